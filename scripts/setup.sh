@@ -1,0 +1,82 @@
+#!/usr/bin/env bash
+# The one setup step of the swim workspace (used by every Makefile target).
+#   1. a Python 3.11 virtual environment in .venv (the ros-jazzy-* wheels are cp311 only);
+#   2. the pinned dependencies of requirements.lock;
+#   3. the wheels' CMake path fix (below);
+#   4. `colcon build` of src/ into install/.
+# Each step records what it did in a stamp file and is skipped when its inputs are unchanged,
+# so a second run does nothing it need not do.
+set -euo pipefail
+
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+venv=${SWIM_VENV:-$root/.venv}
+python=${SWIM_PYTHON:-python3.11}
+
+fail() { echo "setup: error: $*" >&2; exit 1; }
+note() { echo "setup: $*"; }
+digest() { sha256sum | cut -d' ' -f1; }
+
+# --- 0. what the machine must have --------------------------------------------------------
+command -v "$python" >/dev/null 2>&1 \
+  || fail "no '$python' on PATH; install Python 3.11 (the ROS 2 Jazzy wheels are built for CPython 3.11 only) or set SWIM_PYTHON"
+"$python" -c 'import sys; sys.exit(0 if sys.version_info[:2] == (3, 11) else 1)' \
+  || fail "'$python' is Python $("$python" -c 'import sys; print("%d.%d" % sys.version_info[:2])'), not 3.11; set SWIM_PYTHON to a Python 3.11"
+"$python" -c 'import venv, ensurepip' 2>/dev/null || fail "'$python' lacks the venv/ensurepip modules (Debian: apt-get install python3.11-venv)"
+for tool in cmake gcc g++ make; do
+  command -v "$tool" >/dev/null 2>&1 || fail "'$tool' not found; it builds swim_interfaces (Debian: apt-get install cmake build-essential)"
+done
+
+# --- 1. virtual environment ---------------------------------------------------------------
+if [ ! -x "$venv/bin/python" ]; then
+  note "creating virtual environment $venv"
+  "$python" -m venv "$venv"
+fi
+
+# --- 2. pinned dependencies ---------------------------------------------------------------
+want=$(cat "$root/requirements.in" "$root/requirements.lock" | digest)
+stamp="$venv/.swim-requirements.sha256"
+if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
+  note "installing pinned dependencies (requirements.lock)"
+  mkdir -p "$root/log"
+  pip_log="$root/log/setup-pip.txt"
+  { "$venv/bin/python" -m pip install --disable-pip-version-check --upgrade pip==26.3 \
+    && "$venv/bin/python" -m pip install --disable-pip-version-check \
+         -r "$root/requirements.in" -c "$root/requirements.lock"; } >"$pip_log" 2>&1 \
+    || { grep -E '^(ERROR|error)' "$pip_log" >&2 || tail -n 20 "$pip_log" >&2
+         fail "pip could not install requirements.in pinned by requirements.lock (is PyPI reachable? full output: $pip_log)"; }
+  echo "$want" > "$stamp"
+fi
+
+# --- 3. CMake path fix ----------------------------------------------------------------------
+# Why: the ros-jazzy-* wheels were built in a manylinux container whose Python lived in
+# /opt/python/cp311-cp311, and their exported CMake files (share/*/cmake/*Export.cmake) still
+# name that Python's include and site-packages directories. CMake refuses imported targets whose
+# include directories do not exist, so building any interface package fails until those paths
+# name this environment's own Python headers and site-packages.
+py_include=$("$venv/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["include"])')
+py_site=$("$venv/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
+[ -f "$py_include/Python.h" ] || fail "no Python.h in $py_include; install the Python 3.11 headers (Debian: python3.11-dev)"
+mapfile -t stale < <(grep -rl --include='*.cmake' '/opt/python/cp311-cp311/' "$venv/share" 2>/dev/null || true)
+if [ "${#stale[@]}" -gt 0 ]; then
+  note "pointing ${#stale[@]} CMake files of the ROS wheels at this environment's Python"
+  sed -i \
+    -e "s#/opt/python/cp311-cp311/include/python3.11#$py_include#g" \
+    -e "s#/opt/python/cp311-cp311/lib/python3.11/site-packages#$py_site#g" \
+    "${stale[@]}"
+fi
+
+# --- 4. colcon build --------------------------------------------------------------------------
+# shellcheck source=scripts/env.sh
+source "$root/scripts/env.sh"
+sources=$(cd "$root" && { cat colcon.meta requirements.lock; \
+  find src -type f -not -path '*/__pycache__/*' -not -name '*.pyc' -print0 | sort -z | xargs -0 sha256sum; } | digest)
+stamp="$root/install/.swim-sources.sha256"
+if [ "$(cat "$stamp" 2>/dev/null)" != "$sources" ]; then
+  note "colcon build (log: $root/log/latest_build)"
+  (cd "$root" && colcon --log-base log build --base-paths src --metas colcon.meta \
+      --cmake-args "-DPython3_EXECUTABLE=$venv/bin/python" \
+      --event-handlers console_cohesion- summary+ status- >"$root/log/setup-build.txt" 2>&1) \
+    || { tail -n 40 "$root/log/setup-build.txt" >&2; fail "colcon build failed (full output: log/setup-build.txt)"; }
+  echo "$sources" > "$stamp"
+fi
+note "ready ($venv, $root/install)"

@@ -1,0 +1,1 @@
+"""The cascade tracker: time-varying LQR with time-scaled gains, input-output linearization and sliding mode (issue 4)."""

@@ -1,0 +1,215 @@
+"""Rig parameters: loading, validation and the typed record the models read.
+
+The rig file (``config/rig.yaml`` in this package by default) holds one entry per parameter with a
+value, a unit, and either the paper section it comes from (``source``) or the reason it was
+assumed (``assumed``). Loading converts every value to SI, and refuses a missing or unknown key, a
+unit of the wrong dimension, an entry that is neither sourced nor assumed, and an impossible value
+(a negative mass, a thickness not smaller than the chord, ...), each with a message naming the key.
+"""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+from importlib import resources
+from pathlib import Path
+from typing import Any, Mapping
+
+import yaml
+
+from swim_model.errors import RigConfigError
+from swim_model.units import SI_UNIT, UNITS, to_si
+
+RIG_FORMAT_VERSION = 1
+
+# key in the file -> (dimension, sign rule); the record's field is the key plus an SI suffix.
+_POSITIVE, _NONNEGATIVE, _SIGNED = "positive", "non-negative", "signed"
+_SCHEMA: dict[str, tuple[str, str]] = {
+    "foil_chord": ("length", _POSITIVE),
+    "foil_max_thickness": ("length", _POSITIVE),
+    "foil_span": ("length", _POSITIVE),
+    "water_density": ("density", _POSITIVE),
+    "heave_link_length": ("length", _POSITIVE),
+    "heave_pivot_inset": ("length", _SIGNED),
+    "pitch_axis_to_foil_reference": ("length", _SIGNED),
+    "tank_diameter": ("length", _POSITIVE),
+    "constrained_lane_radius": ("length", _POSITIVE),
+    "lane_1_radius": ("length", _POSITIVE),
+    "lane_2_radius": ("length", _POSITIVE),
+    "hub_arm_inertia": ("inertia", _NONNEGATIVE),
+    "platform_mass": ("mass", _POSITIVE),
+    "platform_inertia": ("inertia", _NONNEGATIVE),
+    "heave_link_mass": ("mass", _NONNEGATIVE),
+    "heave_link_cg_distance": ("length", _SIGNED),
+    "heave_link_inertia": ("inertia", _NONNEGATIVE),
+    "foil_assembly_mass": ("mass", _NONNEGATIVE),
+    "foil_assembly_cg_offset": ("length", _SIGNED),
+    "foil_assembly_inertia": ("inertia", _NONNEGATIVE),
+    "heave_rotor_inertia": ("inertia", _NONNEGATIVE),
+    "pitch_rotor_inertia": ("inertia", _NONNEGATIVE),
+    "heave_gear_ratio": ("ratio", _POSITIVE),
+    "pitch_gear_ratio": ("ratio", _POSITIVE),
+    "heave_torque_limit": ("torque", _POSITIVE),
+    "pitch_torque_limit": ("torque", _POSITIVE),
+    "heave_encoder_lines": ("lines_per_rev", _POSITIVE),
+    "pitch_encoder_lines": ("lines_per_rev", _POSITIVE),
+    "hub_encoder_lines": ("lines_per_rev", _POSITIVE),
+    "rail_encoder_lines": ("lines_per_length", _POSITIVE),
+    "sample_period": ("time", _POSITIVE),
+}
+_SUFFIX = {
+    "length": "m", "mass": "kg", "inertia": "kg_m2", "density": "kg_m3", "torque": "n_m",
+    "angle": "rad", "time": "s", "ratio": "", "lines_per_rev": "lines_per_rev",
+    "lines_per_length": "lines_per_m",
+}
+
+
+def _field_name(key: str) -> str:
+    suffix = _SUFFIX[_SCHEMA[key][0]]
+    return f"{key}_{suffix}" if suffix else key
+
+
+@dataclasses.dataclass(frozen=True)
+class RigParameters:
+    """The rig's parameters in SI units (field names carry the unit).
+
+    Symbols of the paper: ``heave_link_length_m`` is Lh, ``heave_pivot_inset_m`` is Ld and
+    ``pitch_axis_to_foil_reference_m`` is Lf of eq. 40.
+    """
+
+    foil_chord_m: float
+    foil_max_thickness_m: float
+    foil_span_m: float
+    water_density_kg_m3: float
+    heave_link_length_m: float
+    heave_pivot_inset_m: float
+    pitch_axis_to_foil_reference_m: float
+    tank_diameter_m: float
+    constrained_lane_radius_m: float
+    lane_1_radius_m: float
+    lane_2_radius_m: float
+    hub_arm_inertia_kg_m2: float
+    platform_mass_kg: float
+    platform_inertia_kg_m2: float
+    heave_link_mass_kg: float
+    heave_link_cg_distance_m: float
+    heave_link_inertia_kg_m2: float
+    foil_assembly_mass_kg: float
+    foil_assembly_cg_offset_m: float
+    foil_assembly_inertia_kg_m2: float
+    heave_rotor_inertia_kg_m2: float
+    pitch_rotor_inertia_kg_m2: float
+    heave_gear_ratio: float
+    pitch_gear_ratio: float
+    heave_torque_limit_n_m: float
+    pitch_torque_limit_n_m: float
+    heave_encoder_lines_per_rev: float
+    pitch_encoder_lines_per_rev: float
+    hub_encoder_lines_per_rev: float
+    rail_encoder_lines_per_m: float
+    sample_period_s: float
+    source_path: str = dataclasses.field(default="", compare=False)
+
+    @property
+    def torque_limits_n_m(self) -> tuple[float, float]:
+        """(heave, pitch) joint torque limits, N m (Sec. 2)."""
+        return (self.heave_torque_limit_n_m, self.pitch_torque_limit_n_m)
+
+    def replace(self, **changes: float) -> "RigParameters":
+        """A copy with some values changed, validated like a loaded file."""
+        changed = dataclasses.replace(self, **changes)
+        _check_consistency(changed)
+        return changed
+
+    def as_dict(self) -> dict[str, float]:
+        """The SI values by field name (no source path)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "source_path"}
+
+    def digest(self) -> str:
+        """SHA-256 of the SI values: primitive libraries record it to detect a different rig."""
+        canonical = json.dumps({k: repr(v) for k, v in sorted(self.as_dict().items())}, sort_keys=True)
+        return hashlib.sha256(canonical.encode()).hexdigest()
+
+
+def default_rig_path() -> Path:
+    """The rig file shipped with swim_model."""
+    return Path(str(resources.files("swim_model") / "config" / "rig.yaml"))
+
+
+def load_rig(path: str | Path | None = None) -> RigParameters:
+    """Load and validate a rig file (default: the shipped ``config/rig.yaml``).
+
+    Raises:
+        RigConfigError: the file is missing or unreadable, or an entry is missing, unknown,
+            in a unit of the wrong dimension, without ``source``/``assumed``, or impossible.
+    """
+    rig_path = Path(path) if path is not None else default_rig_path()
+    try:
+        document = yaml.safe_load(rig_path.read_text())
+    except OSError as err:
+        raise RigConfigError(f"cannot read rig file {rig_path}: {err.strerror}") from err
+    except yaml.YAMLError as err:
+        raise RigConfigError(f"rig file {rig_path} is not valid YAML: {err}") from err
+    return rig_from_mapping(document, origin=str(rig_path))
+
+
+def rig_from_mapping(document: Any, origin: str = "<mapping>") -> RigParameters:
+    """Validate a parsed rig document (the YAML's structure) and convert it to SI."""
+    if not isinstance(document, Mapping):
+        raise RigConfigError(f"{origin}: expected a mapping with 'format_version' and 'parameters'")
+    if document.get("format_version") != RIG_FORMAT_VERSION:
+        raise RigConfigError(
+            f"{origin}: format_version is {document.get('format_version')!r}; this swim_model reads "
+            f"format_version {RIG_FORMAT_VERSION}")
+    entries = document.get("parameters")
+    if not isinstance(entries, Mapping):
+        raise RigConfigError(f"{origin}: 'parameters' must be a mapping of parameter entries")
+    missing = sorted(set(_SCHEMA) - set(entries))
+    unknown = sorted(set(entries) - set(_SCHEMA))
+    if missing:
+        raise RigConfigError(f"{origin}: missing parameters: {', '.join(missing)}")
+    if unknown:
+        raise RigConfigError(f"{origin}: unknown parameters: {', '.join(unknown)} (misspelt?)")
+    values = {_field_name(key): _entry_to_si(key, entries[key], origin) for key in _SCHEMA}
+    rig = RigParameters(**values, source_path=origin)
+    _check_consistency(rig)
+    return rig
+
+
+def _entry_to_si(key: str, entry: Any, origin: str) -> float:
+    dimension, sign_rule = _SCHEMA[key]
+    where = f"{origin}: parameter '{key}'"
+    if not isinstance(entry, Mapping) or "value" not in entry or "unit" not in entry:
+        raise RigConfigError(f"{where} must be a mapping with 'value' and 'unit'")
+    if ("source" in entry) == ("assumed" in entry):
+        raise RigConfigError(f"{where} must say exactly one of 'source' (paper) or 'assumed' (why)")
+    unit = str(entry["unit"])
+    if unit not in UNITS[dimension]:
+        raise RigConfigError(
+            f"{where} has unit '{unit}', which is not a {dimension.replace('_', ' ')}; "
+            f"use one of {', '.join(UNITS[dimension])} (SI: {SI_UNIT[dimension]})")
+    value = entry["value"]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise RigConfigError(f"{where} has value {value!r}; expected a finite number")
+    si_value = to_si(value, unit, dimension)
+    if sign_rule == _POSITIVE and not si_value > 0.0:
+        raise RigConfigError(f"{where} is {value} {unit}; it must be positive")
+    if sign_rule == _NONNEGATIVE and si_value < 0.0:
+        raise RigConfigError(f"{where} is {value} {unit}; it must not be negative")
+    return si_value
+
+
+def _check_consistency(rig: RigParameters) -> None:
+    """Relations between parameters that single entries cannot check."""
+    where = rig.source_path or "rig"
+    if rig.foil_max_thickness_m >= rig.foil_chord_m:
+        raise RigConfigError(f"{where}: foil_max_thickness must be smaller than foil_chord")
+    tank_radius_m = rig.tank_diameter_m / 2.0
+    for name in ("constrained_lane_radius_m", "lane_1_radius_m", "lane_2_radius_m"):
+        if getattr(rig, name) >= tank_radius_m:
+            raise RigConfigError(f"{where}: {name} must lie inside the tank (radius {tank_radius_m} m)")
+    for field in dataclasses.fields(rig):
+        value = getattr(rig, field.name)
+        if isinstance(value, float) and not math.isfinite(value):
+            raise RigConfigError(f"{where}: {field.name} is not finite")

@@ -1,0 +1,25 @@
+from setuptools import find_packages, setup
+
+package_name = 'swim_sim'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='swim maintainers',
+    maintainer_email='swim@example.com',
+    description='The dynamics simulator node with disturbances (issue 5).',
+    license='Apache-2.0',
+    tests_require=['pytest'],
+    entry_points={
+        'console_scripts': [
+
+        ],
+    },
+)
