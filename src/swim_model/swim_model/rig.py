@@ -60,8 +60,8 @@ _SCHEMA: dict[str, tuple[str, str]] = {
 }
 _SUFFIX = {
     "length": "m", "mass": "kg", "inertia": "kg_m2", "density": "kg_m3", "torque": "n_m",
-    "angle": "rad", "time": "s", "ratio": "", "lines_per_rev": "lines_per_rev",
-    "lines_per_length": "lines_per_m",
+    "angle": "rad", "time": "s", "ratio": "", "lines_per_rev": "per_rev",
+    "lines_per_length": "per_m",
 }
 
 

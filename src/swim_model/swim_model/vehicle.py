@@ -1,0 +1,241 @@
+"""The swimming machine's equations of motion (paper Sec. 3, eqs. 4-7, 14-15, 22-23; Appendix A).
+
+q = (alpha, R, phi, theta) for the free vehicle (eq. 6), q = (alpha, phi, theta) with the rails
+locked at R = lane radius for the laterally constrained one (eq. 7). Energy route (A.1):
+
+    T = 1/2 qdot' Mm(q) qdot,   Mm(q) = M(q) + Q2(q)' M_A Q2(q)           (eqs. 5, 41)
+    Mm(q) qddot + Cm(q, qdot) qdot = B tau,   B = [0; I_2],  tau = (tau_h, tau_p)   (eqs. 6, 7)
+
+with Cm from the Christoffel symbols of Mm, written as
+``Cm = 1/2 (Mmdot + d(Mm qdot)/dq - d(Mm qdot)/dq')`` so that ``Mmdot - 2 Cm`` is skew-symmetric.
+The hydrodynamic-force route (A.2, eqs. 44-48) is in :mod:`swim_model.hydrodynamics`.
+
+Partition (eqs. 14-15, 22-23), y = the unactuated coordinates, psi = (phi, theta):
+
+    Mm11 yddot + Mm12 psiddot + Cm1 qdot = 0
+    Mm21 yddot + Mm22 psiddot + Cm2 qdot = tau
+    Mio = Mm22 - Mm21 Mm11^-1 Mm12,   Cio qdot = Cm2 qdot - Mm21 Mm11^-1 Cm1 qdot,
+    tau = Mio psiddot + Cio qdot.
+
+All expressions are CasADi SX (for optimization and exact Jacobians, ``VehicleModel.symbolic``);
+the numeric methods evaluate the same expressions compiled to C (:mod:`swim_model.codegen`).
+"""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+from functools import cached_property
+from typing import Sequence
+
+import casadi as ca
+import numpy as np
+import numpy.typing as npt
+
+from swim_model import codegen
+from swim_model.errors import StateError
+from swim_model.joukowski import AddedMass, JoukowskiFoil
+from swim_model.kinematics import Coordinates, foil_velocity_map, rigid_mass_matrix
+from swim_model.rig import RigParameters, load_rig
+
+Array = npt.NDArray[np.float64]
+
+JOINT_NAMES_UNCONSTRAINED = ("alpha", "R", "phi", "theta")
+JOINT_NAMES_CONSTRAINED = ("alpha", "phi", "theta")
+
+
+def coriolis_from_mass(mass: ca.SX, q: ca.SX, qdot: ca.SX) -> ca.SX:
+    """Cm(q, qdot) from the Christoffel symbols of a configuration-dependent mass matrix."""
+    mass_dot = ca.jtimes(mass, q, qdot)
+    d_momentum = ca.jacobian(mass @ qdot, q)
+    return 0.5 * (mass_dot + d_momentum - d_momentum.T)
+
+
+@dataclasses.dataclass(frozen=True)
+class SymbolicModel:
+    """CasADi symbols, expressions and functions of one vehicle model."""
+
+    q: ca.SX
+    qdot: ca.SX
+    qddot: ca.SX
+    tau: ca.SX
+    u: ca.SX
+    foil_velocity_map: ca.SX
+    rigid_mass: ca.SX
+    mass: ca.SX
+    coriolis: ca.SX
+    functions: dict[str, ca.Function]
+
+
+class VehicleModel:
+    """Equations of motion of the free (4-DOF) or laterally constrained (3-DOF) vehicle.
+
+    Args:
+        rig: rig parameters (default: the shipped rig file).
+        constrained: lock the rails (q = (alpha, phi, theta)).
+        lane_radius_m: R of the locked rails (default: the rig's constrained_lane_radius).
+
+    All numeric methods take and return numpy arrays: q and qdot of length nq (3 or 4), tau the
+    2-vector (heave, pitch) of joint torques in N m.
+    """
+
+    def __init__(self, rig: RigParameters | None = None, constrained: bool = False,
+                 lane_radius_m: float | None = None) -> None:
+        self.rig = rig if rig is not None else load_rig()
+        self.constrained = bool(constrained)
+        self.lane_radius_m = float(lane_radius_m if lane_radius_m is not None
+                                   else self.rig.constrained_lane_radius_m)
+        self.joint_names: tuple[str, ...] = JOINT_NAMES_CONSTRAINED if constrained else JOINT_NAMES_UNCONSTRAINED
+        self.nq = len(self.joint_names)
+        self.n_unactuated = self.nq - 2
+        self.foil = JoukowskiFoil(self.rig.foil_chord_m, self.rig.foil_max_thickness_m, self.rig.foil_span_m)
+        self.added_mass: AddedMass = self.foil.added_mass(self.rig.water_density_kg_m3)
+
+    # ----- symbolic model ----------------------------------------------------------------------
+    def coordinates(self, q: ca.SX) -> Coordinates:
+        """Map the model's q to (alpha, R, phi, theta)."""
+        if self.constrained:
+            return Coordinates(alpha=q[0], radius=ca.SX(self.lane_radius_m), phi=q[1], theta=q[2])
+        return Coordinates(alpha=q[0], radius=q[1], phi=q[2], theta=q[3])
+
+    @cached_property
+    def symbolic(self) -> SymbolicModel:
+        nq, ny = self.nq, self.n_unactuated
+        q, qdot, qddot = ca.SX.sym("q", nq), ca.SX.sym("qdot", nq), ca.SX.sym("qddot", nq)
+        tau, u = ca.SX.sym("tau", 2), ca.SX.sym("u", 2)
+        coords = self.coordinates(q)
+        q2 = foil_velocity_map(coords, q, self.rig)
+        rigid = rigid_mass_matrix(coords, q, self.rig)
+        mass = rigid + q2.T @ ca.SX(self.added_mass.matrix()) @ q2
+        coriolis = coriolis_from_mass(mass, q, qdot)
+        input_map = ca.vertcat(ca.SX.zeros(ny, 2), ca.SX.eye(2))
+        bias = coriolis @ qdot
+        acceleration = ca.solve(mass, input_map @ tau - bias)
+        generalized_force = mass @ qddot + bias
+        # partition (eqs. 14-15, 22-23)
+        m11, m12 = mass[:ny, :ny], mass[:ny, ny:]
+        m21, m22 = mass[ny:, :ny], mass[ny:, ny:]
+        m11_inv_m12 = ca.solve(m11, m12)
+        m11_inv_c1 = ca.solve(m11, bias[:ny])
+        mio = m22 - m21 @ m11_inv_m12
+        cio_qdot = bias[ny:] - m21 @ m11_inv_c1
+        yddot = -(m11_inv_m12 @ u + m11_inv_c1)
+        shape_qddot = ca.vertcat(yddot, u)
+        shape_tau = mio @ u + cio_qdot
+        energy = 0.5 * qdot.T @ mass @ qdot
+        functions = {
+            "mass_matrix": ca.Function("mass_matrix", [q], [mass], ["q"], ["Mm"]),
+            "coriolis_matrix": ca.Function("coriolis_matrix", [q, qdot], [coriolis], ["q", "qdot"], ["Cm"]),
+            "forward_dynamics": ca.Function("forward_dynamics", [q, qdot, tau], [acceleration],
+                                            ["q", "qdot", "tau"], ["qddot"]),
+            "generalized_force": ca.Function("generalized_force", [q, qdot, qddot], [generalized_force],
+                                             ["q", "qdot", "qddot"], ["force"]),
+            "kinetic_energy": ca.Function("kinetic_energy", [q, qdot], [energy], ["q", "qdot"], ["T"]),
+            "momentum": ca.Function("momentum", [q, qdot], [mass @ qdot], ["q", "qdot"], ["p"]),
+            "io_linearization": ca.Function("io_linearization", [q, qdot], [mio, cio_qdot],
+                                            ["q", "qdot"], ["Mio", "Cio_qdot"]),
+            "shape_dynamics": ca.Function("shape_dynamics", [q, qdot, u], [shape_qddot, shape_tau],
+                                          ["q", "qdot", "u"], ["qddot", "tau"]),
+            "foil_velocity_map": ca.Function("foil_velocity_map", [q], [q2], ["q"], ["Q2"]),
+            "rigid_mass_matrix": ca.Function("rigid_mass_matrix", [q], [rigid], ["q"], ["M"]),
+        }
+        return SymbolicModel(q=q, qdot=qdot, qddot=qddot, tau=tau, u=u, foil_velocity_map=q2,
+                             rigid_mass=rigid, mass=mass, coriolis=coriolis, functions=functions)
+
+    def state_derivative_function(self) -> ca.Function:
+        """f(x, tau) = (qdot, qddot) with x = (q, qdot): the state equation for integrators."""
+        s = self.symbolic
+        x = ca.vertcat(s.q, s.qdot)
+        qddot = s.functions["forward_dynamics"](s.q, s.qdot, s.tau)
+        return ca.Function("state_derivative", [x, s.tau], [ca.vertcat(s.qdot, qddot)], ["x", "tau"], ["xdot"])
+
+    def rk4_step_function(self) -> ca.Function:
+        """x(t + h) by one classical Runge-Kutta step with tau held: (x, tau, h) -> x_next."""
+        f = self.state_derivative_function()
+        x, tau, h = ca.SX.sym("x", 2 * self.nq), ca.SX.sym("tau", 2), ca.SX.sym("h")
+        k1 = f(x, tau)
+        k2 = f(x + 0.5 * h * k1, tau)
+        k3 = f(x + 0.5 * h * k2, tau)
+        k4 = f(x + h * k3, tau)
+        x_next = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        return ca.Function("rk4_step", [x, tau, h], [x_next], ["x", "tau", "h"], ["x_next"])
+
+    # ----- numeric path ----------------------------------------------------------------------------
+    @cached_property
+    def numeric(self) -> dict[str, ca.Function]:
+        """The symbolic functions compiled to C (cached on disk), plus the RK4 step."""
+        functions = dict(self.symbolic.functions)
+        functions["rk4_step"] = self.rk4_step_function()
+        return codegen.compiled(list(functions.values()), tag=self._codegen_tag())
+
+    def _codegen_tag(self) -> str:
+        kind = "constrained" if self.constrained else "free"
+        key = f"{self.rig.digest()}:{self.lane_radius_m!r}".encode()
+        return f"vehicle_{kind}_{hashlib.sha256(key).hexdigest()[:16]}"
+
+    def _vector(self, value: npt.ArrayLike, size: int, name: str) -> Array:
+        array = np.asarray(value, dtype=float).reshape(-1)
+        if array.shape != (size,):
+            raise StateError(f"{name} must have {size} entries ({', '.join(self.joint_names) if size == self.nq else 'heave, pitch'}), got shape {np.shape(value)}")
+        if not np.all(np.isfinite(array)):
+            raise StateError(f"{name} has a non-finite entry: {array}")
+        return array
+
+    def _call(self, name: str, *args: Array) -> Sequence[Array]:
+        outputs = self.numeric[name].call(list(args))
+        return [np.asarray(o, dtype=float) for o in outputs]
+
+    def mass_matrix(self, q: npt.ArrayLike) -> Array:
+        """Mm(q), nq x nq (eq. 41)."""
+        return self._call("mass_matrix", self._vector(q, self.nq, "q"))[0]
+
+    def coriolis_matrix(self, q: npt.ArrayLike, qdot: npt.ArrayLike) -> Array:
+        """Cm(q, qdot), nq x nq, linear in qdot (eq. 6)."""
+        return self._call("coriolis_matrix", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"))[0]
+
+    def forward_dynamics(self, q: npt.ArrayLike, qdot: npt.ArrayLike, tau: npt.ArrayLike) -> Array:
+        """qddot = Mm^-1 (B tau - Cm qdot) (eqs. 6-7)."""
+        out = self._call("forward_dynamics", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
+                         self._vector(tau, 2, "tau"))[0]
+        return out.reshape(-1)
+
+    def generalized_force(self, q: npt.ArrayLike, qdot: npt.ArrayLike, qddot: npt.ArrayLike) -> Array:
+        """Mm qddot + Cm qdot: the force on every coordinate (zero on the unactuated ones if feasible)."""
+        return self._call("generalized_force", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
+                          self._vector(qddot, self.nq, "qddot"))[0].reshape(-1)
+
+    def inverse_dynamics(self, q: npt.ArrayLike, qdot: npt.ArrayLike, qddot: npt.ArrayLike) -> Array:
+        """tau = (Mm qddot + Cm qdot) on the actuated rows (heave, pitch), N m."""
+        return self.generalized_force(q, qdot, qddot)[self.n_unactuated:]
+
+    def kinetic_energy(self, q: npt.ArrayLike, qdot: npt.ArrayLike) -> float:
+        """T = 1/2 qdot' Mm qdot, J (eq. 5)."""
+        return self._call("kinetic_energy", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"))[0].item()
+
+    def momentum(self, q: npt.ArrayLike, qdot: npt.ArrayLike) -> Array:
+        """Generalized momentum p = dT/dqdot = Mm qdot; p[0] = p_alpha is conserved (Prop. 1)."""
+        return self._call("momentum", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"))[0].reshape(-1)
+
+    def io_linearization(self, q: npt.ArrayLike, qdot: npt.ArrayLike) -> tuple[Array, Array]:
+        """(Mio, Cio qdot) of eqs. 22-23: tau = Mio psiddot + Cio qdot."""
+        mio, cio = self._call("io_linearization", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"))
+        return mio, cio.reshape(-1)
+
+    def shape_dynamics(self, q: npt.ArrayLike, qdot: npt.ArrayLike, psi_ddot: npt.ArrayLike) -> tuple[Array, Array]:
+        """With the foil accelerations u = psiddot prescribed: (qddot, tau) from eqs. 14-15."""
+        qddot, tau = self._call("shape_dynamics", self._vector(q, self.nq, "q"),
+                                self._vector(qdot, self.nq, "qdot"), self._vector(psi_ddot, 2, "psi_ddot"))
+        return qddot.reshape(-1), tau.reshape(-1)
+
+    def foil_velocity_map(self, q: npt.ArrayLike) -> Array:
+        """Q2(q), 3 x nq: (U, V, Omega) = Q2 qdot (eq. 40)."""
+        return self._call("foil_velocity_map", self._vector(q, self.nq, "q"))[0]
+
+    def rk4_step(self, q: npt.ArrayLike, qdot: npt.ArrayLike, tau: npt.ArrayLike, step_s: float) -> tuple[Array, Array]:
+        """One RK4 step of step_s seconds with tau held; returns (q, qdot)."""
+        x = np.concatenate([self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot")])
+        x_next = self._call("rk4_step", x, self._vector(tau, 2, "tau"), np.array(float(step_s)))[0].reshape(-1)
+        return x_next[:self.nq], x_next[self.nq:]
+
+    def torque_limits(self) -> Array:
+        """(heave, pitch) joint torque limits, N m (paper Sec. 2)."""
+        return np.array(self.rig.torque_limits_n_m)
