@@ -69,7 +69,7 @@ fi
 # shellcheck source=scripts/env.sh
 source "$root/scripts/env.sh"
 sources=$(cd "$root" && { cat colcon.meta requirements.lock; \
-  find src -type f -not -path '*/__pycache__/*' -not -name '*.pyc' -print0 | sort -z | xargs -0 sha256sum; } | digest)
+  find src -type f -not -path '*/__pycache__/*' -not -path '*/.*' -not -name '*.pyc' -print0 | sort -z | xargs -0 sha256sum; } | digest)
 stamp="$root/install/.swim-sources.sha256"
 if [ "$(cat "$stamp" 2>/dev/null)" != "$sources" ]; then
   note "colcon build (log: $root/log/latest_build)"

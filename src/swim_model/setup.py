@@ -9,8 +9,10 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name + '/config', ['swim_model/config/rig.yaml']),
     ],
-    install_requires=['setuptools'],
+    package_data={package_name: ['config/*.yaml']},
+    install_requires=['setuptools', 'numpy', 'scipy', 'casadi', 'pyyaml', 'matplotlib'],
     zip_safe=True,
     maintainer='swim maintainers',
     maintainer_email='swim@example.com',

@@ -236,6 +236,30 @@ class VehicleModel:
         x_next = self._call("rk4_step", x, self._vector(tau, 2, "tau"), np.array(float(step_s)))[0].reshape(-1)
         return x_next[:self.nq], x_next[self.nq:]
 
+    def integrate_rk4(self, q: npt.ArrayLike, qdot: npt.ArrayLike, torques: npt.ArrayLike,
+                      step_s: float) -> tuple[Array, Array]:
+        """RK4 steps of step_s seconds, torques[k] held over step k, in one compiled call.
+
+        Args:
+            torques: (n, 2) heave and pitch torques, N m.
+        Returns:
+            (q, qdot) at the n + 1 step boundaries, shapes (n + 1, nq).
+        """
+        torque_array = np.asarray(torques, dtype=float)
+        if torque_array.ndim != 2 or torque_array.shape[1] != 2 or not np.all(np.isfinite(torque_array)):
+            raise StateError(f"torques must be a finite (n, 2) array, got shape {torque_array.shape}")
+        x0 = np.concatenate([self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot")])
+        steps = self._rk4_accumulator(len(torque_array))
+        states = np.asarray(steps(x0, torque_array.T, float(step_s)), dtype=float)
+        trajectory = np.column_stack([x0, states]).T
+        return trajectory[:, :self.nq], trajectory[:, self.nq:]
+
+    def _rk4_accumulator(self, steps: int) -> ca.Function:
+        cache = self.__dict__.setdefault("_rk4_accumulators", {})
+        if steps not in cache:
+            cache[steps] = self.numeric["rk4_step"].mapaccum(steps)
+        return cache[steps]
+
     def torque_limits(self) -> Array:
         """(heave, pitch) joint torque limits, N m (paper Sec. 2)."""
         return np.array(self.rig.torque_limits_n_m)

@@ -183,6 +183,9 @@ def test_rk4_step_agrees_with_accurate_integration():
     for _ in range(8):
         x = model.rk4_step(*x, tau, 0.001)
     np.testing.assert_allclose(np.concatenate(x), reference.y[:, -1], atol=1e-9)
+    qs, qdots = model.integrate_rk4(q, qdot, np.tile(tau, (8, 1)), 0.001)
+    assert qs.shape == (9, 4)
+    np.testing.assert_allclose(np.concatenate([qs[-1], qdots[-1]]), np.concatenate(x), atol=1e-13)
 
 
 @pytest.mark.parametrize("q, qdot, tau", [
