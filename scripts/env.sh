@@ -18,4 +18,6 @@ if [ -f "$_swim_root/install/local_setup.bash" ]; then
   source "$_swim_root/install/local_setup.bash"
   [ -n "$_swim_nounset" ] && set -u
 fi
+# `ros2 run` for our executables where ros2cli is not installed (see scripts/bin/ros2)
+if ! command -v ros2 >/dev/null 2>&1; then export PATH="$PATH:$_swim_root/scripts/bin"; fi
 unset _swim_root _swim_venv _swim_nounset

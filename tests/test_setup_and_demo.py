@@ -30,18 +30,23 @@ def test_setup_refuses_a_python_that_is_not_3_11(tmp_path):
     assert not (tmp_path / "venv").exists()
 
 
+def test_ros2_run_stand_in_names_what_is_missing():
+    result = subprocess.run(["bash", "-c", "source scripts/env.sh && ros2 run swim_model no-such-tool"],
+                            cwd=WORKSPACE, capture_output=True, text=True, timeout=60)
+    assert result.returncode == 1 and "no executable 'no-such-tool' in package 'swim_model'" in result.stderr
+
+
 def test_setup_names_a_missing_python(tmp_path):
     env = dict(os.environ, SWIM_PYTHON="python-that-does-not-exist")
     result = subprocess.run(["bash", str(SETUP)], capture_output=True, text=True, env=env, timeout=60)
     assert result.returncode != 0 and "no 'python-that-does-not-exist' on PATH" in result.stderr
 
 
-def test_model_demo_runs_as_ros2_run_would(tmp_path):
-    """The installed executable (lib/swim_model/swim-model-demo) prints and saves what it claims."""
+def test_model_demo_runs_through_ros2_run(tmp_path):
+    """`ros2 run swim_model swim-model-demo` (the README's demo) prints and saves what it claims."""
     from swim_model import VehicleModel
-    executable = WORKSPACE / "install" / "swim_model" / "lib" / "swim_model" / "swim-model-demo"
-    result = subprocess.run([str(executable), "--duration", "3", "--output-dir", str(tmp_path)],
-                            capture_output=True, text=True, timeout=300)
+    command = f"source scripts/env.sh && ros2 run swim_model swim-model-demo --duration 3 --output-dir {tmp_path}"
+    result = subprocess.run(["bash", "-c", command], cwd=WORKSPACE, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr
     summary = json.loads((tmp_path / "summary.json").read_text())
     added = VehicleModel(constrained=True).added_mass
