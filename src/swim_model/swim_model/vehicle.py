@@ -108,7 +108,9 @@ class VehicleModel:
         mass = rigid + q2.T @ ca.SX(self.added_mass.matrix()) @ q2
         coriolis = coriolis_from_mass(mass, q, qdot)
         input_map = ca.vertcat(ca.SX.zeros(ny, 2), ca.SX.eye(2))
-        bias = coriolis @ qdot
+        # Cm qdot = Mmdot qdot - dT/dq (Euler-Lagrange): one forward and one reverse derivative, far
+        # cheaper for optimizers to differentiate twice than the matrix Cm times qdot
+        bias = ca.jtimes(mass @ qdot, q, qdot) - ca.gradient(0.5 * qdot.T @ mass @ qdot, q)
         acceleration = ca.solve(mass, input_map @ tau - bias)
         generalized_force = mass @ qddot + bias
         # partition (eqs. 14-15, 22-23)

@@ -1,0 +1,304 @@
+"""Motion primitives by optimal control (paper Secs. 4-5; SPEC.md section 3).
+
+Every primitive solves, for the free or the laterally constrained vehicle, with state x = (q, qdot) and
+the foil accelerations u = psiddot as input (the planning input of eq. 16):
+
+    maximize  s alpha(Tf) - int_0^Tf (w_h tau_h^2 + w_p tau_p^2) dt          (eqs. 10, 12, 13)
+    subject to  the equations of motion (eq. 14, torques from eq. 15), heave/pitch ranges, torque limits,
+                and the boundary conditions of its type:
+
+    cruise           alpha(0) = 0, p_alpha(0) = 0, psi(0) = psi(Tf), qdot(0) = qdot(Tf), mean T = E  (eq. 9)
+    accelerate       from rest (q = (0, R_lane, 0, 0), qdot = 0) to a cruise's start state
+    decelerate       from a cruise's end state to rest, alphadot >= v_min                         (eq. 12)
+    cruise_to_cruise from cruise i's end state to cruise j's start state                        (eq. 13)
+    lane_change      cruise_to_cruise between lanes, R(t) in [R1 - Rb, R2 + Rb]
+
+with s = +1, except decelerate (s = -1) and a cruise-to-cruise that slows down (s = -1). States are
+matched up to a translation of alpha (the symmetry of Prop. 1), which concatenation adds back. In-lane
+primitives of the free vehicle keep R(0) = R(Tf) = R_lane. Transcription: Hermite-Simpson collocation,
+solved by IPOPT with exact derivatives from CasADi.
+
+Energy level of a cruise: the paper fixes E = T(q(Tf), qdot(Tf)), the kinetic energy at the cycle's end.
+Over a periodic cycle the kinetic energy oscillates, so that end-point value only selects where the cycle is
+cut, not how fast the vehicle swims (we found E = 0.05 and E = 0.1 cruises of equal speed with it). We fix
+instead the cycle's mean kinetic energy (1/Tf) int T dt = E, which orders cruises by speed as the paper's
+graph intends. A cruise is solved over one cycle of ``cycle_s`` and repeated (the paper's Fourier series
+have period T with Tf a multiple of T).
+"""
+from __future__ import annotations
+
+import dataclasses
+import enum
+import math
+import time
+from typing import Optional
+
+import casadi as ca
+import numpy as np
+import numpy.typing as npt
+
+from swim_model import SinusoidalGait, VehicleModel, simulate_gait
+from swim_planner.collocation import fine_grid_times, hermite_simpson, simpson_integral
+from swim_planner.errors import PrimitiveSolveError
+
+Array = npt.NDArray[np.float64]
+
+
+class PrimitiveType(str, enum.Enum):
+    ACCELERATE = "accelerate"
+    CRUISE = "cruise"
+    DECELERATE = "decelerate"
+    CRUISE_TO_CRUISE = "cruise_to_cruise"
+    LANE_CHANGE = "lane_change"
+
+
+@dataclasses.dataclass(frozen=True)
+class PlanningLimits:
+    """Limits every primitive respects. The paper gives no ranges; these are assumed values."""
+
+    heave_range_rad: float = math.radians(50.0)    # assumed: |phi| <= 50 deg keeps the peduncle off the hull
+    pitch_range_rad: float = math.radians(70.0)    # assumed: |theta| <= 70 deg, the belt drive's travel
+    torque_fraction: float = 0.7                   # assumed: plan with 70 % of the motor limits, leaving
+                                                   # headroom for feedback and for lambda up to 1.19
+    foil_acceleration_limit_rad_s2: float = 300.0  # assumed: bounds u to keep the NLP well scaled
+    lane_band_m: float = 0.03                      # assumed: Rb, the lateral band around the lanes
+    min_alpha_rate_rad_s: float = 0.0              # v_min of eq. 12 (assumed: never swim backwards)
+
+
+@dataclasses.dataclass(frozen=True)
+class PrimitiveSpec:
+    """What one primitive is. ``start_from``/``end_at`` name the primitives whose states it joins."""
+
+    primitive_id: str
+    primitive_type: PrimitiveType
+    constrained: bool
+    duration_s: float
+    lane_radius_m: float
+    end_lane_radius_m: float
+    energy_j: Optional[float] = None          # cruise: its level E
+    start_from: Optional[str] = None          # id of the primitive whose end state is our start
+    end_at: Optional[str] = None              # id of the primitive whose start state is our end
+    speeding_up: bool = True                  # cruise-to-cruise: sign of alpha(Tf) in the index (eq. 13)
+    intervals: int = 60                       # collocation intervals (per cycle for a cruise)
+    cycles: int = 1                           # cruise: the cycle is solved once and repeated this often
+    heave_effort_weight: float = 0.1          # w_h of eq. 10 (assumed), rad/(N^2 m^2 s)
+    pitch_effort_weight: float = 0.1          # w_p of eq. 10 (assumed)
+
+    @property
+    def solved_duration_s(self) -> float:
+        """The horizon the optimizer sees: one cycle of a cruise, else the whole primitive."""
+        return self.duration_s / self.cycles
+
+    def index_sign(self) -> float:
+        if self.primitive_type is PrimitiveType.DECELERATE:
+            return -1.0
+        if self.primitive_type in (PrimitiveType.CRUISE_TO_CRUISE, PrimitiveType.LANE_CHANGE):
+            return 1.0 if self.speeding_up else -1.0
+        return 1.0
+
+
+@dataclasses.dataclass
+class Primitive:
+    """A solved primitive on the fine grid (knots and midpoints of the collocation, 2N + 1 samples)."""
+
+    spec: PrimitiveSpec
+    time_s: Array
+    q: Array
+    qdot: Array
+    foil_acceleration: Array   # u = psiddot, rad/s^2
+    torque: Array              # (tau_h, tau_p), N m
+    index_j: float             # s alpha(Tf) - effort
+    effort: float              # int (w_h tau_h^2 + w_p tau_p^2) dt
+    solver_status: str
+    solve_time_s: float
+    iterations: int
+
+    @property
+    def start_state(self) -> tuple[Array, Array]:
+        return self.q[0].copy(), self.qdot[0].copy()
+
+    @property
+    def end_state(self) -> tuple[Array, Array]:
+        return self.q[-1].copy(), self.qdot[-1].copy()
+
+
+@dataclasses.dataclass(frozen=True)
+class SolverSettings:
+    tolerance: float = 1e-8
+    max_iterations: int = 3000
+    print_level: int = 0
+
+
+def _ocp_functions(model: VehicleModel) -> tuple[ca.Function, ca.Function, ca.Function]:
+    """xdot(x, u), tau(x, u), and the kinetic energy T(x)."""
+    s = model.symbolic
+    x = ca.vertcat(s.q, s.qdot)
+    qddot, tau = s.functions["shape_dynamics"](s.q, s.qdot, s.u)
+    dynamics = ca.Function("xdot", [x, s.u], [ca.vertcat(s.qdot, qddot)])
+    torque = ca.Function("tau", [x, s.u], [tau])
+    energy = ca.Function("T", [x], [s.functions["kinetic_energy"](s.q, s.qdot)])
+    return dynamics, torque, energy
+
+
+def rest_state(model: VehicleModel, lane_radius_m: float) -> tuple[Array, Array]:
+    q = np.zeros(model.nq)
+    if not model.constrained:
+        q[1] = lane_radius_m
+    return q, np.zeros(model.nq)
+
+
+def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits = PlanningLimits(),
+                    start: Optional[tuple[Array, Array]] = None, end: Optional[tuple[Array, Array]] = None,
+                    guess: Optional[Primitive] = None, settings: SolverSettings = SolverSettings()) -> Primitive:
+    """Solve one primitive.
+
+    Args:
+        start: (q, qdot) the primitive starts from (required for decelerate, cruise-to-cruise, lane change;
+            alpha is ignored: it starts at 0).
+        end: (q, qdot) it must reach (required for accelerate, cruise-to-cruise, lane change; alpha free).
+        guess: a primitive of the same grid size to warm-start from (else a built-in guess).
+    Raises:
+        PrimitiveSolveError: IPOPT did not converge; the message gives its status.
+    """
+    nq, ny = model.nq, model.n_unactuated
+    nx = 2 * nq
+    dynamics, torque, energy = _ocp_functions(model)
+    opti = ca.Opti()
+    grid = hermite_simpson(opti, dynamics, nx, 2, spec.intervals, spec.solved_duration_s)
+    states, inputs = grid.all_states(), grid.all_inputs()
+    samples = 2 * spec.intervals + 1
+    torques = torque.map(samples)(states, inputs)
+    weights = ca.DM([spec.heave_effort_weight, spec.pitch_effort_weight])
+    effort_integrand = ca.Function("effort", [ca.MX.sym("x", nx), ca.MX.sym("u", 2)], [0.0])
+    xs, us = ca.SX.sym("x", nx), ca.SX.sym("u", 2)
+    effort_integrand = ca.Function("effort", [xs, us], [ca.dot(weights, torque(xs, us) ** 2)])
+    effort = simpson_integral(grid, effort_integrand)
+    x0, x_end = grid.x[:, 0], grid.x[:, -1]
+    sign = spec.index_sign()
+    opti.minimize(-(sign * x_end[0] - effort))
+
+    # ranges and limits on the fine grid
+    heave, pitch = states[nq - 2, :], states[nq - 1, :]
+    opti.subject_to(opti.bounded(-limits.heave_range_rad, heave, limits.heave_range_rad))
+    opti.subject_to(opti.bounded(-limits.pitch_range_rad, pitch, limits.pitch_range_rad))
+    tau_max = limits.torque_fraction * model.torque_limits()
+    opti.subject_to(opti.bounded(-tau_max[0], torques[0, :], tau_max[0]))
+    opti.subject_to(opti.bounded(-tau_max[1], torques[1, :], tau_max[1]))
+    u_max = limits.foil_acceleration_limit_rad_s2
+    opti.subject_to(opti.bounded(-u_max, inputs, u_max))
+    if not model.constrained:
+        low = min(spec.lane_radius_m, spec.end_lane_radius_m) - limits.lane_band_m
+        high = max(spec.lane_radius_m, spec.end_lane_radius_m) + limits.lane_band_m
+        opti.subject_to(opti.bounded(low, states[1, :], high))
+
+    _boundary_conditions(opti, model, spec, limits, grid, energy, start, end)
+    _initial_guess(opti, model, spec, grid, start, end, guess)
+
+    opti.solver("ipopt", {"print_time": False, "expand": True},
+                {"print_level": settings.print_level, "tol": settings.tolerance,
+                 "max_iter": settings.max_iterations, "sb": "yes"})
+    started = time.perf_counter()
+    try:
+        solution = opti.solve()
+    except RuntimeError as err:
+        status = opti.stats().get("return_status", "unknown")
+        raise PrimitiveSolveError(f"{spec.primitive_id}: IPOPT did not converge ({status})") from err
+    elapsed = time.perf_counter() - started
+    stats = opti.stats()
+    state_values = np.asarray(solution.value(states)).reshape(nx, samples).T
+    input_values = np.asarray(solution.value(inputs)).reshape(2, samples).T
+    torque_values = np.asarray(solution.value(torques)).reshape(2, samples).T
+    effort_value = float(solution.value(effort))
+    time_s = fine_grid_times(spec.solved_duration_s, spec.intervals)
+    q, qdot = state_values[:, :nq], state_values[:, nq:]
+    if spec.cycles > 1:
+        time_s, q, qdot, input_values, torque_values = _repeat_cycle(
+            spec.cycles, time_s, q, qdot, input_values, torque_values)
+        effort_value *= spec.cycles
+    return Primitive(spec=spec, time_s=time_s, q=q, qdot=qdot, foil_acceleration=input_values,
+                     torque=torque_values, index_j=float(sign * q[-1, 0] - effort_value),
+                     effort=effort_value, solver_status=str(stats["return_status"]), solve_time_s=elapsed,
+                     iterations=int(stats["iter_count"]))
+
+
+def _repeat_cycle(cycles: int, time_s: Array, q: Array, qdot: Array, u: Array, tau: Array):
+    """Tile a periodic cycle: each copy starts where the last ended, alpha carried over (Prop. 1)."""
+    period, advance = time_s[-1], q[-1, 0] - q[0, 0]
+    times, qs = [time_s], [q]
+    for k in range(1, cycles):
+        times.append(time_s[1:] + k * period)
+        shifted = q[1:].copy()
+        shifted[:, 0] += k * advance
+        qs.append(shifted)
+    def tile(a: Array) -> Array:
+        return np.concatenate([a] + [a[1:]] * (cycles - 1))
+    return np.concatenate(times), np.concatenate(qs), tile(qdot), tile(u), tile(tau)
+
+
+def _without_alpha(x: ca.MX, nq: int) -> ca.MX:
+    return ca.vertcat(x[1:nq], x[nq:])
+
+
+def _boundary_conditions(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits,
+                         grid, energy: ca.Function, start, end) -> None:
+    nq, ny = model.nq, model.n_unactuated
+    x0, x_end = grid.x[:, 0], grid.x[:, -1]
+    opti.subject_to(x0[0] == 0.0)
+    kind = spec.primitive_type
+    if kind is PrimitiveType.CRUISE:
+        if spec.energy_j is None:
+            raise ValueError(f"{spec.primitive_id}: a cruise needs energy_j")
+        opti.subject_to(x0[nq - 2:nq] == x_end[nq - 2:nq])          # psi periodic
+        opti.subject_to(x0[nq:] == x_end[nq:])                      # qdot periodic
+        momentum = model.symbolic.functions["momentum"]
+        opti.subject_to(momentum(x0[:nq], x0[nq:])[0] == 0.0)       # reachable from rest: p_alpha = 0
+        # energy level: the cycle's mean kinetic energy (see the module docstring)
+        xs = ca.SX.sym("x", 2 * nq)
+        mean_energy = simpson_integral(grid, ca.Function("T", [xs, ca.SX.sym("u", 2)], [energy(xs)])) / spec.solved_duration_s
+        opti.subject_to(mean_energy == spec.energy_j)
+        if not model.constrained:
+            opti.subject_to(x0[1] == spec.lane_radius_m)
+            opti.subject_to(x_end[1] == spec.lane_radius_m)
+        return
+    if kind is PrimitiveType.ACCELERATE:
+        start = rest_state(model, spec.lane_radius_m)
+    if kind is PrimitiveType.DECELERATE:
+        end = rest_state(model, spec.end_lane_radius_m)
+        alpha_rate = ca.horzcat(grid.x[nq, :], grid.x_mid[nq, :])
+        opti.subject_to(alpha_rate >= limits.min_alpha_rate_rad_s)
+    if start is None or end is None:
+        raise ValueError(f"{spec.primitive_id}: a {kind.value} needs its start and end states")
+    start_x = np.concatenate(start)
+    end_x = np.concatenate(end)
+    opti.subject_to(_without_alpha(x0, nq) == _without_alpha(ca.DM(start_x), nq))
+    opti.subject_to(_without_alpha(x_end, nq) == _without_alpha(ca.DM(end_x), nq))
+
+
+def _initial_guess(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, grid, start, end,
+                   guess: Optional[Primitive]) -> None:
+    nq = model.nq
+    times = fine_grid_times(spec.solved_duration_s, spec.intervals)
+    if guess is not None and len(guess.time_s) == len(times):
+        x_guess = np.column_stack([guess.q, guess.qdot])
+        u_guess = guess.foil_acceleration
+    elif spec.primitive_type is PrimitiveType.CRUISE:
+        # a fish-like gait: pitch leads heave by 90 deg (paper Sec. 5.1), one cycle per second
+        run = simulate_gait(model, SinusoidalGait(0.35, 0.6, 1.0), spec.solved_duration_s,
+                            sample_period_s=spec.solved_duration_s / (len(times) - 1),
+                            initial_y=None if model.constrained else [0.0, spec.lane_radius_m])
+        x_guess = np.column_stack([run.q, run.qdot])
+        u_guess = np.array([SinusoidalGait(0.35, 0.6, 1.0).shape(t)[2] for t in times])
+    else:
+        if spec.primitive_type is PrimitiveType.ACCELERATE:
+            start = rest_state(model, spec.lane_radius_m)
+        if spec.primitive_type is PrimitiveType.DECELERATE:
+            end = rest_state(model, spec.end_lane_radius_m)
+        weight = (times / spec.solved_duration_s)[:, None]
+        x_start, x_end = np.concatenate(start), np.concatenate(end)
+        x_guess = (1 - weight) * x_start + weight * x_end
+        x_guess[:, 0] = 0.02 * times  # drifting forward slowly
+        u_guess = np.zeros((len(times), 2))
+    opti.set_initial(grid.x, x_guess[0::2].T)
+    opti.set_initial(grid.x_mid, x_guess[1::2].T)
+    opti.set_initial(grid.u, u_guess[0::2].T)
+    opti.set_initial(grid.u_mid, u_guess[1::2].T)
