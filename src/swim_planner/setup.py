@@ -10,7 +10,8 @@ setup(
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
     ],
-    install_requires=['setuptools'],
+    install_requires=['setuptools', 'numpy', 'scipy', 'casadi', 'tqdm'],
+    package_data={package_name: ['library/default/manifest.json', 'library/default/primitives/*.npz']},
     zip_safe=True,
     maintainer='swim maintainers',
     maintainer_email='swim@example.com',
@@ -19,7 +20,8 @@ setup(
     tests_require=['pytest'],
     entry_points={
         'console_scripts': [
-
+            'swim-primitives = swim_planner.cli:main',
+            'planner_node = swim_planner.planner_node:main',
         ],
     },
 )

@@ -58,8 +58,9 @@ class PlanningLimits:
 
     heave_range_rad: float = math.radians(50.0)    # assumed: |phi| <= 50 deg keeps the peduncle off the hull
     pitch_range_rad: float = math.radians(70.0)    # assumed: |theta| <= 70 deg, the belt drive's travel
-    torque_fraction: float = 0.7                   # assumed: plan with 70 % of the motor limits, leaving
-                                                   # headroom for feedback and for lambda up to 1.19
+    torque_fraction: float = 0.35                  # assumed: plan with 35 % of the motor limits, so that the
+                                                   # paper's fastest scaling, lambda = 1.67 (Sec. 7.1), fits:
+                                                   # 0.35 * 1.67^2 = 0.98
     foil_acceleration_limit_rad_s2: float = 300.0  # assumed: bounds u to keep the NLP well scaled
     lane_band_m: float = 0.03                      # assumed: Rb, the lateral band around the lanes
     min_alpha_rate_rad_s: float = 0.0              # v_min of eq. 12 (assumed: never swim backwards)

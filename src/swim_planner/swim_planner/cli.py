@@ -1,0 +1,126 @@
+"""swim-primitives: build, list, show and plot primitive libraries.
+
+    swim-primitives build [LIBRARY] [--set constrained|free|all] [--only ID ...] [--workers N] [--scheduler ADDR]
+    swim-primitives list  [LIBRARY]
+    swim-primitives show  ID [--library LIBRARY]
+    swim-primitives plot  ID [--library LIBRARY] [--output FILE.png]
+
+LIBRARY defaults to the library shipped with swim_planner. Builds are resumable: primitives already in
+the library are kept. Jobs run in local processes, or on a Dask cluster when --scheduler names one.
+"""
+from __future__ import annotations
+
+import argparse
+import concurrent.futures
+import json
+import sys
+from pathlib import Path
+
+from swim_model import SwimModelError, load_rig
+from swim_planner.build import build_library
+from swim_planner.catalog import constrained_specs, default_specs, free_specs
+from swim_planner.errors import PlannerError
+from swim_planner.library import PrimitiveLibrary
+from swim_planner.paths import default_library_path
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="swim-primitives", description=__doc__.splitlines()[0])
+    parser.add_argument("--rig", type=Path, default=None, help="rig parameter file (default: the shipped one)")
+    commands = parser.add_subparsers(dest="command", required=True)
+    build = commands.add_parser("build", help="solve the primitives not yet in a library")
+    build.add_argument("library", type=Path, nargs="?", default=None)
+    build.add_argument("--set", choices=("constrained", "free", "all"), default="all")
+    build.add_argument("--only", nargs="+", default=None, help="these ids (and what they join) only")
+    build.add_argument("--workers", type=int, default=2, help="local worker processes")
+    build.add_argument("--scheduler", default=None, help="Dask scheduler address (tcp://host:port)")
+    listing = commands.add_parser("list", help="one line per primitive")
+    listing.add_argument("library", type=Path, nargs="?", default=None)
+    for name in ("show", "plot"):
+        sub = commands.add_parser(name, help=f"{name} one primitive")
+        sub.add_argument("primitive_id")
+        sub.add_argument("--library", type=Path, default=None)
+        if name == "plot":
+            sub.add_argument("--output", type=Path, default=None, help="PNG file (default: <id>.png)")
+    return parser
+
+
+def _select(specs, only):
+    if not only:
+        return specs
+    by_id = {s.primitive_id: s for s in specs}
+    unknown = [i for i in only if i not in by_id]
+    if unknown:
+        raise PlannerError(f"unknown primitive ids: {', '.join(unknown)}")
+    wanted, stack = set(), list(only)
+    while stack:
+        spec = by_id[stack.pop()]
+        if spec.primitive_id not in wanted:
+            wanted.add(spec.primitive_id)
+            stack += [d for d in (spec.start_from, spec.end_at) if d]
+    return [s for s in specs if s.primitive_id in wanted]
+
+
+def _executor(args) -> concurrent.futures.Executor:
+    if args.scheduler:
+        from distributed import Client
+        return Client(args.scheduler).get_executor()
+    return concurrent.futures.ProcessPoolExecutor(max_workers=args.workers)
+
+
+def command_build(args, rig) -> int:
+    from tqdm import tqdm
+    sets = {"constrained": constrained_specs, "free": free_specs, "all": default_specs}
+    specs = _select(sets[args.set](rig), args.only)
+    library = PrimitiveLibrary.create_or_open(args.library or default_library_path(), rig)
+    with tqdm(total=len(specs), unit="primitive", file=sys.stderr) as bar, _executor(args) as executor:
+        def progress(primitive_id: str, status: str) -> None:
+            bar.update(1)
+            bar.write(f"{primitive_id}: {status}")
+        failed = build_library(library, specs, executor, progress=progress)
+    print(f"{library.path}: {len(library)} primitives" + (f"; failed: {', '.join(failed)}" if failed else ""))
+    return 1 if failed else 0
+
+
+def command_list(args, rig) -> int:
+    library = PrimitiveLibrary.load(args.library or default_library_path(), rig)
+    print(f"{'id':48s} {'type':16s} {'T (s)':>6s} {'J':>9s} {'solve (s)':>9s}  status")
+    for primitive_id in library.ids():
+        e = library.entry(primitive_id)
+        print(f"{primitive_id:48s} {e['spec']['primitive_type']:16s} {e['spec']['duration_s']:6.2f} "
+              f"{e['index_j']:9.4f} {e['solve_time_s']:9.2f}  {e['solver_status']}")
+    return 0
+
+
+def command_show(args, rig) -> int:
+    library = PrimitiveLibrary.load(args.library or default_library_path(), rig)
+    entry = dict(library.entry(args.primitive_id))
+    primitive = library.get(args.primitive_id)
+    entry["start_q"], entry["end_q"] = primitive.q[0].tolist(), primitive.q[-1].tolist()
+    entry["peak_torque_n_m"] = abs(primitive.torque).max(axis=0).tolist()
+    print(json.dumps(entry, indent=2))
+    return 0
+
+
+def command_plot(args, rig) -> int:
+    from swim_planner.plots import plot_primitive
+    library = PrimitiveLibrary.load(args.library or default_library_path(), rig)
+    output = args.output or Path(args.primitive_id.replace("/", "_") + ".png")
+    plot_primitive(library.get(args.primitive_id), output)
+    print(f"wrote {output}")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    commands = {"build": command_build, "list": command_list, "show": command_show, "plot": command_plot}
+    try:
+        rig = load_rig(args.rig)
+        return commands[args.command](args, rig)
+    except (PlannerError, SwimModelError) as err:
+        print(f"swim-primitives: {err}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,198 @@
+"""The primitive library on disk: a manifest and one array file per primitive.
+
+Layout of a library directory::
+
+    manifest.json              format version, rig digest, model version, creation time, solver settings,
+                               and per primitive: its spec, index J, effort, solver status, solve time,
+                               the array file's name and SHA-256
+    primitives/<file>.npz      time_s, q, qdot, foil_acceleration, torque (fine collocation grid)
+
+Loading refuses, with a LibraryError naming the cause: a missing or unparsable manifest, another format
+version, a library built for other rig parameters or another model version, and an array file that is
+missing, truncated or altered (its SHA-256 differs from the manifest's).
+"""
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import hashlib
+import io
+import json
+import os
+import re
+from pathlib import Path
+from typing import Iterable, Iterator
+
+import numpy as np
+
+from swim_model import MODEL_VERSION, RigParameters
+from swim_planner.errors import LibraryError
+from swim_planner.primitives import Primitive, PrimitiveSpec, PrimitiveType, SolverSettings
+
+FORMAT_VERSION = 1
+MANIFEST = "manifest.json"
+ARRAYS = ("time_s", "q", "qdot", "foil_acceleration", "torque")
+
+
+def _file_name(primitive_id: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "__", primitive_id) + ".npz"
+
+
+def _spec_to_json(spec: PrimitiveSpec) -> dict:
+    data = dataclasses.asdict(spec)
+    data["primitive_type"] = spec.primitive_type.value
+    return data
+
+
+def _spec_from_json(data: dict) -> PrimitiveSpec:
+    return PrimitiveSpec(**{**data, "primitive_type": PrimitiveType(data["primitive_type"])})
+
+
+def _encode_arrays(primitive: Primitive) -> bytes:
+    buffer = io.BytesIO()
+    np.savez(buffer, **{name: getattr(primitive, name) for name in ARRAYS})
+    return buffer.getvalue()
+
+
+class PrimitiveLibrary:
+    """A library directory: write primitives into it, read them back verified."""
+
+    def __init__(self, path: str | Path, rig: RigParameters, solver: SolverSettings = SolverSettings()) -> None:
+        self.path = Path(path)
+        self.rig = rig
+        self.solver = solver
+        self._entries: dict[str, dict] = {}
+        self._cache: dict[str, Primitive] = {}
+
+    # ----- writing -------------------------------------------------------------------------------
+    @classmethod
+    def create_or_open(cls, path: str | Path, rig: RigParameters,
+                       solver: SolverSettings = SolverSettings()) -> "PrimitiveLibrary":
+        """Open an existing library for adding to it (resuming a build), or start a new one."""
+        if (Path(path) / MANIFEST).exists():
+            library = cls.load(path, rig)
+            library.solver = solver
+            return library
+        library = cls(path, rig, solver)
+        library._write_manifest()
+        return library
+
+    def add(self, primitive: Primitive) -> None:
+        """Store one primitive (its array file first, then the manifest, each replaced atomically)."""
+        spec = primitive.spec
+        payload = _encode_arrays(primitive)
+        name = _file_name(spec.primitive_id)
+        (self.path / "primitives").mkdir(parents=True, exist_ok=True)
+        _atomic_write(self.path / "primitives" / name, payload)
+        self._entries[spec.primitive_id] = {
+            "spec": _spec_to_json(spec), "file": name, "sha256": hashlib.sha256(payload).hexdigest(),
+            "index_j": primitive.index_j, "effort": primitive.effort, "solver_status": primitive.solver_status,
+            "solve_time_s": primitive.solve_time_s, "iterations": primitive.iterations,
+            "samples": int(len(primitive.time_s)),
+        }
+        self._cache[spec.primitive_id] = primitive
+        self._write_manifest()
+
+    def _write_manifest(self) -> None:
+        self.path.mkdir(parents=True, exist_ok=True)
+        manifest = {
+            "format_version": FORMAT_VERSION,
+            "rig_digest": self.rig.digest(),
+            "model_version": MODEL_VERSION,
+            "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "solver": dataclasses.asdict(self.solver),
+            "primitives": self._entries,
+        }
+        _atomic_write(self.path / MANIFEST, json.dumps(manifest, indent=1, sort_keys=True).encode())
+
+    # ----- reading -------------------------------------------------------------------------------
+    @classmethod
+    def load(cls, path: str | Path, rig: RigParameters) -> "PrimitiveLibrary":
+        """Open a library, checking its format, rig and model (arrays are verified as they are read)."""
+        directory = Path(path)
+        try:
+            manifest = json.loads((directory / MANIFEST).read_text())
+        except FileNotFoundError as err:
+            raise LibraryError(f"no primitive library at {directory} (no {MANIFEST}); build one with "
+                               f"`swim-primitives build {directory}`") from err
+        except (OSError, ValueError) as err:
+            raise LibraryError(f"{directory / MANIFEST} is unreadable or not JSON: {err}") from err
+        if not isinstance(manifest, dict) or manifest.get("format_version") != FORMAT_VERSION:
+            found = manifest.get("format_version") if isinstance(manifest, dict) else None
+            raise LibraryError(f"{directory}: library format {found!r}, this planner reads format {FORMAT_VERSION}")
+        if manifest.get("rig_digest") != rig.digest():
+            raise LibraryError(f"{directory} was built for other rig parameters (digest "
+                               f"{str(manifest.get('rig_digest'))[:12]}..., this rig {rig.digest()[:12]}...); "
+                               "rebuild it for this rig")
+        if manifest.get("model_version") != MODEL_VERSION:
+            raise LibraryError(f"{directory} was built with swim_model version {manifest.get('model_version')!r}, "
+                               f"this is version {MODEL_VERSION}; rebuild it")
+        library = cls(directory, rig, SolverSettings(**manifest.get("solver", {})))
+        entries = manifest.get("primitives")
+        if not isinstance(entries, dict):
+            raise LibraryError(f"{directory / MANIFEST}: 'primitives' must be a mapping")
+        library._entries = entries
+        return library
+
+    def ids(self) -> list[str]:
+        return sorted(self._entries)
+
+    def __contains__(self, primitive_id: str) -> bool:
+        return primitive_id in self._entries
+
+    def __len__(self) -> int:
+        return len(self._entries)
+
+    def entry(self, primitive_id: str) -> dict:
+        """The manifest's record of one primitive."""
+        try:
+            return self._entries[primitive_id]
+        except KeyError:
+            raise LibraryError(f"no primitive '{primitive_id}' in {self.path}") from None
+
+    def spec(self, primitive_id: str) -> PrimitiveSpec:
+        return _spec_from_json(self.entry(primitive_id)["spec"])
+
+    def get(self, primitive_id: str) -> Primitive:
+        """Read one primitive, verifying its array file against the manifest."""
+        if primitive_id in self._cache:
+            return self._cache[primitive_id]
+        record = self.entry(primitive_id)
+        file = self.path / "primitives" / record["file"]
+        try:
+            payload = file.read_bytes()
+        except OSError as err:
+            raise LibraryError(f"{file}: cannot read the arrays of '{primitive_id}': {err.strerror}") from err
+        if hashlib.sha256(payload).hexdigest() != record["sha256"]:
+            raise LibraryError(f"{file} is corrupt or truncated (SHA-256 differs from the manifest); "
+                               f"rebuild '{primitive_id}'")
+        try:
+            with np.load(io.BytesIO(payload)) as arrays:
+                data = {name: np.array(arrays[name]) for name in ARRAYS}
+        except (OSError, ValueError, KeyError) as err:
+            raise LibraryError(f"{file}: not a valid primitive array file: {err}") from err
+        primitive = Primitive(spec=self.spec(primitive_id), index_j=record["index_j"], effort=record["effort"],
+                              solver_status=record["solver_status"], solve_time_s=record["solve_time_s"],
+                              iterations=record["iterations"], **data)
+        self._cache[primitive_id] = primitive
+        return primitive
+
+    def __iter__(self) -> Iterator[Primitive]:
+        return (self.get(i) for i in self.ids())
+
+    def digest(self) -> str:
+        """SHA-256 over the manifest's primitive records: names the library a plan came from."""
+        return hashlib.sha256(json.dumps(self._entries, sort_keys=True).encode()).hexdigest()
+
+
+def _atomic_write(path: Path, payload: bytes) -> None:
+    partial = path.with_name(f".{path.name}.{os.getpid()}.partial")
+    partial.write_bytes(payload)
+    partial.replace(path)
+
+
+def verify_all(library: PrimitiveLibrary) -> Iterable[str]:
+    """Read every primitive (raising LibraryError on the first bad one); yields the ids read."""
+    for primitive_id in library.ids():
+        library.get(primitive_id)
+        yield primitive_id

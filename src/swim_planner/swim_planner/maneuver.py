@@ -1,0 +1,140 @@
+"""Maneuvers: primitives concatenated and time-scaled (paper Secs. 4.2-4.3; SPEC.md section 4).
+
+Concatenation: each primitive starts where the previous one ended; its alpha is translated by the
+previous end value (Prop. 1), and the junction is checked: the states (all but alpha) must agree within
+JUNCTION_TOLERANCE, else the request is refused with the mismatch named, never spliced over. Our
+primitives are solved with equal junction states including qdot, so the plan's qdot is continuous there;
+only u = psiddot may jump.
+
+Time scaling by lambda > 0 (P3): t -> t / lambda, q(t) -> q(lambda t), qdot -> lambda qdot,
+u -> lambda^2 u, tau -> lambda^2 tau. A lambda whose torques exceed the motor limits is refused.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from swim_model import RigParameters
+from swim_planner.errors import LibraryError, ManeuverError
+from swim_planner.library import PrimitiveLibrary
+from swim_planner.primitives import Primitive
+
+Array = npt.NDArray[np.float64]
+
+#: largest junction mismatch accepted: rad, m, rad/s, m/s
+JUNCTION_TOLERANCE = 1e-5
+
+
+@dataclasses.dataclass(frozen=True)
+class Segment:
+    primitive_id: str
+    primitive_type: str
+    repeat_index: int
+    start_time_s: float
+    duration_s: float
+    time_scale: float
+    alpha_offset_rad: float
+    first_sample: int
+    sample_count: int
+
+
+@dataclasses.dataclass
+class Plan:
+    """A concatenated, time-scaled plan on its sample grid."""
+
+    constrained: bool
+    lane_radius_m: float
+    joint_names: tuple[str, ...]
+    time_s: Array
+    q: Array
+    qdot: Array
+    foil_acceleration: Array
+    torque: Array
+    segments: list[Segment]
+    library_digest: str
+
+    @property
+    def duration_s(self) -> float:
+        return float(self.time_s[-1])
+
+
+def scale_primitive(primitive: Primitive, time_scale: float) -> tuple[Array, Array, Array, Array, Array]:
+    """(t, q, qdot, u, tau) of a primitive run lambda times faster (P3)."""
+    return (primitive.time_s / time_scale, primitive.q, primitive.qdot * time_scale,
+            primitive.foil_acceleration * time_scale ** 2, primitive.torque * time_scale ** 2)
+
+
+def junction_mismatch(previous: Primitive, following: Primitive) -> float:
+    """Largest difference between previous's end state and following's start state, alpha aside."""
+    q_end, qdot_end = previous.end_state
+    q_start, qdot_start = following.start_state
+    return float(max(np.abs(q_end[1:] - q_start[1:]).max(), np.abs(qdot_end - qdot_start).max()))
+
+
+def check_time_scale(time_scale: float) -> None:
+    if not (isinstance(time_scale, (int, float)) and math.isfinite(time_scale) and time_scale > 0.0):
+        raise ManeuverError(f"time scale must be a positive finite number, got {time_scale!r}")
+
+
+def expand_sequence(primitive_ids: Sequence[str], repeat_counts: Sequence[int]) -> list[tuple[str, int]]:
+    """[(id, repeat_index), ...] from ids and repeat counts (an empty counts list means once each)."""
+    counts = list(repeat_counts) or [1] * len(primitive_ids)
+    if len(counts) != len(primitive_ids):
+        raise ManeuverError(f"{len(primitive_ids)} primitive ids but {len(counts)} repeat counts")
+    if not primitive_ids:
+        raise ManeuverError("the sequence is empty")
+    if any(int(c) < 1 for c in counts):
+        raise ManeuverError("every repeat count must be at least 1")
+    return [(pid, k) for pid, count in zip(primitive_ids, counts) for k in range(int(count))]
+
+
+def concatenate(library: PrimitiveLibrary, rig: RigParameters, sequence: Sequence[tuple[str, int]],
+                time_scale: float = 1.0, start_alpha_rad: float = 0.0) -> Plan:
+    """The plan that runs the primitives of ``sequence`` one after another at time scale lambda."""
+    check_time_scale(time_scale)
+    unknown = sorted({pid for pid, _ in sequence if pid not in library})
+    if unknown:
+        raise ManeuverError(f"unknown primitives: {', '.join(unknown)} (see `swim-primitives list`)")
+    try:
+        primitives = [library.get(pid) for pid, _ in sequence]
+    except LibraryError as err:
+        raise ManeuverError(str(err)) from err
+    kinds = {p.spec.constrained for p in primitives}
+    if len(kinds) != 1:
+        raise ManeuverError("a plan cannot mix constrained and free primitives")
+    for (pid_a, _), (pid_b, _), a, b in zip(sequence, sequence[1:], primitives, primitives[1:]):
+        mismatch = junction_mismatch(a, b)
+        if mismatch > JUNCTION_TOLERANCE:
+            raise ManeuverError(f"'{pid_a}' does not end where '{pid_b}' starts (states differ by {mismatch:.3g}; "
+                                f"tolerance {JUNCTION_TOLERANCE:g})")
+    limits = np.array(rig.torque_limits_n_m)
+    peak = max(float((np.abs(p.torque) / limits).max()) for p in primitives) * time_scale ** 2
+    if peak > 1.0:
+        raise ManeuverError(f"time scale {time_scale:g} needs {peak:.0%} of the motor torque limits; "
+                            f"the largest feasible time scale for this sequence is {time_scale / math.sqrt(peak):.3f}")
+    pieces: list[tuple[Array, ...]] = []
+    segments: list[Segment] = []
+    clock, alpha, sample = 0.0, float(start_alpha_rad), 0
+    for index, ((pid, repeat), primitive) in enumerate(zip(sequence, primitives)):
+        t, q, qdot, u, tau = scale_primitive(primitive, time_scale)
+        q = q.copy()
+        offset = alpha - q[0, 0]
+        q[:, 0] += offset
+        skip = 0 if index == 0 else 1  # the junction sample is the previous segment's last
+        pieces.append((t[skip:] + clock, q[skip:], qdot[skip:], u[skip:], tau[skip:]))
+        count = len(t) - skip
+        segments.append(Segment(pid, primitive.spec.primitive_type.value, repeat, clock, float(t[-1]), time_scale,
+                                offset, sample, count))
+        clock += float(t[-1])
+        alpha = float(q[-1, 0])
+        sample += count
+    time_s, q, qdot, u, tau = (np.concatenate(parts) for parts in zip(*pieces))
+    first = primitives[0]
+    names = ("alpha", "phi", "theta") if first.spec.constrained else ("alpha", "R", "phi", "theta")
+    return Plan(constrained=first.spec.constrained, lane_radius_m=first.spec.lane_radius_m, joint_names=names,
+                time_s=time_s, q=q, qdot=qdot, foil_acceleration=u, torque=tau, segments=segments,
+                library_digest=library.digest())

@@ -1,0 +1,109 @@
+"""planner_node: serves maneuver requests from the primitive library.
+
+Service ``request_maneuver`` (swim_interfaces/srv/RequestManeuver): an explicit primitive sequence with
+repeat counts, concatenated and time-scaled (MODE_SEQUENCE). A request that cannot be planned gets
+success = false and a message saying why; nothing else changes. Goal requests (MODE_GOAL) are refused
+with a message until the graph search lands. Topic ``plan`` (PlannedTrajectory, transient local):
+the last plan made.
+
+Parameters: ``library_path`` (default: the shipped library), ``rig_path`` (default: the shipped rig),
+``default_time_scale`` (used when a request's time_scale is 0; default 1.0).
+"""
+from __future__ import annotations
+
+import threading
+
+import rclpy
+from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import QoSDurabilityPolicy, QoSProfile
+from swim_interfaces.msg import PlannedTrajectory, PrimitiveSegment
+from swim_interfaces.srv import RequestManeuver
+
+from swim_model import SwimModelError, load_rig
+from swim_planner.errors import PlannerError
+from swim_planner.library import PrimitiveLibrary
+from swim_planner.maneuver import Plan, concatenate, expand_sequence
+from swim_planner.paths import default_library_path
+
+
+def plan_to_message(plan: Plan, stamp) -> PlannedTrajectory:
+    message = PlannedTrajectory()
+    message.header.stamp = stamp
+    message.interface_version = PlannedTrajectory.INTERFACE_VERSION
+    message.constrained = plan.constrained
+    message.lane_radius_m = float(plan.lane_radius_m)
+    message.joint_names = list(plan.joint_names)
+    message.time_from_start_s = plan.time_s.tolist()
+    message.positions = plan.q.ravel().tolist()
+    message.velocities = plan.qdot.ravel().tolist()
+    message.foil_accelerations = plan.foil_acceleration.ravel().tolist()
+    message.feedforward_torques = plan.torque.ravel().tolist()
+    message.segments = [PrimitiveSegment(
+        primitive_id=s.primitive_id, primitive_type=s.primitive_type, repeat_index=s.repeat_index,
+        start_time_s=s.start_time_s, duration_s=s.duration_s, time_scale=s.time_scale,
+        alpha_offset_rad=s.alpha_offset_rad, first_sample=s.first_sample, sample_count=s.sample_count)
+        for s in plan.segments]
+    message.library_digest = plan.library_digest
+    return message
+
+
+class PlannerNode(Node):
+    def __init__(self) -> None:
+        super().__init__("planner_node")
+        self.declare_parameter("library_path", "")
+        self.declare_parameter("rig_path", "")
+        self.declare_parameter("default_time_scale", 1.0)
+        rig_path = self.get_parameter("rig_path").value or None
+        library_path = self.get_parameter("library_path").value or default_library_path()
+        self.rig = load_rig(rig_path)
+        self.library = PrimitiveLibrary.load(library_path, self.rig)
+        self._library_lock = threading.Lock()  # the library caches arrays as it reads them
+        latched = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
+        self.plan_publisher = self.create_publisher(PlannedTrajectory, "plan", latched)
+        self.create_service(RequestManeuver, "request_maneuver", self.on_request,
+                            callback_group=ReentrantCallbackGroup())
+        self.get_logger().info(f"serving {len(self.library)} primitives from {self.library.path}")
+
+    def on_request(self, request: RequestManeuver.Request,
+                   response: RequestManeuver.Response) -> RequestManeuver.Response:
+        try:
+            plan = self.plan(request)
+        except PlannerError as err:
+            response.success, response.message = False, str(err)
+            self.get_logger().warning(f"maneuver refused: {err}")
+            return response
+        response.success = True
+        response.message = f"planned {len(plan.segments)} segments, {plan.duration_s:.3f} s"
+        response.plan = plan_to_message(plan, self.get_clock().now().to_msg())
+        self.plan_publisher.publish(response.plan)
+        return response
+
+    def plan(self, request: RequestManeuver.Request) -> Plan:
+        if request.mode != RequestManeuver.Request.MODE_SEQUENCE:
+            raise PlannerError(f"mode {request.mode} is not served yet; use MODE_SEQUENCE "
+                               f"({RequestManeuver.Request.MODE_SEQUENCE}) with explicit primitive ids")
+        time_scale = request.time_scale or self.get_parameter("default_time_scale").value
+        sequence = expand_sequence(list(request.primitive_ids), list(request.repeat_counts))
+        with self._library_lock:
+            return concatenate(self.library, self.rig, sequence, time_scale, request.start_alpha_rad)
+
+
+def main(args: list[str] | None = None) -> None:
+    try:
+        with rclpy.init(args=args):
+            try:
+                node = PlannerNode()
+            except (PlannerError, SwimModelError) as err:
+                rclpy.logging.get_logger("planner_node").fatal(str(err))
+                raise SystemExit(2) from err
+            executor = MultiThreadedExecutor(num_threads=4)
+            executor.add_node(node)
+            executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,83 @@
+"""The library on disk: round trip, and every way a library can be bad."""
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from swim_planner.errors import LibraryError
+from swim_planner.library import MANIFEST, PrimitiveLibrary
+
+SOME = ["constrained/cruise/E0.05", "constrained/accelerate/E0.05"]
+
+
+@pytest.fixture()
+def copy(library, rig, tmp_path):
+    """A new library holding two primitives of the shipped one."""
+    new = PrimitiveLibrary.create_or_open(tmp_path / "lib", rig)
+    for primitive_id in SOME:
+        new.add(library.get(primitive_id))
+    return tmp_path / "lib"
+
+
+def test_round_trip(library, rig, copy):
+    loaded = PrimitiveLibrary.load(copy, rig)
+    assert loaded.ids() == sorted(SOME)
+    for primitive_id in SOME:
+        original, read = library.get(primitive_id), loaded.get(primitive_id)
+        np.testing.assert_array_equal(read.q, original.q)
+        np.testing.assert_array_equal(read.torque, original.torque)
+        assert read.spec == original.spec and read.index_j == original.index_j
+    manifest = json.loads((copy / MANIFEST).read_text())
+    assert manifest["rig_digest"] == rig.digest() and manifest["format_version"] == 1
+
+
+def _edit_manifest(path, change):
+    manifest = json.loads((path / MANIFEST).read_text())
+    change(manifest)
+    (path / MANIFEST).write_text(json.dumps(manifest))
+
+
+def test_other_rig_is_refused(rig, copy):
+    with pytest.raises(LibraryError, match="other rig parameters"):
+        PrimitiveLibrary.load(copy, rig.replace(platform_mass_kg=rig.platform_mass_kg + 0.1))
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda m: m.__setitem__("format_version", 99), "library format 99"),
+    (lambda m: m.__setitem__("model_version", "0"), "swim_model version"),
+    (lambda m: m.__setitem__("primitives", []), "must be a mapping"),
+])
+def test_bad_manifest_is_refused(rig, copy, change, message):
+    _edit_manifest(copy, change)
+    with pytest.raises(LibraryError, match=message):
+        PrimitiveLibrary.load(copy, rig)
+
+
+def test_truncated_array_file_is_refused(rig, copy):
+    target = next((copy / "primitives").iterdir())
+    target.write_bytes(target.read_bytes()[:200])
+    loaded = PrimitiveLibrary.load(copy, rig)
+    with pytest.raises(LibraryError, match="corrupt or truncated"):
+        for primitive_id in loaded.ids():
+            loaded.get(primitive_id)
+
+
+def test_missing_library_and_garbage_manifest(rig, tmp_path):
+    with pytest.raises(LibraryError, match="no primitive library"):
+        PrimitiveLibrary.load(tmp_path / "absent", rig)
+    (tmp_path / "bad").mkdir()
+    (tmp_path / "bad" / MANIFEST).write_text("{not json")
+    with pytest.raises(LibraryError, match="not JSON"):
+        PrimitiveLibrary.load(tmp_path / "bad", rig)
+
+
+def test_unknown_primitive(rig, copy):
+    with pytest.raises(LibraryError, match="no primitive 'nope'"):
+        PrimitiveLibrary.load(copy, rig).get("nope")
+
+
+def test_missing_array_file(rig, copy):
+    shutil.rmtree(copy / "primitives")
+    with pytest.raises(LibraryError, match="cannot read"):
+        PrimitiveLibrary.load(copy, rig).get(SOME[0])

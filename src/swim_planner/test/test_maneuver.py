@@ -1,0 +1,59 @@
+"""Concatenation and time scaling of the shipped library's primitives."""
+import numpy as np
+import pytest
+
+from swim_planner.errors import ManeuverError
+from swim_planner.maneuver import concatenate, expand_sequence
+
+PAPER_CONSTRAINED = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05",
+                      "constrained/cruise_to_cruise/E0.05-E0.10", "constrained/cruise/E0.10",
+                      "constrained/decelerate/E0.10"], [1, 2, 1, 2, 1])
+
+
+def paper_plan(library, rig, time_scale=1.0, start_alpha=0.0):
+    return concatenate(library, rig, expand_sequence(*PAPER_CONSTRAINED), time_scale, start_alpha)
+
+
+def test_paper_constrained_maneuver_lasts_30_s(library, rig):
+    """Sec. 7.1: {accelerate1, cruise1 x2, cruise-to-cruise(1,2), cruise2 x2, decelerate2}, 30 s nominal."""
+    plan = paper_plan(library, rig)
+    assert plan.duration_s == pytest.approx(4 + 2 * 5 + 2 + 2 * 5 + 4)
+    assert [s.primitive_id for s in plan.segments][1:3] == ["constrained/cruise/E0.05"] * 2
+    assert np.all(np.diff(plan.time_s) > 0)
+    # alpha continues across junctions and the vehicle ends at rest
+    for segment in plan.segments[1:]:
+        k = segment.first_sample
+        assert abs(plan.q[k, 0] - plan.q[k - 1, 0]) < 0.05
+    np.testing.assert_allclose(plan.qdot[-1], 0.0, atol=1e-6)
+    assert plan.q[-1, 0] > 1.0
+
+
+@pytest.mark.parametrize("time_scale", [0.8, 1.2])
+def test_time_scaling(library, rig, time_scale):
+    """lambda = 1.2 lasts 1/1.2 as long and needs 1.44x the torque (P3, Sec. 4.3)."""
+    nominal, scaled = paper_plan(library, rig), paper_plan(library, rig, time_scale)
+    assert scaled.duration_s == pytest.approx(nominal.duration_s / time_scale, rel=1e-12)
+    np.testing.assert_allclose(scaled.torque, nominal.torque * time_scale ** 2, rtol=1e-12)
+    np.testing.assert_allclose(scaled.q, nominal.q, atol=1e-12)
+    np.testing.assert_allclose(scaled.qdot, nominal.qdot * time_scale, rtol=1e-12)
+    assert np.abs(scaled.torque).max() == pytest.approx(time_scale ** 2 * np.abs(nominal.torque).max())
+
+
+def test_start_alpha_translates_the_plan(library, rig):
+    plan, moved = paper_plan(library, rig), paper_plan(library, rig, start_alpha=1.5)
+    np.testing.assert_allclose(moved.q[:, 0], plan.q[:, 0] + 1.5, atol=1e-12)
+
+
+@pytest.mark.parametrize("ids, counts, scale, message", [
+    (["constrained/accelerate/E0.05", "constrained/cruise/E0.10"], [1, 1], 1.0, "does not end where"),
+    (["constrained/cruise/E0.05", "no/such/primitive"], [1, 1], 1.0, "unknown primitives: no/such/primitive"),
+    (PAPER_CONSTRAINED[0], PAPER_CONSTRAINED[1], 3.0, "largest feasible time scale"),
+    (PAPER_CONSTRAINED[0], PAPER_CONSTRAINED[1], -1.0, "positive finite"),
+    (PAPER_CONSTRAINED[0], PAPER_CONSTRAINED[1], float("nan"), "positive finite"),
+    (PAPER_CONSTRAINED[0], [1, 2], 1.0, "repeat counts"),
+    (PAPER_CONSTRAINED[0], [1, 0, 1, 1, 1], 1.0, "at least 1"),
+    (["constrained/accelerate/E0.05", "free/cruise/R0.43/E0.05"], [1, 1], 1.0, "mix constrained and free"),
+])
+def test_impossible_requests_say_why(library, rig, ids, counts, scale, message):
+    with pytest.raises(ManeuverError, match=message):
+        concatenate(library, rig, expand_sequence(ids, counts), scale)

@@ -1,0 +1,112 @@
+"""planner_node over DDS: a real node in its own process, requests through rclpy, the latched plan topic."""
+import os
+import signal
+import subprocess
+import time
+
+import numpy as np
+import pytest
+
+from conftest import WORKSPACE
+
+PAPER = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05", "constrained/cruise_to_cruise/E0.05-E0.10",
+          "constrained/cruise/E0.10", "constrained/decelerate/E0.10"], [1, 2, 1, 2, 1])
+
+
+@pytest.fixture(scope="module")
+def planner(ros_domain):
+    command = "source scripts/env.sh && exec ros2 run swim_planner planner_node"
+    process = subprocess.Popen(["bash", "-c", command], cwd=WORKSPACE, env=dict(os.environ),
+                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    yield process
+    os.killpg(process.pid, signal.SIGINT)
+    try:
+        process.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        os.killpg(process.pid, signal.SIGKILL)
+
+
+@pytest.fixture()
+def client(planner, rclpy_context):
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from swim_interfaces.srv import RequestManeuver
+    node = rclpy.create_node("planner_test_client", context=rclpy_context)
+    service = node.create_client(RequestManeuver, "request_maneuver")
+    assert service.wait_for_service(timeout_sec=30.0), "planner_node did not come up"
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    executor.add_node(node)
+    yield executor, service
+    executor.shutdown()
+    node.destroy_node()
+
+
+def call(executor, service, ids, counts, time_scale=1.0, mode=0):
+    from swim_interfaces.srv import RequestManeuver
+    request = RequestManeuver.Request(mode=mode, primitive_ids=ids, repeat_counts=counts, time_scale=time_scale)
+    future = service.call_async(request)
+    executor.spin_until_future_complete(future, timeout_sec=30.0)
+    assert future.done(), "no reply within 30 s"
+    return future.result()
+
+
+def test_valid_request_returns_the_paper_maneuver(client):
+    executor, service = client
+    reply = call(executor, service, *PAPER, time_scale=1.2)
+    assert reply.success, reply.message
+    plan = reply.plan
+    assert plan.time_from_start_s[-1] == pytest.approx(30.0 / 1.2)
+    assert len(plan.positions) == 3 * len(plan.time_from_start_s)
+    assert [s.primitive_id for s in plan.segments] == [PAPER[0][0]] + [PAPER[0][1]] * 2 + [PAPER[0][2]] + \
+        [PAPER[0][3]] * 2 + [PAPER[0][4]]
+    assert all(s.time_scale == 1.2 for s in plan.segments)
+    np.testing.assert_allclose(np.asarray(plan.velocities).reshape(-1, 3)[-1], 0.0, atol=1e-6)
+
+
+@pytest.mark.parametrize("ids, counts, scale, mode, message", [
+    (["no/such"], [1], 1.0, 0, "unknown primitives"),
+    (["constrained/accelerate/E0.05", "constrained/cruise/E0.10"], [1, 1], 1.0, 0, "does not end where"),
+    (PAPER[0], PAPER[1], 3.0, 0, "largest feasible time scale"),
+    (PAPER[0], [1], 1.0, 0, "repeat counts"),
+    ([], [], 1.0, 0, "empty"),
+    (PAPER[0], PAPER[1], float("nan"), 0, "positive finite"),
+    (PAPER[0], PAPER[1], 1.0, 7, "not served"),
+])
+def test_bad_requests_are_refused_and_the_node_lives_on(client, planner, ids, counts, scale, mode, message):
+    executor, service = client
+    reply = call(executor, service, ids, counts, scale, mode)
+    assert not reply.success and message in reply.message
+    assert len(reply.plan.time_from_start_s) == 0
+    assert planner.poll() is None
+
+
+def test_concurrent_requests(client):
+    executor, service = client
+    from swim_interfaces.srv import RequestManeuver
+    futures = [service.call_async(RequestManeuver.Request(primitive_ids=PAPER[0], repeat_counts=PAPER[1],
+                                                          time_scale=scale))
+               for scale in (0.8, 1.0, 1.1, 1.2)]
+    deadline = time.monotonic() + 30
+    while not all(f.done() for f in futures) and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.05)
+    durations = [f.result().plan.time_from_start_s[-1] for f in futures]
+    np.testing.assert_allclose(durations, [30 / 0.8, 30.0, 30 / 1.1, 30 / 1.2])
+
+
+def test_last_plan_is_latched(client, rclpy_context):
+    import rclpy
+    from rclpy.qos import QoSDurabilityPolicy, QoSProfile
+    from swim_interfaces.msg import PlannedTrajectory
+    executor, service = client
+    assert call(executor, service, *PAPER, time_scale=1.0).success
+    late = rclpy.create_node("late_subscriber", context=rclpy_context)
+    received = []
+    late.create_subscription(PlannedTrajectory, "plan", received.append,
+                             QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL))
+    executor.add_node(late)
+    deadline = time.monotonic() + 10
+    while not received and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.1)
+    executor.remove_node(late)
+    late.destroy_node()
+    assert received and received[-1].time_from_start_s[-1] == pytest.approx(30.0)
