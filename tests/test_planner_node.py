@@ -70,7 +70,7 @@ def test_valid_request_returns_the_paper_maneuver(client):
     (PAPER[0], [1], 1.0, 0, "repeat counts"),
     ([], [], 1.0, 0, "empty"),
     (PAPER[0], PAPER[1], float("nan"), 0, "positive finite"),
-    (PAPER[0], PAPER[1], 1.0, 7, "not served"),
+    (PAPER[0], PAPER[1], 1.0, 7, "unknown mode 7"),
 ])
 def test_bad_requests_are_refused_and_the_node_lives_on(client, planner, ids, counts, scale, mode, message):
     executor, service = client
@@ -78,6 +78,25 @@ def test_bad_requests_are_refused_and_the_node_lives_on(client, planner, ids, co
     assert not reply.success and message in reply.message
     assert len(reply.plan.time_from_start_s) == 0
     assert planner.poll() is None
+
+
+def test_goal_request(client):
+    from swim_interfaces.srv import RequestManeuver
+    executor, service = client
+    request = RequestManeuver.Request(mode=RequestManeuver.Request.MODE_GOAL, goal_state="constrained/rest",
+                                      goal_alpha_rad=3.0, time_scale=1.0)
+    future = service.call_async(request)
+    executor.spin_until_future_complete(future, timeout_sec=30.0)
+    reply = future.result()
+    assert reply.success, reply.message
+    positions = np.asarray(reply.plan.positions).reshape(-1, 3)
+    assert positions[-1, 0] - positions[0, 0] >= 3.0
+    assert reply.plan.segments[0].primitive_type == "accelerate"
+    assert reply.plan.segments[-1].primitive_type == "decelerate"
+    request.goal_state = "constrained/cruise/E9.99"
+    future = service.call_async(request)
+    executor.spin_until_future_complete(future, timeout_sec=30.0)
+    assert not future.result().success and "unknown goal state" in future.result().message
 
 
 def test_concurrent_requests(client):

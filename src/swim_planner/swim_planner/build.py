@@ -3,7 +3,8 @@
 Cruises depend on nothing; every other primitive needs the states of the cruises it joins. Jobs go to any
 ``concurrent.futures.Executor`` (a process pool by default, or a Dask ``distributed.Client``'s executor),
 each as soon as the primitives it depends on are in the library. Primitives already in the library are
-not solved again, so an interrupted build resumes where it stopped.
+not solved again, so an interrupted build resumes where it stopped; a stored primitive whose spec has
+changed is solved again, with every primitive that joins it.
 """
 from __future__ import annotations
 
@@ -20,13 +21,36 @@ Progress = Callable[[str, str], None]
 
 def solve_job(rig: RigParameters, spec: PrimitiveSpec, limits: PlanningLimits, settings: SolverSettings,
               start, end, guess: Optional[Primitive] = None) -> Primitive:
-    """One primitive, in a worker process: picklable arguments in, a Primitive out."""
+    """One primitive, in a worker process: picklable arguments in, a Primitive out.
+
+    guess: a primitive on the same grid to start from, or the cruise this primitive joins (its stroke
+    seeds the initial guess of an accelerate or decelerate)."""
     model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m)
-    return solve_primitive(model, spec, limits, start=start, end=end, guess=guess, settings=settings)
+    try:
+        return solve_primitive(model, spec, limits, start=start, end=end, guess=guess, settings=settings)
+    except PrimitiveSolveError:
+        if guess is None:
+            raise
+        # IPOPT's infeasibility verdicts depend on where it starts: try the plain blend of the boundary
+        # states before giving up
+        return solve_primitive(model, spec, limits, start=start, end=end, guess=None, settings=settings)
 
 
 def dependencies(spec: PrimitiveSpec) -> list[str]:
     return [d for d in (spec.start_from, spec.end_at) if d is not None]
+
+
+def _stale(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec]) -> set[str]:
+    """Stored primitives whose spec changed, and everything that joins them (their states may move)."""
+    stale = {s.primitive_id for s in specs if s.primitive_id in library and library.spec(s.primitive_id) != s}
+    grew = True
+    while grew:
+        grew = False
+        for spec in specs:
+            if spec.primitive_id not in stale and any(d in stale for d in dependencies(spec)):
+                stale.add(spec.primitive_id)
+                grew = True
+    return stale
 
 
 def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], executor: concurrent.futures.Executor,
@@ -37,9 +61,10 @@ def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], exe
         missing = [d for d in dependencies(spec) if d not in known]
         if missing:
             raise ValueError(f"{spec.primitive_id} depends on unknown primitives: {', '.join(missing)}")
-    pending = [s for s in specs if s.primitive_id not in library]
+    stale = _stale(library, specs)
+    pending = [s for s in specs if s.primitive_id not in library or s.primitive_id in stale]
     for spec in specs:
-        if spec.primitive_id in library:
+        if spec.primitive_id in library and spec.primitive_id not in stale:
             progress(spec.primitive_id, "cached")
     failed: list[str] = []
     running: dict[concurrent.futures.Future, PrimitiveSpec] = {}
@@ -50,11 +75,13 @@ def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], exe
                 pending.remove(spec)
                 failed.append(spec.primitive_id)
                 progress(spec.primitive_id, "skipped: a primitive it joins failed")
-            elif all(d in library for d in deps):
+            elif all(d in library and d not in stale for d in deps):
                 pending.remove(spec)
                 start = library.get(spec.start_from).end_state if spec.start_from else None
                 end = library.get(spec.end_at).start_state if spec.end_at else None
-                running[executor.submit(solve_job, library.rig, spec, limits, library.solver, start, end)] = spec
+                cruise = library.get(spec.start_from or spec.end_at) if deps else None
+                running[executor.submit(solve_job, library.rig, spec, limits, library.solver, start, end,
+                                        cruise)] = spec
         if not running:
             break
         done, _ = concurrent.futures.wait(running, return_when=concurrent.futures.FIRST_COMPLETED)
@@ -62,6 +89,7 @@ def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], exe
             spec = running.pop(future)
             try:
                 library.add(future.result())
+                stale.discard(spec.primitive_id)
                 progress(spec.primitive_id, "solved")
             except PrimitiveSolveError as err:
                 failed.append(spec.primitive_id)

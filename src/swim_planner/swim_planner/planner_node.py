@@ -1,9 +1,9 @@
 """planner_node: serves maneuver requests from the primitive library.
 
 Service ``request_maneuver`` (swim_interfaces/srv/RequestManeuver): an explicit primitive sequence with
-repeat counts, concatenated and time-scaled (MODE_SEQUENCE). A request that cannot be planned gets
-success = false and a message saying why; nothing else changes. Goal requests (MODE_GOAL) are refused
-with a message until the graph search lands. Topic ``plan`` (PlannedTrajectory, transient local):
+repeat counts (MODE_SEQUENCE), or a goal state of the lane/energy graph with a distance to cover at least
+(MODE_GOAL, answered by the quickest path), concatenated and time-scaled. A request that cannot be planned
+gets success = false and a message saying why; nothing else changes. Topic ``plan`` (PlannedTrajectory, transient local):
 the last plan made.
 
 Parameters: ``library_path`` (default: the shipped library), ``rig_path`` (default: the shipped rig),
@@ -23,6 +23,7 @@ from swim_interfaces.srv import RequestManeuver
 
 from swim_model import SwimModelError, load_rig
 from swim_planner.errors import PlannerError
+from swim_planner.graph import build_graph, plan_to_goal, rest_node
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.maneuver import Plan, concatenate, expand_sequence
 from swim_planner.paths import default_library_path
@@ -60,6 +61,9 @@ class PlannerNode(Node):
         self.rig = load_rig(rig_path)
         self.library = PrimitiveLibrary.load(library_path, self.rig)
         self._library_lock = threading.Lock()  # the library caches arrays as it reads them
+        self.graph = build_graph(self.library)
+        for line in self.graph.mismatches:
+            self.get_logger().warning(f"junction mismatch, primitive dropped from the graph: {line}")
         latched = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
         self.plan_publisher = self.create_publisher(PlannedTrajectory, "plan", latched)
         self.create_service(RequestManeuver, "request_maneuver", self.on_request,
@@ -81,28 +85,36 @@ class PlannerNode(Node):
         return response
 
     def plan(self, request: RequestManeuver.Request) -> Plan:
-        if request.mode != RequestManeuver.Request.MODE_SEQUENCE:
-            raise PlannerError(f"mode {request.mode} is not served yet; use MODE_SEQUENCE "
-                               f"({RequestManeuver.Request.MODE_SEQUENCE}) with explicit primitive ids")
         time_scale = request.time_scale or self.get_parameter("default_time_scale").value
-        sequence = expand_sequence(list(request.primitive_ids), list(request.repeat_counts))
+        if request.mode == RequestManeuver.Request.MODE_SEQUENCE:
+            sequence = expand_sequence(list(request.primitive_ids), list(request.repeat_counts))
+        elif request.mode == RequestManeuver.Request.MODE_GOAL:
+            start = request.start_state or rest_node(request.goal_state.startswith("constrained"),
+                                                     self.rig.lane_1_radius_m)
+            sequence = plan_to_goal(self.graph, start, request.goal_state, request.goal_alpha_rad)
+        else:
+            raise PlannerError(f"unknown mode {request.mode}: use MODE_SEQUENCE "
+                               f"({RequestManeuver.Request.MODE_SEQUENCE}) or MODE_GOAL ({RequestManeuver.Request.MODE_GOAL})")
         with self._library_lock:
             return concatenate(self.library, self.rig, sequence, time_scale, request.start_alpha_rad)
 
 
 def main(args: list[str] | None = None) -> None:
+    # this rclpy's init() is not a context manager, hence try/finally
+    rclpy.init(args=args)
     try:
-        with rclpy.init(args=args):
-            try:
-                node = PlannerNode()
-            except (PlannerError, SwimModelError) as err:
-                rclpy.logging.get_logger("planner_node").fatal(str(err))
-                raise SystemExit(2) from err
-            executor = MultiThreadedExecutor(num_threads=4)
-            executor.add_node(node)
-            executor.spin()
+        try:
+            node = PlannerNode()
+        except (PlannerError, SwimModelError) as err:
+            rclpy.logging.get_logger("planner_node").fatal(str(err))
+            raise SystemExit(2) from err
+        executor = MultiThreadedExecutor(num_threads=4)
+        executor.add_node(node)
+        executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    finally:
+        rclpy.try_shutdown()
 
 
 if __name__ == "__main__":

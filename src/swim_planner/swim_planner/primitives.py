@@ -7,7 +7,9 @@ the foil accelerations u = psiddot as input (the planning input of eq. 16):
     subject to  the equations of motion (eq. 14, torques from eq. 15), heave/pitch ranges, torque limits,
                 and the boundary conditions of its type:
 
-    cruise           alpha(0) = 0, p_alpha(0) = 0, psi(0) = psi(Tf), qdot(0) = qdot(Tf), mean T = E  (eq. 9)
+    cruise           alpha(0) = 0, p_alpha(0) = 0, psi(0) = psi(Tf), qdot(0) = qdot(Tf), mean T = E  (eq. 9),
+                     alphadot(0) >= v_min (the cycle is cut where the vehicle moves forward, so that the
+                     decelerate's alphadot >= v_min can hold from its first instant)
     accelerate       from rest (q = (0, R_lane, 0, 0), qdot = 0) to a cruise's start state
     decelerate       from a cruise's end state to rest, alphadot >= v_min                         (eq. 12)
     cruise_to_cruise from cruise i's end state to cruise j's start state                        (eq. 13)
@@ -121,6 +123,11 @@ class Primitive:
     @property
     def end_state(self) -> tuple[Array, Array]:
         return self.q[-1].copy(), self.qdot[-1].copy()
+
+
+#: IPOPT statuses that count as converged: its full tolerance, or its "acceptable" one (acceptable_tol,
+#: 1e-6); the library tests check every boundary condition and limit independently either way
+CONVERGED_STATUSES = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -253,6 +260,8 @@ def _boundary_conditions(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec
         opti.subject_to(x0[nq:] == x_end[nq:])                      # qdot periodic
         momentum = model.symbolic.functions["momentum"]
         opti.subject_to(momentum(x0[:nq], x0[nq:])[0] == 0.0)       # reachable from rest: p_alpha = 0
+        # cut the cycle where the vehicle moves forward: a decelerate from here can keep alphadot >= v_min
+        opti.subject_to(x0[nq] >= limits.min_alpha_rate_rad_s)
         # energy level: the cycle's mean kinetic energy (see the module docstring)
         xs = ca.SX.sym("x", 2 * nq)
         mean_energy = simpson_integral(grid, ca.Function("T", [xs, ca.SX.sym("u", 2)], [energy(xs)])) / spec.solved_duration_s
@@ -277,29 +286,55 @@ def _boundary_conditions(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec
 
 def _initial_guess(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, grid, start, end,
                    guess: Optional[Primitive]) -> None:
-    nq = model.nq
     times = fine_grid_times(spec.solved_duration_s, spec.intervals)
-    if guess is not None and len(guess.time_s) == len(times):
-        x_guess = np.column_stack([guess.q, guess.qdot])
-        u_guess = guess.foil_acceleration
+    if guess is not None and guess.spec.primitive_id == spec.primitive_id and len(guess.time_s) == len(times):
+        x_guess, u_guess = np.column_stack([guess.q, guess.qdot]), guess.foil_acceleration
     elif spec.primitive_type is PrimitiveType.CRUISE:
-        # a fish-like gait: pitch leads heave by 90 deg (paper Sec. 5.1), one cycle per second
-        run = simulate_gait(model, SinusoidalGait(0.35, 0.6, 1.0), spec.solved_duration_s,
-                            sample_period_s=spec.solved_duration_s / (len(times) - 1),
-                            initial_y=None if model.constrained else [0.0, spec.lane_radius_m])
-        x_guess = np.column_stack([run.q, run.qdot])
-        u_guess = np.array([SinusoidalGait(0.35, 0.6, 1.0).shape(t)[2] for t in times])
+        x_guess, u_guess = _gait_guess(model, spec, times)
     else:
-        if spec.primitive_type is PrimitiveType.ACCELERATE:
-            start = rest_state(model, spec.lane_radius_m)
-        if spec.primitive_type is PrimitiveType.DECELERATE:
-            end = rest_state(model, spec.end_lane_radius_m)
-        weight = (times / spec.solved_duration_s)[:, None]
-        x_start, x_end = np.concatenate(start), np.concatenate(end)
-        x_guess = (1 - weight) * x_start + weight * x_end
-        x_guess[:, 0] = 0.02 * times  # drifting forward slowly
-        u_guess = np.zeros((len(times), 2))
+        x_guess, u_guess = _blend_guess(model, spec, times, start, end, guess)
     opti.set_initial(grid.x, x_guess[0::2].T)
     opti.set_initial(grid.x_mid, x_guess[1::2].T)
     opti.set_initial(grid.u, u_guess[0::2].T)
     opti.set_initial(grid.u_mid, u_guess[1::2].T)
+
+
+def _gait_guess(model: VehicleModel, spec: PrimitiveSpec, times: Array) -> tuple[Array, Array]:
+    """A fish-like gait: pitch leads heave by 90 deg (paper Sec. 5.1), one cycle per second."""
+    gait = SinusoidalGait(0.35, 0.6, 1.0)
+    run = simulate_gait(model, gait, times[-1], sample_period_s=times[1] - times[0],
+                        initial_y=None if model.constrained else [0.0, spec.lane_radius_m])
+    return np.column_stack([run.q, run.qdot]), np.array([gait.shape(t)[2] for t in times])
+
+
+def _blend_guess(model: VehicleModel, spec: PrimitiveSpec, times: Array, start, end,
+                 cruise: Optional[Primitive]) -> tuple[Array, Array]:
+    """Blend between the boundary states; with a cruise given, fade its stroke in (accelerate), out
+    (decelerate), or keep it (between cruises), so the guess already swims in the right phase."""
+    if spec.primitive_type is PrimitiveType.ACCELERATE:
+        start = rest_state(model, spec.lane_radius_m)
+    if spec.primitive_type is PrimitiveType.DECELERATE:
+        end = rest_state(model, spec.end_lane_radius_m)
+    weight = (times / times[-1])[:, None]
+    x_start, x_end = np.concatenate(start), np.concatenate(end)
+    x_guess = (1 - weight) * x_start + weight * x_end
+    x_guess[:, 0] = 0.02 * times
+    u_guess = np.zeros((len(times), 2))
+    if cruise is None:
+        return x_guess, u_guess
+    nq = model.nq
+    period = cruise.spec.solved_duration_s
+    one = cruise.time_s <= period + 1e-12
+    # the cruise's stroke, periodic, phased so the accelerate ends (decelerate starts) at its junction
+    phase = (times - times[-1]) % period if spec.primitive_type is PrimitiveType.ACCELERATE else times % period
+    stroke = np.column_stack([np.interp(phase, cruise.time_s[one], cruise.q[one, j]) for j in range(nq)])
+    rates = np.column_stack([np.interp(phase, cruise.time_s[one], cruise.qdot[one, j]) for j in range(nq)])
+    accel = np.column_stack([np.interp(phase, cruise.time_s[one], cruise.foil_acceleration[one, j]) for j in range(2)])
+    envelope = {PrimitiveType.ACCELERATE: weight, PrimitiveType.DECELERATE: 1.0 - weight}.get(
+        spec.primitive_type, np.ones_like(weight))  # between cruises: keep stroking
+    x_guess[:, nq - 2:nq] = envelope * stroke[:, nq - 2:]
+    x_guess[:, 2 * nq - 2:] = envelope * rates[:, nq - 2:]
+    mean_rate = (cruise.q[-1, 0] - cruise.q[0, 0]) / cruise.time_s[-1]
+    x_guess[:, nq] = envelope[:, 0] * mean_rate
+    x_guess[:, 0] = np.concatenate([[0.0], np.cumsum(0.5 * (x_guess[1:, nq] + x_guess[:-1, nq]) * np.diff(times))])
+    return x_guess, envelope * accel

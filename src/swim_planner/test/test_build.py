@@ -33,6 +33,18 @@ def test_build_in_order_then_resume(rig, tmp_path):
     assert sorted(events) == [("small/accelerate", "cached"), ("small/cruise", "cached")]
 
 
+def test_changed_spec_is_solved_again_with_what_joins_it(rig, tmp_path):
+    import dataclasses
+    library = PrimitiveLibrary.create_or_open(tmp_path / "lib", rig)
+    with concurrent.futures.ThreadPoolExecutor(max_workers=1) as executor:
+        assert build_library(library, SMALL, executor) == []
+        changed = [dataclasses.replace(SMALL[0], energy_j=0.06), SMALL[1]]
+        events = []
+        assert build_library(library, changed, executor, progress=lambda i, s: events.append((i, s))) == []
+    assert events == [("small/cruise", "solved"), ("small/accelerate", "solved")]
+    assert library.spec("small/cruise").energy_j == 0.06
+
+
 def test_unknown_dependency_is_refused(rig, tmp_path):
     library = PrimitiveLibrary.create_or_open(tmp_path / "lib", rig)
     with pytest.raises(ValueError, match="depends on unknown primitives: small/cruise"):

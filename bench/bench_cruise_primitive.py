@@ -1,0 +1,32 @@
+"""Benchmark: time to compute one cruise primitive (target <= 10 s on this 2-core machine), and its index J.
+
+Solves the default constrained E = 0.05 cruise (one 1 s cycle, 80 Hermite-Simpson intervals) from the
+built-in initial guess. Prints one JSON line. The paper's method (Fourier series with a generic optimizer)
+is not implemented yet, so the side-by-side comparison the issue asks for is not in this line.
+"""
+import json
+import time
+
+from swim_model import VehicleModel, load_rig
+from swim_planner.catalog import constrained_specs
+from swim_planner.primitives import solve_primitive
+
+TARGET_S = 10.0
+
+
+def main() -> None:
+    rig = load_rig()
+    spec = next(s for s in constrained_specs(rig) if s.primitive_id == "constrained/cruise/E0.05")
+    model = VehicleModel(rig, constrained=True, lane_radius_m=spec.lane_radius_m)
+    model.numeric  # load the compiled model outside the timing
+    start = time.perf_counter()
+    primitive = solve_primitive(model, spec)
+    wall = time.perf_counter() - start
+    print(json.dumps({"benchmark": "cruise_primitive", "primitive": spec.primitive_id,
+                      "wall_s": round(wall, 2), "ipopt_s": round(primitive.solve_time_s, 2),
+                      "iterations": primitive.iterations, "index_j": round(primitive.index_j, 5),
+                      "target_s": TARGET_S, "meets_target": wall <= TARGET_S}))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,156 @@
+"""The state-transition graph of a primitive library (paper Figs. 9 and 12) and goal search.
+
+Nodes are the vehicle's steady conditions: ``constrained/rest``, ``constrained/cruise/E0.05``,
+``free/rest/R0.43``, ``free/cruise/R0.43/E0.10``, ... Edges are primitives: an accelerate goes from rest
+to a cruise, a cruise loops on its node, a decelerate returns to rest, a cruise-to-cruise or lane change
+joins two cruise nodes. Building the graph checks every junction (each edge into a node against each edge
+out of it) within JUNCTION_TOLERANCE and reports mismatches; pruning removes what cannot be reached from
+rest or cannot get back to rest.
+
+Goal search: the quickest path (at the requested time scale) from rest to the goal node; if the request
+asks for a longer distance, the path's fastest cruise is repeated until it is covered.
+"""
+from __future__ import annotations
+
+import dataclasses
+import heapq
+import math
+from collections import defaultdict
+
+from swim_planner.catalog import energy_tag, lane_tag
+from swim_planner.errors import ManeuverError
+from swim_planner.library import PrimitiveLibrary
+from swim_planner.maneuver import JUNCTION_TOLERANCE, junction_mismatch
+from swim_planner.primitives import PrimitiveSpec, PrimitiveType
+
+
+def rest_node(constrained: bool, lane_radius_m: float) -> str:
+    return "constrained/rest" if constrained else f"free/rest/{lane_tag(lane_radius_m)}"
+
+
+def cruise_node(constrained: bool, energy_j: float, lane_radius_m: float) -> str:
+    if constrained:
+        return f"constrained/cruise/{energy_tag(energy_j)}"
+    return f"free/cruise/{lane_tag(lane_radius_m)}/{energy_tag(energy_j)}"
+
+
+@dataclasses.dataclass(frozen=True)
+class Edge:
+    primitive_id: str
+    source: str
+    target: str
+    duration_s: float
+    advance_rad: float
+
+
+@dataclasses.dataclass
+class StateGraph:
+    edges: list[Edge]
+    mismatches: list[str]                 # junctions that did not match, as readable lines
+    pruned: list[str]                     # primitives removed as dead ends
+
+    @property
+    def nodes(self) -> set[str]:
+        return {e.source for e in self.edges} | {e.target for e in self.edges}
+
+    def outgoing(self, node: str) -> list[Edge]:
+        return [e for e in self.edges if e.source == node]
+
+
+def _node_of_cruise(library: PrimitiveLibrary, cruise_id: str) -> str:
+    spec = library.spec(cruise_id)
+    return cruise_node(spec.constrained, spec.energy_j, spec.lane_radius_m)
+
+
+def _endpoints(library: PrimitiveLibrary, spec: PrimitiveSpec) -> tuple[str, str]:
+    kind = spec.primitive_type
+    if kind is PrimitiveType.CRUISE:
+        node = cruise_node(spec.constrained, spec.energy_j, spec.lane_radius_m)
+        return node, node
+    if kind is PrimitiveType.ACCELERATE:
+        return rest_node(spec.constrained, spec.lane_radius_m), _node_of_cruise(library, spec.end_at)
+    if kind is PrimitiveType.DECELERATE:
+        return _node_of_cruise(library, spec.start_from), rest_node(spec.constrained, spec.end_lane_radius_m)
+    return _node_of_cruise(library, spec.start_from), _node_of_cruise(library, spec.end_at)
+
+
+def build_graph(library: PrimitiveLibrary) -> StateGraph:
+    """Edges from the library, junctions checked, dead ends pruned."""
+    edges = []
+    for primitive_id in library.ids():
+        spec = library.spec(primitive_id)
+        source, target = _endpoints(library, spec)
+        primitive = library.get(primitive_id)
+        edges.append(Edge(primitive_id, source, target, spec.duration_s, float(primitive.q[-1, 0] - primitive.q[0, 0])))
+    mismatches, bad = [], set()
+    for into in edges:
+        for out in edges:
+            if into.target == out.source:
+                gap = junction_mismatch(library.get(into.primitive_id), library.get(out.primitive_id))
+                if gap > JUNCTION_TOLERANCE:
+                    mismatches.append(f"{into.primitive_id} -> {out.primitive_id}: states differ by {gap:.3g}")
+                    bad.add(out.primitive_id)
+    kept = [e for e in edges if e.primitive_id not in bad]
+    alive = _live_nodes(kept)
+    pruned = sorted(e.primitive_id for e in kept if e.source not in alive or e.target not in alive) + sorted(bad)
+    return StateGraph([e for e in kept if e.source in alive and e.target in alive], mismatches, pruned)
+
+
+def _live_nodes(edges: list[Edge]) -> set[str]:
+    """Nodes reachable from some rest node that can also get back to a rest node."""
+    forward, backward = defaultdict(set), defaultdict(set)
+    for e in edges:
+        forward[e.source].add(e.target)
+        backward[e.target].add(e.source)
+    rests = {n for e in edges for n in (e.source, e.target) if "/rest" in n}
+
+    def reach(start: set[str], links) -> set[str]:
+        seen, stack = set(start), list(start)
+        while stack:
+            for nxt in links[stack.pop()]:
+                if nxt not in seen:
+                    seen.add(nxt)
+                    stack.append(nxt)
+        return seen
+    return reach(rests, forward) & reach(rests, backward)
+
+
+def plan_to_goal(graph: StateGraph, start: str, goal: str, min_advance_rad: float = 0.0) -> list[tuple[str, int]]:
+    """The quickest primitive sequence from ``start`` to ``goal`` covering at least ``min_advance_rad``.
+
+    Returns [(primitive_id, repeat_index), ...]. Raises ManeuverError if the goal cannot be reached.
+    """
+    nodes = graph.nodes
+    for name, node in (("start", start), ("goal", goal)):
+        if node not in nodes:
+            raise ManeuverError(f"unknown {name} state '{node}'; states: {', '.join(sorted(nodes))}")
+    queue: list[tuple[float, int, str, list[Edge]]] = [(0.0, 0, start, [])]
+    best: dict[str, float] = {}
+    counter = 1
+    path = None
+    while queue:
+        elapsed, _, node, edges = heapq.heappop(queue)
+        if node == goal and (edges or min_advance_rad <= 0.0):
+            path = edges
+            break
+        if best.get(node, math.inf) <= elapsed:
+            continue
+        best[node] = elapsed
+        for edge in graph.outgoing(node):
+            if edge.source == edge.target and edge.target != goal:
+                continue  # a cruise loop only helps to cover distance, added below
+            heapq.heappush(queue, (elapsed + edge.duration_s, counter, edge.target, edges + [edge]))
+            counter += 1
+    if path is None:
+        raise ManeuverError(f"no sequence of primitives leads from '{start}' to '{goal}'")
+    sequence = [(e.primitive_id, 0) for e in path]
+    advance = sum(e.advance_rad for e in path)
+    if advance < min_advance_rad:
+        cruises = [e for e in graph.edges if e.source == e.target and e.source in {p.target for p in path}]
+        if not cruises:
+            raise ManeuverError(f"the path to '{goal}' covers {advance:.3f} rad and passes no cruise to repeat")
+        fastest = max(cruises, key=lambda e: e.advance_rad / e.duration_s)
+        repeats = math.ceil((min_advance_rad - advance) / fastest.advance_rad)
+        where = next(i for i, e in enumerate(path) if e.target == fastest.source) + 1
+        sequence[where:where] = [(fastest.primitive_id, k) for k in range(repeats)]
+    return sequence

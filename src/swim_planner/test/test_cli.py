@@ -1,0 +1,34 @@
+"""swim-primitives: list, show, plot, and clear errors."""
+import json
+
+from swim_planner.cli import main
+from swim_planner.primitives import CONVERGED_STATUSES
+
+
+def test_list_shows_every_primitive(library, capsys):
+    assert main(["list"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert len(lines) == 1 + len(library)
+    assert all(line.split()[-1] in CONVERGED_STATUSES for line in lines[1:])
+
+
+def test_show_reports_the_manifest_and_the_states(library, capsys):
+    assert main(["show", "constrained/cruise/E0.05"]) == 0
+    shown = json.loads(capsys.readouterr().out)
+    assert shown["index_j"] == library.entry("constrained/cruise/E0.05")["index_j"]
+    assert shown["start_q"] == library.get("constrained/cruise/E0.05").q[0].tolist()
+
+
+def test_plot_writes_a_figure(tmp_path):
+    output = tmp_path / "cruise.png"
+    assert main(["plot", "constrained/cruise/E0.10", "--output", str(output)]) == 0
+    assert output.stat().st_size > 20_000
+
+
+def test_errors_are_one_clear_line(tmp_path, capsys):
+    assert main(["show", "no/such"]) == 2
+    assert "no primitive 'no/such'" in capsys.readouterr().err
+    assert main(["list", str(tmp_path)]) == 2
+    assert "no primitive library" in capsys.readouterr().err
+    assert main(["build", str(tmp_path / "x"), "--only", "no/such"]) == 2
+    assert "unknown primitive ids: no/such" in capsys.readouterr().err
