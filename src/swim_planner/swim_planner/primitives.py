@@ -168,7 +168,7 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
     Raises:
         PrimitiveSolveError: IPOPT did not converge; the message gives its status.
     """
-    nq, ny = model.nq, model.n_unactuated
+    nq = model.nq
     nx = 2 * nq
     dynamics, torque, energy = _ocp_functions(model)
     opti = ca.Opti()
@@ -177,11 +177,10 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
     samples = 2 * spec.intervals + 1
     torques = torque.map(samples)(states, inputs)
     weights = ca.DM([spec.heave_effort_weight, spec.pitch_effort_weight])
-    effort_integrand = ca.Function("effort", [ca.MX.sym("x", nx), ca.MX.sym("u", 2)], [0.0])
     xs, us = ca.SX.sym("x", nx), ca.SX.sym("u", 2)
     effort_integrand = ca.Function("effort", [xs, us], [ca.dot(weights, torque(xs, us) ** 2)])
     effort = simpson_integral(grid, effort_integrand)
-    x0, x_end = grid.x[:, 0], grid.x[:, -1]
+    x_end = grid.x[:, -1]
     sign = spec.index_sign()
     opti.minimize(-(sign * x_end[0] - effort))
 
@@ -249,7 +248,7 @@ def _without_alpha(x: ca.MX, nq: int) -> ca.MX:
 
 def _boundary_conditions(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits,
                          grid, energy: ca.Function, start, end) -> None:
-    nq, ny = model.nq, model.n_unactuated
+    nq = model.nq
     x0, x_end = grid.x[:, 0], grid.x[:, -1]
     opti.subject_to(x0[0] == 0.0)
     kind = spec.primitive_type

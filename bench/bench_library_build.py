@@ -1,0 +1,34 @@
+"""Benchmark: wall time to build the whole default library (target <= 10 min on this 2-core machine).
+
+Builds the 28 default primitives (constrained graph of Fig. 9, free two-lane graph of Fig. 12) into a
+temporary directory with two local worker processes, exactly as `swim-primitives build` does, and prints
+one JSON line.
+"""
+import concurrent.futures
+import json
+import tempfile
+import time
+
+from swim_model import load_rig
+from swim_planner.build import build_library
+from swim_planner.catalog import default_specs
+from swim_planner.library import PrimitiveLibrary
+
+TARGET_S = 600.0
+
+
+def main() -> None:
+    rig = load_rig()
+    specs = default_specs(rig)
+    with tempfile.TemporaryDirectory() as directory:
+        library = PrimitiveLibrary.create_or_open(directory, rig)
+        start = time.perf_counter()
+        with concurrent.futures.ProcessPoolExecutor(max_workers=2) as executor:
+            failed = build_library(library, specs, executor)
+        wall = time.perf_counter() - start
+    print(json.dumps({"benchmark": "library_build", "primitives": len(specs), "failed": failed,
+                      "wall_s": round(wall, 1), "target_s": TARGET_S, "meets_target": wall <= TARGET_S}))
+
+
+if __name__ == "__main__":
+    main()
