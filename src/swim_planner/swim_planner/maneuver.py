@@ -8,12 +8,17 @@ only u = psiddot may jump.
 
 Time scaling by lambda > 0 (P3): t -> t / lambda, q(t) -> q(lambda t), qdot -> lambda qdot,
 u -> lambda^2 u, tau -> lambda^2 tau. A lambda whose torques exceed the motor limits is refused.
+
+A slowly varying lambda (Sec. 4.3): with s the nominal (lambda = 1) plan time and lambda(s) given,
+the plan runs t(s) = int_0^s ds' / lambda(s'), q(t) = q_nom(s), qdot = lambda qdot_nom(s),
+u = lambda^2 u_nom(s) + lambdadot qdot_nom and tau = lambda^2 tau_nom(s); the torque the lambdadot term
+would need (lambdadot Mm qdot_nom) is left to feedback, as in the paper.
 """
 from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -138,3 +143,33 @@ def concatenate(library: PrimitiveLibrary, rig: RigParameters, sequence: Sequenc
     return Plan(constrained=first.spec.constrained, lane_radius_m=first.spec.lane_radius_m, joint_names=names,
                 time_s=time_s, q=q, qdot=qdot, foil_acceleration=u, torque=tau, segments=segments,
                 library_digest=library.digest())
+
+
+def vary_time_scale(nominal: Plan, time_scale_of: Callable[[float], float], rig: RigParameters) -> Plan:
+    """Re-time a plan made at lambda = 1 by a slowly varying lambda(s) of the nominal time s."""
+    for segment in nominal.segments:
+        if segment.time_scale != 1.0:
+            raise ManeuverError("vary_time_scale re-times a plan made at time scale 1")
+    nominal_time = nominal.time_s
+    scale = np.array([float(time_scale_of(s)) for s in nominal_time])
+    if not np.all(np.isfinite(scale)) or scale.min() <= 0.0:
+        raise ManeuverError("lambda(s) must be positive and finite over the whole plan")
+    limits = np.array(rig.torque_limits_n_m)
+    peak = float((np.abs(nominal.torque) * scale[:, None] ** 2 / limits).max())
+    if peak > 1.0:
+        raise ManeuverError(f"lambda(s) needs {peak:.0%} of the motor torque limits")
+    inverse = 1.0 / scale
+    time_s = np.concatenate([[0.0], np.cumsum(0.5 * (inverse[1:] + inverse[:-1]) * np.diff(nominal_time))])
+    scale_rate = np.gradient(scale, time_s)   # d lambda / dt
+    foil_acceleration = scale[:, None] ** 2 * nominal.foil_acceleration + \
+        scale_rate[:, None] * nominal.qdot[:, -2:]
+    segments = []
+    for segment in nominal.segments:
+        first, last = segment.first_sample, segment.first_sample + segment.sample_count - 1
+        start = float(time_s[first - 1]) if first > 0 else 0.0
+        segments.append(dataclasses.replace(
+            segment, start_time_s=start, duration_s=float(time_s[last] - start),
+            time_scale=float(scale[max(first - 1, 0):last + 1].mean())))
+    return dataclasses.replace(nominal, time_s=time_s, qdot=nominal.qdot * scale[:, None],
+                               foil_acceleration=foil_acceleration,
+                               torque=nominal.torque * scale[:, None] ** 2, segments=segments)

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from swim_planner.errors import ManeuverError
-from swim_planner.maneuver import concatenate, expand_sequence
+from swim_planner.maneuver import concatenate, expand_sequence, vary_time_scale
 
 PAPER_CONSTRAINED = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05",
                       "constrained/cruise_to_cruise/E0.05-E0.10", "constrained/cruise/E0.10",
@@ -57,3 +57,26 @@ def test_start_alpha_translates_the_plan(library, rig):
 def test_impossible_requests_say_why(library, rig, ids, counts, scale, message):
     with pytest.raises(ManeuverError, match=message):
         concatenate(library, rig, expand_sequence(ids, counts), scale)
+
+
+def test_constant_varying_scale_equals_constant_scaling(library, rig):
+    fixed = paper_plan(library, rig, 1.2)
+    varied = vary_time_scale(paper_plan(library, rig), lambda s: 1.2, rig)
+    np.testing.assert_allclose(varied.time_s, fixed.time_s, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(varied.torque, fixed.torque, rtol=1e-12)
+    np.testing.assert_allclose(varied.qdot, fixed.qdot, rtol=1e-12)
+    np.testing.assert_allclose(varied.foil_acceleration, fixed.foil_acceleration, rtol=1e-9, atol=1e-9)
+
+
+def test_ramped_scale_lasts_the_closed_form_time(library, rig):
+    """lambda(s) = 1 + c s gives t(S) = ln(1 + c S) / c."""
+    nominal = paper_plan(library, rig)
+    c = 0.2 / nominal.duration_s  # from 1.0 to 1.2 over the maneuver
+    varied = vary_time_scale(nominal, lambda s: 1.0 + c * s, rig)
+    assert varied.duration_s == pytest.approx(np.log(1.0 + c * nominal.duration_s) / c, rel=1e-6)
+    np.testing.assert_allclose(varied.q, nominal.q)
+    assert varied.segments[0].time_scale < varied.segments[-1].time_scale
+    with pytest.raises(ManeuverError, match="positive and finite"):
+        vary_time_scale(nominal, lambda s: 1.0 - s, rig)
+    with pytest.raises(ManeuverError, match="torque limits"):
+        vary_time_scale(nominal, lambda s: 3.0, rig)
