@@ -1,5 +1,10 @@
 """The paper's own primitive method, for reproduction and comparison (Sec. 5, SPEC.md section 3).
 
+Accelerate (eq. 11): phi = A1(t) sin(A2(t)), theta = B1(t) sin(B2(t)) with A1, A2, B1, B2 polynomials
+in t, all 18 coefficients at once (the paper found this "did not converge" with MATLAB's fmin and split
+the 4 s into two 2 s segments of 9). The boundary conditions (rest at t = 0, the cruise's start state at
+Tf) become penalties, as for the cruise.
+
 Cruise: the foil motion is a Fourier series with the cycle's period T,
 
     phi(t)   = a_0 + sum_{k=1..K} (a_k cos(k w t) + b_k sin(k w t)),   w = 2 pi / T
@@ -54,20 +59,24 @@ def fourier_shape(coefficients: Array, period_s: float, times: Array) -> tuple[A
     return psi, psidot, psiddot
 
 
+def shape_driven_batch(model: VehicleModel, samples: int) -> ca.Function:
+    """(q, psidot rows of qdot, u) at many samples -> (alphadot, tau, T) with p_alpha = 0 (constrained)."""
+    if not model.constrained:
+        raise ValueError("the paper's parameterizations are implemented for the constrained vehicle")
+    s = model.symbolic
+    mass = s.functions["mass_matrix"](s.q)
+    alpha_rate = -(mass[0, 1:] @ s.qdot[1:]) / mass[0, 0]       # p_alpha = 0
+    qdot = ca.vertcat(alpha_rate, s.qdot[1:])
+    _, tau = s.functions["shape_dynamics"](s.q, qdot, s.u)
+    energy = s.functions["kinetic_energy"](s.q, qdot)
+    return ca.Function("point", [s.q, s.qdot, s.u], [alpha_rate, tau, energy]).map(samples)
+
+
 class _CruiseObjective:
     """Index, energy and torques of a Fourier cruise of the constrained vehicle, evaluated in one call."""
 
     def __init__(self, model: VehicleModel, spec: PrimitiveSpec, samples: int) -> None:
-        if not model.constrained:
-            raise ValueError("the paper's Fourier cruise is implemented for the constrained vehicle")
-        s = model.symbolic
-        mass = s.functions["mass_matrix"](s.q)
-        alpha_rate = -(mass[0, 1:] @ s.qdot[1:]) / mass[0, 0]       # p_alpha = 0
-        qdot = ca.vertcat(alpha_rate, s.qdot[1:])
-        qddot_y, tau = s.functions["shape_dynamics"](s.q, qdot, s.u)
-        energy = s.functions["kinetic_energy"](s.q, qdot)
-        point = ca.Function("point", [s.q, s.qdot, s.u], [alpha_rate, tau, energy])
-        self.batch = point.map(samples)
+        self.batch = shape_driven_batch(model, samples)
         self.model, self.spec, self.samples = model, spec, samples
         self.period = spec.solved_duration_s
         self.times = np.linspace(0.0, self.period, samples, endpoint=False)
@@ -112,3 +121,76 @@ def solve_fourier_cruise(model: VehicleModel, spec: PrimitiveSpec, limits: Plann
     return FourierCruise(coefficients=coefficients, index_j=index, energy_error_j=energy - spec.energy_j,
                          max_torque_fraction=float((np.abs(tau) / model.torque_limits()[:, None]).max()),
                          evaluations=int(result.nfev), wall_s=time.perf_counter() - started)
+
+
+@dataclasses.dataclass(frozen=True)
+class PolynomialSineAccelerate:
+    coefficients: Array         # (4, 5): A1, A2, B1, B2, lowest power first (phases of degree 3: last entry 0)
+    index_j: float
+    boundary_error: float       # largest |psi| or |psidot| mismatch at the two ends, rad or rad/s
+    evaluations: int
+    wall_s: float
+
+
+def polynomial_sine_shape(coefficients: Array, times: Array) -> tuple[Array, Array, Array]:
+    """psi, psidot, psiddot of eq. 11: phi = A1 sin(A2), theta = B1 sin(B2)."""
+    out = []
+    for amplitude_c, phase_c in ((coefficients[0], coefficients[1]), (coefficients[2], coefficients[3])):
+        amplitude, phase = np.polynomial.Polynomial(amplitude_c), np.polynomial.Polynomial(phase_c)
+        a, da, dda = amplitude(times), amplitude.deriv(1)(times), amplitude.deriv(2)(times)
+        b, db, ddb = phase(times), phase.deriv(1)(times), phase.deriv(2)(times)
+        sin_b, cos_b = np.sin(b), np.cos(b)
+        out.append((a * sin_b, da * sin_b + a * db * cos_b,
+                    dda * sin_b + 2 * da * db * cos_b + a * ddb * cos_b - a * db * db * sin_b))
+    return tuple(np.column_stack([out[0][i], out[1][i]]) for i in range(3))
+
+
+#: which of the (4, 5) coefficients are free: amplitudes A1, B1 of degree 4, phases A2, B2 of degree 3,
+#: 9 per angle and 18 in all, the paper's count
+FREE_COEFFICIENTS = np.array([[True] * 5, [True] * 4 + [False]] * 2)
+
+
+def solve_polynomial_sine_accelerate(model: VehicleModel, spec: PrimitiveSpec, end_state: tuple[Array, Array],
+                                     limits: PlanningLimits = PlanningLimits(), samples: int = 200,
+                                     max_evaluations: int = 20000) -> PolynomialSineAccelerate:
+    """Eq. 11 with its 18 coefficients at once, by Nelder-Mead, boundary conditions as penalties."""
+    if spec.primitive_type is not PrimitiveType.ACCELERATE:
+        raise ValueError("solve_polynomial_sine_accelerate solves accelerates")
+    batch = shape_driven_batch(model, samples)
+    times = np.linspace(0.0, spec.duration_s, samples)
+    weights = np.array([spec.heave_effort_weight, spec.pitch_effort_weight])
+    tau_max = limits.torque_fraction * model.torque_limits()
+    target_psi, target_rate = end_state[0][-2:], end_state[1][-2:]
+    # amplitude grows linearly from 0, phase advances at 2 pi rad/s: a swimming stroke, not the answer
+    start = np.zeros(FREE_COEFFICIENTS.shape)
+    start[0, 1], start[2, 1] = 0.3 / spec.duration_s, 0.5 / spec.duration_s
+    start[1, 1], start[3, 0], start[3, 1] = 2 * math.pi, math.pi / 2, 2 * math.pi
+
+    def evaluate(coefficients: Array) -> tuple[float, float, float]:
+        psi, psidot, psiddot = polynomial_sine_shape(coefficients, times)
+        q = np.vstack([np.zeros(samples), psi.T])
+        qdot = np.vstack([np.zeros(samples), psidot.T])
+        alpha_rate, tau, _ = (np.asarray(v) for v in batch(q, qdot, psiddot.T))
+        advance = float(np.trapezoid(alpha_rate.ravel(), times))
+        effort = float(np.trapezoid((weights[:, None] * tau ** 2).sum(axis=0), times))
+        boundary = max(np.abs(psi[0]).max(), np.abs(psidot[0]).max(),
+                       np.abs(psi[-1] - target_psi).max(), np.abs(psidot[-1] - target_rate).max())
+        excess = float(np.maximum(np.abs(tau) / tau_max[:, None] - 1.0, 0.0).sum())
+        return advance - effort, boundary, excess
+
+    def unpack(free: Array) -> Array:
+        coefficients = np.zeros(FREE_COEFFICIENTS.shape)
+        coefficients[FREE_COEFFICIENTS] = free
+        return coefficients
+
+    def cost(free: Array) -> float:
+        index, boundary, excess = evaluate(unpack(free))
+        return -index + PENALTY * (boundary ** 2 + excess ** 2)
+
+    started = time.perf_counter()
+    result = optimize.minimize(cost, start[FREE_COEFFICIENTS], method="Nelder-Mead",
+                               options={"maxfev": max_evaluations, "xatol": 1e-8, "fatol": 1e-10,
+                                        "adaptive": True})
+    index, boundary, _ = evaluate(unpack(result.x))
+    return PolynomialSineAccelerate(unpack(result.x), index, boundary, int(result.nfev),
+                                    time.perf_counter() - started)

@@ -30,3 +30,30 @@ def test_collocation_beats_the_papers_method_on_the_same_cruise(library, rig):
     # and ours meets the energy level the paper's method misses (penalties are all Nelder-Mead can take)
     assert abs(paper.energy_error_j) > 1e-4
     assert paper.max_torque_fraction == pytest.approx(0.35, abs=0.01)
+
+
+def test_polynomial_sine_shape_derivatives_are_exact():
+    from swim_planner.paper_method import polynomial_sine_shape
+    coefficients = np.array([[0.0, 0.1, 0.02, 0.0, 0.001], [0.0, 6.0, 0.1, 0.01, 0.0],
+                             [0.0, 0.2, -0.01, 0.0, 0.0], [1.5, 6.0, 0.0, 0.02, 0.0]])
+    times = np.linspace(0.0, 4.0, 40)
+    h = 1e-5
+    psi, psidot, psiddot = polynomial_sine_shape(coefficients, times)
+    ahead, behind = polynomial_sine_shape(coefficients, times + h)[0], polynomial_sine_shape(coefficients, times - h)[0]
+    np.testing.assert_allclose(psidot, (ahead - behind) / (2 * h), atol=1e-6)
+    np.testing.assert_allclose(psiddot, (ahead - 2 * psi + behind) / h ** 2, atol=2e-3)
+
+
+def test_collocation_converges_where_the_18_parameter_accelerate_does_not(library, rig):
+    """Sec. 5: eq. 11 with 18 parameters at once 'did not converge' (MATLAB fmin); ours meets its ends."""
+    from swim_planner.paper_method import FREE_COEFFICIENTS, solve_polynomial_sine_accelerate
+    assert FREE_COEFFICIENTS.sum() == 18
+    spec = next(s for s in constrained_specs(rig) if s.primitive_id == "constrained/accelerate/E0.05")
+    model = VehicleModel(rig, constrained=True, lane_radius_m=spec.lane_radius_m)
+    end_state = library.get(spec.end_at).start_state
+    paper = solve_polynomial_sine_accelerate(model, spec, end_state, max_evaluations=3000)
+    ours = library.get(spec.primitive_id)
+    ours_error = max(np.abs(ours.q[-1, 1:] - end_state[0][1:]).max(), np.abs(ours.qdot[-1] - end_state[1]).max())
+    assert ours_error < 1e-6
+    assert paper.boundary_error > 1e-2
+    assert ours.index_j > paper.index_j
