@@ -26,7 +26,8 @@ def main() -> None:
     paper = solve_fourier_cruise(model, spec, max_evaluations=8000)
     print(json.dumps({"benchmark": "cruise_primitive", "primitive": spec.primitive_id,
                       "wall_s": round(wall, 2), "ipopt_s": round(primitive.solve_time_s, 2),
-                      "iterations": primitive.iterations, "index_j_per_cycle": round(primitive.index_j / spec.cycles, 5),
+                      "iterations": primitive.iterations,
+                      "index_j_per_cycle": round(primitive.index_j / spec.cycles, 5),
                       "paper_method_wall_s": round(paper.wall_s, 2), "paper_method_index_j_per_cycle":
                       round(paper.index_j, 5), "paper_method_energy_error_j": round(paper.energy_error_j, 5),
                       "speedup": round(paper.wall_s / wall, 2), "target_s": TARGET_S,

@@ -15,7 +15,7 @@ def test_second_setup_does_no_work():
     result = subprocess.run(["bash", str(SETUP)], capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     assert "installing" not in result.stdout and "colcon build" not in result.stdout
-    assert result.stdout.strip().endswith("ready (" + str(WORKSPACE / ".venv") + ", " + str(WORKSPACE / "install") + ")")
+    assert result.stdout.strip().endswith(f"ready ({WORKSPACE / '.venv'}, {WORKSPACE / 'install'})")
 
 
 def test_setup_refuses_a_python_that_is_not_3_11(tmp_path):

@@ -14,7 +14,8 @@ setup(
     zip_safe=True,
     maintainer='swim maintainers',
     maintainer_email='swim@example.com',
-    description='The cascade tracker: time-varying LQR with time-scaled gains, input-output linearization and sliding mode (issue 4).',
+    description=('The cascade tracker: time-varying LQR with time-scaled gains, input-output '
+                 'linearization and sliding mode (issue 4).'),
     license='Apache-2.0',
     tests_require=['pytest'],
     entry_points={

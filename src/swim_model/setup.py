@@ -16,7 +16,8 @@ setup(
     zip_safe=True,
     maintainer='swim maintainers',
     maintainer_email='swim@example.com',
-    description="The swimming machine's physics: Joukowski foil added mass and the 4-DOF/3-DOF vehicle model (pure Python, no ROS).",
+    description=("The swimming machine's physics: Joukowski foil added mass and the 4-DOF/3-DOF "
+                 "vehicle model (pure Python, no ROS)."),
     license='Apache-2.0',
     tests_require=['pytest'],
     entry_points={

@@ -15,7 +15,8 @@ setup(
     zip_safe=True,
     maintainer='swim maintainers',
     maintainer_email='swim@example.com',
-    description='Off-line optimal-control motion primitives, the primitive library, the lane/energy graph and the maneuver planner node (issue 3).',
+    description=('Off-line optimal-control motion primitives, the primitive library, the '
+                 'lane/energy graph and the maneuver planner node (issue 3).'),
     license='Apache-2.0',
     tests_require=['pytest'],
     entry_points={

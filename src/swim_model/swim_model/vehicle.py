@@ -177,7 +177,8 @@ class VehicleModel:
     def _vector(self, value: npt.ArrayLike, size: int, name: str) -> Array:
         array = np.asarray(value, dtype=float).reshape(-1)
         if array.shape != (size,):
-            raise StateError(f"{name} must have {size} entries ({', '.join(self.joint_names) if size == self.nq else 'heave, pitch'}), got shape {np.shape(value)}")
+            names = ", ".join(self.joint_names) if size == self.nq else "heave, pitch"
+            raise StateError(f"{name} must have {size} entries ({names}), got shape {np.shape(value)}")
         if not np.all(np.isfinite(array)):
             raise StateError(f"{name} has a non-finite entry: {array}")
         return array
@@ -211,7 +212,8 @@ class VehicleModel:
 
     def kinetic_energy(self, q: npt.ArrayLike, qdot: npt.ArrayLike) -> float:
         """T = 1/2 qdot' Mm qdot, J (eq. 5)."""
-        return self._call("kinetic_energy", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"))[0].item()
+        energy = self._call("kinetic_energy", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"))[0]
+        return energy.item()
 
     def momentum(self, q: npt.ArrayLike, qdot: npt.ArrayLike) -> Array:
         """Generalized momentum p = dT/dqdot = Mm qdot; p[0] = p_alpha is conserved (Prop. 1)."""

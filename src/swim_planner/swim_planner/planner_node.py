@@ -3,8 +3,8 @@
 Service ``request_maneuver`` (swim_interfaces/srv/RequestManeuver): an explicit primitive sequence with
 repeat counts (MODE_SEQUENCE), or a goal state of the lane/energy graph with a distance to cover at least
 (MODE_GOAL, answered by the quickest path), concatenated and time-scaled. A request that cannot be planned
-gets success = false and a message saying why; nothing else changes. Topic ``plan`` (PlannedTrajectory, transient local):
-the last plan made.
+gets success = false and a message saying why; nothing else changes. Topic ``plan`` (PlannedTrajectory,
+transient local): the last plan made.
 
 Parameters: ``library_path`` (default: the shipped library), ``rig_path`` (default: the shipped rig),
 ``default_time_scale`` (used when a request's time_scale is 0; default 1.0).
@@ -93,8 +93,9 @@ class PlannerNode(Node):
                                                      self.rig.lane_1_radius_m)
             sequence = plan_to_goal(self.graph, start, request.goal_state, request.goal_alpha_rad)
         else:
-            raise PlannerError(f"unknown mode {request.mode}: use MODE_SEQUENCE "
-                               f"({RequestManeuver.Request.MODE_SEQUENCE}) or MODE_GOAL ({RequestManeuver.Request.MODE_GOAL})")
+            modes = RequestManeuver.Request
+            raise PlannerError(f"unknown mode {request.mode}: use MODE_SEQUENCE ({modes.MODE_SEQUENCE}) "
+                               f"or MODE_GOAL ({modes.MODE_GOAL})")
         with self._library_lock:
             return concatenate(self.library, self.rig, sequence, time_scale, request.start_alpha_rad)
 

@@ -263,7 +263,8 @@ def _boundary_conditions(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec
         opti.subject_to(x0[nq] >= limits.min_alpha_rate_rad_s)
         # energy level: the cycle's mean kinetic energy (see the module docstring)
         xs = ca.SX.sym("x", 2 * nq)
-        mean_energy = simpson_integral(grid, ca.Function("T", [xs, ca.SX.sym("u", 2)], [energy(xs)])) / spec.solved_duration_s
+        energy_of = ca.Function("T", [xs, ca.SX.sym("u", 2)], [energy(xs)])
+        mean_energy = simpson_integral(grid, energy_of) / spec.solved_duration_s
         opti.subject_to(mean_energy == spec.energy_j)
         if not model.constrained:
             opti.subject_to(x0[1] == spec.lane_radius_m)

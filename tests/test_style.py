@@ -1,0 +1,11 @@
+"""Style is a test too: pycodestyle errors/warnings and pyflakes over every package, test and benchmark."""
+import subprocess
+import sys
+
+from conftest import WORKSPACE
+
+
+def test_ruff_finds_nothing():
+    result = subprocess.run([sys.executable, "-m", "ruff", "check", "--output-format", "concise",
+                             "src", "tests", "bench"], cwd=WORKSPACE, capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stdout + result.stderr
