@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 from swim_model import SwimModelError, load_rig
-from swim_planner.build import build_library
+from swim_planner.build import build_library, dependencies
 from swim_planner.catalog import constrained_specs, default_specs, free_specs
 from swim_planner.errors import PlannerError
 from swim_planner.library import PrimitiveLibrary
@@ -57,7 +57,7 @@ def _select(specs, only):
         spec = by_id[stack.pop()]
         if spec.primitive_id not in wanted:
             wanted.add(spec.primitive_id)
-            stack += [d for d in (spec.start_from, spec.end_at) if d]
+            stack += dependencies(spec)
     return [s for s in specs if s.primitive_id in wanted]
 
 

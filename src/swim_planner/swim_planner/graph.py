@@ -17,7 +17,7 @@ import heapq
 import math
 from collections import defaultdict
 
-from swim_planner.catalog import energy_tag, lane_tag
+from swim_planner.catalog import cruise_id, lane_tag
 from swim_planner.errors import ManeuverError
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.maneuver import JUNCTION_TOLERANCE, junction_mismatch
@@ -29,9 +29,8 @@ def rest_node(constrained: bool, lane_radius_m: float) -> str:
 
 
 def cruise_node(constrained: bool, energy_j: float, lane_radius_m: float) -> str:
-    if constrained:
-        return f"constrained/cruise/{energy_tag(energy_j)}"
-    return f"free/cruise/{lane_tag(lane_radius_m)}/{energy_tag(energy_j)}"
+    """A cruise state is named like the default library's cruise primitive that loops on it."""
+    return cruise_id(constrained, energy_j, lane_radius_m)
 
 
 @dataclasses.dataclass(frozen=True)

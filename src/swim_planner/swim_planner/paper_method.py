@@ -77,7 +77,7 @@ class _CruiseObjective:
 
     def __init__(self, model: VehicleModel, spec: PrimitiveSpec, samples: int) -> None:
         self.batch = shape_driven_batch(model, samples)
-        self.model, self.spec, self.samples = model, spec, samples
+        self.samples = samples
         self.period = spec.solved_duration_s
         self.times = np.linspace(0.0, self.period, samples, endpoint=False)
         self.step = self.period / samples

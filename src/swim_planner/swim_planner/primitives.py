@@ -198,6 +198,11 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
         high = max(spec.lane_radius_m, spec.end_lane_radius_m) + limits.lane_band_m
         opti.subject_to(opti.bounded(low, states[1, :], high))
 
+    # an accelerate starts at rest and a decelerate ends there, whatever the caller passed
+    if spec.primitive_type is PrimitiveType.ACCELERATE:
+        start = rest_state(model, spec.lane_radius_m)
+    if spec.primitive_type is PrimitiveType.DECELERATE:
+        end = rest_state(model, spec.end_lane_radius_m)
     _boundary_conditions(opti, model, spec, limits, grid, energy, start, end)
     _initial_guess(opti, model, spec, grid, start, end, guess)
 
@@ -270,10 +275,7 @@ def _boundary_conditions(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec
             opti.subject_to(x0[1] == spec.lane_radius_m)
             opti.subject_to(x_end[1] == spec.lane_radius_m)
         return
-    if kind is PrimitiveType.ACCELERATE:
-        start = rest_state(model, spec.lane_radius_m)
     if kind is PrimitiveType.DECELERATE:
-        end = rest_state(model, spec.end_lane_radius_m)
         alpha_rate = ca.horzcat(grid.x[nq, :], grid.x_mid[nq, :])
         opti.subject_to(alpha_rate >= limits.min_alpha_rate_rad_s)
     if start is None or end is None:
@@ -311,10 +313,6 @@ def _blend_guess(model: VehicleModel, spec: PrimitiveSpec, times: Array, start, 
                  cruise: Optional[Primitive]) -> tuple[Array, Array]:
     """Blend between the boundary states; with a cruise given, fade its stroke in (accelerate), out
     (decelerate), or keep it (between cruises), so the guess already swims in the right phase."""
-    if spec.primitive_type is PrimitiveType.ACCELERATE:
-        start = rest_state(model, spec.lane_radius_m)
-    if spec.primitive_type is PrimitiveType.DECELERATE:
-        end = rest_state(model, spec.end_lane_radius_m)
     weight = (times / times[-1])[:, None]
     x_start, x_end = np.concatenate(start), np.concatenate(end)
     x_guess = (1 - weight) * x_start + weight * x_end
