@@ -38,6 +38,8 @@ def sample_plan():
     plan.velocities = np.zeros(3 * len(times)).tolist()
     plan.foil_accelerations = np.ones(2 * len(times)).tolist()
     plan.feedforward_torques = np.full(2 * len(times), 0.25).tolist()
+    plan.lqr_gains = np.linspace(-1.0, 1.0, 2 * 7 * len(times)).tolist()
+    plan.sliding_gains = np.linspace(0.0, 2.0, 2 * 7 * len(times)).tolist()
     plan.segments = [PrimitiveSegment(primitive_id="constrained/cruise/E0.05", primitive_type="cruise",
                                       start_time_s=0.0, duration_s=1.0, time_scale=1.2, alpha_offset_rad=0.5,
                                       first_sample=0, sample_count=len(times))]
@@ -87,7 +89,7 @@ def test_rosbags_reads_what_rclpy_serializes():
     assert decoded.lane_radius_m == 0.43 and decoded.library_digest == "abc"
     np.testing.assert_array_equal(decoded.positions, np.asarray(sent.positions))
     assert decoded.segments[0].alpha_offset_rad == 0.5
-    assert decoded.INTERFACE_VERSION == 1
+    assert decoded.INTERFACE_VERSION == 2
 
 
 def test_result_codes_follow_follow_joint_trajectory():

@@ -20,7 +20,7 @@ setup(
     tests_require=['pytest'],
     entry_points={
         'console_scripts': [
-
+            'tracker_node = swim_controller.tracker_node:main',
         ],
     },
 )

@@ -9,8 +9,11 @@ changed is solved again, with every primitive that joins it.
 from __future__ import annotations
 
 import concurrent.futures
+import dataclasses
 from typing import Callable, Optional, Sequence
 
+from swim_controller.errors import GainComputationError
+from swim_controller.riccati import LqrWeights, primitive_gains
 from swim_model import RigParameters, VehicleModel
 from swim_planner.errors import PrimitiveSolveError
 from swim_planner.library import PrimitiveLibrary
@@ -20,20 +23,33 @@ Progress = Callable[[str, str], None]
 
 
 def solve_job(rig: RigParameters, spec: PrimitiveSpec, limits: PlanningLimits, settings: SolverSettings,
-              start, end, guess: Optional[Primitive] = None) -> Primitive:
-    """One primitive, in a worker process: picklable arguments in, a Primitive out.
+              start, end, guess: Optional[Primitive] = None, lqr_weights: LqrWeights = LqrWeights()) -> Primitive:
+    """One primitive and its tracking gains, in a worker process: picklable arguments in, a Primitive out.
 
     guess: a primitive on the same grid to start from, or the cruise this primitive joins (its stroke
     seeds the initial guess of an accelerate or decelerate)."""
     model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m)
     try:
-        return solve_primitive(model, spec, limits, start=start, end=end, guess=guess, settings=settings)
+        primitive = solve_primitive(model, spec, limits, start=start, end=end, guess=guess, settings=settings)
     except PrimitiveSolveError:
         if guess is None:
             raise
         # IPOPT's infeasibility verdicts depend on where it starts: try the plain blend of the boundary
         # states before giving up
-        return solve_primitive(model, spec, limits, start=start, end=end, guess=None, settings=settings)
+        primitive = solve_primitive(model, spec, limits, start=start, end=end, guess=None, settings=settings)
+    return gains_job(rig, primitive, lqr_weights)
+
+
+def gains_job(rig: RigParameters, primitive: Primitive, lqr_weights: LqrWeights) -> Primitive:
+    """The primitive with its LQ gains P(t), G'P computed (swim_controller.riccati), once, off-line."""
+    spec = primitive.spec
+    model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m)
+    try:
+        gains = primitive_gains(model, primitive.time_s, primitive.q, primitive.qdot, primitive.foil_acceleration,
+                                lqr_weights)
+    except GainComputationError as err:
+        raise PrimitiveSolveError(f"{spec.primitive_id}: {err}") from err
+    return dataclasses.replace(primitive, gains=gains)
 
 
 def dependencies(spec: PrimitiveSpec) -> list[str]:
@@ -63,10 +79,23 @@ def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], exe
             raise ValueError(f"{spec.primitive_id} depends on unknown primitives: {', '.join(missing)}")
     stale = _stale(library, specs)
     pending = [s for s in specs if s.primitive_id not in library or s.primitive_id in stale]
+    gain_jobs = {}
     for spec in specs:
         if spec.primitive_id in library and spec.primitive_id not in stale:
-            progress(spec.primitive_id, "cached")
+            if library.needs_gains(spec.primitive_id):
+                # solved before, gains missing or for other weights: compute only those
+                gain_jobs[executor.submit(gains_job, library.rig, library.get(spec.primitive_id),
+                                          library.lqr_weights)] = spec.primitive_id
+            else:
+                progress(spec.primitive_id, "cached")
     failed: list[str] = []
+    for future in concurrent.futures.as_completed(gain_jobs):
+        try:
+            library.add(future.result())
+            progress(gain_jobs[future], "gains computed")
+        except PrimitiveSolveError as err:
+            failed.append(gain_jobs[future])
+            progress(gain_jobs[future], f"failed: {err}")
     running: dict[concurrent.futures.Future, PrimitiveSpec] = {}
     while pending or running:
         for spec in list(pending):
@@ -81,7 +110,7 @@ def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], exe
                 end = library.get(spec.end_at).start_state if spec.end_at else None
                 cruise = library.get(spec.start_from or spec.end_at) if deps else None
                 running[executor.submit(solve_job, library.rig, spec, limits, library.solver, start, end,
-                                        cruise)] = spec
+                                        cruise, library.lqr_weights)] = spec
         if not running:
             break
         done, _ = concurrent.futures.wait(running, return_when=concurrent.futures.FIRST_COMPLETED)

@@ -1,12 +1,15 @@
 """swim-primitives: build, list, show and plot primitive libraries.
 
     swim-primitives build [LIBRARY] [--set constrained|free|all] [--only ID ...] [--workers N] [--scheduler ADDR]
+                          [--lqr-weights FILE.yaml]
     swim-primitives list  [LIBRARY]
     swim-primitives show  ID [--library LIBRARY]
     swim-primitives plot  ID [--library LIBRARY] [--output FILE.png]
 
 LIBRARY defaults to the library shipped with swim_planner. Builds are resumable: primitives already in
-the library are kept. Jobs run in local processes, or on a Dask cluster when --scheduler names one.
+the library are kept. Jobs run in local processes, or on a Dask cluster when --scheduler names one. Each
+primitive is stored with its tracking gains (the Riccati solution P(t) and G'P, swim_controller.riccati);
+when the LQ weights change, a build recomputes only the gains.
 """
 from __future__ import annotations
 
@@ -16,6 +19,9 @@ import json
 import sys
 from pathlib import Path
 
+import yaml
+
+from swim_controller.riccati import LqrWeights
 from swim_model import SwimModelError, load_rig
 from swim_planner.build import build_library, dependencies
 from swim_planner.catalog import constrained_specs, default_specs, free_specs
@@ -34,6 +40,9 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("--only", nargs="+", default=None, help="these ids (and what they join) only")
     build.add_argument("--workers", type=int, default=2, help="local worker processes")
     build.add_argument("--scheduler", default=None, help="Dask scheduler address (tcp://host:port)")
+    build.add_argument("--lqr-weights", type=Path, default=None,
+                       help="YAML of swim_controller LqrWeights fields for the stored tracking gains "
+                            "(default: the package defaults); changed weights recompute the gains only")
     listing = commands.add_parser("list", help="one line per primitive")
     listing.add_argument("library", type=Path, nargs="?", default=None)
     for name in ("show", "plot"):
@@ -68,11 +77,25 @@ def _executor(args) -> concurrent.futures.Executor:
     return concurrent.futures.ProcessPoolExecutor(max_workers=args.workers)
 
 
+def _lqr_weights(path: Path | None) -> LqrWeights:
+    """LqrWeights from a YAML mapping of its field names (the package defaults for the others)."""
+    if path is None:
+        return LqrWeights()
+    try:
+        values = yaml.safe_load(Path(path).read_text()) or {}
+        weights = LqrWeights(**{key: float(value) for key, value in values.items()})
+        weights.validate()
+    except (OSError, yaml.YAMLError, TypeError, ValueError, AttributeError) as err:
+        raise PlannerError(f"{path}: not a valid LQR weights file: {err}") from err
+    return weights
+
+
 def command_build(args, rig) -> int:
     from tqdm import tqdm
     sets = {"constrained": constrained_specs, "free": free_specs, "all": default_specs}
     specs = _select(sets[args.set](rig), args.only)
-    library = PrimitiveLibrary.create_or_open(args.library or default_library_path(), rig)
+    library = PrimitiveLibrary.create_or_open(args.library or default_library_path(), rig,
+                                              lqr_weights=_lqr_weights(args.lqr_weights))
     with tqdm(total=len(specs), unit="primitive", file=sys.stderr) as bar, _executor(args) as executor:
         def progress(primitive_id: str, status: str) -> None:
             bar.update(1)

@@ -12,7 +12,7 @@ instability, not the primitive's consistency. The replay therefore restarts from
 every ``window_s`` seconds (multiple shooting) and reports the largest deviation within a window.
 REPLAY_TOLERANCE is the deviation our default constrained primitives stay within over 0.5 s windows on their
 default grids (measured: 1 to 21 mrad, the E = 0.10 cruise the worst; with 40 intervals per cruise cycle it
-was 135 mrad, which is why cruises use 80).
+was 135 mrad, which is why cruises use 80; with the input-smoothness term, 0.2 to 22 mrad).
 """
 from __future__ import annotations
 

@@ -3,9 +3,11 @@
 Layout of a library directory::
 
     manifest.json              format version, rig digest, model version, creation time, solver settings,
-                               and per primitive: its spec, index J, effort, solver status, solve time,
+                               the LQ weights the stored gains were computed with, and per primitive: its
+                               spec, index J, effort, solver status, solve time, whether it has gains,
                                the array file's name and SHA-256
-    primitives/<file>.npz      time_s, q, qdot, foil_acceleration, torque (fine collocation grid)
+    primitives/<file>.npz      time_s, q, qdot, foil_acceleration, torque (fine collocation grid), and
+                               riccati P (N, n, n) and riccati_input_gain G'P (N, 2, n) for the tracker
 
 Loading refuses, with a LibraryError naming the cause: a missing or unparsable manifest, another format
 version, a library built for other rig parameters or another model version, and an array file that is
@@ -21,17 +23,19 @@ import json
 import os
 import re
 from pathlib import Path
-from typing import Iterable, Iterator
+from typing import Iterable, Iterator, Optional
 
 import numpy as np
 
+from swim_controller.riccati import LqrWeights, TrackingGains
 from swim_model import MODEL_VERSION, RigParameters
 from swim_planner.errors import LibraryError
 from swim_planner.primitives import Primitive, PrimitiveSpec, PrimitiveType, SolverSettings
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2   # 2: tracking gains (P(t), G'P) stored with the primitives
 MANIFEST = "manifest.json"
 ARRAYS = ("time_s", "q", "qdot", "foil_acceleration", "torque")
+GAIN_ARRAYS = ("riccati", "riccati_input_gain")
 
 
 def _file_name(primitive_id: str) -> str:
@@ -50,32 +54,47 @@ def _spec_from_json(data: dict) -> PrimitiveSpec:
 
 def _encode_arrays(primitive: Primitive) -> bytes:
     buffer = io.BytesIO()
-    np.savez(buffer, **{name: getattr(primitive, name) for name in ARRAYS})
+    arrays = {name: getattr(primitive, name) for name in ARRAYS}
+    if primitive.gains is not None:
+        arrays.update(riccati=primitive.gains.riccati, riccati_input_gain=primitive.gains.input_gain)
+    np.savez(buffer, **arrays)
     return buffer.getvalue()
 
 
 class PrimitiveLibrary:
     """A library directory: write primitives into it, read them back verified."""
 
-    def __init__(self, path: str | Path, rig: RigParameters, solver: SolverSettings = SolverSettings()) -> None:
+    def __init__(self, path: str | Path, rig: RigParameters, solver: SolverSettings = SolverSettings(),
+                 lqr_weights: LqrWeights = LqrWeights()) -> None:
         self.path = Path(path)
         self.rig = rig
         self.solver = solver
+        self.lqr_weights = lqr_weights
         self._entries: dict[str, dict] = {}
         self._cache: dict[str, Primitive] = {}
 
     # ----- writing -------------------------------------------------------------------------------
     @classmethod
-    def create_or_open(cls, path: str | Path, rig: RigParameters,
-                       solver: SolverSettings = SolverSettings()) -> "PrimitiveLibrary":
-        """Open an existing library for adding to it (resuming a build), or start a new one."""
+    def create_or_open(cls, path: str | Path, rig: RigParameters, solver: SolverSettings = SolverSettings(),
+                       lqr_weights: Optional[LqrWeights] = None) -> "PrimitiveLibrary":
+        """Open an existing library for adding to it (resuming a build), or start a new one.
+
+        lqr_weights: the weights gains are to be computed with (None: keep the library's own); primitives
+        whose stored gains were computed with other weights then report ``needs_gains``."""
         if (Path(path) / MANIFEST).exists():
             library = cls.load(path, rig)
             library.solver = solver
+            if lqr_weights is not None:
+                library.lqr_weights = lqr_weights
             return library
-        library = cls(path, rig, solver)
+        library = cls(path, rig, solver, lqr_weights or LqrWeights())
         library._write_manifest()
         return library
+
+    def needs_gains(self, primitive_id: str) -> bool:
+        """True if the primitive has no stored gains for the library's LQ weights."""
+        record = self.entry(primitive_id)
+        return not record.get("has_gains") or record.get("gains_lqr_weights") != dataclasses.asdict(self.lqr_weights)
 
     def add(self, primitive: Primitive) -> None:
         """Store one primitive (its array file first, then the manifest, each replaced atomically)."""
@@ -88,7 +107,8 @@ class PrimitiveLibrary:
             "spec": _spec_to_json(spec), "file": name, "sha256": hashlib.sha256(payload).hexdigest(),
             "index_j": primitive.index_j, "effort": primitive.effort, "solver_status": primitive.solver_status,
             "solve_time_s": primitive.solve_time_s, "iterations": primitive.iterations,
-            "samples": int(len(primitive.time_s)),
+            "samples": int(len(primitive.time_s)), "has_gains": primitive.gains is not None,
+            "gains_lqr_weights": dataclasses.asdict(self.lqr_weights) if primitive.gains is not None else None,
         }
         self._cache[spec.primitive_id] = primitive
         self._write_manifest()
@@ -101,6 +121,7 @@ class PrimitiveLibrary:
             "model_version": MODEL_VERSION,
             "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
             "solver": dataclasses.asdict(self.solver),
+            "lqr_weights": dataclasses.asdict(self.lqr_weights),
             "primitives": self._entries,
         }
         _atomic_write(self.path / MANIFEST, json.dumps(manifest, indent=1, sort_keys=True).encode())
@@ -127,7 +148,11 @@ class PrimitiveLibrary:
         if manifest.get("model_version") != MODEL_VERSION:
             raise LibraryError(f"{directory} was built with swim_model version {manifest.get('model_version')!r}, "
                                f"this is version {MODEL_VERSION}; rebuild it")
-        library = cls(directory, rig, SolverSettings(**manifest.get("solver", {})))
+        try:
+            library = cls(directory, rig, SolverSettings(**manifest.get("solver", {})),
+                          LqrWeights(**manifest.get("lqr_weights", {})))
+        except TypeError as err:
+            raise LibraryError(f"{directory / MANIFEST}: unknown solver or LQR setting: {err}") from err
         entries = manifest.get("primitives")
         if not isinstance(entries, dict):
             raise LibraryError(f"{directory / MANIFEST}: 'primitives' must be a mapping")
@@ -169,11 +194,15 @@ class PrimitiveLibrary:
         try:
             with np.load(io.BytesIO(payload)) as arrays:
                 data = {name: np.array(arrays[name]) for name in ARRAYS}
+                gains = None
+                if not self.needs_gains(primitive_id):
+                    gains = TrackingGains(riccati=np.array(arrays["riccati"]),
+                                          input_gain=np.array(arrays["riccati_input_gain"]))
         except (OSError, ValueError, KeyError) as err:
             raise LibraryError(f"{file}: not a valid primitive array file: {err}") from err
         primitive = Primitive(spec=self.spec(primitive_id), index_j=record["index_j"], effort=record["effort"],
                               solver_status=record["solver_status"], solve_time_s=record["solve_time_s"],
-                              iterations=record["iterations"], **data)
+                              iterations=record["iterations"], gains=gains, **data)
         self._cache[primitive_id] = primitive
         return primitive
 

@@ -9,6 +9,9 @@ only u = psiddot may jump.
 Time scaling by lambda > 0 (P3): t -> t / lambda, q(t) -> q(lambda t), qdot -> lambda qdot,
 u -> lambda^2 u, tau -> lambda^2 tau. A lambda whose torques exceed the motor limits is refused.
 
+Tracking gains go along (Theorem 1; swim_controller.time_scaling): each sample carries K = lambda R^-1 (G'P)
+Gamma(lambda) and G_l'P_l = (G'P) Gamma(lambda) of its primitive, so the tracker's law is u = u_des - K x.
+
 A slowly varying lambda (Sec. 4.3): with s the nominal (lambda = 1) plan time and lambda(s) given,
 the plan runs t(s) = int_0^s ds' / lambda(s'), q(t) = q_nom(s), qdot = lambda qdot_nom(s),
 u = lambda^2 u_nom(s) + lambdadot qdot_nom and tau = lambda^2 tau_nom(s); the torque the lambdadot term
@@ -23,6 +26,7 @@ from typing import Callable, Sequence
 import numpy as np
 import numpy.typing as npt
 
+from swim_controller.time_scaling import retime_feedback, scale_feedback
 from swim_model import RigParameters
 from swim_planner.errors import LibraryError, ManeuverError
 from swim_planner.library import PrimitiveLibrary
@@ -59,6 +63,8 @@ class Plan:
     qdot: Array
     foil_acceleration: Array
     torque: Array
+    lqr_gain: Array       # (N, 2, n) K of eq. 33, time-scaled
+    sliding_gain: Array   # (N, 2, n) G_l' P_l (eq. 24), time-scaled
     segments: list[Segment]
     library_digest: str
 
@@ -108,6 +114,10 @@ def concatenate(library: PrimitiveLibrary, rig: RigParameters, sequence: Sequenc
         primitives = [library.get(pid) for pid, _ in sequence]
     except LibraryError as err:
         raise ManeuverError(str(err)) from err
+    ungained = sorted({pid for (pid, _), p in zip(sequence, primitives) if p.gains is None})
+    if ungained:
+        raise ManeuverError(f"no tracking gains stored for {', '.join(ungained)} (for the library's LQ weights); "
+                            f"run `swim-primitives build {library.path}` to compute them")
     kinds = {p.spec.constrained for p in primitives}
     if len(kinds) != 1:
         raise ManeuverError("a plan cannot mix constrained and free primitives")
@@ -124,25 +134,30 @@ def concatenate(library: PrimitiveLibrary, rig: RigParameters, sequence: Sequenc
     pieces: list[tuple[Array, ...]] = []
     segments: list[Segment] = []
     clock, alpha, sample = 0.0, float(start_alpha_rad), 0
+    weights = library.lqr_weights
+    input_weights = np.array([weights.heave_input_weight, weights.pitch_input_weight])
+    ny, nq = primitives[0].q.shape[1] - 2, primitives[0].q.shape[1]
     for index, ((pid, repeat), primitive) in enumerate(zip(sequence, primitives)):
         t, q, qdot, u, tau = scale_primitive(primitive, time_scale)
+        lqr_gain, sliding_gain = scale_feedback(primitive.gains.input_gain, input_weights, time_scale, ny, nq)
         q = q.copy()
         offset = alpha - q[0, 0]
         q[:, 0] += offset
         skip = 0 if index == 0 else 1  # the junction sample is the previous segment's last
-        pieces.append((t[skip:] + clock, q[skip:], qdot[skip:], u[skip:], tau[skip:]))
+        pieces.append((t[skip:] + clock, q[skip:], qdot[skip:], u[skip:], tau[skip:], lqr_gain[skip:],
+                       sliding_gain[skip:]))
         count = len(t) - skip
         segments.append(Segment(pid, primitive.spec.primitive_type.value, repeat, clock, float(t[-1]), time_scale,
                                 offset, sample, count))
         clock += float(t[-1])
         alpha = float(q[-1, 0])
         sample += count
-    time_s, q, qdot, u, tau = (np.concatenate(parts) for parts in zip(*pieces))
+    time_s, q, qdot, u, tau, lqr_gain, sliding_gain = (np.concatenate(parts) for parts in zip(*pieces))
     first = primitives[0]
     names = ("alpha", "phi", "theta") if first.spec.constrained else ("alpha", "R", "phi", "theta")
     return Plan(constrained=first.spec.constrained, lane_radius_m=first.spec.lane_radius_m, joint_names=names,
-                time_s=time_s, q=q, qdot=qdot, foil_acceleration=u, torque=tau, segments=segments,
-                library_digest=library.digest())
+                time_s=time_s, q=q, qdot=qdot, foil_acceleration=u, torque=tau, lqr_gain=lqr_gain,
+                sliding_gain=sliding_gain, segments=segments, library_digest=library.digest())
 
 
 def vary_time_scale(nominal: Plan, time_scale_of: Callable[[float], float], rig: RigParameters) -> Plan:
@@ -170,6 +185,9 @@ def vary_time_scale(nominal: Plan, time_scale_of: Callable[[float], float], rig:
         segments.append(dataclasses.replace(
             segment, start_time_s=start, duration_s=float(time_s[last] - start),
             time_scale=float(scale[max(first - 1, 0):last + 1].mean())))
+    nq = nominal.q.shape[1]
+    lqr_gain, sliding_gain = retime_feedback(nominal.lqr_gain, nominal.sliding_gain, scale, nq - 2, nq)
     return dataclasses.replace(nominal, time_s=time_s, qdot=nominal.qdot * scale[:, None],
                                foil_acceleration=foil_acceleration,
-                               torque=nominal.torque * scale[:, None] ** 2, segments=segments)
+                               torque=nominal.torque * scale[:, None] ** 2, lqr_gain=lqr_gain,
+                               sliding_gain=sliding_gain, segments=segments)

@@ -41,6 +41,8 @@ def plan_to_message(plan: Plan, stamp) -> PlannedTrajectory:
     message.velocities = plan.qdot.ravel().tolist()
     message.foil_accelerations = plan.foil_acceleration.ravel().tolist()
     message.feedforward_torques = plan.torque.ravel().tolist()
+    message.lqr_gains = plan.lqr_gain.ravel().tolist()
+    message.sliding_gains = plan.sliding_gain.ravel().tolist()
     message.segments = [PrimitiveSegment(
         primitive_id=s.primitive_id, primitive_type=s.primitive_type, repeat_index=s.repeat_index,
         start_time_s=s.start_time_s, duration_s=s.duration_s, time_scale=s.time_scale,

@@ -39,6 +39,7 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
+from swim_controller.riccati import TrackingGains
 from swim_model import SinusoidalGait, VehicleModel, simulate_gait
 from swim_planner.collocation import fine_grid_times, hermite_simpson, simpson_integral
 from swim_planner.errors import PrimitiveSolveError
@@ -86,6 +87,7 @@ class PrimitiveSpec:
     cycles: int = 1                           # cruise: the cycle is solved once and repeated this often
     heave_effort_weight: float = 0.1          # w_h of eq. 10 (assumed), rad/(N^2 m^2 s)
     pitch_effort_weight: float = 0.1          # w_p of eq. 10 (assumed)
+    input_smoothness_weight: float = 1e-8     # w_u (assumed), rad/(rad/s^3)^2/s: see solve_primitive
 
     @property
     def solved_duration_s(self) -> float:
@@ -115,6 +117,7 @@ class Primitive:
     solver_status: str
     solve_time_s: float
     iterations: int
+    gains: Optional[TrackingGains] = None   # P(t) and G'P for the tracker (swim_controller.riccati)
 
     @property
     def start_state(self) -> tuple[Array, Array]:
@@ -182,7 +185,11 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
     effort = simpson_integral(grid, effort_integrand)
     x_end = grid.x[:, -1]
     sign = spec.index_sign()
-    opti.minimize(-(sign * x_end[0] - effort))
+    # w_u int |udot|^2 dt on the fine grid: without it the optimizer makes the light pitch axis ring at the
+    # grid's own frequency (cheap in torque), a plan no sampled controller can follow
+    fine_step = spec.solved_duration_s / (samples - 1)
+    roughness = spec.input_smoothness_weight * ca.sumsqr(inputs[:, 1:] - inputs[:, :-1]) / fine_step
+    opti.minimize(-(sign * x_end[0] - effort) + roughness)
 
     # ranges and limits on the fine grid
     heave, pitch = states[nq - 2, :], states[nq - 1, :]

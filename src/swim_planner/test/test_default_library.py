@@ -67,8 +67,11 @@ def test_limits_and_boundary_conditions(library, rig, primitive_id):
 @pytest.mark.parametrize("primitive_id", [i for i in IDS if i.startswith("constrained/")])
 def test_open_loop_replay_reproduces_the_states(library, rig, primitive_id):
     primitive = library.get(primitive_id)
-    result = replay_open_loop(model_for(primitive.spec, rig), primitive.time_s, primitive.q, primitive.qdot,
-                              primitive.foil_acceleration)
+    # a cruise is one solved cycle tiled: replay that cycle (the copies are it, translated in alpha; u may
+    # jump where they join, which the replay's smooth torque signal cannot represent)
+    cycle = primitive.time_s <= primitive.spec.solved_duration_s + 1e-9
+    result = replay_open_loop(model_for(primitive.spec, rig), primitive.time_s[cycle], primitive.q[cycle],
+                              primitive.qdot[cycle], primitive.foil_acceleration[cycle])
     assert result.max_position_error <= REPLAY_TOLERANCE
 
 

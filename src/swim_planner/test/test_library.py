@@ -1,4 +1,5 @@
 """The library on disk: round trip, and every way a library can be bad."""
+import dataclasses
 import json
 import shutil
 
@@ -6,7 +7,7 @@ import numpy as np
 import pytest
 
 from swim_planner.errors import LibraryError
-from swim_planner.library import MANIFEST, PrimitiveLibrary
+from swim_planner.library import FORMAT_VERSION, MANIFEST, PrimitiveLibrary
 
 SOME = ["constrained/cruise/E0.05", "constrained/accelerate/E0.05"]
 
@@ -28,8 +29,11 @@ def test_round_trip(library, rig, copy):
         np.testing.assert_array_equal(read.q, original.q)
         np.testing.assert_array_equal(read.torque, original.torque)
         assert read.spec == original.spec and read.index_j == original.index_j
+        np.testing.assert_array_equal(read.gains.riccati, original.gains.riccati)
+        np.testing.assert_array_equal(read.gains.input_gain, original.gains.input_gain)
     manifest = json.loads((copy / MANIFEST).read_text())
-    assert manifest["rig_digest"] == rig.digest() and manifest["format_version"] == 1
+    assert manifest["rig_digest"] == rig.digest() and manifest["format_version"] == FORMAT_VERSION
+    assert manifest["lqr_weights"] == dataclasses.asdict(library.lqr_weights)
 
 
 def _edit_manifest(path, change):

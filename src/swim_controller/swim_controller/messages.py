@@ -1,0 +1,73 @@
+"""Between ROS messages and the tracker's types: checked, so a bad message is refused, never used."""
+from __future__ import annotations
+
+from typing import Optional, Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from swim_controller.errors import PlanError, StateMessageError
+from swim_controller.riccati import error_state_size
+from swim_controller.tracker import Reference
+from swim_controller.velocity_filter import VelocityEstimator
+
+Array = npt.NDArray[np.float64]
+SUPPORTED_INTERFACE_VERSION = 2
+
+
+def reference_from_message(plan, joint_names: Sequence[str]) -> Reference:
+    """A swim_interfaces/PlannedTrajectory as a Reference; raises PlanError naming what is wrong."""
+    if plan.interface_version != SUPPORTED_INTERFACE_VERSION:
+        raise PlanError(f"plan interface version {plan.interface_version}, this tracker reads "
+                        f"{SUPPORTED_INTERFACE_VERSION}")
+    if tuple(plan.joint_names) != tuple(joint_names):
+        raise PlanError(f"plan joints {list(plan.joint_names)} do not match the vehicle's {list(joint_names)}")
+    samples, nq = len(plan.time_from_start_s), len(joint_names)
+    n = error_state_size(nq, nq - 2)
+
+    def array(name: str, shape: tuple[int, ...]) -> Array:
+        values = np.asarray(getattr(plan, name), dtype=float)
+        if values.size != int(np.prod(shape)):
+            raise PlanError(f"plan {name} has {values.size} values, expected {int(np.prod(shape))} for "
+                            f"{samples} samples")
+        return values.reshape(shape)
+    return Reference(
+        time_s=np.asarray(plan.time_from_start_s, dtype=float), q=array("positions", (samples, nq)),
+        qdot=array("velocities", (samples, nq)), foil_acceleration=array("foil_accelerations", (samples, 2)),
+        torque=array("feedforward_torques", (samples, 2)), lqr_gain=array("lqr_gains", (samples, 2, n)),
+        sliding_gain=array("sliding_gains", (samples, 2, n)), joint_names=tuple(joint_names),
+        segment_start_s=tuple(s.start_time_s for s in plan.segments),
+        time_scale=plan.segments[0].time_scale if plan.segments else 1.0)
+
+
+def state_from_message(message, joint_names: Optional[Sequence[str]], velocity: VelocityEstimator,
+                       receipt_time_s: float) -> tuple[float, Array, Array]:
+    """(time_s, q, qdot) from a sensor_msgs/JointState, in joint_names' order (any order in the message).
+
+    The time is the message's stamp, or receipt_time_s when the stamp is zero (a source that does not stamp).
+    Velocities come from the message, or, when it has none, from the filtered differences of positions.
+    Raises StateMessageError for unknown or missing joints, wrong lengths and non-finite values."""
+    names = list(message.name)
+    if joint_names is None:   # no plan yet: accept either vehicle's joints
+        joint_names = names if names in (["alpha", "phi", "theta"], ["alpha", "R", "phi", "theta"]) else None
+        if joint_names is None:
+            raise StateMessageError(f"joint names {names} are not [alpha, phi, theta] or [alpha, R, phi, theta]")
+    if sorted(names) != sorted(joint_names) or len(set(names)) != len(names):
+        raise StateMessageError(f"joint names {names}, expected {list(joint_names)}")
+    positions = np.asarray(message.position, dtype=float)
+    if positions.shape != (len(names),):
+        raise StateMessageError(f"{len(positions)} positions for {len(names)} joints")
+    order = [names.index(j) for j in joint_names]
+    q = positions[order]
+    if not np.all(np.isfinite(q)):
+        raise StateMessageError(f"non-finite position: {q}")
+    time_s = message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec or receipt_time_s
+    if len(message.velocity) == 0:
+        return time_s, q, velocity.update(time_s, q)
+    velocities = np.asarray(message.velocity, dtype=float)
+    if velocities.shape != (len(names),):
+        raise StateMessageError(f"{len(velocities)} velocities for {len(names)} joints")
+    qdot = velocities[order]
+    if not np.all(np.isfinite(qdot)):
+        raise StateMessageError(f"non-finite velocity: {qdot}")
+    return time_s, q, qdot

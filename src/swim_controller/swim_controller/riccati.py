@@ -1,0 +1,208 @@
+"""The time-varying LQ regulator about a planned trajectory (paper Sec. 6.1, eqs. 16-21; SPEC.md section 5).
+
+Error state (n = ny + 2 nq: 10 for the free vehicle, 7 for the laterally constrained one)::
+
+    x = ( int_0^t (y - y_des) dt,  q - q_des,  qdot - qdot_des ),   y = (alpha, R) or (alpha)
+
+The integral error is taken with the same sign as the others (y - y_des) so that the paper's
+z = edot + 2 l e + l^2 int e is one consistent PID-like combination. With u = psiddot as input and
+qddot = f(q, qdot, u) the shape dynamics (eq. 14 solved for yddot, psiddot = u), the Jacobian
+linearization about the plan is (eqs. 16-17)::
+
+    xdot = F(t) x + G(t) (u - u_des),
+    F = [[0, [I_ny 0], 0], [0, 0, I_nq], [0, df/dq, df/dqdot]],   G = [[0], [0], [df/du]]
+
+and the finite-horizon LQ problem min int (du' R du + x' Q x) dt + x(T)' S x(T) has the gain
+du = -R^-1 G' P x with P from the backward Riccati equation (eq. 20)::
+
+    -Pdot = P F + F' P - P G R^-1 G' P + Q,     P(T) = S.
+
+Q = Z' Gg Z (Sec. 7) with z = Z x = (edot_a + 2 l_a e_a + l_a^2 int e_a, [same for R],
+edot_phi + l_phi e_phi, edot_theta + l_theta e_theta); Gg diagonal. S is the algebraic Riccati solution for
+the time-averaged F, G, scaled (Sec. 7). p_alpha is a first integral of the ideal model (SPEC.md P1), so its
+linearization is an uncontrollable mode with eigenvalue 0 and the averaged pair is not stabilizable; the
+algebraic equation is therefore solved for F_avg - mu I, a small stability margin mu (a named parameter).
+
+P(t) is computed off-line, once per primitive, by integrating the Riccati equation backward with an
+explicit 8th-order Runge-Kutta method at tight tolerances (F, G linear between the plan's samples).
+"""
+from __future__ import annotations
+
+import dataclasses
+from typing import Optional
+
+import casadi as ca
+import numpy as np
+import numpy.typing as npt
+import scipy.integrate
+import scipy.linalg
+
+from swim_controller.errors import GainComputationError
+from swim_model import VehicleModel
+
+Array = npt.NDArray[np.float64]
+
+
+@dataclasses.dataclass(frozen=True)
+class LqrWeights:
+    """The tuning of the LQ stage (Sec. 7): rates l, coordination gains Gg, input weights R, terminal S.
+
+    The paper publishes the structure, not its numbers; every default here is assumed, tuned in simulation
+    on the ideal model (tests/test_closed_loop_ideal.py) for convergence within a few seconds without
+    saturating the motors.
+    """
+
+    alpha_rate_per_s: float = 1.5        # assumed: l_alpha, longitudinal error decays with ~0.7 s
+    lateral_rate_per_s: float = 1.5      # assumed: l_R
+    heave_rate_per_s: float = 8.0        # assumed: l_phi
+    pitch_rate_per_s: float = 8.0        # assumed: l_theta
+    alpha_gain: float = 100.0            # assumed: Gg[alpha], 1/(rad/s)^2 (z_alpha is a rate)
+    lateral_gain: float = 100.0          # assumed: Gg[R], 1/(m/s)^2
+    heave_gain: float = 1.0              # assumed: Gg[phi], 1/(rad/s)^2
+    pitch_gain: float = 1.0              # assumed: Gg[theta], 1/(rad/s)^2
+    heave_input_weight: float = 1e-2     # assumed: R[phi_ddot], 1/(rad/s^2)^2 (1e-4 saturated the motors)
+    pitch_input_weight: float = 1e-2     # assumed: R[theta_ddot], 1/(rad/s^2)^2
+    terminal_scale: float = 0.01         # assumed: S = terminal_scale * P_are (Sec. 7 "a scaled version");
+                                         # P_are of the averaged system is ~10x the mid-primitive P, and at
+                                         # scale 1 the gains near each primitive's end saturate the motors
+    terminal_margin_per_s: float = 0.05  # assumed: mu, the shift that makes the averaged pair stabilizable
+
+    def validate(self) -> None:
+        """Raise ValueError unless every weight is positive and finite (the margin may be zero)."""
+        for field in dataclasses.fields(self):
+            value = getattr(self, field.name)
+            low_ok = value >= 0.0 if field.name == "terminal_margin_per_s" else value > 0.0
+            if not (isinstance(value, (int, float)) and np.isfinite(value) and low_ok):
+                raise ValueError(f"LQR weight {field.name} must be a positive finite number, got {value!r}")
+
+    def input_weight_matrix(self) -> Array:
+        """R, 2 x 2 diagonal, for u = (phi_ddot, theta_ddot)."""
+        return np.diag([self.heave_input_weight, self.pitch_input_weight])
+
+    def state_weight_matrix(self, constrained: bool) -> Array:
+        """Q = Z' Gg Z (Sec. 7) on x = (int e_y, e_q, edot_q)."""
+        nq, ny = (3, 1) if constrained else (4, 2)
+        n = error_state_size(nq, ny)
+        rates_y = [self.alpha_rate_per_s] if constrained else [self.alpha_rate_per_s, self.lateral_rate_per_s]
+        gains = [self.alpha_gain] if constrained else [self.alpha_gain, self.lateral_gain]
+        gains += [self.heave_gain, self.pitch_gain]
+        z_map = np.zeros((nq, n))
+        for i, rate in enumerate(rates_y):
+            z_map[i, i] = rate ** 2                 # int e
+            z_map[i, ny + i] = 2.0 * rate           # e
+            z_map[i, ny + nq + i] = 1.0             # edot
+        for j, rate in enumerate([self.heave_rate_per_s, self.pitch_rate_per_s]):
+            row, coordinate = ny + j, nq - 2 + j
+            z_map[row, ny + coordinate] = rate
+            z_map[row, ny + nq + coordinate] = 1.0
+        return z_map.T @ np.diag(gains) @ z_map
+
+
+def error_state_size(nq: int, ny: int) -> int:
+    """n = ny + 2 nq: integral errors of y, position errors, velocity errors."""
+    return ny + 2 * nq
+
+
+@dataclasses.dataclass(frozen=True)
+class Linearization:
+    """F(t_k) (N, n, n) and G(t_k) (N, n, 2) at the plan's samples."""
+
+    state_matrix: Array
+    input_matrix: Array
+
+
+def _jacobian_function(model: VehicleModel) -> ca.Function:
+    s = model.symbolic
+    qddot, _ = s.functions["shape_dynamics"](s.q, s.qdot, s.u)
+    outputs = [ca.jacobian(qddot, s.q), ca.jacobian(qddot, s.qdot), ca.jacobian(qddot, s.u)]
+    return ca.Function("shape_jacobians", [s.q, s.qdot, s.u], outputs)
+
+
+def linearize(model: VehicleModel, q: Array, qdot: Array, foil_acceleration: Array) -> Linearization:
+    """F and G of eq. 16 along a trajectory, by CasADi's exact derivatives (no finite differences)."""
+    samples, nq, ny = len(q), model.nq, model.n_unactuated
+    n = error_state_size(nq, ny)
+    jacobians = _jacobian_function(model).map(samples)
+    d_q, d_qdot, d_u = (np.asarray(a, dtype=float) for a in jacobians(q.T, qdot.T, foil_acceleration.T))
+    # map() stacks the per-sample nq x m blocks side by side: (nq, samples * m)
+    d_q = d_q.reshape(nq, samples, nq).transpose(1, 0, 2)
+    d_qdot = d_qdot.reshape(nq, samples, nq).transpose(1, 0, 2)
+    d_u = d_u.reshape(nq, samples, 2).transpose(1, 0, 2)
+    state = np.zeros((samples, n, n))
+    state[:, np.arange(ny), ny + np.arange(ny)] = 1.0                    # d/dt int e_y = e_y
+    state[:, ny + np.arange(nq), ny + nq + np.arange(nq)] = 1.0          # d/dt e_q = edot_q
+    state[:, ny + nq:, ny:ny + nq] = d_q
+    state[:, ny + nq:, ny + nq:] = d_qdot
+    inputs = np.zeros((samples, n, 2))
+    inputs[:, ny + nq:, :] = d_u
+    return Linearization(state, inputs)
+
+
+def terminal_weight(linearization: Linearization, state_weight: Array, input_weight: Array,
+                    weights: LqrWeights) -> Array:
+    """S: the scaled algebraic Riccati solution for the time-averaged F, G, shifted by the margin mu."""
+    state_avg = linearization.state_matrix.mean(axis=0)
+    input_avg = linearization.input_matrix.mean(axis=0)
+    shifted = state_avg - weights.terminal_margin_per_s * np.eye(len(state_avg))
+    try:
+        solution = scipy.linalg.solve_continuous_are(shifted, input_avg, state_weight, input_weight)
+    except (np.linalg.LinAlgError, ValueError) as err:
+        raise GainComputationError(f"no algebraic Riccati solution for the averaged linearization: {err}") from err
+    return weights.terminal_scale * 0.5 * (solution + solution.T)
+
+
+def solve_riccati(time_s: Array, linearization: Linearization, state_weight: Array, input_weight: Array,
+                  terminal: Array, rtol: float = 1e-10) -> Array:
+    """P(t_k), (N, n, n): eq. 20 integrated backward from P(T) = S, F and G linear between samples."""
+    time_s = np.asarray(time_s, dtype=float)
+    if time_s.ndim != 1 or len(time_s) < 2 or np.any(np.diff(time_s) <= 0.0):
+        raise GainComputationError("the time grid must be strictly increasing with at least two samples")
+    state_matrix, input_matrix = linearization.state_matrix, linearization.input_matrix
+    n = state_matrix.shape[1]
+    input_inverse = np.linalg.inv(input_weight)
+    horizon = time_s[-1]
+
+    def matrices_at(t: float) -> tuple[Array, Array]:
+        k = int(np.clip(np.searchsorted(time_s, t, side="right") - 1, 0, len(time_s) - 2))
+        w = (t - time_s[k]) / (time_s[k + 1] - time_s[k])
+        return ((1 - w) * state_matrix[k] + w * state_matrix[k + 1],
+                (1 - w) * input_matrix[k] + w * input_matrix[k + 1])
+
+    def backward(tau: float, p_flat: Array) -> Array:
+        # tau = T - t runs forward, so dP/dtau = -dP/dt = P F + F'P - P G R^-1 G' P + Q
+        f, g = matrices_at(horizon - tau)
+        p = p_flat.reshape(n, n)
+        pg = p @ g
+        rate = p @ f
+        rate = rate + rate.T - pg @ input_inverse @ pg.T + state_weight
+        return rate.reshape(-1)
+
+    scale = max(float(np.abs(terminal).max()), float(np.abs(state_weight).max()), 1e-300)
+    result = scipy.integrate.solve_ivp(backward, (0.0, horizon), terminal.reshape(-1), method="DOP853",
+                                       t_eval=(horizon - time_s)[::-1], rtol=rtol, atol=rtol * 1e-3 * scale)
+    if not result.success or not np.all(np.isfinite(result.y)):
+        raise GainComputationError(f"the Riccati integration failed: {result.message}")
+    riccati = result.y.T[::-1].reshape(len(time_s), n, n)
+    return 0.5 * (riccati + riccati.transpose(0, 2, 1))
+
+
+@dataclasses.dataclass
+class TrackingGains:
+    """What the tracker needs along one primitive, at its samples: P(t) and G(t)' P(t)."""
+
+    riccati: Array        # P, (N, n, n)
+    input_gain: Array     # G' P, (N, 2, n): du = -R^-1 G'P x and s = Mio^-1 G'P x (eq. 24)
+
+
+def primitive_gains(model: VehicleModel, time_s: Array, q: Array, qdot: Array, foil_acceleration: Array,
+                    weights: Optional[LqrWeights] = None) -> TrackingGains:
+    """P(t) and G'P along a planned trajectory, for the weights given (the defaults if None)."""
+    weights = weights or LqrWeights()
+    weights.validate()
+    linearization = linearize(model, q, qdot, foil_acceleration)
+    state_weight = weights.state_weight_matrix(model.constrained)
+    input_weight = weights.input_weight_matrix()
+    terminal = terminal_weight(linearization, state_weight, input_weight, weights)
+    riccati = solve_riccati(time_s, linearization, state_weight, input_weight, terminal)
+    input_gain = np.einsum("kni,knm->kim", linearization.input_matrix, riccati)
+    return TrackingGains(riccati=riccati, input_gain=input_gain)

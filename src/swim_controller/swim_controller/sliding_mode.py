@@ -1,0 +1,46 @@
+"""The sliding-mode outer loop (paper Sec. 6.3, eqs. 24-25; SPEC.md section 5).
+
+Derivation. Let the plant be Mm(q) qddot + Cm(q, qdot) qdot = [0; tau + d] with d an unknown torque
+disturbance on the foil's motors (the matched part of what the ideal model leaves out), ||d|| <= D. With
+tau = tau1 + eps and the I/O linearization tau1 = Mio u + Cio qdot (eqs. 22-23), eliminating yddot from
+eq. 14 gives psiddot = u + Mio^-1 (eps + d), and Mm^-1 [0; I] = B Mio^-1 with B = [-Mm11^-1 Mm12; I] = df/du.
+So the error system is xdot = F x + G (du + Mio^-1 (eps + d)) with du = -R^-1 G'P x the LQ feedback.
+Along it, V = x' P x (P from eq. 20) has
+
+    Vdot = -x'Qx - x'PGR^-1G'Px + 2 (G'Px)' Mio^-1 (eps + d) = -x'Qx - ||R^-1/2 G'Px||^2 + 2 s'(eps + d)
+
+with s = Mio^-1 G'P x (Mio is symmetric). Choosing eps = -D s / ||s|| makes 2 s'(eps + d) <= 2 ||s|| (||d|| - D)
+<= 0, so V decreases at least as fast as without the disturbance (eq. 25). (The extracted text of the
+paper writes s with an extra K'; with the matched input map above no K is needed.) To keep eps from
+chattering, the unit vector s / ||s|| is replaced by s / phi inside a boundary layer ||s|| < phi, where eps
+is linear in s and the guarantee weakens to ultimate boundedness of s. With time scaling, P and G are
+those of the scaled system: G_l' P_l = (G'P)(lambda t) Gamma (see time_scaling).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+Array = npt.NDArray[np.float64]
+
+
+@dataclasses.dataclass(frozen=True)
+class SlidingMode:
+    """eps = -D s / max(||s||, phi)."""
+
+    disturbance_bound_n_m: float = 0.02   # assumed: D, about 5 % of the pitch motor's limit (0.52 N m)
+    boundary_layer: float = 1.0           # assumed: phi, in the units of s = Mio^-1 G'P x
+
+    def validate(self) -> None:
+        if not (math.isfinite(self.disturbance_bound_n_m) and self.disturbance_bound_n_m >= 0.0):
+            raise ValueError(f"disturbance bound must be finite and >= 0, got {self.disturbance_bound_n_m!r}")
+        if not (math.isfinite(self.boundary_layer) and self.boundary_layer > 0.0):
+            raise ValueError(f"boundary layer must be finite and > 0, got {self.boundary_layer!r}")
+
+    def term(self, sliding_variable: Array) -> Array:
+        """eps (N m, heave and pitch) for the sliding variable s."""
+        norm = math.hypot(sliding_variable[0], sliding_variable[1])
+        return sliding_variable * (-self.disturbance_bound_n_m / max(norm, self.boundary_layer))

@@ -1,0 +1,136 @@
+"""What the tracker node does between plans and around the law: modes, tolerances, stale state, cancel.
+
+Modes: IDLE (no plan yet: zero torque), TRACKING (the cascade law on the active plan), HOLDING (after a
+plan ended or was canceled: the foil held still at its last heave and pitch), STOPPED (the state went
+stale: zero torque until a fresh state arrives, then IDLE). Plan time runs on the state messages' own
+clock (their stamps), so a lock-step simulator and a real-time rig look the same to the law.
+"""
+from __future__ import annotations
+
+import dataclasses
+import enum
+import math
+from typing import Optional
+
+import numpy as np
+import numpy.typing as npt
+
+from swim_controller.tracker import CascadeTracker, ControlOutput, Reference
+
+Array = npt.NDArray[np.float64]
+
+
+class Mode(enum.Enum):
+    IDLE = "idle"
+    TRACKING = "tracking"
+    HOLDING = "holding"
+    STOPPED = "stopped"
+
+
+class Outcome(enum.Enum):
+    """How a plan's execution ended (the action's result codes map one to one)."""
+
+    SUCCEEDED = "succeeded"
+    PATH_TOLERANCE_VIOLATED = "path tolerance violated"
+    GOAL_TOLERANCE_VIOLATED = "goal tolerance violated"
+    STATE_LOST = "state lost"
+    PREEMPTED = "preempted"
+    CANCELED = "canceled"
+
+
+@dataclasses.dataclass(frozen=True)
+class Tolerances:
+    """Limits on |alpha error| and |R error|; 0 means not checked."""
+
+    path_alpha_rad: float = 0.0
+    path_r_m: float = 0.0
+    goal_alpha_rad: float = 0.0
+    goal_r_m: float = 0.0
+
+    def validate(self) -> None:
+        for field in dataclasses.fields(self):
+            value = getattr(self, field.name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ValueError(f"tolerance {field.name} must be finite and >= 0, got {value!r}")
+
+
+@dataclasses.dataclass
+class Step:
+    """One period's command and report."""
+
+    torque: Array
+    saturated: tuple[bool, bool]
+    output: Optional[ControlOutput]   # None unless TRACKING
+    outcome: Optional[Outcome]        # set on the period the plan's execution ended
+
+
+def _violates(error: float, tolerance: float) -> bool:
+    return tolerance > 0.0 and abs(error) > tolerance
+
+
+class Supervisor:
+    """Runs one plan at a time through a CascadeTracker; owns no ROS objects and no clock."""
+
+    def __init__(self, tracker: CascadeTracker) -> None:
+        self.tracker = tracker
+        self.mode = Mode.IDLE
+        self.tolerances = Tolerances()
+        self._start_time_s: Optional[float] = None
+        self._hold_target: Optional[Array] = None
+        self.last_errors: tuple[float, float] = (0.0, 0.0)   # alpha, R at the last tracked period
+        self.elapsed_s = 0.0
+
+    def begin(self, reference: Reference, tolerances: Tolerances = Tolerances()) -> None:
+        """Start tracking reference at the next state (its stamp is plan time 0)."""
+        tolerances.validate()
+        self.tracker.start(reference)
+        self.tolerances = tolerances
+        self._start_time_s = None
+        self.mode = Mode.TRACKING
+        self.last_errors = (0.0, 0.0)
+        self.elapsed_s = 0.0
+
+    def cancel(self, q: Optional[Array]) -> None:
+        """Stop the plan and hold the foil where it is (q: the last measured state, if any)."""
+        if q is not None:
+            self._hold_target = np.array(q[-2:], dtype=float)
+            self.mode = Mode.HOLDING
+        else:
+            self.mode = Mode.IDLE
+
+    def state_lost(self) -> None:
+        """No fresh state: command zero torque until states come back."""
+        self.mode = Mode.STOPPED
+
+    def on_state(self, time_s: float, q: Array, qdot: Array) -> Step:
+        """The command for the period that starts with this (validated) state."""
+        if self.mode is Mode.STOPPED:
+            self.mode = Mode.IDLE   # fresh state again: stay passive until a new plan
+        if self.mode is Mode.IDLE:
+            return Step(np.zeros(2), (False, False), None, None)
+        if self.mode is Mode.HOLDING:
+            torque, saturated = self.tracker.hold(q, qdot, self._hold_target)
+            return Step(torque, saturated, None, None)
+        if self._start_time_s is None:
+            self._start_time_s = time_s
+        plan_time_s = time_s - self._start_time_s
+        output = self.tracker.step(plan_time_s, q, qdot)
+        reference = self.tracker.reference
+        lateral_error = float(q[1] - output.reference.q[1]) if reference.ny == 2 else 0.0
+        errors = (float(q[0] - output.reference.q[0]), lateral_error)
+        self.last_errors = errors
+        self.elapsed_s = plan_time_s
+        outcome = None
+        if _violates(errors[0], self.tolerances.path_alpha_rad) or _violates(errors[1], self.tolerances.path_r_m):
+            outcome = Outcome.PATH_TOLERANCE_VIOLATED
+        elif output.holding:
+            goal_missed = (_violates(errors[0], self.tolerances.goal_alpha_rad)
+                           or _violates(errors[1], self.tolerances.goal_r_m))
+            outcome = Outcome.GOAL_TOLERANCE_VIOLATED if goal_missed else Outcome.SUCCEEDED
+        if outcome is not None:
+            self._hold_target = reference.q[-1, -2:].copy() if outcome is Outcome.SUCCEEDED else q[-2:].copy()
+            self.mode = Mode.HOLDING
+            if outcome is not Outcome.SUCCEEDED:
+                torque, saturated = self.tracker.hold(q, qdot, self._hold_target)
+                return Step(torque, saturated, output, outcome)
+        return Step(output.torque, output.saturated, output, outcome)

@@ -1,0 +1,73 @@
+"""Time scaling of the LQ tracker (paper Sec. 6.4, Theorem 1, eqs. 26-33; SPEC.md section 5).
+
+A primitive run lambda times faster, q(t) -> q(lambda t), is linearized to F_l(t) = lambda Gamma^-1 F(lambda t)
+Gamma and G_l(t) = G(lambda t) (eq. 28), with Gamma(lambda) = diag(lambda^2 I_ny, lambda I_nq, I_nq) on
+x = (int e_y, e_q, edot_q) (eq. 27). Substituting P_l(t) = Gamma P(lambda t) Gamma into the Riccati equation of
+the scaled system, -Pdot_l = lambda Gamma (-Pdot)(lambda t) Gamma, shows that P_l solves it for the weights
+
+    Q_l = lambda Gamma Q Gamma,   R_l = R / lambda,   S_l = Gamma S Gamma.
+
+The paper's eq. 30 prints Q_l = Gamma Q Gamma; the factor lambda is needed for the substitution to close
+(tests/test_time_scaling: the printed form misses by the factor, ours agrees to 1e-6). With Q = Z' Gg Z it is
+the same structure with every rate l scaled to lambda l and Gg to lambda Gg: a faster plan is tracked with
+proportionally faster error dynamics. The scaled control law is eq. 33:
+
+    u(t) = lambda^2 u_des(lambda t) - lambda R^-1 G(lambda t)' Gamma P(lambda t) Gamma x(t),
+
+and since G has rows only on the velocity block, where Gamma is I, G' Gamma P Gamma = (G'P)(lambda t) Gamma.
+"""
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+
+Array = npt.NDArray[np.float64]
+
+
+def scaling_matrix(time_scale: float, ny: int, nq: int) -> Array:
+    """Gamma(lambda) of eq. 27, (ny + 2 nq) square."""
+    return np.diag(np.concatenate([np.full(ny, time_scale ** 2), np.full(nq, time_scale), np.ones(nq)]))
+
+
+def scaling_diagonal(time_scale: float | Array, ny: int, nq: int) -> Array:
+    """The diagonal of Gamma; for an array of lambdas, one row per lambda."""
+    scale = np.asarray(time_scale, dtype=float)[..., None]
+    return np.concatenate([np.repeat(scale ** 2, ny, -1), np.repeat(scale, nq, -1),
+                           np.ones(scale.shape[:-1] + (nq,))], axis=-1)
+
+
+def scale_riccati(riccati: Array, time_scale: float, ny: int, nq: int) -> Array:
+    """P_l at the scaled sample times t_k / lambda: Gamma P(t_k) Gamma, for P of shape (N, n, n)."""
+    gamma = scaling_diagonal(time_scale, ny, nq)
+    return riccati * gamma[:, None] * gamma[None, :]
+
+
+def scale_weights(state_weight: Array, input_weight: Array, terminal: Array, time_scale: float, ny: int,
+                  nq: int) -> tuple[Array, Array, Array]:
+    """(Q_l, R_l, S_l) for which Gamma P(lambda t) Gamma is the optimal Riccati solution (see above)."""
+    gamma = scaling_diagonal(time_scale, ny, nq)
+    outer = gamma[:, None] * gamma[None, :]
+    return time_scale * state_weight * outer, input_weight / time_scale, terminal * outer
+
+
+def scale_feedback(input_gain: Array, input_weight_diagonal: Array, time_scale: float | Array, ny: int,
+                   nq: int) -> tuple[Array, Array]:
+    """The gains of eq. 33 from the unscaled G'P (N, 2, n), at each sample's lambda (scalar or (N,)).
+
+    Returns:
+        lqr_gain: K = lambda R^-1 (G'P) Gamma, so that u = lambda^2 u_des - K x  (1/s^2 and 1/s units by block)
+        sliding_gain: (G'P) Gamma = G_l' P_l, so that s = Mio^-1 G_l' P_l x (eq. 24)
+    """
+    scale = np.broadcast_to(np.asarray(time_scale, dtype=float), input_gain.shape[:1])
+    gamma = scaling_diagonal(scale, ny, nq)                    # (N, n)
+    sliding_gain = input_gain * gamma[:, None, :]
+    lqr_gain = sliding_gain * (scale[:, None, None] / np.asarray(input_weight_diagonal)[None, :, None])
+    return lqr_gain, sliding_gain
+
+
+def retime_feedback(lqr_gain: Array, sliding_gain: Array, time_scale: float | Array, ny: int,
+                    nq: int) -> tuple[Array, Array]:
+    """The gains of a plan made at lambda = 1, rescaled to lambda per sample (scalar or (N,))."""
+    scale = np.broadcast_to(np.asarray(time_scale, dtype=float), lqr_gain.shape[:1])
+    gamma = scaling_diagonal(scale, ny, nq)[:, None, :]
+    return lqr_gain * gamma * scale[:, None, None], sliding_gain * gamma

@@ -1,0 +1,317 @@
+"""tracker_node: the cascade tracker (paper Sec. 6) on the rig's state, one plan at a time.
+
+Topics:
+    joint_states (sub, sensor_msgs/JointState)      vehicle state: names alpha, [R,] phi, theta; positions,
+                                                    and velocities (or none: then filtered differences)
+    joint_commands (pub, sensor_msgs/JointState)    torque command: names [phi, theta], effort in N m,
+                                                    one per state received (the state source sets the rate)
+    tracking_state (pub, swim_interfaces/TrackingState)  reference, feedback, error, output per period
+Action ``execute_plan`` (swim_interfaces/action/ExecutePlan): one active goal; a new goal preempts it
+(PREEMPTED); cancel holds the foil where it is (CANCELED); feedback at ``feedback_rate_hz``.
+Safety: no valid state for ``stale_after_periods`` sample periods -> zero torque, the goal aborts with
+STATE_LOST; a state with wrong names, lengths or a non-finite value is rejected, counted, never used.
+
+Parameters (validated on set, changeable at run time): sample_period_s (0.008, the paper's), stale_after_periods
+(5), sliding_mode_enabled (true), disturbance_bound_n_m, boundary_layer, time_scale (1.0: run plans as
+planned; else re-timed by Theorem 1 when a goal arrives), feedback_rate_hz (10), velocity_cutoff_hz, rig_path.
+"""
+from __future__ import annotations
+
+import math
+import threading
+import time
+from typing import Optional
+
+import numpy as np
+import rclpy
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.node import Node
+from sensor_msgs.msg import JointState
+from swim_interfaces.action import ExecutePlan
+from swim_interfaces.msg import TrackingState
+from trajectory_msgs.msg import JointTrajectoryPoint
+
+from swim_controller.errors import PlanError, StateMessageError
+from swim_controller.messages import reference_from_message, state_from_message
+from swim_controller.sliding_mode import SlidingMode
+from swim_controller.supervisor import Mode, Outcome, Step, Supervisor, Tolerances
+from swim_controller.tracker import CascadeTracker, model_io_linearization
+from swim_controller.velocity_filter import DEFAULT_CUTOFF_HZ, VelocityEstimator
+from swim_model import SwimModelError, VehicleModel, load_rig
+
+RESULT_CODES = {
+    Outcome.SUCCEEDED: ExecutePlan.Result.SUCCESSFUL,
+    Outcome.PATH_TOLERANCE_VIOLATED: ExecutePlan.Result.PATH_TOLERANCE_VIOLATED,
+    Outcome.GOAL_TOLERANCE_VIOLATED: ExecutePlan.Result.GOAL_TOLERANCE_VIOLATED,
+    Outcome.STATE_LOST: ExecutePlan.Result.STATE_LOST,
+    Outcome.PREEMPTED: ExecutePlan.Result.PREEMPTED,
+    Outcome.CANCELED: ExecutePlan.Result.CANCELED,
+}
+
+PARAMETER_RULES = {
+    "sample_period_s": (lambda v: isinstance(v, float) and 0.001 <= v <= 0.1, "a float in [0.001, 0.1] s"),
+    "stale_after_periods": (lambda v: isinstance(v, int) and 1 <= v <= 1000, "an integer in [1, 1000]"),
+    "sliding_mode_enabled": (lambda v: isinstance(v, bool), "a bool"),
+    "disturbance_bound_n_m": (lambda v: isinstance(v, float) and math.isfinite(v) and v >= 0.0, "a float >= 0"),
+    "boundary_layer": (lambda v: isinstance(v, float) and math.isfinite(v) and v > 0.0, "a float > 0"),
+    "time_scale": (lambda v: isinstance(v, float) and 0.1 <= v <= 10.0, "a float in [0.1, 10]"),
+    "feedback_rate_hz": (lambda v: isinstance(v, float) and 0.1 <= v <= 1000.0, "a float in [0.1, 1000] Hz"),
+    "velocity_cutoff_hz": (lambda v: isinstance(v, float) and math.isfinite(v) and v > 0.0, "a float > 0 Hz"),
+}
+
+
+class ActiveGoal:
+    """A goal being executed: its handle and the event its execute callback waits on."""
+
+    def __init__(self, handle) -> None:
+        self.handle = handle
+        self.done = threading.Event()
+        self.outcome: Optional[Outcome] = None
+        self.reason = ""
+
+    def finish(self, outcome: Outcome, reason: str) -> None:
+        if not self.done.is_set():
+            self.outcome, self.reason = outcome, reason
+            self.done.set()
+
+
+class TrackerNode(Node):
+    def __init__(self) -> None:
+        super().__init__("tracker_node")
+        defaults = SlidingMode()
+        self.declare_parameter("rig_path", "")
+        self.declare_parameter("sample_period_s", 0.008)
+        self.declare_parameter("stale_after_periods", 5)
+        self.declare_parameter("sliding_mode_enabled", True)
+        self.declare_parameter("disturbance_bound_n_m", defaults.disturbance_bound_n_m)
+        self.declare_parameter("boundary_layer", defaults.boundary_layer)
+        self.declare_parameter("time_scale", 1.0)
+        self.declare_parameter("feedback_rate_hz", 10.0)
+        self.declare_parameter("velocity_cutoff_hz", DEFAULT_CUTOFF_HZ)
+        for name, (valid, expected) in PARAMETER_RULES.items():
+            if not valid(self.get_parameter(name).value):
+                raise ValueError(f"parameter {name} must be {expected}, got {self.get_parameter(name).value!r}")
+        self.rig = load_rig(self.get_parameter("rig_path").value or None)
+        self._models: dict[bool, VehicleModel] = {}
+        self._lock = threading.Lock()
+        self._supervisor: Optional[Supervisor] = None
+        self._goal: Optional[ActiveGoal] = None
+        self._last_q: Optional[np.ndarray] = None
+        self._last_state_monotonic = time.monotonic()
+        self._last_tracking: Optional[TrackingState] = None
+        self._velocity = VelocityEstimator(self.get_parameter("velocity_cutoff_hz").value)
+        self.rejected_states = 0
+        self.commands_sent = 0
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+
+        self.command_publisher = self.create_publisher(JointState, "joint_commands", 10)
+        self.tracking_publisher = self.create_publisher(TrackingState, "tracking_state", 10)
+        control_group = MutuallyExclusiveCallbackGroup()
+        self.create_subscription(JointState, "joint_states", self._on_state, 10, callback_group=control_group)
+        self.create_timer(self.get_parameter("sample_period_s").value, self._check_stale,
+                          callback_group=control_group)
+        self._action = ActionServer(self, ExecutePlan, "execute_plan", execute_callback=self._execute,
+                                    goal_callback=lambda goal: GoalResponse.ACCEPT,
+                                    handle_accepted_callback=self._on_accepted,
+                                    cancel_callback=lambda handle: CancelResponse.ACCEPT,
+                                    callback_group=ReentrantCallbackGroup())
+        self.get_logger().info("tracker ready: waiting for joint_states and execute_plan goals")
+
+    # ----- parameters ------------------------------------------------------------------------------
+    def _on_set_parameters(self, parameters) -> SetParametersResult:
+        for parameter in parameters:
+            rule = PARAMETER_RULES.get(parameter.name)
+            if rule and not rule[0](parameter.value):
+                return SetParametersResult(successful=False, reason=f"{parameter.name} must be {rule[1]}")
+        with self._lock:
+            values = {p.name: p.value for p in parameters}
+            if self._supervisor is not None:
+                tracker = self._supervisor.tracker
+                if "sliding_mode_enabled" in values:
+                    tracker.sliding_mode_enabled = values["sliding_mode_enabled"]
+                bound = values.get("disturbance_bound_n_m", tracker.sliding_mode.disturbance_bound_n_m)
+                layer = values.get("boundary_layer", tracker.sliding_mode.boundary_layer)
+                tracker.sliding_mode = SlidingMode(bound, layer)
+            if "velocity_cutoff_hz" in values:
+                self._velocity = VelocityEstimator(values["velocity_cutoff_hz"])
+        return SetParametersResult(successful=True)
+
+    def _model(self, constrained: bool, lane_radius_m: float) -> VehicleModel:
+        key = (constrained, lane_radius_m)
+        if key not in self._models:
+            self._models[key] = VehicleModel(self.rig, constrained=constrained, lane_radius_m=lane_radius_m)
+        return self._models[key]
+
+    def _make_tracker(self, model: VehicleModel) -> CascadeTracker:
+        parameter = self.get_parameter
+        return CascadeTracker(model_io_linearization(model), model.torque_limits(),
+                              SlidingMode(parameter("disturbance_bound_n_m").value, parameter("boundary_layer").value),
+                              parameter("sliding_mode_enabled").value, parameter("sample_period_s").value)
+
+    # ----- the control period ----------------------------------------------------------------------
+    def _on_state(self, message: JointState) -> None:
+        with self._lock:
+            supervisor = self._supervisor
+            names = supervisor.tracker.reference.joint_names if supervisor else None
+            try:
+                time_s, q, qdot = state_from_message(message, names, self._velocity,
+                                                     self.get_clock().now().nanoseconds * 1e-9)
+            except StateMessageError as err:
+                self.rejected_states += 1
+                self.get_logger().warning(f"state rejected ({self.rejected_states} so far): {err}",
+                                          throttle_duration_sec=1.0)
+                return
+            self._last_state_monotonic = time.monotonic()
+            self._last_q = q
+            if supervisor is None:
+                self._publish_command(np.zeros(2), message.header.stamp)
+                return
+            try:
+                step = supervisor.on_state(time_s, q, qdot)
+            except Exception as err:  # noqa: BLE001 - a failing law must stop the motors, not the node
+                self.get_logger().error(f"control step failed, torque zeroed: {err!r}", throttle_duration_sec=1.0)
+                supervisor.state_lost()
+                self._publish_command(np.zeros(2), message.header.stamp)
+                return
+            self._publish_command(step.torque, message.header.stamp)
+            if step.output is not None:
+                self._last_tracking = self._tracking_message(step, message.header.stamp, q, qdot)
+                self.tracking_publisher.publish(self._last_tracking)
+            if step.outcome is not None and self._goal is not None:
+                self._goal.finish(step.outcome, step.outcome.value)
+
+    def _check_stale(self) -> None:
+        with self._lock:
+            limit = self.get_parameter("stale_after_periods").value * self.get_parameter("sample_period_s").value
+            if time.monotonic() - self._last_state_monotonic <= limit:
+                return
+            if self._supervisor is not None and self._supervisor.mode is not Mode.STOPPED:
+                self._supervisor.state_lost()
+                self.get_logger().error(f"no valid joint_states for {limit * 1e3:.0f} ms: torque zeroed")
+                if self._goal is not None:
+                    self._goal.finish(Outcome.STATE_LOST, f"no valid joint_states for {limit * 1e3:.0f} ms")
+            self._velocity.reset()
+            self._publish_command(np.zeros(2), self.get_clock().now().to_msg())
+
+    def _publish_command(self, torque: np.ndarray, stamp) -> None:
+        command = JointState()
+        command.header.stamp = stamp
+        command.name = ["phi", "theta"]
+        command.effort = [float(torque[0]), float(torque[1])]
+        self.command_publisher.publish(command)
+        self.commands_sent += 1
+
+    def _tracking_message(self, step: Step, stamp, q: np.ndarray, qdot: np.ndarray) -> TrackingState:
+        output = step.output
+        reference = output.reference
+        supervisor = self._supervisor
+        message = TrackingState()
+        message.header.stamp = stamp
+        plan = supervisor.tracker.reference
+        message.joint_names = list(plan.joint_names)
+        message.reference = JointTrajectoryPoint(positions=reference.q.tolist(), velocities=reference.qdot.tolist())
+        message.feedback = JointTrajectoryPoint(positions=q.tolist(), velocities=qdot.tolist())
+        message.error = JointTrajectoryPoint(positions=(reference.q - q).tolist(),
+                                             velocities=(reference.qdot - qdot).tolist())
+        message.output_torques = output.torque.tolist()
+        message.feedforward_torques = reference.torque.tolist()
+        message.torque_saturated = list(output.saturated)
+        message.plan_time_s = float(reference.time_s)
+        message.time_scale = float(plan.time_scale)
+        message.segment_index = plan.segment_index(reference.time_s)
+        message.sliding_mode_enabled = bool(supervisor.tracker.sliding_mode_enabled)
+        return message
+
+    # ----- the action ------------------------------------------------------------------------------
+    def _on_accepted(self, handle) -> None:
+        with self._lock:
+            if self._goal is not None:
+                self._goal.finish(Outcome.PREEMPTED, "preempted by a new goal")
+        handle.execute()
+
+    def _execute(self, handle):
+        goal = ActiveGoal(handle)
+        request = handle.request
+        try:
+            tolerances = Tolerances(request.path_tolerance_alpha_rad, request.path_tolerance_r_m,
+                                    request.goal_tolerance_alpha_rad, request.goal_tolerance_r_m)
+            tolerances.validate()
+            plan = request.plan
+            model = self._model(plan.constrained, plan.lane_radius_m)
+            reference = reference_from_message(plan, model.joint_names)
+            time_scale = self.get_parameter("time_scale").value
+            if time_scale != 1.0:
+                reference = reference.retimed(time_scale)
+        except (PlanError, ValueError, SwimModelError) as err:
+            handle.abort()
+            self.get_logger().warning(f"plan refused: {err}")
+            return ExecutePlan.Result(error_code=ExecutePlan.Result.INVALID_PLAN, error_string=str(err))
+        with self._lock:
+            if self._goal is not None:
+                self._goal.finish(Outcome.PREEMPTED, "preempted by a new goal")
+            self._goal = goal
+            tracker = self._make_tracker(model)
+            self._supervisor = Supervisor(tracker)
+            self._supervisor.begin(reference, tolerances)
+            # a new goal's first state is due within stale_after_periods from now, not from the last one seen
+            self._last_state_monotonic = time.monotonic()
+        self.get_logger().info(f"executing a {reference.duration_s:.2f} s plan ({len(plan.segments)} segments)")
+        period = 1.0 / self.get_parameter("feedback_rate_hz").value
+        while not goal.done.wait(period):
+            if not rclpy.ok():
+                goal.finish(Outcome.CANCELED, "shutting down")
+                break
+            if handle.is_cancel_requested:
+                with self._lock:
+                    self._supervisor.cancel(self._last_q)
+                goal.finish(Outcome.CANCELED, "canceled: holding the foil where it is")
+                break
+            with self._lock:
+                tracking, supervisor = self._last_tracking, self._supervisor
+                progress = min(supervisor.elapsed_s / reference.duration_s, 1.0)
+            if tracking is not None:
+                handle.publish_feedback(ExecutePlan.Feedback(state=tracking, progress=progress))
+        return self._finish(goal, reference.duration_s)
+
+    def _finish(self, goal: ActiveGoal, duration_s: float) -> ExecutePlan.Result:
+        with self._lock:
+            supervisor = self._supervisor
+            errors, elapsed = supervisor.last_errors, supervisor.elapsed_s
+            if self._goal is goal:
+                self._goal = None
+        result = ExecutePlan.Result(error_code=RESULT_CODES[goal.outcome], error_string=goal.reason,
+                                    final_alpha_error_rad=errors[0], final_r_error_m=errors[1],
+                                    duration_s=min(elapsed, duration_s))
+        if goal.outcome is Outcome.SUCCEEDED:
+            goal.handle.succeed()
+        elif goal.outcome is Outcome.CANCELED and goal.handle.is_cancel_requested:
+            goal.handle.canceled()
+        else:
+            goal.handle.abort()
+        self.get_logger().info(f"plan ended: {goal.reason}")
+        return result
+
+
+def main(args: list[str] | None = None) -> None:
+    # this rclpy's init() is not a context manager, hence try/finally
+    rclpy.init(args=args)
+    try:
+        try:
+            node = TrackerNode()
+        except (ValueError, SwimModelError) as err:
+            rclpy.logging.get_logger("tracker_node").fatal(str(err))
+            raise SystemExit(2) from err
+        executor = MultiThreadedExecutor(num_threads=3)
+        executor.add_node(node)
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,50 @@
+"""A closed loop on the ideal model for the tests: the tracker at its sample period, the plant integrated by
+RK4 substeps with the torque held (zero-order hold), an optional torque disturbance d(t) on the motors."""
+from __future__ import annotations
+
+import dataclasses
+from typing import Callable, Optional
+
+import numpy as np
+
+from swim_controller.tracker import CascadeTracker, Reference
+
+
+@dataclasses.dataclass
+class Run:
+    time_s: np.ndarray
+    q: np.ndarray
+    q_reference: np.ndarray
+    torque: np.ndarray
+    saturated: np.ndarray
+
+    @property
+    def error(self) -> np.ndarray:
+        return self.q - self.q_reference
+
+    def two_norm(self, column: int) -> float:
+        """sqrt(int e^2 dt) of one coordinate's error (the paper's measure, Sec. 7)."""
+        step = self.time_s[1] - self.time_s[0]
+        return float(np.sqrt(np.sum(self.error[:, column] ** 2) * step))
+
+
+def simulate(model, tracker: CascadeTracker, reference: Reference, sample_period_s: float = 0.008,
+             substeps: int = 8, q0: Optional[np.ndarray] = None, qdot0: Optional[np.ndarray] = None,
+             disturbance: Callable[[float], np.ndarray] = lambda t: np.zeros(2), extra_time_s: float = 0.0) -> Run:
+    tracker.start(reference)
+    q = reference.q[0].copy() if q0 is None else np.array(q0, dtype=float)
+    qdot = reference.qdot[0].copy() if qdot0 is None else np.array(qdot0, dtype=float)
+    periods = int(round((reference.duration_s + extra_time_s) / sample_period_s))
+    times, qs, refs, torques, saturations = [], [], [], [], []
+    for k in range(periods):
+        t = k * sample_period_s
+        out = tracker.step(t, q, qdot)
+        times.append(t)
+        qs.append(q.copy())
+        refs.append(out.reference.q.copy())
+        torques.append(out.torque.copy())
+        saturations.append(out.saturated)
+        applied = np.tile(out.torque + disturbance(t), (substeps, 1))
+        trajectory_q, trajectory_qdot = model.integrate_rk4(q, qdot, applied, sample_period_s / substeps)
+        q, qdot = trajectory_q[-1], trajectory_qdot[-1]
+    return Run(np.array(times), np.array(qs), np.array(refs), np.array(torques), np.array(saturations))

@@ -1,0 +1,29 @@
+"""Fixtures: the shipped primitive library (with its stored tracking gains) and the vehicle models."""
+import pytest
+
+from swim_model import VehicleModel, load_rig
+
+
+@pytest.fixture(scope="session")
+def rig():
+    return load_rig()
+
+
+@pytest.fixture(scope="session")
+def library(rig):
+    from swim_planner.library import PrimitiveLibrary
+    from swim_planner.paths import default_library_path
+    return PrimitiveLibrary.load(default_library_path(), rig)
+
+
+@pytest.fixture(scope="session")
+def model_for(rig):
+    """VehicleModel for a primitive's spec, built once per (constrained, lane)."""
+    cache = {}
+
+    def make(spec) -> VehicleModel:
+        key = (spec.constrained, spec.lane_radius_m)
+        if key not in cache:
+            cache[key] = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m)
+        return cache[key]
+    return make

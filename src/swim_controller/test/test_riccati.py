@@ -1,0 +1,118 @@
+"""The LQ stage against closed forms and independent computations (swim_controller.riccati)."""
+import numpy as np
+import pytest
+import scipy.linalg
+from hypothesis import given, settings, strategies as st
+
+from swim_controller.errors import GainComputationError
+from swim_controller.riccati import Linearization, LqrWeights, linearize, solve_riccati, terminal_weight
+
+
+def test_scalar_riccati_matches_its_closed_form():
+    """-pdot = 2 a p - p^2 b^2 / r + q with p(T) = s has p(t) = p+ + (p- - p+) ... ; compare to the tanh form."""
+    a, b, r, q, s, horizon = 0.7, 1.3, 0.5, 2.0, 0.1, 3.0
+    time_s = np.linspace(0.0, horizon, 61)
+    lin = Linearization(np.full((61, 1, 1), a), np.full((61, 1, 1), b))
+    p = solve_riccati(time_s, lin, np.array([[q]]), np.array([[r]]), np.array([[s]]))[:, 0, 0]
+    # closed form: with k = b^2/r, roots p1 > 0 > p2 of k p^2 - 2 a p - q = 0, and tau = T - t,
+    # p(tau) = (p1 (s - p2) - p2 (s - p1) e^{-k (p1 - p2) tau}) / ((s - p2) - (s - p1) e^{-k (p1 - p2) tau})
+    k = b * b / r
+    p1 = (a + np.sqrt(a * a + k * q)) / k
+    p2 = (a - np.sqrt(a * a + k * q)) / k
+    decay = np.exp(-k * (p1 - p2) * (horizon - time_s))
+    exact = (p1 * (s - p2) - p2 * (s - p1) * decay) / ((s - p2) - (s - p1) * decay)
+    np.testing.assert_allclose(p, exact, rtol=1e-8)
+
+
+def test_long_horizon_riccati_reaches_the_algebraic_solution():
+    rng = np.random.default_rng(3)
+    f = rng.normal(size=(4, 4))
+    g = rng.normal(size=(4, 2))
+    q, r = np.eye(4), np.diag([0.5, 2.0])
+    samples = 11
+    lin = Linearization(np.repeat(f[None], samples, 0), np.repeat(g[None], samples, 0))
+    p = solve_riccati(np.linspace(0, 30.0, samples), lin, q, r, np.zeros((4, 4)))
+    np.testing.assert_allclose(p[0], scipy.linalg.solve_continuous_are(f, g, q, r), rtol=1e-7)
+
+
+def test_bad_time_grid_is_refused():
+    lin = Linearization(np.zeros((3, 1, 1)), np.zeros((3, 1, 1)))
+    with pytest.raises(GainComputationError):
+        solve_riccati(np.array([0.0, 1.0, 1.0]), lin, np.eye(1), np.eye(1), np.eye(1))
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.lists(st.floats(-3, 3), min_size=10, max_size=10), st.booleans())
+def test_state_weight_is_the_papers_z_form(values, constrained):
+    """x'Qx = z'Gg z with z built independently from the paper's Sec. 7 formula."""
+    w = LqrWeights(alpha_rate_per_s=1.1, lateral_rate_per_s=2.3, heave_rate_per_s=5.0, pitch_rate_per_s=7.0,
+                   alpha_gain=3.0, lateral_gain=5.0, heave_gain=0.7, pitch_gain=0.2)
+    if constrained:
+        x = np.array(values[:7])
+        ia, ea, ephi, etheta, da, dphi, dtheta = x
+        z = [da + 2 * 1.1 * ea + 1.1 ** 2 * ia, dphi + 5.0 * ephi, dtheta + 7.0 * etheta]
+        gains = [3.0, 0.7, 0.2]
+    else:
+        x = np.array(values)
+        ia, ir, ea, er, ephi, etheta, da, dr, dphi, dtheta = x
+        z = [da + 2 * 1.1 * ea + 1.1 ** 2 * ia, dr + 2 * 2.3 * er + 2.3 ** 2 * ir, dphi + 5.0 * ephi,
+             dtheta + 7.0 * etheta]
+        gains = [3.0, 5.0, 0.7, 0.2]
+    expected = float(np.dot(gains, np.square(z)))
+    assert x @ w.state_weight_matrix(constrained) @ x == pytest.approx(expected, rel=1e-12, abs=1e-12)
+
+
+@pytest.mark.parametrize("constrained", [True, False])
+def test_linearization_matches_finite_differences_of_the_model(constrained):
+    """CasADi's exact F, G against central differences of swim_model's numeric shape dynamics."""
+    from swim_model import VehicleModel, load_rig
+    model = VehicleModel(load_rig(), constrained=constrained, lane_radius_m=0.43)
+    rng = np.random.default_rng(7)
+    nq, ny = model.nq, model.n_unactuated
+    q = rng.normal(scale=0.4, size=nq)
+    if not constrained:
+        q[1] = 0.45
+    qdot, u = rng.normal(scale=0.5, size=nq), rng.normal(scale=20.0, size=2)
+    lin = linearize(model, q[None], qdot[None], u[None])
+    f, g = lin.state_matrix[0], lin.input_matrix[0]
+    step = 1e-6
+
+    def accel(qq, qd, uu):
+        return model.shape_dynamics(qq, qd, uu)[0]
+    for j in range(nq):
+        e = np.zeros(nq)
+        e[j] = step
+        np.testing.assert_allclose(f[ny + nq:, ny + j], (accel(q + e, qdot, u) - accel(q - e, qdot, u)) / (2 * step),
+                                   rtol=1e-5, atol=1e-6)
+        np.testing.assert_allclose(f[ny + nq:, ny + nq + j],
+                                   (accel(q, qdot + e, u) - accel(q, qdot - e, u)) / (2 * step), rtol=1e-5, atol=1e-6)
+    for j in range(2):
+        e = np.zeros(2)
+        e[j] = step
+        np.testing.assert_allclose(g[ny + nq:, j], (accel(q, qdot, u + e) - accel(q, qdot, u - e)) / (2 * step),
+                                   rtol=1e-5, atol=1e-6)
+    # the kinematic blocks: d/dt int e_y = e_y, d/dt e_q = edot_q; u drives psiddot one to one
+    np.testing.assert_array_equal(f[:ny, ny:ny + ny], np.eye(ny))
+    np.testing.assert_array_equal(f[ny:ny + nq, ny + nq:], np.eye(nq))
+    np.testing.assert_allclose(g[-2:], np.eye(2), atol=1e-12)
+
+
+def test_terminal_weight_solves_the_shifted_algebraic_equation():
+    rng = np.random.default_rng(1)
+    f = rng.normal(size=(5, 5, 5)) * 0.3
+    g = rng.normal(size=(5, 5, 2))
+    w = LqrWeights(terminal_scale=0.5, terminal_margin_per_s=0.1)
+    q, r = np.eye(5), np.eye(2)
+    s = terminal_weight(Linearization(f, g), q, r, w)
+    fa, ga = f.mean(0) - 0.1 * np.eye(5), g.mean(0)
+    p = s / 0.5
+    residual = p @ fa + fa.T @ p - p @ ga @ np.linalg.solve(r, ga.T) @ p + q
+    assert np.abs(residual).max() < 1e-8
+    assert np.linalg.eigvalsh(s).min() > 0.0
+
+
+def test_weights_are_validated():
+    with pytest.raises(ValueError, match="heave_gain"):
+        LqrWeights(heave_gain=-1.0).validate()
+    with pytest.raises(ValueError, match="pitch_input_weight"):
+        LqrWeights(pitch_input_weight=float("nan")).validate()

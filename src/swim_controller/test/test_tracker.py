@@ -1,0 +1,111 @@
+"""The cascade law's parts: plan sampling, saturation, the sliding-mode term, velocity estimates, modes."""
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from swim_controller.errors import PlanError
+from swim_controller.sliding_mode import SlidingMode
+from swim_controller.supervisor import Mode, Outcome, Supervisor, Tolerances
+from swim_controller.tracker import CascadeTracker, Reference, saturate
+from swim_controller.velocity_filter import VelocityEstimator
+
+
+def _reference(time_s, q, qdot, u=None, gain=0.0):
+    samples, nq = q.shape
+    n = (nq - 2) + 2 * nq
+    u = np.zeros((samples, 2)) if u is None else u
+    return Reference(time_s, q, qdot, u, np.zeros((samples, 2)), np.full((samples, 2, n), gain),
+                     np.full((samples, 2, n), gain))
+
+
+def test_reference_interpolates_a_cubic_exactly_and_clamps():
+    t = np.linspace(0.0, 1.0, 5)
+    f = lambda s: 2 * s ** 3 - s ** 2 + 0.5 * s   # noqa: E731
+    df = lambda s: 6 * s ** 2 - 2 * s + 0.5         # noqa: E731
+    ref = _reference(t, np.column_stack([f(t)] * 3), np.column_stack([df(t)] * 3))
+    for s in (0.1, 0.37, 0.9):
+        assert ref.sample(s).q[0] == pytest.approx(f(s), abs=1e-12)
+    assert ref.sample(-1.0).q[0] == pytest.approx(f(0.0))
+    assert ref.sample(5.0).q[0] == pytest.approx(f(1.0))
+
+
+@pytest.mark.parametrize("bad", ["nan", "order", "shape"])
+def test_malformed_plans_are_refused(bad):
+    t = np.linspace(0.0, 1.0, 4)
+    q = np.zeros((4, 3))
+    if bad == "nan":
+        q[2, 1] = np.nan
+    if bad == "order":
+        t = np.array([0.0, 0.5, 0.5, 1.0])
+    if bad == "shape":
+        q = np.zeros((4, 5))
+    with pytest.raises(PlanError):
+        _reference(t, q, np.zeros((4, q.shape[1])))
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(allow_nan=True, allow_infinity=True, width=64), min_size=2, max_size=2))
+def test_saturation_never_exceeds_the_limits(values):
+    limits = np.array([1.25, 0.524])
+    command, flags = saturate(np.array(values), limits)
+    assert np.all(np.abs(command) <= limits)
+    if not all(math.isfinite(v) for v in values):
+        assert np.all(command == 0.0) and all(flags)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(-50, 50), st.floats(-50, 50), st.floats(0, 2 * math.pi), st.floats(0, 1))
+def test_sliding_term_makes_the_lyapunov_derivative_nonpositive(s0, s1, angle, fraction):
+    """Outside the boundary layer, 2 s'(eps + d) <= 0 for every ||d|| <= D (module docstring)."""
+    mode = SlidingMode(disturbance_bound_n_m=0.3, boundary_layer=1.0)
+    s = np.array([s0, s1])
+    eps = mode.term(s)
+    d = 0.3 * fraction * np.array([math.cos(angle), math.sin(angle)])
+    norm = float(np.linalg.norm(s))
+    if norm >= 1.0:
+        assert np.linalg.norm(eps) == pytest.approx(0.3)
+        assert s @ (eps + d) <= 1e-12
+    else:   # inside the layer: linear in s, never larger than D
+        np.testing.assert_allclose(eps, -0.3 * s, atol=1e-15)
+
+
+def test_velocity_estimate_of_a_ramp_follows_its_closed_form():
+    """For q = v t the estimate is v (1 - a^k) after k differences, a = exp(-2 pi fc h)."""
+    estimator = VelocityEstimator(cutoff_hz=10.0)
+    h, v = 0.008, np.array([0.3, -2.0, 1.0])
+    a = math.exp(-2 * math.pi * 10.0 * h)
+    for k in range(40):
+        rate = estimator.update(k * h, v * k * h)
+    np.testing.assert_allclose(rate, v * (1 - a ** 39), rtol=1e-12)
+
+
+def _static_io(q, qdot):
+    return np.diag([2.0, 0.5]), np.zeros(2)
+
+
+def test_supervisor_reports_tolerances_and_holds_after_the_plan():
+    t = np.linspace(0.0, 1.0, 11)
+    q = np.zeros((11, 3))
+    q[:, 0] = t                           # alpha from 0 to 1 rad
+    qdot = np.zeros((11, 3))
+    qdot[:, 0] = 1.0
+    limits = np.array([100.0, 100.0])
+    supervisor = Supervisor(CascadeTracker(_static_io, limits, sliding_mode_enabled=False))
+    supervisor.begin(_reference(t, q, qdot), Tolerances(path_alpha_rad=0.1))
+    assert supervisor.on_state(100.0, np.zeros(3), np.zeros(3)).outcome is None
+    step = supervisor.on_state(100.5, np.zeros(3), np.zeros(3))   # 0.5 rad behind
+    assert step.outcome is Outcome.PATH_TOLERANCE_VIOLATED and supervisor.mode is Mode.HOLDING
+    supervisor.begin(_reference(t, q, qdot), Tolerances(goal_alpha_rad=0.05))
+    supervisor.on_state(0.0, np.zeros(3), np.zeros(3))
+    assert supervisor.on_state(1.2, np.array([0.9, 0.0, 0.0]), np.zeros(3)).outcome is \
+        Outcome.GOAL_TOLERANCE_VIOLATED
+    supervisor.begin(_reference(t, q, qdot), Tolerances(goal_alpha_rad=0.05))
+    supervisor.on_state(0.0, np.zeros(3), np.zeros(3))
+    assert supervisor.on_state(1.2, np.array([0.98, 0.0, 0.0]), np.zeros(3)).outcome is Outcome.SUCCEEDED
+    # holding: a foil displaced from the plan's last psi is pushed back (u = -kp e through Mio)
+    held = supervisor.on_state(1.3, np.array([0.98, 0.1, -0.2]), np.zeros(3))
+    np.testing.assert_allclose(held.torque, np.diag([2.0, 0.5]) @ (-100.0 * np.array([0.1, -0.2])))
+    supervisor.state_lost()
+    assert np.all(supervisor.on_state(1.4, np.zeros(3), np.zeros(3)).torque == 0.0)
