@@ -178,8 +178,11 @@ class TrackerNode(Node):
                 return
             self._publish_command(step.torque, message.header.stamp)
             if step.output is not None:
-                self._last_tracking = self._tracking_message(step, message.header.stamp, q, qdot)
-                self.tracking_publisher.publish(self._last_tracking)
+                try:
+                    self._last_tracking = self._tracking_message(step, message.header.stamp, q, qdot)
+                    self.tracking_publisher.publish(self._last_tracking)
+                except Exception as err:  # noqa: BLE001
+                    self.get_logger().error(f"tracking_state not published: {err!r}", throttle_duration_sec=1.0)
             if step.outcome is not None and self._goal is not None:
                 self._goal.finish(step.outcome, step.outcome.value)
 
