@@ -48,7 +48,7 @@ class LqrWeights:
     """The tuning of the LQ stage (Sec. 7): rates l, coordination gains Gg, input weights R, terminal S.
 
     The paper publishes the structure, not its numbers; every default here is assumed, tuned in simulation
-    on the ideal model (tests/test_closed_loop_ideal.py) for convergence within a few seconds without
+    on the ideal model (swim_controller/test/test_closed_loop_ideal.py) for convergence within a few seconds without
     saturating the motors.
     """
 
