@@ -18,17 +18,16 @@ planned; else re-timed by Theorem 1 when a goal arrives), feedback_rate_hz (10),
 from __future__ import annotations
 
 import math
-import threading
 import time
 from typing import Optional
 
 import numpy as np
 import rclpy
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.action import ActionServer, CancelResponse, GoalResponse
-from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.action import ActionServer, CancelResponse
+from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
+from rclpy.task import Future
 from sensor_msgs.msg import JointState
 from swim_interfaces.action import ExecutePlan
 from swim_interfaces.msg import TrackingState
@@ -64,18 +63,21 @@ PARAMETER_RULES = {
 
 
 class ActiveGoal:
-    """A goal being executed: its handle and the event its execute callback waits on."""
+    """A goal being executed: its handle, its own supervisor, and the future its execute coroutine awaits."""
 
-    def __init__(self, handle) -> None:
+    def __init__(self, handle, supervisor: Supervisor, duration_s: float) -> None:
         self.handle = handle
-        self.done = threading.Event()
+        self.supervisor = supervisor
+        self.duration_s = duration_s
+        self.done = Future()
         self.outcome: Optional[Outcome] = None
         self.reason = ""
+        self.last_feedback_monotonic = -math.inf
 
     def finish(self, outcome: Outcome, reason: str) -> None:
-        if not self.done.is_set():
+        if not self.done.done():
             self.outcome, self.reason = outcome, reason
-            self.done.set()
+            self.done.set_result(outcome)
 
 
 class TrackerNode(Node):
@@ -95,8 +97,7 @@ class TrackerNode(Node):
             if not valid(self.get_parameter(name).value):
                 raise ValueError(f"parameter {name} must be {expected}, got {self.get_parameter(name).value!r}")
         self.rig = load_rig(self.get_parameter("rig_path").value or None)
-        self._models: dict[bool, VehicleModel] = {}
-        self._lock = threading.Lock()
+        self._models: dict[tuple[bool, float], VehicleModel] = {}
         self._supervisor: Optional[Supervisor] = None
         self._goal: Optional[ActiveGoal] = None
         self._last_q: Optional[np.ndarray] = None
@@ -109,15 +110,14 @@ class TrackerNode(Node):
 
         self.command_publisher = self.create_publisher(JointState, "joint_commands", 10)
         self.tracking_publisher = self.create_publisher(TrackingState, "tracking_state", 10)
-        control_group = MutuallyExclusiveCallbackGroup()
-        self.create_subscription(JointState, "joint_states", self._on_state, 10, callback_group=control_group)
-        self.create_timer(self.get_parameter("sample_period_s").value, self._check_stale,
-                          callback_group=control_group)
+        # One thread runs every callback (rclpy.spin): the control period, the stale watchdog and the action
+        # never race, so no locks. The execute callback is a coroutine that awaits its goal's end instead of
+        # blocking a thread; rclpy's MultiThreadedExecutor with a mutually exclusive group stalled here
+        # (the subscription stopped being served after a few periods, ros2/rclcpp#832 family).
+        self.create_subscription(JointState, "joint_states", self._on_state, 10)
+        self.create_timer(self.get_parameter("sample_period_s").value, self._check_stale)
         self._action = ActionServer(self, ExecutePlan, "execute_plan", execute_callback=self._execute,
-                                    goal_callback=lambda goal: GoalResponse.ACCEPT,
-                                    handle_accepted_callback=self._on_accepted,
-                                    cancel_callback=lambda handle: CancelResponse.ACCEPT,
-                                    callback_group=ReentrantCallbackGroup())
+                                    cancel_callback=self._on_cancel)
         self.get_logger().info("tracker ready: waiting for joint_states and execute_plan goals")
 
     # ----- parameters ------------------------------------------------------------------------------
@@ -126,17 +126,16 @@ class TrackerNode(Node):
             rule = PARAMETER_RULES.get(parameter.name)
             if rule and not rule[0](parameter.value):
                 return SetParametersResult(successful=False, reason=f"{parameter.name} must be {rule[1]}")
-        with self._lock:
-            values = {p.name: p.value for p in parameters}
-            if self._supervisor is not None:
-                tracker = self._supervisor.tracker
-                if "sliding_mode_enabled" in values:
-                    tracker.sliding_mode_enabled = values["sliding_mode_enabled"]
-                bound = values.get("disturbance_bound_n_m", tracker.sliding_mode.disturbance_bound_n_m)
-                layer = values.get("boundary_layer", tracker.sliding_mode.boundary_layer)
-                tracker.sliding_mode = SlidingMode(bound, layer)
-            if "velocity_cutoff_hz" in values:
-                self._velocity = VelocityEstimator(values["velocity_cutoff_hz"])
+        values = {p.name: p.value for p in parameters}
+        if self._supervisor is not None:
+            tracker = self._supervisor.tracker
+            if "sliding_mode_enabled" in values:
+                tracker.sliding_mode_enabled = values["sliding_mode_enabled"]
+            bound = values.get("disturbance_bound_n_m", tracker.sliding_mode.disturbance_bound_n_m)
+            layer = values.get("boundary_layer", tracker.sliding_mode.boundary_layer)
+            tracker.sliding_mode = SlidingMode(bound, layer)
+        if "velocity_cutoff_hz" in values:
+            self._velocity = VelocityEstimator(values["velocity_cutoff_hz"])
         return SetParametersResult(successful=True)
 
     def _model(self, constrained: bool, lane_radius_m: float) -> VehicleModel:
@@ -153,51 +152,63 @@ class TrackerNode(Node):
 
     # ----- the control period ----------------------------------------------------------------------
     def _on_state(self, message: JointState) -> None:
-        with self._lock:
-            supervisor = self._supervisor
-            names = supervisor.tracker.reference.joint_names if supervisor else None
+        supervisor = self._supervisor
+        names = supervisor.tracker.reference.joint_names if supervisor else None
+        try:
+            time_s, q, qdot = state_from_message(message, names, self._velocity,
+                                                 self.get_clock().now().nanoseconds * 1e-9)
+        except StateMessageError as err:
+            self.rejected_states += 1
+            self.get_logger().warning(f"state rejected ({self.rejected_states} so far): {err}",
+                                      throttle_duration_sec=1.0)
+            return
+        self._last_state_monotonic = time.monotonic()
+        self._last_q = q
+        if supervisor is None:
+            self._publish_command(np.zeros(2), message.header.stamp)
+            return
+        try:
+            step = supervisor.on_state(time_s, q, qdot)
+        except Exception as err:  # noqa: BLE001 - a failing law must stop the motors, not the node
+            self.get_logger().error(f"control step failed, torque zeroed: {err!r}", throttle_duration_sec=1.0)
+            supervisor.state_lost()
+            self._publish_command(np.zeros(2), message.header.stamp)
+            return
+        self._publish_command(step.torque, message.header.stamp)
+        if step.output is not None:
             try:
-                time_s, q, qdot = state_from_message(message, names, self._velocity,
-                                                     self.get_clock().now().nanoseconds * 1e-9)
-            except StateMessageError as err:
-                self.rejected_states += 1
-                self.get_logger().warning(f"state rejected ({self.rejected_states} so far): {err}",
-                                          throttle_duration_sec=1.0)
-                return
-            self._last_state_monotonic = time.monotonic()
-            self._last_q = q
-            if supervisor is None:
-                self._publish_command(np.zeros(2), message.header.stamp)
-                return
-            try:
-                step = supervisor.on_state(time_s, q, qdot)
-            except Exception as err:  # noqa: BLE001 - a failing law must stop the motors, not the node
-                self.get_logger().error(f"control step failed, torque zeroed: {err!r}", throttle_duration_sec=1.0)
-                supervisor.state_lost()
-                self._publish_command(np.zeros(2), message.header.stamp)
-                return
-            self._publish_command(step.torque, message.header.stamp)
-            if step.output is not None:
-                try:
-                    self._last_tracking = self._tracking_message(step, message.header.stamp, q, qdot)
-                    self.tracking_publisher.publish(self._last_tracking)
-                except Exception as err:  # noqa: BLE001
-                    self.get_logger().error(f"tracking_state not published: {err!r}", throttle_duration_sec=1.0)
-            if step.outcome is not None and self._goal is not None:
-                self._goal.finish(step.outcome, step.outcome.value)
+                self._last_tracking = self._tracking_message(step, message.header.stamp, q, qdot)
+                self.tracking_publisher.publish(self._last_tracking)
+            except Exception as err:  # noqa: BLE001
+                self.get_logger().error(f"tracking_state not published: {err!r}", throttle_duration_sec=1.0)
+        goal = self._goal
+        if goal is not None:
+            if step.outcome is not None:
+                goal.finish(step.outcome, step.outcome.value)
+            else:
+                self._publish_feedback(goal)
+
+    def _publish_feedback(self, goal: ActiveGoal) -> None:
+        """At most feedback_rate_hz: the latest tracking state and the fraction of the plan done."""
+        now = time.monotonic()
+        if self._last_tracking is None or now - goal.last_feedback_monotonic < 1.0 / self.get_parameter(
+                "feedback_rate_hz").value:
+            return
+        goal.last_feedback_monotonic = now
+        progress = min(goal.supervisor.elapsed_s / goal.duration_s, 1.0)
+        goal.handle.publish_feedback(ExecutePlan.Feedback(state=self._last_tracking, progress=progress))
 
     def _check_stale(self) -> None:
-        with self._lock:
-            limit = self.get_parameter("stale_after_periods").value * self.get_parameter("sample_period_s").value
-            if time.monotonic() - self._last_state_monotonic <= limit:
-                return
-            if self._supervisor is not None and self._supervisor.mode is not Mode.STOPPED:
-                self._supervisor.state_lost()
-                self.get_logger().error(f"no valid joint_states for {limit * 1e3:.0f} ms: torque zeroed")
-                if self._goal is not None:
-                    self._goal.finish(Outcome.STATE_LOST, f"no valid joint_states for {limit * 1e3:.0f} ms")
-            self._velocity.reset()
-            self._publish_command(np.zeros(2), self.get_clock().now().to_msg())
+        limit = self.get_parameter("stale_after_periods").value * self.get_parameter("sample_period_s").value
+        if time.monotonic() - self._last_state_monotonic <= limit:
+            return
+        if self._supervisor is not None and self._supervisor.mode is not Mode.STOPPED:
+            self._supervisor.state_lost()
+            self.get_logger().error(f"no valid joint_states for {limit * 1e3:.0f} ms: torque zeroed")
+            if self._goal is not None:
+                self._goal.finish(Outcome.STATE_LOST, f"no valid joint_states for {limit * 1e3:.0f} ms")
+        self._velocity.reset()
+        self._publish_command(np.zeros(2), self.get_clock().now().to_msg())
 
     def _publish_command(self, torque: np.ndarray, stamp) -> None:
         command = JointState()
@@ -229,14 +240,17 @@ class TrackerNode(Node):
         return message
 
     # ----- the action ------------------------------------------------------------------------------
-    def _on_accepted(self, handle) -> None:
-        with self._lock:
-            if self._goal is not None:
-                self._goal.finish(Outcome.PREEMPTED, "preempted by a new goal")
-        handle.execute()
+    def _on_cancel(self, handle) -> CancelResponse:
+        """Cancel the active goal: hold the foil where it is now."""
+        goal = self._goal
+        if goal is None or goal.handle is not handle:
+            return CancelResponse.REJECT
+        goal.supervisor.cancel(self._last_q)
+        goal.finish(Outcome.CANCELED, "canceled: holding the foil where it is")
+        return CancelResponse.ACCEPT
 
-    def _execute(self, handle):
-        goal = ActiveGoal(handle)
+    async def _execute(self, handle) -> ExecutePlan.Result:
+        """Validate the plan, make it the active one (preempting any other), await its end."""
         request = handle.request
         try:
             tolerances = Tolerances(request.path_tolerance_alpha_rad, request.path_tolerance_r_m,
@@ -252,42 +266,24 @@ class TrackerNode(Node):
             handle.abort()
             self.get_logger().warning(f"plan refused: {err}")
             return ExecutePlan.Result(error_code=ExecutePlan.Result.INVALID_PLAN, error_string=str(err))
-        with self._lock:
-            if self._goal is not None:
-                self._goal.finish(Outcome.PREEMPTED, "preempted by a new goal")
-            self._goal = goal
-            tracker = self._make_tracker(model)
-            self._supervisor = Supervisor(tracker)
-            self._supervisor.begin(reference, tolerances)
-            # a new goal's first state is due within stale_after_periods from now, not from the last one seen
-            self._last_state_monotonic = time.monotonic()
+        if self._goal is not None:
+            self._goal.finish(Outcome.PREEMPTED, "preempted by a new goal")
+        goal = ActiveGoal(handle, Supervisor(self._make_tracker(model)), reference.duration_s)
+        goal.supervisor.begin(reference, tolerances)
+        self._goal, self._supervisor, self._last_tracking = goal, goal.supervisor, None
+        # a new goal's first state is due within stale_after_periods from now, not from the last one seen
+        self._last_state_monotonic = time.monotonic()
         self.get_logger().info(f"executing a {reference.duration_s:.2f} s plan ({len(plan.segments)} segments)")
-        period = 1.0 / self.get_parameter("feedback_rate_hz").value
-        while not goal.done.wait(period):
-            if not rclpy.ok():
-                goal.finish(Outcome.CANCELED, "shutting down")
-                break
-            if handle.is_cancel_requested:
-                with self._lock:
-                    self._supervisor.cancel(self._last_q)
-                goal.finish(Outcome.CANCELED, "canceled: holding the foil where it is")
-                break
-            with self._lock:
-                tracking, supervisor = self._last_tracking, self._supervisor
-                progress = min(supervisor.elapsed_s / reference.duration_s, 1.0)
-            if tracking is not None:
-                handle.publish_feedback(ExecutePlan.Feedback(state=tracking, progress=progress))
-        return self._finish(goal, reference.duration_s)
+        await goal.done
+        return self._finish(goal)
 
-    def _finish(self, goal: ActiveGoal, duration_s: float) -> ExecutePlan.Result:
-        with self._lock:
-            supervisor = self._supervisor
-            errors, elapsed = supervisor.last_errors, supervisor.elapsed_s
-            if self._goal is goal:
-                self._goal = None
+    def _finish(self, goal: ActiveGoal) -> ExecutePlan.Result:
+        if self._goal is goal:
+            self._goal = None
+        errors = goal.supervisor.last_errors
         result = ExecutePlan.Result(error_code=RESULT_CODES[goal.outcome], error_string=goal.reason,
                                     final_alpha_error_rad=errors[0], final_r_error_m=errors[1],
-                                    duration_s=min(elapsed, duration_s))
+                                    duration_s=min(goal.supervisor.elapsed_s, goal.duration_s))
         if goal.outcome is Outcome.SUCCEEDED:
             goal.handle.succeed()
         elif goal.outcome is Outcome.CANCELED and goal.handle.is_cancel_requested:
@@ -307,9 +303,7 @@ def main(args: list[str] | None = None) -> None:
         except (ValueError, SwimModelError) as err:
             rclpy.logging.get_logger("tracker_node").fatal(str(err))
             raise SystemExit(2) from err
-        executor = MultiThreadedExecutor(num_threads=3)
-        executor.add_node(node)
-        executor.spin()
+        rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
