@@ -1,6 +1,10 @@
 """Workspace tests: shared fixtures. DDS traffic stays on this host and in a domain of our own."""
+import contextlib
 import os
 import random
+import shlex
+import signal
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -25,3 +29,24 @@ def rclpy_context(ros_domain):
     rclpy.init(context=context)
     yield context
     rclpy.shutdown(context=context)
+
+
+@contextlib.contextmanager
+def running_node(package: str, executable: str, log_path: Path, *ros_args: str):
+    """`ros2 run package executable --ros-args ros_args` in its own process group, output to log_path;
+    stopped with SIGINT as a user's Ctrl-C would (SIGKILL if it has not exited 10 s later)."""
+    arguments = " ".join(shlex.quote(a) for a in ros_args)
+    command = f"source scripts/env.sh && exec ros2 run {package} {executable}" + (
+        f" --ros-args {arguments}" if ros_args else "")
+    with open(log_path, "w") as log:
+        process = subprocess.Popen(["bash", "-c", command], cwd=WORKSPACE, env=dict(os.environ), stdout=log,
+                                   stderr=subprocess.STDOUT, text=True, start_new_session=True)
+        try:
+            yield process
+        finally:
+            os.killpg(process.pid, signal.SIGINT)
+            try:
+                process.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                os.killpg(process.pid, signal.SIGKILL)
+                process.wait()

@@ -1,29 +1,19 @@
 """planner_node over DDS: a real node in its own process, requests through rclpy, the latched plan topic."""
-import os
-import signal
-import subprocess
 import time
 
 import numpy as np
 import pytest
 
-from conftest import WORKSPACE
+from conftest import running_node
 
 PAPER = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05", "constrained/cruise_to_cruise/E0.05-E0.10",
           "constrained/cruise/E0.10", "constrained/decelerate/E0.10"], [1, 2, 1, 2, 1])
 
 
 @pytest.fixture(scope="module")
-def planner(ros_domain):
-    command = "source scripts/env.sh && exec ros2 run swim_planner planner_node"
-    process = subprocess.Popen(["bash", "-c", command], cwd=WORKSPACE, env=dict(os.environ),
-                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
-    yield process
-    os.killpg(process.pid, signal.SIGINT)
-    try:
-        process.wait(timeout=10)
-    except subprocess.TimeoutExpired:
-        os.killpg(process.pid, signal.SIGKILL)
+def planner(ros_domain, tmp_path_factory):
+    with running_node("swim_planner", "planner_node", tmp_path_factory.mktemp("planner_node") / "log.txt") as process:
+        yield process
 
 
 @pytest.fixture()
@@ -129,3 +119,40 @@ def test_last_plan_is_latched(client, rclpy_context):
     executor.remove_node(late)
     late.destroy_node()
     assert received and received[-1].time_from_start_s[-1] == pytest.approx(30.0)
+
+
+def test_lqr_weights_switch_at_run_time(client, tmp_path):
+    """Plans after a new lqr_weights_path carry gains for it; a bad file is refused and changes nothing."""
+    from rclpy.parameter import Parameter
+    from rclpy.parameter_client import AsyncParameterClient
+    executor, service = client
+    parameters = AsyncParameterClient(executor.get_nodes()[0], "planner_node")
+    assert parameters.wait_for_services(timeout_sec=10.0)
+
+    def set_weights_path(path):
+        future = parameters.set_parameters([Parameter("lqr_weights_path", value=str(path))])
+        executor.spin_until_future_complete(future, timeout_sec=10.0)
+        return future.result().results[0]
+
+    def heave_gains(reply):
+        assert reply.success, reply.message
+        plan = reply.plan
+        return np.reshape(plan.lqr_gains, (len(plan.time_from_start_s), 2, -1))[:, 0], plan.library_digest
+
+    sequence = (PAPER[0][:2], [1, 1])
+    stored, stored_digest = heave_gains(call(executor, service, *sequence))
+    heavier = tmp_path / "heavier_heave_input.yaml"
+    heavier.write_text("heave_input_weight: 0.04\n")   # 4x the default: a costlier heave input
+    assert set_weights_path(heavier).successful
+    retuned, retuned_digest = heave_gains(call(executor, service, *sequence))
+    assert np.abs(retuned).mean() < 0.8 * np.abs(stored).mean() and retuned_digest != stored_digest
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("heave_input_weight: -1.0\n")
+    refused = set_weights_path(bad)
+    assert not refused.successful and "positive finite" in refused.reason
+    unchanged, _ = heave_gains(call(executor, service, *sequence))
+    np.testing.assert_array_equal(unchanged, retuned)
+    assert set_weights_path("").successful
+    back, back_digest = heave_gains(call(executor, service, *sequence))
+    np.testing.assert_array_equal(back, stored)
+    assert back_digest == stored_digest

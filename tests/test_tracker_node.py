@@ -4,15 +4,12 @@ The plant is swim_model's ideal constrained vehicle: it publishes joint_states s
 waits for the node's torque command for that state, integrates one 8 ms period (RK4, torque held) and
 repeats, so runs are deterministic and faster than real time.
 """
-import os
-import signal
-import subprocess
 import time
 
 import numpy as np
 import pytest
 
-from conftest import WORKSPACE
+from conftest import running_node
 
 PERIOD_S = 0.008
 # the node's watchdog limit here: 12 periods (96 ms), above this host's scheduling hiccups under a full test run
@@ -21,18 +18,11 @@ SHORT_PLAN = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05"]
 
 
 @pytest.fixture(scope="module")
-def tracker(ros_domain):
-    command = ("source scripts/env.sh && exec ros2 run swim_controller tracker_node "
-               f"--ros-args -p stale_after_periods:={STALE_AFTER_PERIODS} -p feedback_rate_hz:=20.0")
-    log = open(os.environ.get("TRACKER_LOG", os.devnull), "w")
-    process = subprocess.Popen(["bash", "-c", command], cwd=WORKSPACE, env=dict(os.environ),
-                               stdout=log, stderr=subprocess.STDOUT, text=True, start_new_session=True)
-    yield process
-    os.killpg(process.pid, signal.SIGINT)
-    try:
-        process.wait(timeout=10)
-    except subprocess.TimeoutExpired:
-        os.killpg(process.pid, signal.SIGKILL)
+def tracker(ros_domain, tmp_path_factory):
+    log = tmp_path_factory.mktemp("tracker_node") / "log.txt"
+    with running_node("swim_controller", "tracker_node", log, "-p", f"stale_after_periods:={STALE_AFTER_PERIODS}",
+                      "-p", "feedback_rate_hz:=20.0") as process:
+        yield process
 
 
 @pytest.fixture(scope="module")

@@ -9,13 +9,12 @@ changed is solved again, with every primitive that joins it.
 from __future__ import annotations
 
 import concurrent.futures
-import dataclasses
 from typing import Callable, Optional, Sequence
 
-from swim_controller.errors import GainComputationError
-from swim_controller.riccati import LqrWeights, primitive_gains
+from swim_controller.riccati import LqrWeights
 from swim_model import RigParameters, VehicleModel
 from swim_planner.errors import PrimitiveSolveError
+from swim_planner.gains import gains_job
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.primitives import PlanningLimits, Primitive, PrimitiveSpec, SolverSettings, solve_primitive
 
@@ -38,18 +37,6 @@ def solve_job(rig: RigParameters, spec: PrimitiveSpec, limits: PlanningLimits, s
         # states before giving up
         primitive = solve_primitive(model, spec, limits, start=start, end=end, guess=None, settings=settings)
     return gains_job(rig, primitive, lqr_weights)
-
-
-def gains_job(rig: RigParameters, primitive: Primitive, lqr_weights: LqrWeights) -> Primitive:
-    """The primitive with its LQ gains P(t), G'P computed (swim_controller.riccati), once, off-line."""
-    spec = primitive.spec
-    model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m)
-    try:
-        gains = primitive_gains(model, primitive.time_s, primitive.q, primitive.qdot, primitive.foil_acceleration,
-                                lqr_weights)
-    except GainComputationError as err:
-        raise PrimitiveSolveError(f"{spec.primitive_id}: {err}") from err
-    return dataclasses.replace(primitive, gains=gains)
 
 
 def dependencies(spec: PrimitiveSpec) -> list[str]:

@@ -19,13 +19,13 @@ import json
 import sys
 from pathlib import Path
 
-import yaml
 
 from swim_controller.riccati import LqrWeights
 from swim_model import SwimModelError, load_rig
 from swim_planner.build import build_library, dependencies
 from swim_planner.catalog import constrained_specs, default_specs, free_specs
 from swim_planner.errors import PlannerError
+from swim_planner.gains import load_lqr_weights
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.paths import default_library_path
 
@@ -77,25 +77,12 @@ def _executor(args) -> concurrent.futures.Executor:
     return concurrent.futures.ProcessPoolExecutor(max_workers=args.workers)
 
 
-def _lqr_weights(path: Path | None) -> LqrWeights:
-    """LqrWeights from a YAML mapping of its field names (the package defaults for the others)."""
-    if path is None:
-        return LqrWeights()
-    try:
-        values = yaml.safe_load(Path(path).read_text()) or {}
-        weights = LqrWeights(**{key: float(value) for key, value in values.items()})
-        weights.validate()
-    except (OSError, yaml.YAMLError, TypeError, ValueError, AttributeError) as err:
-        raise PlannerError(f"{path}: not a valid LQR weights file: {err}") from err
-    return weights
-
-
 def command_build(args, rig) -> int:
     from tqdm import tqdm
     sets = {"constrained": constrained_specs, "free": free_specs, "all": default_specs}
     specs = _select(sets[args.set](rig), args.only)
-    library = PrimitiveLibrary.create_or_open(args.library or default_library_path(), rig,
-                                              lqr_weights=_lqr_weights(args.lqr_weights))
+    weights = load_lqr_weights(args.lqr_weights) if args.lqr_weights else LqrWeights()
+    library = PrimitiveLibrary.create_or_open(args.library or default_library_path(), rig, lqr_weights=weights)
     with tqdm(total=len(specs), unit="primitive", file=sys.stderr) as bar, _executor(args) as executor:
         def progress(primitive_id: str, status: str) -> None:
             bar.update(1)

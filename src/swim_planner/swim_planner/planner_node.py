@@ -7,13 +7,17 @@ gets success = false and a message saying why; nothing else changes. Topic ``pla
 transient local): the last plan made.
 
 Parameters: ``library_path`` (default: the shipped library), ``rig_path`` (default: the shipped rig),
-``default_time_scale`` (used when a request's time_scale is 0; default 1.0).
+``default_time_scale`` (used when a request's time_scale is 0; default 1.0), ``lqr_weights_path`` (a YAML of
+swim_controller LqrWeights fields; empty: the gains stored in the library). Setting ``lqr_weights_path`` at run
+time retunes the plans made after it: each primitive's gains for the new weights are computed on its first use
+(about 1 s each) and kept; a file that does not load is refused and changes nothing.
 """
 from __future__ import annotations
 
 import threading
 
 import rclpy
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
@@ -23,6 +27,7 @@ from swim_interfaces.srv import RequestManeuver
 
 from swim_model import SwimModelError, load_rig
 from swim_planner.errors import PlannerError
+from swim_planner.gains import RetunedLibrary, load_lqr_weights
 from swim_planner.graph import build_graph, plan_to_goal, rest_node
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.maneuver import Plan, concatenate, expand_sequence
@@ -58,12 +63,15 @@ class PlannerNode(Node):
         self.declare_parameter("library_path", "")
         self.declare_parameter("rig_path", "")
         self.declare_parameter("default_time_scale", 1.0)
+        self.declare_parameter("lqr_weights_path", "")
         rig_path = self.get_parameter("rig_path").value or None
         library_path = self.get_parameter("library_path").value or default_library_path()
         self.rig = load_rig(rig_path)
         self.library = PrimitiveLibrary.load(library_path, self.rig)
         self._library_lock = threading.Lock()  # the library caches arrays as it reads them
         self.graph = build_graph(self.library)
+        self._plan_library = self._retuned(self.get_parameter("lqr_weights_path").value)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
         for line in self.graph.mismatches:
             self.get_logger().warning(f"junction mismatch, primitive dropped from the graph: {line}")
         latched = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
@@ -71,6 +79,24 @@ class PlannerNode(Node):
         self.create_service(RequestManeuver, "request_maneuver", self.on_request,
                             callback_group=ReentrantCallbackGroup())
         self.get_logger().info(f"serving {len(self.library)} primitives from {self.library.path}")
+
+    def _retuned(self, lqr_weights_path: str) -> PrimitiveLibrary | RetunedLibrary:
+        """The library plans are made from: its stored gains, or gains for the weights in lqr_weights_path."""
+        if not lqr_weights_path:
+            return self.library
+        return RetunedLibrary(self.library, load_lqr_weights(lqr_weights_path))
+
+    def _on_set_parameters(self, parameters) -> SetParametersResult:
+        for parameter in parameters:
+            if parameter.name == "lqr_weights_path":
+                try:
+                    retuned = self._retuned(parameter.value)
+                except PlannerError as err:
+                    return SetParametersResult(successful=False, reason=str(err))
+                with self._library_lock:
+                    self._plan_library = retuned
+                self.get_logger().info(f"LQ weights for new plans: {parameter.value or 'those stored'}")
+        return SetParametersResult(successful=True)
 
     def on_request(self, request: RequestManeuver.Request,
                    response: RequestManeuver.Response) -> RequestManeuver.Response:
@@ -99,7 +125,7 @@ class PlannerNode(Node):
             raise PlannerError(f"unknown mode {request.mode}: use MODE_SEQUENCE ({modes.MODE_SEQUENCE}) "
                                f"or MODE_GOAL ({modes.MODE_GOAL})")
         with self._library_lock:
-            return concatenate(self.library, self.rig, sequence, time_scale, request.start_alpha_rad)
+            return concatenate(self._plan_library, self.rig, sequence, time_scale, request.start_alpha_rad)
 
 
 def main(args: list[str] | None = None) -> None:

@@ -1,0 +1,86 @@
+"""Tracking gains for a library's primitives (swim_controller.riccati), and LQ weights from YAML.
+
+The gains P(t), G'P of every primitive are computed once, off-line, for the library's LQ weights and stored
+with it. To compare tunings (paper Sec. 7) without rebuilding, ``RetunedLibrary`` shows the same library with
+gains for other weights, each primitive's computed on first use (about 1 s, a backward Riccati solve) and
+kept; the control loop itself never solves a Riccati equation.
+"""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+from pathlib import Path
+
+import yaml
+
+from swim_controller.errors import GainComputationError
+from swim_controller.riccati import LqrWeights, primitive_gains
+from swim_model import RigParameters, VehicleModel
+from swim_planner.errors import PlannerError, PrimitiveSolveError
+from swim_planner.library import PrimitiveLibrary
+from swim_planner.primitives import Primitive, PrimitiveSpec
+
+
+def gains_job(rig: RigParameters, primitive: Primitive, lqr_weights: LqrWeights) -> Primitive:
+    """The primitive with its LQ gains P(t), G'P computed (swim_controller.riccati), once, off-line."""
+    spec = primitive.spec
+    model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m)
+    try:
+        gains = primitive_gains(model, primitive.time_s, primitive.q, primitive.qdot, primitive.foil_acceleration,
+                                lqr_weights)
+    except GainComputationError as err:
+        raise PrimitiveSolveError(f"{spec.primitive_id}: {err}") from err
+    return dataclasses.replace(primitive, gains=gains)
+
+
+def load_lqr_weights(path: str | Path) -> LqrWeights:
+    """LqrWeights from a YAML mapping of its field names (the package defaults for the others)."""
+    names = {field.name for field in dataclasses.fields(LqrWeights)}
+    try:
+        values = yaml.safe_load(Path(path).read_text()) or {}
+        unknown = sorted(set(values) - names)
+        if unknown:
+            raise ValueError(f"unknown fields {unknown}; known: {sorted(names)}")
+        weights = LqrWeights(**{key: float(value) for key, value in values.items()})
+        weights.validate()
+    except (OSError, yaml.YAMLError, TypeError, ValueError, AttributeError) as err:
+        raise PlannerError(f"{path}: not a valid LQR weights file: {err}") from err
+    return weights
+
+
+class RetunedLibrary:
+    """A read-only view of a PrimitiveLibrary whose primitives carry gains for other LQ weights.
+
+    It answers what ``maneuver.concatenate`` and the graph ask of a library (ids, spec, get, digest,
+    lqr_weights, path); the digest names the weights too, so a plan says which tuning its gains are for.
+    """
+
+    def __init__(self, library: PrimitiveLibrary, lqr_weights: LqrWeights) -> None:
+        lqr_weights.validate()
+        self.library, self.lqr_weights = library, lqr_weights
+        self.path = library.path
+        self._retuned: dict[str, Primitive] = {}
+
+    def ids(self) -> list[str]:
+        return self.library.ids()
+
+    def __contains__(self, primitive_id: str) -> bool:
+        return primitive_id in self.library
+
+    def __len__(self) -> int:
+        return len(self.library)
+
+    def spec(self, primitive_id: str) -> PrimitiveSpec:
+        return self.library.spec(primitive_id)
+
+    def get(self, primitive_id: str) -> Primitive:
+        if primitive_id not in self._retuned:
+            self._retuned[primitive_id] = gains_job(self.library.rig, self.library.get(primitive_id),
+                                                    self.lqr_weights)
+        return self._retuned[primitive_id]
+
+    def digest(self) -> str:
+        """SHA-256 of the library's digest and the weights."""
+        weights = json.dumps(dataclasses.asdict(self.lqr_weights), sort_keys=True)
+        return hashlib.sha256((self.library.digest() + weights).encode()).hexdigest()

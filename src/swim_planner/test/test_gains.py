@@ -1,0 +1,68 @@
+"""Gains for other LQ weights: the stored ones reproduce, a common scale of Q, R, S leaves the law unchanged."""
+import dataclasses
+
+import numpy as np
+import pytest
+
+from swim_controller.riccati import LqrWeights
+from swim_planner.errors import PlannerError
+from swim_planner.gains import RetunedLibrary, load_lqr_weights
+from swim_planner.maneuver import concatenate, expand_sequence
+
+PRIMITIVE = "constrained/cruise_to_cruise/E0.05-E0.10"
+SEQUENCE = ["constrained/cruise/E0.05", PRIMITIVE, "constrained/cruise/E0.10"]
+
+
+def test_same_weights_reproduce_the_stored_gains(library):
+    stored = library.get(PRIMITIVE).gains
+    recomputed = RetunedLibrary(library, library.lqr_weights).get(PRIMITIVE).gains
+    scale = np.abs(stored.riccati).max()
+    assert np.abs(recomputed.riccati - stored.riccati).max() < 1e-6 * scale
+
+
+def test_a_common_scale_of_q_r_s_scales_p_and_keeps_the_feedback(library, rig):
+    """Q, R -> cQ, cR makes P_ARE -> c P_ARE, so S -> cS and P(t) -> c P(t); K = R^-1 G'P is unchanged."""
+    base = library.lqr_weights
+    factor = 7.0
+    scaled = dataclasses.replace(base, **{name: getattr(base, name) * factor for name in (
+        "alpha_gain", "lateral_gain", "heave_gain", "pitch_gain", "heave_input_weight", "pitch_input_weight")})
+    retuned = RetunedLibrary(library, scaled)
+    stored, other = library.get(PRIMITIVE).gains, retuned.get(PRIMITIVE).gains
+    assert np.allclose(other.riccati, factor * stored.riccati, rtol=1e-5, atol=1e-9 * factor)
+    sequence = expand_sequence(SEQUENCE, [])
+    plan, retuned_plan = concatenate(library, rig, sequence, 1.2), concatenate(retuned, rig, sequence, 1.2)
+    scale = np.abs(plan.lqr_gain).max()
+    assert np.abs(retuned_plan.lqr_gain - plan.lqr_gain).max() < 1e-5 * scale
+    assert retuned_plan.library_digest != plan.library_digest
+
+
+def test_other_input_weights_change_the_plan_gains(library, rig):
+    heavier = dataclasses.replace(library.lqr_weights, heave_input_weight=4 * library.lqr_weights.heave_input_weight)
+    sequence = expand_sequence(SEQUENCE, [])
+    plan = concatenate(library, rig, sequence)
+    retuned = concatenate(RetunedLibrary(library, heavier), rig, sequence)
+    # a costlier heave input: smaller heave feedback, on average over the plan
+    heave = np.abs(plan.lqr_gain[:, 0]).mean()
+    assert np.abs(retuned.lqr_gain[:, 0]).mean() < 0.8 * heave
+
+
+def test_weights_file(tmp_path):
+    path = tmp_path / "weights.yaml"
+    path.write_text("alpha_rate_per_s: 2.0\nheave_input_weight: 0.05\n")
+    weights = load_lqr_weights(path)
+    assert weights == dataclasses.replace(LqrWeights(), alpha_rate_per_s=2.0, heave_input_weight=0.05)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("alpha_rate: 2.0\n", "unknown fields"),
+    ("alpha_rate_per_s: -1.0\n", "positive finite"),
+    ("alpha_rate_per_s: [1, 2]\n", "not a valid"),
+    ("- 1\n- 2\n", "not a valid"),
+])
+def test_bad_weights_files_are_refused(tmp_path, text, message):
+    path = tmp_path / "weights.yaml"
+    path.write_text(text)
+    with pytest.raises(PlannerError, match=message):
+        load_lqr_weights(path)
+    with pytest.raises(PlannerError, match="not a valid"):
+        load_lqr_weights(tmp_path / "missing.yaml")
