@@ -210,3 +210,39 @@ def test_malformed_states_are_rejected_and_never_used(rig_loop, plan_message):
         plant.step()
     result = run_until(plant, future, 2000)
     assert result.error_code == ExecutePlan.Result.SUCCESSFUL, result.error_string
+
+
+def test_parameters_are_validated_and_switch_sliding_mode_mid_plan(rig_loop, plan_message):
+    from rclpy.parameter import Parameter
+    from rclpy.parameter_client import AsyncParameterClient
+    from swim_interfaces.action import ExecutePlan
+    from swim_interfaces.msg import TrackingState
+    plant, client = rig_loop
+    plant.q, plant.qdot = np.zeros(3), np.zeros(3)
+    tracking = []
+    plant.node.create_subscription(TrackingState, "tracking_state", tracking.append, 10)
+    parameters = AsyncParameterClient(plant.node, "tracker_node")
+    assert parameters.wait_for_services(timeout_sec=10.0)
+
+    def set_parameter(name, value):
+        future = parameters.set_parameters([Parameter(name, value=value)])
+        plant.executor.spin_until_future_complete(future, timeout_sec=10.0)
+        return future.result().results[0]
+
+    for name, value in [("sample_period_s", 0.5), ("stale_after_periods", 0), ("time_scale", float("nan")),
+                        ("disturbance_bound_n_m", -1.0)]:
+        result = set_parameter(name, value)
+        assert not result.successful and name in result.reason
+    assert "type" in set_parameter("sliding_mode_enabled", 1).reason   # rclpy's own check: types are fixed
+    _, future = send(plant, client, plan_message)
+    for _ in range(20):
+        plant.step()
+    assert tracking and tracking[-1].sliding_mode_enabled   # the default
+    assert set_parameter("sliding_mode_enabled", False).successful
+    tracking.clear()
+    for _ in range(20):
+        plant.step()
+    assert tracking and not any(t.sliding_mode_enabled for t in tracking)
+    assert set_parameter("sliding_mode_enabled", True).successful
+    result = run_until(plant, future, 2000)
+    assert result.error_code == ExecutePlan.Result.SUCCESSFUL, result.error_string
