@@ -16,6 +16,11 @@ fail() { echo "setup: error: $*" >&2; exit 1; }
 note() { echo "setup: $*"; }
 digest() { sha256sum | cut -d' ' -f1; }
 
+# one setup at a time per workspace: two `make` runs at once would build into the same install/
+mkdir -p "$root/log"
+exec 9>"$root/log/.setup.lock"
+flock 9
+
 # --- 0. what the machine must have --------------------------------------------------------
 command -v "$python" >/dev/null 2>&1 \
   || fail "no '$python' on PATH; install Python 3.11 (the ROS 2 Jazzy wheels are built for CPython 3.11 only) or set SWIM_PYTHON"
