@@ -19,7 +19,7 @@ setup(
     tests_require=['pytest'],
     entry_points={
         'console_scripts': [
-
+            'sim_node = swim_sim.sim_node:main',
         ],
     },
 )

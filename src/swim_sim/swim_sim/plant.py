@@ -1,0 +1,243 @@
+"""The simulated vehicle: swim_model's dynamics plus the disturbances, one control period at a time.
+
+Over a period the commanded torque is held (zero-order hold, as a DAC holds it) and clipped at the motor
+limits (paper Sec. 2). The period is integrated by ``substeps`` classical RK4 steps of
+
+    Mm(q) qddot + Cm(q, qdot) qdot = B tau - b o qdot + Q2(q)' F_drag + Q_platform + Q_tilt + f_held,
+
+with viscous friction b, quadratic drag and the tilt's gravity force inside the compiled right-hand side, and
+f_held (dry friction and the surface-wave force) held over each substep. Dry friction is a switch model: a
+coordinate whose velocity crosses zero stops there; while stopped it is held by the force
+F = -(W^-1 a0) (a0 its acceleration without that force, W the stuck block of Mm^-1) as long as |F| stays below
+the static limit; beyond it the coordinate breaks away with Coulomb friction opposing its motion.
+A period with no stopped coordinate and no velocity sign change runs as one compiled call (the fast path).
+"""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import math
+from typing import Optional
+
+import casadi as ca
+import numpy as np
+import numpy.typing as npt
+
+from swim_model import VehicleModel, codegen
+from swim_sim.disturbances import GRAVITY_M_S2, Disturbances
+
+Array = npt.NDArray[np.float64]
+
+#: a velocity this large (rad/s or m/s) is numerical blow-up, not swimming: the rig's fastest joint (pitch)
+#: reaches about 10 rad/s (assumed bound, 100x that)
+BLOW_UP_SPEED = 1.0e3
+
+
+class SimulationError(RuntimeError):
+    """The integration blew up (non-finite or absurd state): the simulator stops instead of publishing it."""
+
+
+@dataclasses.dataclass(frozen=True)
+class PlantState:
+    time_s: float
+    q: Array
+    qdot: Array
+    torque: Array               # the torque applied over the last period (after the limits), N m
+    saturated: tuple[bool, bool]
+
+
+def _parameter_vector(model: VehicleModel, disturbances: Disturbances) -> Array:
+    """p = (b per coordinate, k_foil_U, k_foil_V, k_platform, m g sin(tilt), tilt direction)."""
+    rig = model.rig
+    viscous = np.zeros(model.nq)
+    viscous[0] = disturbances.hub_viscous_n_m_s
+    if not model.constrained:
+        viscous[1] = disturbances.rail_viscous_n_s_m
+    half_rho = 0.5 * rig.water_density_kg_m3
+    planform_m2 = rig.foil_chord_m * rig.foil_span_m
+    moving_mass_kg = rig.platform_mass_kg + rig.heave_link_mass_kg + rig.foil_assembly_mass_kg
+    return np.concatenate([viscous, [
+        half_rho * disturbances.foil_axial_drag_coefficient * planform_m2,
+        half_rho * disturbances.foil_normal_drag_coefficient * planform_m2,
+        half_rho * disturbances.platform_drag_area_m2,
+        moving_mass_kg * GRAVITY_M_S2 * math.sin(disturbances.tilt_rad),
+        disturbances.tilt_direction_rad]])
+
+
+def _dynamics(model: VehicleModel) -> tuple[ca.Function, ca.Function, ca.Function]:
+    """(rk4 step, forward dynamics, potential energy) with the smooth disturbances, symbolic."""
+    s = model.symbolic
+    nq = model.nq
+    q, qdot, tau = s.q, s.qdot, s.tau
+    held = ca.SX.sym("f_held", nq)
+    p = ca.SX.sym("p", nq + 5)
+    coords = model.coordinates(q)
+    foil_velocity = s.foil_velocity_map @ qdot
+    u, v = foil_velocity[0], foil_velocity[1]
+    foil_force = ca.vertcat(-p[nq] * ca.fabs(u) * u, -p[nq + 1] * ca.fabs(v) * v, 0)
+    radial_rate = ca.SX(0) if model.constrained else qdot[1]
+    tangential = coords.radius * qdot[0]
+    platform_speed = ca.sqrt(tangential ** 2 + radial_rate ** 2 + 1e-12)
+    platform = ca.SX.zeros(nq)
+    platform[0] = -p[nq + 2] * platform_speed * tangential * coords.radius
+    tilt = ca.SX.zeros(nq)
+    tilt[0] = p[nq + 3] * coords.radius * ca.sin(coords.alpha - p[nq + 4])
+    if not model.constrained:
+        platform[1] = -p[nq + 2] * platform_speed * radial_rate
+        tilt[1] = -p[nq + 3] * ca.cos(coords.alpha - p[nq + 4])
+    input_map = ca.vertcat(ca.SX.zeros(nq - 2, 2), ca.SX.eye(2))
+    force = (input_map @ tau - p[:nq] * qdot + s.foil_velocity_map.T @ foil_force + platform + tilt + held)
+    bias = s.functions["generalized_force"](q, qdot, ca.SX.zeros(nq))
+    free_qddot = ca.solve(s.mass, force - bias)
+    # stopped coordinates (lock = 1) held by the constraint force lambda that makes their qddot zero:
+    # (D Mm^-1 D + I - D) lambda = -D qddot_free, qddot = qddot_free + Mm^-1 D lambda, D = diag(lock)
+    lock = ca.SX.sym("lock", nq)
+    locked = ca.diag(lock)
+    inverse_mass = ca.inv(s.mass)
+    hold_force = ca.solve(locked @ inverse_mass @ locked + ca.SX.eye(nq) - locked, -locked @ free_qddot)
+    qddot = free_qddot + inverse_mass @ locked @ hold_force
+    x, h = ca.vertcat(q, qdot), ca.SX.sym("h")
+    f = ca.Function("f", [x, tau, held, p, lock], [ca.vertcat(qdot, qddot)])
+    k1 = f(x, tau, held, p, lock)
+    k2 = f(x + 0.5 * h * k1, tau, held, p, lock)
+    k3 = f(x + 0.5 * h * k2, tau, held, p, lock)
+    k4 = f(x + h * k3, tau, held, p, lock)
+    step = ca.Function("sim_rk4_step", [x, tau, held, p, lock, h], [x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)])
+    forward = ca.Function("sim_forward", [x, tau, held, p, lock], [hold_force])
+    potential = ca.Function("sim_potential", [q, p], [p[nq + 3] * coords.radius * ca.cos(coords.alpha - p[nq + 4])])
+    return step, forward, potential
+
+
+class Plant:
+    """The vehicle and its disturbances, stepped by control periods. Deterministic for a seed."""
+
+    def __init__(self, model: VehicleModel, disturbances: Disturbances = Disturbances(),
+                 sample_period_s: Optional[float] = None, substeps: int = 8, seed: int = 0) -> None:
+        disturbances.validate()
+        self.model, self.disturbances = model, disturbances
+        self.sample_period_s = float(sample_period_s or model.rig.sample_period_s)
+        if not (self.sample_period_s > 0.0 and substeps >= 1):
+            raise ValueError("the sample period must be > 0 and substeps >= 1")
+        self.substeps = int(substeps)
+        self._parameters = _parameter_vector(model, disturbances)
+        step, forward, potential = _dynamics(model)
+        tag = f"sim_{model._codegen_tag()}_{hashlib.sha256(b'sim-dynamics-1').hexdigest()[:8]}"
+        compiled = codegen.compiled([step, forward, potential], tag=tag)
+        self._step, self._forward, self._potential = (compiled[n] for n in ("sim_rk4_step", "sim_forward",
+                                                                              "sim_potential"))
+        self._period = self._step.mapaccum(self.substeps)
+        self._dry = disturbances.coulomb_and_static(model.constrained)
+        self._limits = model.torque_limits()
+        self.seed = seed
+        self.reset(np.zeros(model.nq) if model.constrained else self._rest_state(), np.zeros(model.nq))
+
+    def _rest_state(self) -> Array:
+        q = np.zeros(self.model.nq)
+        q[1] = self.model.lane_radius_m
+        return q
+
+    # ----- state ---------------------------------------------------------------------------------
+    def reset(self, q: npt.ArrayLike, qdot: npt.ArrayLike, time_s: float = 0.0) -> None:
+        """Put the vehicle at (q, qdot); restarts the noise from the seed, so runs repeat bit for bit."""
+        q, qdot = (self.model._vector(v, self.model.nq, n) for v, n in ((q, "q"), (qdot, "qdot")))
+        self.time_s = float(time_s)
+        self.q, self.qdot = q.copy(), qdot.copy()
+        self.torque, self.saturated = np.zeros(2), (False, False)
+        self.stuck = {i: qdot[i] == 0.0 for i, _, _ in self._dry}
+        self.rng = np.random.default_rng(self.seed)
+        self._wave_state = 0.0
+
+    @property
+    def state(self) -> PlantState:
+        return PlantState(self.time_s, self.q.copy(), self.qdot.copy(), self.torque.copy(), self.saturated)
+
+    def energy(self) -> float:
+        """T + V: kinetic energy (eq. 5) plus the tilt's gravity potential, J."""
+        potential = float(self._potential(self.q, self._parameters))
+        return self.model.kinetic_energy(self.q, self.qdot) + potential
+
+    # ----- one period ----------------------------------------------------------------------------
+    def step(self, torque: npt.ArrayLike) -> PlantState:
+        """Hold torque (clipped at the motor limits; non-finite -> zero) over one period and integrate."""
+        command = np.asarray(torque, dtype=float).reshape(-1)
+        if command.shape != (2,) or not np.all(np.isfinite(command)):
+            command = np.zeros(2)
+        applied = np.clip(command, -self._limits, self._limits)
+        self.saturated = (bool(abs(command[0]) > self._limits[0]), bool(abs(command[1]) > self._limits[1]))
+        wave = self._wave_force()
+        x = np.concatenate([self.q, self.qdot])
+        x_next = self._fast_period(x, applied, wave)
+        if x_next is None:
+            x_next = self._stick_slip_period(x, applied, wave)
+        nq = self.model.nq
+        if not np.all(np.isfinite(x_next)) or np.abs(x_next[nq:]).max() > BLOW_UP_SPEED:
+            raise SimulationError(f"the integration blew up at t = {self.time_s:.3f} s (state {x_next}); "
+                                  f"try more substeps or smaller disturbances")
+        self.q, self.qdot = x_next[:nq], x_next[nq:]
+        self.torque = applied
+        self.time_s += self.sample_period_s
+        return self.state
+
+    def _wave_force(self) -> Array:
+        """The surface-wave generalized force for this period: std ~ |v_foil|^2, first-order filtered noise."""
+        coefficient = self.disturbances.wave_force_per_speed2_n_s2_m2
+        if coefficient == 0.0:
+            return np.zeros(self.model.nq)
+        decay = math.exp(-2.0 * math.pi * self.disturbances.wave_bandwidth_hz * self.sample_period_s)
+        self._wave_state = decay * self._wave_state + math.sqrt(1.0 - decay ** 2) * self.rng.standard_normal()
+        q2 = self.model.foil_velocity_map(self.q)
+        speed2 = float(np.sum((q2 @ self.qdot)[:2] ** 2))
+        return q2.T @ np.array([0.0, coefficient * speed2 * self._wave_state, 0.0])
+
+    def _fast_period(self, x: Array, torque: Array, wave: Array) -> Optional[Array]:
+        """The whole period in one compiled call, unless a moving dry-friction coordinate's velocity reaches zero
+        in it (None: redo the period substep by substep)."""
+        held, lock = self._friction(x, torque, wave)
+        h = self.sample_period_s / self.substeps
+        states = np.asarray(self._period(x, torque, held, self._parameters, lock, h))
+        nq = self.model.nq
+        for i, _, _ in self._dry:
+            if not self.stuck[i] and np.any(np.sign(states[nq + i]) != math.copysign(1.0, x[nq + i])):
+                return None
+        return self._pin_stopped(x, states[:, -1].copy())
+
+    def _pin_stopped(self, x: Array, x_next: Array) -> Array:
+        """Stopped coordinates exactly where they stopped (the constraint leaves round-off, ~1e-20)."""
+        for i, _, _ in self._dry:
+            if self.stuck[i]:
+                x_next[i], x_next[self.model.nq + i] = x[i], 0.0
+        return x_next
+
+    def _stick_slip_period(self, x: Array, torque: Array, wave: Array) -> Array:
+        h = self.sample_period_s / self.substeps
+        nq = self.model.nq
+        for _ in range(self.substeps):
+            held, lock = self._friction(x, torque, wave)
+            x_next = np.asarray(self._step(x, torque, held, self._parameters, lock, h)).reshape(-1)
+            x_next = self._pin_stopped(x, x_next)
+            for i, _, _ in self._dry:
+                if not self.stuck[i] and x_next[nq + i] * x[nq + i] <= 0.0:
+                    x_next[nq + i] = 0.0     # the velocity reached zero: stopped; stiction decides next substep
+                    self.stuck[i] = True
+            x = x_next
+        return x
+
+    def _friction(self, x: Array, torque: Array, wave: Array) -> tuple[Array, Array]:
+        """(held force, lock mask) for the next step: stopped coordinates stay locked while the force holding
+        them is within their static limit, else break away (against Coulomb friction); moving ones feel
+        -Coulomb sign(v). Mutates x only to give a breaking-away coordinate its direction of motion."""
+        nq = self.model.nq
+        held, lock = wave.copy(), np.zeros(nq)
+        for i, _, _ in self._dry:
+            lock[i] = 1.0 if self.stuck[i] else 0.0
+        if lock.any():
+            hold_force = np.asarray(self._forward(x, torque, held, self._parameters, lock)).reshape(-1)
+            for i, _, static in self._dry:
+                if self.stuck[i] and abs(hold_force[i]) > static:
+                    self.stuck[i], lock[i] = False, 0.0
+                    x[nq + i] = 1e-12 * math.copysign(1.0, hold_force[i] * -1.0)   # where the net force pushes
+        for i, coulomb, _ in self._dry:
+            if not self.stuck[i]:
+                held[i] -= coulomb * math.copysign(1.0, x[nq + i])
+        return held, lock
+

@@ -1,0 +1,235 @@
+"""sim_node: the simulated rig (swim_sim.plant) behind the same topics the hardware bridge serves.
+
+Topics:
+    joint_commands (sub, sensor_msgs/JointState)  torque command: names phi, theta; effort in N m
+    joint_states (pub, sensor_msgs/JointState)    alpha, [R,] phi, theta: measured positions (quantized, noisy),
+                                                  velocities (velocity_source "model") and applied efforts
+    /clock (pub, rosgraph_msgs/Clock)             simulated time, one tick per period
+Services: ``reset`` (std_srvs/Trigger: back to the initial state, noise restarted from the seed; time runs on),
+``set_state`` (swim_interfaces/SetVehicleState).
+
+Modes: ``lockstep`` (default): each state is published, the step waits for the command stamped with that
+state's stamp, then integrates one period and publishes the next: deterministic for a seed and as fast as the
+controller answers. ``realtime``: a timer steps every period with the latest command held.
+A state with a non-finite or absurd value is never published: the simulator stops with an error (reset or
+set_state restarts it). Malformed commands are rejected and counted.
+
+Simulated time starts at ``start_time_s`` (1 s by default: a zero stamp means "not stamped" to consumers).
+Parameters: rig_path, constrained, lane_radius_m, sample_period_s, substeps, mode, seed, start_time_s,
+initial_positions, velocity_source, resend_after_s, disturbances.<field> (swim_sim.disturbances.Disturbances),
+sensors.<field> (swim_sim.sensors.SensorNoise); read at start.
+"""
+from __future__ import annotations
+
+import dataclasses
+from typing import Optional
+
+import numpy as np
+import rclpy
+from builtin_interfaces.msg import Time
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+from swim_interfaces.srv import SetVehicleState
+
+from swim_model import StateError, SwimModelError, VehicleModel, load_rig
+from swim_sim.disturbances import Disturbances
+from swim_sim.plant import Plant, SimulationError
+from swim_sim.sensors import SensorNoise, Sensors
+
+MOTOR_JOINTS = ["phi", "theta"]
+
+
+def stamp_of(time_s: float) -> Time:
+    """A builtin_interfaces/Time from seconds, rounded to the nanosecond (so stamps compare exactly)."""
+    nanoseconds = int(round(time_s * 1e9))
+    return Time(sec=nanoseconds // 1_000_000_000, nanosec=nanoseconds % 1_000_000_000)
+
+
+def command_torque(message: JointState) -> np.ndarray:
+    """(heave, pitch) torque from a joint_commands message; ValueError naming what is wrong."""
+    names = list(message.name)
+    if sorted(names) != MOTOR_JOINTS or len(message.effort) != 2:
+        raise ValueError(f"a command names {MOTOR_JOINTS} with 2 efforts; got names {names}, "
+                         f"{len(message.effort)} efforts")
+    torque = np.array([message.effort[names.index(j)] for j in MOTOR_JOINTS], dtype=float)
+    if not np.all(np.isfinite(torque)):
+        raise ValueError(f"non-finite torque {torque}")
+    return torque
+
+
+class SimNode(Node):
+    def __init__(self) -> None:
+        super().__init__("sim_node")
+        declare = self.declare_parameter
+        declare("rig_path", "")
+        declare("constrained", False)
+        declare("lane_radius_m", 0.0)
+        declare("sample_period_s", 0.008)
+        declare("substeps", 8)
+        declare("mode", "lockstep")
+        declare("seed", 0)
+        declare("start_time_s", 1.0)
+        declare("initial_positions", [0.0])
+        declare("velocity_source", "model")
+        declare("resend_after_s", 0.5)
+        for field in dataclasses.fields(Disturbances):
+            declare(f"disturbances.{field.name}", float(field.default))
+        for field in dataclasses.fields(SensorNoise):
+            declare(f"sensors.{field.name}", field.default)
+        value = lambda name: self.get_parameter(name).value  # noqa: E731
+        self.mode = value("mode")
+        if self.mode not in ("lockstep", "realtime"):
+            raise ValueError(f"parameter mode must be 'lockstep' or 'realtime', got {self.mode!r}")
+        if value("velocity_source") not in ("model", "none"):
+            raise ValueError(f"parameter velocity_source must be 'model' or 'none', got {value('velocity_source')!r}")
+        rig = load_rig(value("rig_path") or None)
+        model = VehicleModel(rig, constrained=value("constrained"), lane_radius_m=value("lane_radius_m") or None)
+        fields = dataclasses.fields
+        disturbances = Disturbances(**{f.name: value(f"disturbances.{f.name}") for f in fields(Disturbances)})
+        noise = SensorNoise(**{f.name: value(f"sensors.{f.name}") for f in fields(SensorNoise)})
+        self.plant = Plant(model, disturbances, value("sample_period_s"), value("substeps"), value("seed"))
+        self.sensors = Sensors(model, noise, self.plant.sample_period_s)
+        self.start_time_s = float(value("start_time_s"))
+        self.initial_q = self._initial_positions(model, value("initial_positions"))
+        self.plant.reset(self.initial_q, np.zeros(model.nq), self.start_time_s)
+        self.failed: Optional[str] = None
+        self.rejected_commands = 0
+        self._latest_torque = np.zeros(2)
+        self._published_stamp: Optional[Time] = None
+
+        self.state_publisher = self.create_publisher(JointState, "joint_states", 10)
+        self.clock_publisher = self.create_publisher(Clock, "/clock", 10)
+        self.create_subscription(JointState, "joint_commands", self._on_command, 10)
+        self.create_service(Trigger, "reset", self._on_reset)
+        self.create_service(SetVehicleState, "set_state", self._on_set_state)
+        if self.mode == "realtime":
+            self.create_timer(self.plant.sample_period_s, self._on_tick)
+        else:
+            self.create_timer(value("resend_after_s"), self._resend)   # a controller that starts late gets the state
+        self._publish_state()
+        self.get_logger().info(f"simulating the {'constrained' if model.constrained else 'free'} vehicle, "
+                               f"{self.mode}, period {self.plant.sample_period_s * 1e3:g} ms")
+
+    @staticmethod
+    def _initial_positions(model: VehicleModel, values) -> np.ndarray:
+        """The initial q: the parameter if it has nq entries, else at rest (R on its lane)."""
+        if len(values) == model.nq:
+            return np.asarray(values, dtype=float)
+        q = np.zeros(model.nq)
+        if not model.constrained:
+            q[1] = model.lane_radius_m
+        return q
+
+    # ----- stepping ------------------------------------------------------------------------------
+    def _on_command(self, message: JointState) -> None:
+        try:
+            torque = command_torque(message)
+        except ValueError as err:
+            self.rejected_commands += 1
+            self.get_logger().warning(f"command rejected ({self.rejected_commands} so far): {err}",
+                                      throttle_duration_sec=1.0)
+            return
+        self._latest_torque = torque
+        if self.mode == "lockstep" and message.header.stamp == self._published_stamp:
+            self._step(torque)
+
+    def _on_tick(self) -> None:
+        self._step(self._latest_torque)
+
+    def _resend(self) -> None:
+        if self._published_stamp is not None and self.failed is None:
+            self._publish_state(advance=False)
+
+    def _step(self, torque: np.ndarray) -> None:
+        if self.failed is not None:
+            return
+        try:
+            self.plant.step(torque)
+        except SimulationError as err:
+            self.failed = str(err)
+            self.get_logger().error(f"simulation stopped: {err} (call reset or set_state to restart)")
+            return
+        self._publish_state()
+
+    def _publish_state(self, advance: bool = True) -> None:
+        state = self.plant.state
+        stamp = stamp_of(state.time_s)
+        message = JointState()
+        message.header.stamp = stamp
+        message.name = list(self.plant.model.joint_names)
+        if advance:   # a resend repeats the last measurement: the noise sequence depends on steps only
+            self._last_measurement = self.sensors.measure(state.q, state.qdot, self.plant.rng)
+        positions, velocities = self._last_measurement
+        message.position = positions.tolist()
+        if self.get_parameter("velocity_source").value == "model":
+            message.velocity = velocities.tolist()
+        effort = np.zeros(self.plant.model.nq)
+        effort[-2:] = state.torque
+        message.effort = effort.tolist()
+        self._published_stamp = stamp
+        self.clock_publisher.publish(Clock(clock=stamp))
+        self.state_publisher.publish(message)
+
+    # ----- services ------------------------------------------------------------------------------
+    def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        self._restart(self.initial_q, np.zeros(self.plant.model.nq))
+        response.success, response.message = True, "vehicle back at its initial state"
+        return response
+
+    def _on_set_state(self, request: SetVehicleState.Request,
+                      response: SetVehicleState.Response) -> SetVehicleState.Response:
+        try:
+            q, qdot = self._state_from_request(request.state)
+        except ValueError as err:
+            response.success, response.message = False, str(err)
+            return response
+        self._restart(q, qdot)
+        response.success, response.message = True, "state set"
+        return response
+
+    def _state_from_request(self, state: JointState) -> tuple[np.ndarray, np.ndarray]:
+        names, joints = list(state.name), list(self.plant.model.joint_names)
+        if sorted(names) != sorted(joints) or len(state.position) != len(joints) or \
+                len(state.velocity) not in (0, len(joints)):
+            raise ValueError(f"the state must name {joints} with {len(joints)} positions and 0 or {len(joints)} "
+                             f"velocities; got {names}, {len(state.position)}, {len(state.velocity)}")
+        order = [names.index(j) for j in joints]
+        q = np.asarray(state.position, dtype=float)[order]
+        qdot = np.asarray(state.velocity, dtype=float)[order] if len(state.velocity) else np.zeros(len(joints))
+        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qdot))):
+            raise ValueError("the state has a non-finite value")
+        return q, qdot
+
+    def _restart(self, q: np.ndarray, qdot: np.ndarray) -> None:
+        """Put the vehicle at (q, qdot) at the current simulated time (time never runs backwards)."""
+        time_s = self.plant.time_s
+        try:
+            self.plant.reset(q, qdot, time_s)
+        except StateError as err:
+            raise ValueError(str(err)) from err
+        self.failed = None
+        self._publish_state()
+
+
+def main(args: list[str] | None = None) -> None:
+    # this rclpy's init() is not a context manager, hence try/finally
+    rclpy.init(args=args)
+    try:
+        try:
+            node = SimNode()
+        except (ValueError, SwimModelError) as err:
+            rclpy.logging.get_logger("sim_node").fatal(str(err))
+            raise SystemExit(2) from err
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    main()
+
