@@ -9,8 +9,10 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name + '/config', ['swim_hw_bridge/config/bridge.yaml']),
     ],
-    install_requires=['setuptools'],
+    package_data={package_name: ['config/*.yaml']},
+    install_requires=['setuptools', 'numpy', 'pyyaml'],
     zip_safe=True,
     maintainer='swim maintainers',
     maintainer_email='swim@example.com',
@@ -19,7 +21,7 @@ setup(
     tests_require=['pytest'],
     entry_points={
         'console_scripts': [
-
+            'bridge_node = swim_hw_bridge.bridge_node:main',
         ],
     },
 )

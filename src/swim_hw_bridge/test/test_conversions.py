@@ -1,0 +1,90 @@
+"""Conversions against closed forms by hand (paper Sec. 2 resolutions, x4 quadrature) and the config checks."""
+import math
+
+import pytest
+import yaml
+
+from swim_hw_bridge.conversions import BridgeConfigError, config_from_mapping, default_config_path
+
+INCH_M = 0.0254
+OZ_IN_N_M = 0.0283495231 * 9.80665 * 0.0254
+
+
+def test_one_revolution_of_each_encoder_in_counts(conversions):
+    # 4 counts per line: hub 4*6144 per rev; heave 4*512 per motor rev, 43 motor revs per joint rev; pitch 25
+    alpha, _, phi, theta = conversions.counts_to_positions((4 * 6144, 0, 4 * 512 * 43, 4 * 512 * 25))
+    assert alpha == pytest.approx(2 * math.pi, rel=1e-12)
+    assert phi == pytest.approx(2 * math.pi, rel=1e-12)
+    assert theta == pytest.approx(2 * math.pi, rel=1e-12)
+
+
+def test_rail_counts_to_metres_from_the_home_lane(conversions):
+    # 1024 lines per inch, 4 counts per line: 4096 counts = 1 inch; R counted from the 0.43 m lane
+    _, radius, _, _ = conversions.counts_to_positions((0, 4096, 0, 0))
+    assert radius == pytest.approx(0.43 + INCH_M, rel=1e-12)
+    _, radius, _, _ = conversions.counts_to_positions((0, -1, 0, 0))
+    assert radius == pytest.approx(0.43 - INCH_M / 4096, rel=1e-12)
+
+
+def test_single_count_resolution(conversions):
+    alpha, _, phi, theta = conversions.counts_to_positions((1, 0, 1, 1))
+    assert alpha == pytest.approx(2 * math.pi / 24576, rel=1e-12)
+    assert phi == pytest.approx(2 * math.pi / 88064, rel=1e-12)
+    assert theta == pytest.approx(2 * math.pi / 51200, rel=1e-12)
+
+
+def test_torque_to_current_through_gear_and_torque_constant(conversions):
+    heave_a, pitch_a = conversions.torques_to_currents(1.0, -0.5)
+    assert heave_a == pytest.approx(1.0 / (43 * 0.0335), rel=1e-12)
+    assert pitch_a == pytest.approx(-0.5 / (25 * 0.030), rel=1e-12)
+    assert conversions.currents_to_torques(heave_a, pitch_a) == pytest.approx((1.0, -0.5), rel=1e-12)
+    assert conversions.currents_to_volts(0.2, -1.0) == pytest.approx((1.0, -5.0), rel=1e-12)
+
+
+def test_limits_are_the_papers_and_agree_with_the_rig_file(config):
+    from swim_model import load_rig
+    rig = load_rig()
+    assert config.torque_limits_n_m == pytest.approx((177 * OZ_IN_N_M, 74.2 * OZ_IN_N_M), rel=1e-9)
+    assert config.torque_limits_n_m == pytest.approx(rig.torque_limits_n_m, rel=1e-12)
+    assert (config.heave_gear_ratio, config.pitch_gear_ratio) == (rig.heave_gear_ratio, rig.pitch_gear_ratio)
+    assert config.heave_encoder_lines_per_rev == rig.heave_encoder_lines_per_rev
+    assert config.pitch_encoder_lines_per_rev == rig.pitch_encoder_lines_per_rev
+    assert config.hub_encoder_lines_per_rev == rig.hub_encoder_lines_per_rev
+    assert config.rail_encoder_lines_per_m == pytest.approx(rig.rail_encoder_lines_per_m, rel=1e-12)
+    # the current limits leave the paper's torque limits reachable (the torque limit binds first)
+    for torque, gain, current in zip(config.torque_limits_n_m, config.motor_torque_gains_n_m_per_a,
+                                     config.current_limits_a):
+        assert torque / gain <= current
+
+
+def shipped_document():
+    return yaml.safe_load(default_config_path().read_text())
+
+
+def test_every_entry_is_sourced_or_assumed():
+    for key, entry in shipped_document()["parameters"].items():
+        assert ("source" in entry) != ("assumed" in entry), key
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda p: p.pop("heave_gear_ratio"), "missing"),
+    (lambda p: p.update(bogus={"value": 1, "unit": "1", "assumed": "x"}), "unknown"),
+    (lambda p: p["heave_torque_constant"].update(unit="A"), "unit"),
+    (lambda p: p["heave_gear_ratio"].pop("source"), "exactly one"),
+    (lambda p: p["pitch_current_limit"].update(value=float("nan")), "finite"),
+    (lambda p: p["pitch_current_limit"].update(value=-1.0), "positive"),
+    (lambda p: p["heave_home_position"].update(value=90, unit="deg"), "home_position"),
+    (lambda p: p["heave_current_limit"].update(value=5.0), "full scale"),
+])
+def test_bad_files_are_refused_with_a_reason(edit, message):
+    document = shipped_document()
+    edit(document["parameters"])
+    with pytest.raises(BridgeConfigError, match=message):
+        config_from_mapping(document, "edited.yaml")
+
+
+def test_device_config_round_trips_and_carries_backend_options(config):
+    from swim_hw_bridge.conversions import BridgeConfig
+    values = config.device_config("emulated")
+    assert values["counter_bits"] == 32
+    assert BridgeConfig.from_dict(values) == config
