@@ -1,0 +1,271 @@
+"""A free-vortex wake behind the Joukowski foil (issue 7): what the paper's ideal-flow model leaves out.
+
+2-D inviscid flow around the foil of ``joukowski.py`` with point vortices, after Streitlien & Triantafyllou
+(AIAA J. 1995) and the discrete-vortex methods of Katz & Plotkin, "Low-Speed Aerodynamics" (2nd ed. 2001),
+Ch. 13. The formulas (map, circle theorem, Routh's rule, Kutta condition, impulse) are stated and derived in
+``vortex_force.py``; this module holds the wake's state and its time step.
+
+Each call ``Wake.step(dt, pose, velocity)`` advances from t to t + dt:
+
+1. Convect the free vortices with the local fluid velocity at t (second-order Adams-Bashforth,
+   ``Z += dt (u_n + dt/(2 dt_prev) (u_n - u_{n-1}))``; forward Euler for a vortex's first step).
+2. Move the foil to the new pose (position ``X_0`` of the frame origin and chord angle theta in the tank frame)
+   with its new velocity ``(U, V, Omega)`` in foil axes. A vortex the step carried into the foil is reflected
+   to its mirror point in the circle plane (counted in ``reflected_count``).
+3. Shed one vortex on the chord line behind the trailing-edge cusp, at a distance
+   ``max(shed_distance_fraction |v_TE| dt, min_shed_distance_m)`` (``v_TE`` the foil's velocity at its trailing
+   edge); its strength makes the Kutta condition hold. The images carry the bound circulation
+   ``-sum Gamma_k``, so Kelvin's theorem (zero total circulation) holds by construction; the test measures it
+   independently from the velocity field's circulation at infinity.
+4. Force and moment from the change of the vortical impulse over the step (backward difference; the values
+   belong to the middle of the step):
+   ``F_v = -(I_v(t+dt) - I_v(t))/dt`` in the tank frame, returned in foil axes at the mid-step angle;
+   ``M_v = -(L_O(t+dt) - L_O(t))/dt - X_0,mid x F_v`` with ``L_O = L_v + X_0 x I_v`` about the tank origin.
+5. If more than ``max_vortex_count`` vortices exist, amalgamate the pair of age-adjacent vortices (same sign
+   preferred) that is closest together relative to its distance from the foil, at the circulation-weighted
+   centroid (circulation conserved exactly; the impulse used for the next force is recomputed after merging,
+   so merging causes no force spike). The newest ``protected_vortex_count`` vortices are never merged.
+
+Force split (the integration rule): the total fluid force on the foil is ``F_Kirchhoff + F_v``, where
+``F_Kirchhoff`` is the added-mass (ideal-flow) force of eq. 46 that swim_model's ideal model already applies
+with ``M_A`` of ``added_mass.py``; ``WakeForce`` is ``F_v`` only -- the circulatory (vortical) part, with no
+added-mass term. In particular the foil's own motion enters F_v only through the vortices it sheds.
+
+Assumptions: unbounded fluid (the tank wall and free surface are ignored), 2-D strips (forces are per metre of
+span times the span, no tip vortices), no viscous drag, shedding only from the trailing edge (no leading-edge
+separation: valid for small effective angles of attack). Vortices live in the tank frame, so a foil
+circling the hub meets its own wake.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+from swim_model.errors import StateError
+from swim_model.joukowski import JoukowskiFoil
+from swim_model.vortex_force import CirclePlane
+
+Pose = tuple[float, float, float]        # x_m, y_m (frame origin in the tank frame), theta_rad (chord angle)
+Velocity = tuple[float, float, float]    # U_m_s, V_m_s (origin velocity along the foil axes), Omega_rad_s
+
+
+@dataclasses.dataclass(frozen=True)
+class WakeParameters:
+    """Numerical parameters of the wake; all assumed (the paper models no wake), each with its reason."""
+
+    rho_kg_m3: float = 998.2
+    # assumed: fresh water at 20 C, as rig.yaml
+    core_radius_m: float = 1.5e-3
+    # assumed: Krasny blob radius, 2.5 % of the rig's 6 cm chord: smooths vortex-vortex encounters
+    # (roll-up) without changing the far field; image and body terms stay exact
+    shed_distance_fraction: float = 0.5
+    # assumed: a vortex shed over one step sits at the centroid of the vorticity shed during the step,
+    # half the distance the trailing edge moves through the fluid in that step (Katz & Plotkin Sec. 13.8 use 0.2-0.3)
+    min_shed_distance_m: float = 2.0e-4
+    # assumed: keeps the new vortex off the cusp (F' = 0) when the trailing edge is nearly at rest
+    max_vortex_count: int | None = 300
+    # assumed: bound on the vortex count (cost grows as N^2); None: never merge
+    protected_vortex_count: int = 60
+    # assumed: the newest vortices (the near wake, about one cycle of the paper's gaits at 8 ms) are never merged
+    opposite_sign_merge_penalty: float = 10.0
+    # assumed: merging vortices of opposite sign destroys their dipole; such pairs are merged last
+
+    def __post_init__(self) -> None:
+        for name in ("rho_kg_m3", "core_radius_m", "shed_distance_fraction", "min_shed_distance_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise StateError(f"WakeParameters.{name} must be positive and finite, got {value!r}")
+        if self.max_vortex_count is not None and self.max_vortex_count <= self.protected_vortex_count + 1:
+            raise StateError("WakeParameters.max_vortex_count must exceed protected_vortex_count + 1")
+
+
+@dataclasses.dataclass(frozen=True)
+class WakeForce:
+    """The vortical force and moment on the foil over one step, foil axes, for the whole span.
+
+    ``fx_n`` along the chord (toward the leading edge: thrust when the foil swims forward), ``fy_n`` normal to
+    it, ``moment_n_m`` about the foil frame's origin (the map origin, the added mass's reference point),
+    counter-clockwise. Per metre of span: divide by the foil's span. Valid at the middle of the step.
+    """
+
+    fx_n: float
+    fy_n: float
+    moment_n_m: float
+    time_s: float
+
+
+class Wake:
+    """Point-vortex wake of one foil; call ``step`` once per control period."""
+
+    def __init__(self, foil: JoukowskiFoil, params: WakeParameters | None = None) -> None:
+        self.foil = foil
+        self.params = params or WakeParameters()
+        self.plane = CirclePlane(foil.map)
+        self.time_s = 0.0
+        self.positions_m = np.zeros(0, dtype=complex)          # tank frame, X + iY
+        self.circulations_m2_s = np.zeros(0)                   # counter-clockwise positive
+        self._previous_velocities = np.zeros(0, dtype=complex)  # tank frame, at the previous step
+        self._has_previous_velocity = np.zeros(0, dtype=bool)
+        self._previous_dt_s = 0.0
+        self._pose: Pose | None = None
+        self._velocity: Velocity = (0.0, 0.0, 0.0)
+        self._impulse = 0j          # tank frame, per metre of span
+        self._angular_impulse = 0.0  # about the tank origin, per metre of span
+        self.reflected_count = 0
+        self.merged_count = 0
+
+    # --- queries ------------------------------------------------------------------------------------------
+    def vortex_count(self) -> int:
+        return int(self.circulations_m2_s.size)
+
+    def shed_circulation(self) -> float:
+        """Sum of the free vortices' circulations, m^2/s (minus the foil's bound circulation)."""
+        return float(np.sum(self.circulations_m2_s))
+
+    def bound_circulation(self) -> float:
+        """Circulation around the foil, m^2/s: the total circulation of the flow minus that of the free vortices."""
+        return self.total_circulation() - self.shed_circulation()
+
+    def total_circulation(self) -> float:
+        """Circulation of the whole flow, measured on a contour enclosing foil and wake (Kelvin: zero), m^2/s."""
+        zeta, _ = self._circle_plane_positions()
+        return self.plane.far_field_circulation(zeta, self.circulations_m2_s, self._velocity)
+
+    def vortices_in_foil_frame(self) -> npt.NDArray[np.complex128]:
+        """Free-vortex positions z = x + iy in the foil frame, m (for plots)."""
+        if self._pose is None:
+            return np.zeros(0, dtype=complex)
+        x, y, theta = self._pose
+        return (self.positions_m - complex(x, y)) * np.exp(-1j * theta)
+
+    # --- the step ----------------------------------------------------------------------------------------------
+    def step(self, dt_s: float, pose: Pose, velocity: Velocity) -> WakeForce:
+        """Advance by dt_s to the foil's new pose and velocity; return the vortical force over the step.
+
+        Args:
+            dt_s: step, s (> 0).
+            pose: (x_m, y_m, theta_rad) of the foil frame in the tank frame at the end of the step.
+            velocity: (U_m_s, V_m_s, Omega_rad_s) in foil axes at the end of the step.
+        """
+        if not (math.isfinite(dt_s) and dt_s > 0.0):
+            raise StateError(f"Wake.step: dt_s must be positive and finite, got {dt_s!r}")
+        values = tuple(float(v) for v in (*pose, *velocity))
+        if len(values) != 6 or not all(math.isfinite(v) for v in values):
+            raise StateError(f"Wake.step: pose and velocity must be 3 finite numbers each, got {pose!r}, {velocity!r}")
+        new_pose: Pose = values[:3]  # type: ignore[assignment]
+        new_velocity: Velocity = values[3:]  # type: ignore[assignment]
+        old_pose = new_pose if self._pose is None else self._pose
+
+        self._convect(dt_s)
+        self._pose, self._velocity = new_pose, new_velocity
+        self.time_s += dt_s
+        self._reflect_inside_foil()
+        self._shed(dt_s)
+
+        impulse, angular_impulse = self._impulses()
+        force_tank = -(impulse - self._impulse) / dt_s
+        origin_mid = 0.5 * (complex(old_pose[0], old_pose[1]) + complex(new_pose[0], new_pose[1]))
+        moment_origin = -(angular_impulse - self._angular_impulse) / dt_s
+        moment = moment_origin - float(np.imag(np.conj(origin_mid) * force_tank))
+        force_foil = force_tank * np.exp(-1j * 0.5 * (old_pose[2] + new_pose[2]))
+
+        self._merge()
+        self._impulse, self._angular_impulse = self._impulses()
+        span = self.foil.span_m
+        return WakeForce(fx_n=float(force_foil.real) * span, fy_n=float(force_foil.imag) * span,
+                         moment_n_m=moment * span, time_s=self.time_s - 0.5 * dt_s)
+
+    # --- internals ---------------------------------------------------------------------------------------------
+    def _circle_plane_positions(self) -> tuple[npt.NDArray[np.complex128], npt.NDArray[np.complex128]]:
+        """(zeta_k, rotation e^{i theta}) of the free vortices at the current pose."""
+        if self._pose is None:
+            return np.zeros(0, dtype=complex), 1.0 + 0j
+        x, y, theta = self._pose
+        rotation = complex(math.cos(theta), math.sin(theta))
+        z = (self.positions_m - complex(x, y)) / rotation
+        return self.plane.to_circle(z), rotation
+
+    def _convect(self, dt_s: float) -> None:
+        if self.positions_m.size == 0:
+            return
+        zeta, rotation = self._circle_plane_positions()
+        velocities = rotation * self.plane.vortex_velocities(zeta, self.circulations_m2_s, self._velocity,
+                                                             self.params.core_radius_m)
+        increment = velocities.copy()
+        if self._previous_dt_s > 0.0:
+            ratio = dt_s / (2.0 * self._previous_dt_s)
+            has = self._has_previous_velocity
+            increment[has] += ratio * (velocities[has] - self._previous_velocities[has])
+        self.positions_m = self.positions_m + dt_s * increment
+        self._previous_velocities = velocities
+        self._has_previous_velocity = np.ones(velocities.size, dtype=bool)
+        self._previous_dt_s = dt_s
+
+    def _reflect_inside_foil(self) -> None:
+        zeta, rotation = self._circle_plane_positions()
+        inside = np.abs(zeta) < self.plane.r_m
+        if not np.any(inside):
+            return
+        self.reflected_count += int(np.count_nonzero(inside))
+        mirrored = self.plane.image(zeta[inside])
+        x, y, _ = self._pose  # type: ignore[misc]
+        self.positions_m[inside] = complex(x, y) + rotation * self.plane.to_foil(mirrored)
+
+    def _shed(self, dt_s: float) -> None:
+        u, v, omega = self._velocity
+        te_speed = abs(complex(u, v) + 1j * omega * self.plane.z_te)
+        distance = max(self.params.shed_distance_fraction * te_speed * dt_s, self.params.min_shed_distance_m)
+        zeta_new = complex(self.plane.to_circle(np.array([self.plane.z_te - distance]))[0])
+        zeta, rotation = self._circle_plane_positions()
+        gamma = self.plane.kutta_strength(zeta_new, zeta, self.circulations_m2_s, self._velocity)
+        x, y, _ = self._pose  # type: ignore[misc]
+        position = complex(x, y) + rotation * (self.plane.z_te - distance)
+        self.positions_m = np.append(self.positions_m, position)
+        self.circulations_m2_s = np.append(self.circulations_m2_s, gamma)
+        self._previous_velocities = np.append(self._previous_velocities, 0j)
+        self._has_previous_velocity = np.append(self._has_previous_velocity, False)
+
+    def _impulses(self) -> tuple[complex, float]:
+        """(I_v in the tank frame, L_v about the tank origin), per metre of span."""
+        zeta, rotation = self._circle_plane_positions()
+        rho = self.params.rho_kg_m3
+        impulse = rotation * self.plane.vortex_impulse(zeta, self.circulations_m2_s, rho)
+        x, y, _ = self._pose  # type: ignore[misc]
+        angular = (self.plane.vortex_angular_impulse(zeta, self.circulations_m2_s, rho)
+                   + float(np.imag(np.conj(complex(x, y)) * impulse)))
+        return complex(impulse), angular
+
+    def _merge(self) -> None:
+        limit = self.params.max_vortex_count
+        if limit is None:
+            return
+        while self.circulations_m2_s.size > limit:
+            self._merge_one_pair()
+
+    def _merge_one_pair(self) -> None:
+        z, gamma = self.positions_m, self.circulations_m2_s
+        candidates = z.size - self.params.protected_vortex_count  # pairs (i, i+1) with i + 1 < candidates
+        x, y, _ = self._pose  # type: ignore[misc]
+        separation = np.abs(z[1:candidates] - z[:candidates - 1])
+        distance = np.minimum(np.abs(z[1:candidates] - complex(x, y)), np.abs(z[:candidates - 1] - complex(x, y)))
+        cost = separation / (distance + self.foil.chord_m)
+        opposite = gamma[1:candidates] * gamma[:candidates - 1] < 0.0
+        cost[opposite] *= self.params.opposite_sign_merge_penalty
+        i = int(np.argmin(cost))
+        weights = np.abs(gamma[i:i + 2])
+        total_weight = float(np.sum(weights))
+        share = weights / total_weight if total_weight > 0.0 else np.array([0.5, 0.5])
+        z[i] = share[0] * z[i] + share[1] * z[i + 1]
+        self._previous_velocities[i] = (share[0] * self._previous_velocities[i]
+                                        + share[1] * self._previous_velocities[i + 1])
+        self._has_previous_velocity[i] = self._has_previous_velocity[i] and self._has_previous_velocity[i + 1]
+        gamma[i] = gamma[i] + gamma[i + 1]
+        keep = np.ones(z.size, dtype=bool)
+        keep[i + 1] = False
+        self.positions_m, self.circulations_m2_s = z[keep], gamma[keep]
+        self._previous_velocities = self._previous_velocities[keep]
+        self._has_previous_velocity = self._has_previous_velocity[keep]
+        self.merged_count += 1
