@@ -47,6 +47,12 @@ class FaultCode(enum.IntFlag):
     INTERNAL_ERROR = 256
 
 
+def fault_names(faults: FaultCode) -> str:
+    """'NONE' or the latched faults' names joined by '|' (stable across Python versions)."""
+    names = [member.name for member in FaultCode if member and member & faults]
+    return "|".join(n for n in names if n) or "NONE"
+
+
 class WatchdogState(enum.IntEnum):
     WAITING = 0   # no command received since the last reset or activation
     OK = 1

@@ -1,0 +1,384 @@
+"""bridge_node: the lifecycle node that runs our controller's torques on the rig's motors (issue 5).
+
+    joint_commands (sub, sensor_msgs/JointState)   names phi, theta (any order), effort N m: what tracker_node
+                                                   publishes; anything else is refused and counted
+    joint_states (pub, sensor_msgs/JointState)     names alpha, R, phi, theta; position (rad, m), velocity
+                                                   (filtered differences), effort (the joint torques N Kt i
+                                                   written; 0 for the unactuated alpha, R); while active
+    /diagnostics (pub, diagnostic_msgs/DiagnosticArray)  loop rate, overruns, watchdog, saturation count, faults
+    emergency_stop (srv std_srvs/Trigger, and sub std_msgs/Bool: true stops)   latches zero current and stops the
+                                                   amplifier enable line until reset_emergency_stop
+    reset_emergency_stop (srv std_srvs/Trigger)    clears the e-stop and every latched fault; torque resumes
+                                                   only with a command received after the reset
+
+Lifecycle (lifecycle_msgs ChangeState on bridge_node/change_state): configure opens the device with outputs at
+zero; activate enables the amplifiers and starts the I/O loop (io_loop.py); deactivate stops the loop, zeroes,
+disables; cleanup closes the device; shutdown and error zero, then disable, then close. Parameters (validated;
+they take effect at the next configure): backend (emulated | serial | mf624), config_path (bridge.yaml; empty:
+the shipped one), sample_period_s, watchdog_periods, overrun_limit, stale_read_limit, read_failure_limit,
+diagnostics_rate_hz, autostart (configure and activate at start-up, for runs without a lifecycle manager).
+
+Amplifier-enable wiring (the charge pump). A DAC holds its last value when the process dies, so a current
+command alone cannot make a crashed bridge safe. The bridge therefore drives a digital output that it toggles
+once per period while it is active and no fault is latched (Device.toggle_enable). That line feeds a
+retriggerable monostable (or an AC-coupled charge pump: series capacitor, diode pump into an RC, comparator)
+whose output drives the amplifiers' enable (inhibit) inputs. Each edge retriggers it; its time constant is a
+few periods (the emulated rig: 50 ms, about 6 periods of 8 ms). A steady line, high or low, lets it fall and
+the amplifiers disable: a crashed, hung, overrunning or faulted bridge stops the motors even with the DAC
+stuck. An e-stop or latched fault stops the toggling on purpose.
+"""
+from __future__ import annotations
+
+import dataclasses
+import time
+from typing import Any
+
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from lifecycle_msgs.srv import ChangeState
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.duration import Duration
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.lifecycle import Node as LifecycleNode
+from rclpy.lifecycle import State, TransitionCallbackReturn
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Bool
+from std_srvs.srv import Trigger
+
+from swim_hw_bridge.backends import BACKENDS, UnknownBackend, make_device
+from swim_hw_bridge.conversions import BridgeConfigError, Conversions, load_bridge_config
+from swim_hw_bridge.device import Device, DeviceError
+from swim_hw_bridge.io_loop import IoLoop, Snapshot
+from swim_hw_bridge.safety import (Command, FaultCode, MalformedCommand, SafetyLayer, SafetyLimits, WatchdogState,
+                                   fault_names, parse_command)
+
+STATE_NAMES = ["alpha", "R", "phi", "theta"]
+
+#: name -> (default, description); the checks are in validate_parameter
+PARAMETERS: dict[str, tuple[Any, str]] = {
+    "backend": ("emulated", f"device backend: {' | '.join(BACKENDS)}"),
+    "config_path": ("", "bridge parameter YAML (empty: the shipped config/bridge.yaml)"),
+    "sample_period_s": (0.008, "I/O loop period, s (the paper's 8 ms), 0.0005 to 0.1"),
+    "watchdog_periods": (5, "periods without a command before the torque is zeroed, >= 1"),
+    "overrun_limit": (3, "overruns in a row that latch the OVERRUN fault, >= 1"),
+    "stale_read_limit": (3, "repeated device samples in a row that latch STALE_READ, >= 1"),
+    "read_failure_limit": (3, "failed device reads in a row that latch READ_FAILED, >= 1"),
+    "diagnostics_rate_hz": (2.0, "/diagnostics publication rate, Hz, 0.1 to 100"),
+    "autostart": (False, "configure and activate at start-up"),
+}
+
+
+def validate_parameter(name: str, value: Any) -> str | None:
+    """None when value is acceptable for name, else the reason it is not."""
+    if name == "backend" and value not in BACKENDS:
+        return f"backend must be one of {', '.join(BACKENDS)}, got '{value}'"
+    if name == "sample_period_s" and not 0.0005 <= value <= 0.1:
+        return f"sample_period_s must lie in [0.0005, 0.1] s, got {value}"
+    if name in ("watchdog_periods", "overrun_limit", "stale_read_limit", "read_failure_limit") and value < 1:
+        return f"{name} must be at least 1, got {value}"
+    if name == "diagnostics_rate_hz" and not 0.1 <= value <= 100.0:
+        return f"diagnostics_rate_hz must lie in [0.1, 100] Hz, got {value}"
+    return None
+
+
+@dataclasses.dataclass(frozen=True)
+class BridgeSettings:
+    backend: str
+    config_path: str
+    sample_period_s: float
+    watchdog_periods: int
+    overrun_limit: int
+    stale_read_limit: int
+    read_failure_limit: int
+    diagnostics_rate_hz: float
+    autostart: bool
+
+
+class BridgeNode(LifecycleNode):
+    def __init__(self) -> None:
+        super().__init__("bridge_node")
+        self._guard_change_state_service()
+        for name, (default, description) in PARAMETERS.items():
+            self.declare_parameter(name, default, ParameterDescriptor(description=description))
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.settings = self._read_settings()
+        self.state_publisher = self.create_lifecycle_publisher(JointState, "joint_states", 10)
+        self.diagnostics_publisher = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self.create_subscription(JointState, "joint_commands", self._on_command, 10)
+        self.create_subscription(Bool, "emergency_stop", self._on_emergency_stop_topic, 10)
+        self.create_service(Trigger, "emergency_stop", self._on_emergency_stop)
+        self.create_service(Trigger, "reset_emergency_stop", self._on_reset)
+        self.device: Device | None = None
+        self.loop: IoLoop | None = None
+        self.active = False
+        self.malformed_commands = 0
+        self._estop_pending = False   # an e-stop asked for while no device is configured
+        self._state_label = "unconfigured"
+        self._last_published_period = -1
+        self._reported_faults = FaultCode.NONE
+        self._state_timer = None
+        self._diagnostics_timer = self.create_timer(1.0 / self.settings.diagnostics_rate_hz,
+                                                    self._publish_diagnostics)
+
+    def _guard_change_state_service(self) -> None:
+        """rclpy 7.1.6 raises out of the change_state service for a transition the current state does not have
+        (activate while unconfigured), which ends spin() and the process; answer success=False instead."""
+        service = self._service_change_state
+        inner = service.callback
+
+        def change_state(request: ChangeState.Request, response: ChangeState.Response) -> ChangeState.Response:
+            try:
+                return inner(request, response)
+            except _rclpy.RCLError as err:
+                self.get_logger().warning(f"transition {request.transition.id} '{request.transition.label}' "
+                                          f"refused: {err}")
+                response.success = False
+                return response
+
+        service.callback = change_state
+
+    # --- parameters ---------------------------------------------------------------------------------------
+    def _on_set_parameters(self, parameters: list) -> SetParametersResult:
+        for parameter in parameters:
+            reason = validate_parameter(parameter.name, parameter.value)
+            if reason is not None:
+                return SetParametersResult(successful=False, reason=reason)
+        return SetParametersResult(successful=True)
+
+    def _read_settings(self) -> BridgeSettings:
+        """The parameters now, checked; raises ValueError with the first reason."""
+        values = {name: self.get_parameter(name).value for name in PARAMETERS}
+        for name, value in values.items():
+            reason = validate_parameter(name, value)
+            if reason is not None:
+                raise ValueError(reason)
+        return BridgeSettings(**values)
+
+    # --- lifecycle --------------------------------------------------------------------------------------------
+    def on_configure(self, state: State) -> TransitionCallbackReturn:
+        try:
+            self.settings = self._read_settings()
+            config = load_bridge_config(self.settings.config_path or None)
+            device = make_device(self.settings.backend, config.device_config(self.settings.backend))
+            device.open()
+        except (ValueError, BridgeConfigError, UnknownBackend, DeviceError) as err:
+            self.get_logger().error(f"configure failed: {err}")
+            return TransitionCallbackReturn.FAILURE
+        try:
+            device.write_currents(0.0, 0.0)
+            limits = SafetyLimits.from_config(config, self.settings.sample_period_s, self.settings.watchdog_periods,
+                                              self.settings.stale_read_limit, self.settings.read_failure_limit)
+            self.loop = IoLoop(device, Conversions(config), SafetyLayer(limits), self.settings.sample_period_s,
+                               self.settings.overrun_limit)
+        except DeviceError as err:
+            self.get_logger().error(f"configure failed: cannot zero the outputs: {err}")
+            device.close()
+            return TransitionCallbackReturn.FAILURE
+        self.device = device
+        if self._estop_pending:
+            self.loop.emergency_stop()
+        self._restart_diagnostics_timer()
+        self._state_label = "inactive"
+        self.get_logger().info(f"configured: backend {self.settings.backend}, config {config.source_path}")
+        return super().on_configure(state)
+
+    def on_activate(self, state: State) -> TransitionCallbackReturn:
+        assert self.device is not None and self.loop is not None
+        try:
+            self.device.enable()
+        except DeviceError as err:
+            self.get_logger().error(f"activate failed: cannot enable the amplifiers: {err}")
+            return TransitionCallbackReturn.FAILURE
+        self.loop.start(enable_toggling=True)
+        self._state_timer = self.create_timer(self.settings.sample_period_s, self._publish_state)
+        self.active = True
+        self._state_label = "active"
+        self.get_logger().info("active: amplifiers enabled, I/O loop running")
+        return super().on_activate(state)
+
+    def on_deactivate(self, state: State) -> TransitionCallbackReturn:
+        self._stop_state_timer()
+        self._stop_outputs()
+        self._state_label = "inactive"
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state: State) -> TransitionCallbackReturn:
+        self._close_device()
+        self._state_label = "unconfigured"
+        return super().on_cleanup(state)
+
+    def on_shutdown(self, state: State) -> TransitionCallbackReturn:
+        self._stop_state_timer()
+        self.release()
+        self._state_label = "finalized"
+        return super().on_shutdown(state)
+
+    def on_error(self, state: State) -> TransitionCallbackReturn:
+        self.get_logger().error("error processing: zero current, amplifiers disabled, device closed")
+        self._stop_state_timer()
+        self.release()
+        self._state_label = "unconfigured"
+        return TransitionCallbackReturn.SUCCESS
+
+    def release(self) -> None:
+        """Zero, then disable, then close, whatever state we are in (also on process exit)."""
+        self._stop_outputs()
+        self._close_device()
+
+    def _stop_state_timer(self) -> None:
+        if self._state_timer is not None:
+            self.destroy_timer(self._state_timer)
+            self._state_timer = None
+
+    def _stop_outputs(self) -> None:
+        self.active = False
+        if self.loop is not None and not self.loop.stop():
+            self.get_logger().error("the I/O loop did not stop within 1 s (device call hung?)")
+        if self.device is None:
+            return
+        for action, call in (("zero the currents", lambda: self.device.write_currents(0.0, 0.0)),
+                             ("disable the amplifiers", self.device.disable)):
+            try:
+                call()
+            except DeviceError as err:
+                self.get_logger().error(f"cannot {action}: {err}")
+
+    def _close_device(self) -> None:
+        if self.device is not None:
+            try:
+                self.device.close()
+            except DeviceError as err:
+                self.get_logger().error(f"cannot close the device: {err}")
+        self.device, self.loop = None, None
+
+    # --- commands and e-stop -----------------------------------------------------------------------------------
+    def _on_command(self, message: JointState) -> None:
+        received_s = time.monotonic()
+        if not self.active or self.loop is None:
+            return
+        try:
+            heave_n_m, pitch_n_m = parse_command(message.name, message.effort)
+        except MalformedCommand as err:
+            self.malformed_commands += 1
+            self.get_logger().warning(f"joint_commands refused ({self.malformed_commands} so far): {err}",
+                                      throttle_duration_sec=1.0)
+            return
+        stamp_ns = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
+        self.loop.set_command(Command(heave_n_m, pitch_n_m, received_s, stamp_ns))
+
+    def _emergency_stop(self) -> None:
+        self._estop_pending = True
+        if self.loop is not None:
+            self.loop.emergency_stop()
+        self.get_logger().error("EMERGENCY STOP: zero current, amplifier enable stopped, latched until reset")
+
+    def _on_emergency_stop(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        self._emergency_stop()
+        response.success, response.message = True, "emergency stop latched until reset_emergency_stop"
+        return response
+
+    def _on_emergency_stop_topic(self, message: Bool) -> None:
+        if message.data:
+            self._emergency_stop()
+        else:
+            self.get_logger().warning("emergency_stop false ignored: only the reset_emergency_stop service resets",
+                                      throttle_duration_sec=5.0)
+
+    def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        self._estop_pending = False
+        if self.loop is not None:
+            self.loop.reset(time.monotonic())
+        self.get_logger().info("emergency stop and faults reset: torque resumes with the next command")
+        response.success, response.message = True, "reset: torque resumes with a command received from now on"
+        return response
+
+    # --- publishing --------------------------------------------------------------------------------------------
+    def _publish_state(self) -> None:
+        snapshot = self.loop.snapshot() if self.loop is not None else None
+        if snapshot is None or snapshot.periods == self._last_published_period:
+            return
+        self._last_published_period = snapshot.periods
+        message = JointState()
+        age_s = max(time.monotonic() - snapshot.monotonic_s, 0.0)
+        message.header.stamp = (self.get_clock().now() - Duration(nanoseconds=int(age_s * 1e9))).to_msg()
+        message.name = STATE_NAMES
+        message.position = list(snapshot.positions)
+        message.velocity = list(snapshot.velocities)
+        message.effort = [0.0, 0.0, snapshot.torques_n_m[0], snapshot.torques_n_m[1]]
+        self.state_publisher.publish(message)
+
+    def _restart_diagnostics_timer(self) -> None:
+        self.destroy_timer(self._diagnostics_timer)
+        self._diagnostics_timer = self.create_timer(1.0 / self.settings.diagnostics_rate_hz,
+                                                    self._publish_diagnostics)
+
+    def _publish_diagnostics(self) -> None:
+        snapshot = self.loop.snapshot() if self.loop is not None else None
+        self._log_new_faults(snapshot)
+        array = DiagnosticArray()
+        array.header.stamp = self.get_clock().now().to_msg()
+        array.status = [self.diagnostic_status(snapshot)]
+        self.diagnostics_publisher.publish(array)
+
+    def _log_new_faults(self, snapshot: Snapshot | None) -> None:
+        faults = snapshot.faults if snapshot is not None else FaultCode.NONE
+        new = faults & ~self._reported_faults
+        if new:
+            self.get_logger().error(f"fault latched: {fault_names(new)} (zero current until reset)")
+        self._reported_faults = faults
+
+    def _loop_running(self) -> bool:
+        return self.loop is not None and self.loop.running
+
+    def diagnostic_status(self, snapshot: Snapshot | None) -> DiagnosticStatus:
+        status = DiagnosticStatus(name=f"{self.get_fully_qualified_name()}: I/O loop",
+                                  hardware_id=self.settings.backend)
+        values = {"lifecycle_state": self._state_label, "malformed_commands": self.malformed_commands,
+                  "emergency_stop_pending": self._estop_pending}
+        if snapshot is None:
+            status.level, status.message = DiagnosticStatus.WARN, f"{self._state_label}: I/O loop not running yet"
+        else:
+            values.update(
+                loop_rate_hz=f"{snapshot.loop_rate_hz:.2f}", periods=snapshot.periods, overruns=snapshot.overruns,
+                consecutive_overruns=snapshot.consecutive_overruns, watchdog=snapshot.watchdog.name,
+                saturation_count=snapshot.saturation_count, fault_code=int(snapshot.faults),
+                faults=fault_names(snapshot.faults), loop_running=self._loop_running(),
+                enable_toggling=snapshot.enable_toggling and self._loop_running(),
+                heave_current_a=snapshot.currents_a[0], pitch_current_a=snapshot.currents_a[1],
+                heave_torque_n_m=snapshot.torques_n_m[0], pitch_torque_n_m=snapshot.torques_n_m[1])
+            if snapshot.faults:
+                status.level, status.message = DiagnosticStatus.ERROR, f"fault: {fault_names(snapshot.faults)}"
+            elif not self.active or snapshot.watchdog is not WatchdogState.OK:
+                status.level = DiagnosticStatus.WARN
+                status.message = f"{self._state_label}, watchdog {snapshot.watchdog.name}: zero torque"
+            else:
+                status.level, status.message = DiagnosticStatus.OK, "active"
+        status.values = [KeyValue(key=key, value=str(value)) for key, value in values.items()]
+        return status
+
+
+def main(args: list[str] | None = None) -> None:
+    # this rclpy's init() is not a context manager, hence try/finally
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = BridgeNode()
+        if node.settings.autostart and node.trigger_configure() == TransitionCallbackReturn.SUCCESS:
+            node.trigger_activate()
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        executor.spin()
+    except ValueError as err:   # a parameter given on the command line that does not validate
+        rclpy.logging.get_logger("bridge_node").fatal(str(err))
+        raise SystemExit(2) from err
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.release()   # zero, then disable, then close: never leave the amplifiers driven
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,295 @@
+"""bridge_node over DDS: the real node in its own process with the emulated rig, driven from the test side.
+
+The test side closes a PD loop (the role tracker_node plays) over joint_states -> joint_commands, and drives the
+lifecycle through bridge_node/change_state as a lifecycle manager would.
+"""
+import math
+import time
+
+import pytest
+
+from conftest import running_node
+
+PERIOD_S = 0.008
+# a long watchdog (200 ms) keeps "the old command is still within the watchdog after a reset" observable
+WATCHDOG_PERIODS = 25
+WATCHDOG_S = WATCHDOG_PERIODS * PERIOD_S
+
+
+class BridgeClient:
+    """The test's side of the bridge: lifecycle and e-stop services, commands out, states and diagnostics in."""
+
+    def __init__(self, context, namespace=""):
+        from diagnostic_msgs.msg import DiagnosticArray
+        from lifecycle_msgs.srv import ChangeState, GetState
+        from rclpy.executors import SingleThreadedExecutor
+        from sensor_msgs.msg import JointState
+        from std_msgs.msg import Bool
+        from std_srvs.srv import Trigger
+        import rclpy
+        self.node = rclpy.create_node("bridge_test_client", namespace=namespace or "/", context=context)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+        prefix = f"{namespace}/" if namespace else ""
+        self.fully_qualified = f"{namespace}/bridge_node" if namespace else "/bridge_node"
+        self.change_state = self.node.create_client(ChangeState, f"{prefix}bridge_node/change_state")
+        self.get_state = self.node.create_client(GetState, f"{prefix}bridge_node/get_state")
+        self.estop = self.node.create_client(Trigger, f"{prefix}emergency_stop")
+        self.reset = self.node.create_client(Trigger, f"{prefix}reset_emergency_stop")
+        self.commands = self.node.create_publisher(JointState, f"{prefix}joint_commands", 10)
+        self.estop_topic = self.node.create_publisher(Bool, f"{prefix}emergency_stop", 10)
+        self.states = []        # (monotonic receive time, JointState)
+        self.diagnostics = []   # DiagnosticStatus of this bridge
+        self.node.create_subscription(JointState, f"{prefix}joint_states",
+                                      lambda m: self.states.append((time.monotonic(), m)), 50)
+        self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diagnostics, 10)
+        assert self.change_state.wait_for_service(timeout_sec=30.0), "bridge_node did not come up"
+
+    def _on_diagnostics(self, array):
+        self.diagnostics += [s for s in array.status if s.name.startswith(self.fully_qualified + ":")]
+
+    def close(self):
+        self.executor.shutdown()
+        self.node.destroy_node()
+
+    def spin(self, seconds):
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=0.002)
+
+    def call(self, client, request):
+        future = client.call_async(request)
+        self.executor.spin_until_future_complete(future, timeout_sec=10.0)
+        assert future.done(), f"no reply from {client.srv_name}"
+        return future.result()
+
+    def transition(self, transition_id):
+        from lifecycle_msgs.msg import Transition
+        from lifecycle_msgs.srv import ChangeState
+        return self.call(self.change_state, ChangeState.Request(transition=Transition(id=transition_id))).success
+
+    def state_label(self):
+        from lifecycle_msgs.srv import GetState
+        return self.call(self.get_state, GetState.Request()).current_state.label
+
+    def trigger(self, client):
+        from std_srvs.srv import Trigger
+        return self.call(client, Trigger.Request())
+
+    def send(self, efforts, names=("phi", "theta")):
+        from sensor_msgs.msg import JointState
+        message = JointState(name=list(names), effort=[float(e) for e in efforts])
+        message.header.stamp = self.node.get_clock().now().to_msg()
+        self.commands.publish(message)
+
+    def hold(self, seconds, target=(0.0, 0.0)):
+        """PD on (phi, theta) to target from each joint_states, as a controller would, for seconds."""
+        gains = ((1.0, 0.3), (0.1, 0.02))   # N m/rad, N m s/rad: heave, pitch (about 3 and 8 rad/s)
+        end = time.monotonic() + seconds
+        answered = len(self.states)
+        while time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=0.002)
+            if len(self.states) > answered:
+                answered = len(self.states)
+                state = self.states[-1][1]
+                self.send([-kp * (state.position[j] - target[j - 2]) - kd * state.velocity[j]
+                           for j, (kp, kd) in zip((2, 3), gains)])
+
+    def latest_diagnostic(self, timeout_s=2.0):
+        self.diagnostics.clear()
+        end = time.monotonic() + timeout_s
+        while not self.diagnostics and time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=0.01)
+        assert self.diagnostics, "no /diagnostics from the bridge"
+        status = self.diagnostics[-1]
+        return status, {kv.key: kv.value for kv in status.values}
+
+
+def efforts(client, since):
+    return [tuple(m.effort[2:]) for t, m in client.states if t >= since]
+
+
+@pytest.fixture(scope="module")
+def bridge_process(ros_domain, tmp_path_factory):
+    log = tmp_path_factory.mktemp("bridge_node") / "log.txt"
+    with running_node("swim_hw_bridge", "bridge_node", log, "-p", f"watchdog_periods:={WATCHDOG_PERIODS}",
+                      "-p", "diagnostics_rate_hz:=20.0") as process:
+        yield process
+
+
+@pytest.fixture()
+def bridge(bridge_process, rclpy_context):
+    """The shared bridge, active, no e-stop, the foil held at rest."""
+    from lifecycle_msgs.msg import Transition
+    client = BridgeClient(rclpy_context)
+    if client.state_label() == "unconfigured":
+        assert client.transition(Transition.TRANSITION_CONFIGURE)
+    if client.state_label() == "inactive":
+        assert client.transition(Transition.TRANSITION_ACTIVATE)
+    assert client.trigger(client.reset).success
+    client.hold(0.3)
+    yield client
+    client.hold(0.3)
+    client.close()
+
+
+def test_lifecycle_transitions_open_enable_and_release_the_device(ros_domain, rclpy_context, tmp_path):
+    from lifecycle_msgs.msg import Transition
+    with running_node("swim_hw_bridge", "bridge_node", tmp_path / "log.txt", "-r", "__ns:=/lifecycle_test",
+                      "-p", "diagnostics_rate_hz:=20.0"):
+        client = BridgeClient(rclpy_context, "/lifecycle_test")
+        try:
+            assert client.state_label() == "unconfigured"
+            assert not client.transition(Transition.TRANSITION_ACTIVATE)   # not from unconfigured
+            assert client.transition(Transition.TRANSITION_CONFIGURE)
+            assert client.state_label() == "inactive"
+            client.spin(0.2)
+            assert not client.states   # inactive: the loop is not running, nothing published
+            _, values = client.latest_diagnostic()
+            assert values["lifecycle_state"] == "inactive"
+
+            assert client.transition(Transition.TRANSITION_ACTIVATE)
+            client.spin(0.5)
+            assert client.state_label() == "active"
+            assert len(client.states) >= 40   # about 62 at 125 Hz
+            state = client.states[-1][1]
+            assert list(state.name) == ["alpha", "R", "phi", "theta"]
+            assert state.position[1] == pytest.approx(0.43, abs=1e-3)   # the rig's home lane
+            assert len(state.velocity) == 4 and list(state.effort) == [0.0] * 4   # no command yet: zero
+            status, values = client.latest_diagnostic()
+            assert values["lifecycle_state"] == "active" and values["enable_toggling"] == "True"
+            assert values["watchdog"] == "WAITING"
+
+            assert client.transition(Transition.TRANSITION_DEACTIVATE)
+            client.spin(0.1)
+            client.states.clear()
+            client.spin(0.3)
+            assert not client.states
+            _, values = client.latest_diagnostic()
+            assert values["lifecycle_state"] == "inactive" and values["enable_toggling"] == "False"
+
+            assert client.transition(Transition.TRANSITION_CLEANUP)
+            assert client.state_label() == "unconfigured"
+            assert client.transition(Transition.TRANSITION_CONFIGURE)   # and round again
+            assert client.transition(Transition.TRANSITION_ACTIVATE)
+            client.spin(0.2)
+            assert client.states
+            assert client.transition(Transition.TRANSITION_ACTIVE_SHUTDOWN)
+            assert client.state_label() == "finalized"
+        finally:
+            client.close()
+
+
+def test_a_bad_configuration_fails_configure_and_the_node_carries_on(ros_domain, rclpy_context, tmp_path):
+    from lifecycle_msgs.msg import Transition
+    with running_node("swim_hw_bridge", "bridge_node", tmp_path / "log.txt", "-r", "__ns:=/bad_config",
+                      "-p", f"config_path:={tmp_path / 'missing.yaml'}") as process:
+        client = BridgeClient(rclpy_context, "/bad_config")
+        try:
+            assert not client.transition(Transition.TRANSITION_CONFIGURE)
+            assert client.state_label() == "unconfigured" and process.poll() is None
+        finally:
+            client.close()
+    assert "cannot read the bridge file" in (tmp_path / "log.txt").read_text()
+
+
+def test_commands_reach_the_motors_and_the_watchdog_zeroes_the_torque(bridge):
+    bridge.hold(1.0, target=(0.1, -0.1))
+    state = bridge.states[-1][1]
+    assert state.position[2] == pytest.approx(0.1, abs=0.03) and state.position[3] == pytest.approx(-0.1, abs=0.03)
+    bridge.send([0.05, -0.01])   # one last command, then silence
+    last_sent = time.monotonic()
+    bridge.spin(0.1)
+    assert (0.05, -0.01) in [pytest.approx(e) for e in efforts(bridge, last_sent)]
+    status, values = bridge.latest_diagnostic()
+    assert values["watchdog"] == "OK" and status.level == status.OK
+    bridge.spin(WATCHDOG_S + 0.3)
+    zeroed = [t for t, m in bridge.states if t > last_sent and tuple(m.effort[2:]) == (0.0, 0.0)]
+    assert zeroed, "the watchdog never zeroed the torque"
+    assert WATCHDOG_S - 0.01 < zeroed[0] - last_sent < WATCHDOG_S + 0.15
+    assert all(e == (0.0, 0.0) for e in efforts(bridge, zeroed[0]))
+    _, values = bridge.latest_diagnostic()
+    assert values["watchdog"] == "EXPIRED"
+
+
+@pytest.mark.parametrize("how", ["service", "topic"])
+def test_emergency_stop_latches_until_reset_and_a_fresh_command(bridge, how):
+    from std_msgs.msg import Bool
+    bridge.hold(0.2)
+    if how == "service":
+        assert bridge.trigger(bridge.estop).success
+    else:
+        bridge.estop_topic.publish(Bool(data=True))
+    bridge.spin(0.05)
+    stopped = time.monotonic()
+    bridge.hold(0.3, target=(0.3, 0.3))   # commands keep coming: all refused while latched
+    assert efforts(bridge, stopped) and all(e == (0.0, 0.0) for e in efforts(bridge, stopped))
+    status, values = bridge.latest_diagnostic()
+    assert status.level == status.ERROR and "EMERGENCY_STOP" in values["faults"]
+    assert values["enable_toggling"] == "False"
+    bridge.estop_topic.publish(Bool(data=False))   # false does not reset
+    bridge.send([0.05, 0.0])
+    bridge.spin(0.1)
+    assert "EMERGENCY_STOP" in bridge.latest_diagnostic()[1]["faults"]
+    # reset: the last command is still inside the watchdog window, but it predates the reset: no torque
+    bridge.send([0.05, 0.0])
+    bridge.spin(0.01)
+    assert bridge.trigger(bridge.reset).success
+    reset_at = time.monotonic()
+    bridge.spin(0.08)
+    assert all(e == (0.0, 0.0) for e in efforts(bridge, reset_at))
+    _, values = bridge.latest_diagnostic()
+    assert values["faults"] == "NONE" and values["watchdog"] == "WAITING"
+    bridge.send([0.05, 0.0])
+    sent = time.monotonic()
+    bridge.spin(0.05)
+    assert (0.05, 0.0) in [pytest.approx(e) for e in efforts(bridge, sent)]
+
+
+def test_malformed_commands_are_counted_and_ignored(bridge):
+    before = int(bridge.latest_diagnostic()[1]["malformed_commands"])
+    bridge.send([0.01, 0.0])
+    sent = time.monotonic()
+    bad = [dict(efforts=[0.2, 0.2], names=("phi", "alpha")), dict(efforts=[0.2], names=("phi", "theta")),
+           dict(efforts=[0.2, 0.2, 0.2], names=("phi", "theta", "R")), dict(efforts=[math.nan, 0.2]),
+           dict(efforts=[0.2, math.inf]), dict(efforts=[0.2, 0.2], names=("phi", "phi"))]
+    for message in bad:
+        bridge.send(**message)
+        bridge.spin(0.01)
+    bridge.spin(0.05)
+    applied = efforts(bridge, sent)
+    assert (0.01, 0.0) in [pytest.approx(e) for e in applied]
+    assert all(e in ((0.0, 0.0), pytest.approx((0.01, 0.0))) for e in applied)   # never a refused value
+    _, values = bridge.latest_diagnostic()
+    assert int(values["malformed_commands"]) == before + len(bad)
+    assert values["faults"] == "NONE"
+
+
+def test_diagnostics_report_the_loop(bridge):
+    bridge.hold(0.3)
+    status, values = bridge.latest_diagnostic()
+    assert status.level == status.OK and status.hardware_id == "emulated"
+    assert float(values["loop_rate_hz"]) == pytest.approx(1 / PERIOD_S, rel=0.1)
+    for key in ("overruns", "consecutive_overruns", "saturation_count", "fault_code", "periods"):
+        assert int(values[key]) >= 0
+    assert values["fault_code"] == "0" and values["watchdog"] == "OK"
+    saturated = int(values["saturation_count"])
+    bridge.send([50.0, 0.0])   # far past the 1.25 N m heave limit: clipped and counted
+    sent = time.monotonic()
+    bridge.spin(0.05)
+    assert max(abs(e[0]) for e in efforts(bridge, sent)) == pytest.approx(177 * 0.00706155181422604, rel=1e-6)
+    assert int(bridge.latest_diagnostic()[1]["saturation_count"]) > saturated
+    bridge.hold(0.5)
+
+
+def test_parameters_are_validated(bridge):
+    from rclpy.parameter import Parameter
+    from rclpy.parameter_client import AsyncParameterClient
+    parameters = AsyncParameterClient(bridge.node, "bridge_node")
+    assert parameters.wait_for_services(timeout_sec=10.0)
+    for name, value in [("sample_period_s", 5.0), ("watchdog_periods", 0), ("backend", "ethercat"),
+                        ("diagnostics_rate_hz", -1.0)]:
+        future = parameters.set_parameters([Parameter(name, value=value)])
+        bridge.executor.spin_until_future_complete(future, timeout_sec=10.0)
+        result = future.result().results[0]
+        assert not result.successful and name in result.reason
