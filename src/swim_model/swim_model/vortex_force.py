@@ -155,12 +155,18 @@ class CirclePlane:
             return np.zeros(0, dtype=complex)
         d1, d2 = self.map_derivatives(zeta_k)
         core_zeta2 = (core_radius_m / np.maximum(np.abs(d1), 1e-12)) ** 2
-        delta = zeta_k[:, None] - zeta_k[None, :]
-        blob = np.conj(delta) / (delta.real ** 2 + delta.imag ** 2 + core_zeta2[None, :])
-        np.fill_diagonal(blob, 0.0)
+        # real arithmetic on N x N arrays (the cost of a step): sum_k Gamma_k conj(D)/(|D|^2 + delta_k^2);
+        # the diagonal (D = 0) contributes nothing, so a vortex's own blob term drops out by itself
+        dx = zeta_k.real[:, None] - zeta_k.real[None, :]
+        dy = zeta_k.imag[:, None] - zeta_k.imag[None, :]
+        weight = gamma_k / (dx * dx + dy * dy + core_zeta2[None, :])
+        mutual = (weight * dx).sum(axis=1) - 1j * (weight * dy).sum(axis=1)
         images = self.image(zeta_k)
-        kernel = blob - 1.0 / (zeta_k[:, None] - images[None, :])
-        dw_dzeta = kernel @ gamma_k / (2j * math.pi) + self.body_potential_derivative(zeta_k, velocity)
+        dx = zeta_k.real[:, None] - images.real[None, :]
+        dy = zeta_k.imag[:, None] - images.imag[None, :]
+        weight = gamma_k / (dx * dx + dy * dy)
+        mutual -= (weight * dx).sum(axis=1) - 1j * (weight * dy).sum(axis=1)
+        dw_dzeta = mutual / (2j * math.pi) + self.body_potential_derivative(zeta_k, velocity)
         conj_u = dw_dzeta / d1 - gamma_k * d2 / (4j * math.pi * d1 * d1)
         return np.conj(conj_u)
 
