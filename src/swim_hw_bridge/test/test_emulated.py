@@ -92,3 +92,15 @@ def test_free_vehicle_moves_alpha_by_shape_change(device):
         device.read_counters()
         alpha.append(device.q[0])
     assert np.ptp(alpha) > 0.0
+
+
+def test_write_log_keeps_the_last_writes_with_their_times(config):
+    device = EmulatedDevice({**config.device_config("emulated"), "write_log_size": 3})
+    device.open()
+    before = time.monotonic()
+    for k in range(5):
+        device.write_currents(0.1 * k, -0.1 * k)
+    assert device.write_count == 5
+    rows = sorted(device.write_log.tolist())
+    assert [r[1] for r in rows] == pytest.approx([0.2, 0.3, 0.4])
+    assert all(before <= r[0] <= time.monotonic() for r in rows)

@@ -10,6 +10,9 @@ The enable line is emulated as the rig wires it (see bridge_node's docstring): t
 enable() has been called and the last toggle_enable() edge is at most charge_pump_timeout_s old, so a bridge that
 stops toggling (hung, crashed, faulted) finds the emulated amplifiers disabled.
 
+Write log (option write_log_size, default 0: off): the last N writes as rows (time.monotonic(), heave_a, pitch_a)
+in a preallocated array, write_log[:write_count % N], to see what the motors got and when (the latency benchmark).
+
 Fault injection for tests (attributes, off by default): read_delay_s (every read takes this long), repeat_samples
 (reads return the previous sample, same sequence), fail_reads (reads raise DeviceError).
 """
@@ -55,6 +58,8 @@ class EmulatedDevice(Device):
         self._sequence = 0
         self._last_sample: CounterSample | None = None
         self._torques = np.zeros((self.substeps, 2))
+        self.write_log = np.zeros((int(config.get("write_log_size", 0)), 3))
+        self.write_count = 0
 
     # --- the Device interface --------------------------------------------------------------------------
     def open(self) -> None:
@@ -86,6 +91,9 @@ class EmulatedDevice(Device):
         if self.model is None:
             raise DeviceError("emulated device: write before open()")
         self.commanded_currents_a = (float(heave_a), float(pitch_a))
+        if len(self.write_log):
+            self.write_log[self.write_count % len(self.write_log)] = (time.monotonic(), heave_a, pitch_a)
+            self.write_count += 1
 
     def toggle_enable(self) -> None:
         self.enable_level = not self.enable_level

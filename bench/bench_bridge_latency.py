@@ -1,0 +1,87 @@
+"""Benchmark: bridge_node command-to-device latency with the emulated backend at the 8 ms period.
+
+bridge_node runs in this process (its executor in one thread, its I/O loop in another, as in its own process);
+a second node publishes joint_commands at about 125 Hz over DDS (localhost, own ROS_DOMAIN_ID). Each command
+carries a distinct heave torque, so the emulated device's write log (time.monotonic() of every write_currents)
+tells which write first used it. Latency = that write's time - the command's publish time. The loop only
+picks up a command at its next period, so about half a period (4 ms) of the median is the sampling itself.
+Prints one JSON line.
+"""
+import json
+import os
+import random
+import statistics
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import yaml
+
+PERIOD_S = 0.008
+COMMANDS = 600
+
+
+def main() -> None:
+    os.environ["ROS_DOMAIN_ID"] = str(random.Random(os.getpid()).randint(101, 200))
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from sensor_msgs.msg import JointState
+    from swim_hw_bridge.bridge_node import BridgeNode
+    from swim_hw_bridge.conversions import Conversions, load_bridge_config
+
+    from swim_hw_bridge.conversions import default_config_path
+    document = yaml.safe_load(default_config_path().read_text())
+    document["backend_options"]["emulated"]["write_log_size"] = 4 * COMMANDS + 1000   # every write of the run
+    config_path = Path(tempfile.mkdtemp()) / "bridge.yaml"
+    config_path.write_text(yaml.safe_dump(document))
+    rclpy.init(args=["--ros-args", "-p", f"config_path:={config_path}", "--log-level", "warn"])
+    bridge = BridgeNode()
+    bridge.trigger_configure()
+    device = bridge.loop.device
+    bridge.trigger_activate()
+    bridge_executor = SingleThreadedExecutor()
+    bridge_executor.add_node(bridge)
+    spinner = threading.Thread(target=bridge_executor.spin, daemon=True)
+    spinner.start()
+
+    sender = rclpy.create_node("bridge_latency_bench")
+    publisher = sender.create_publisher(JointState, "joint_commands", 10)
+    deadline = time.monotonic() + 10.0
+    while publisher.get_subscription_count() == 0 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    time.sleep(0.5)   # discovery settled both ways
+    conversions = Conversions(load_bridge_config())
+    jitter = random.Random(0)
+    published = {}   # heave current the command makes -> publish time
+    for k in range(COMMANDS):
+        torque = (1 if k % 2 else -1) * 1e-4 * (k + 1)   # distinct, small, alternating: the foil stays near 0
+        message = JointState(name=["phi", "theta"], effort=[torque, 0.0])
+        published[conversions.torques_to_currents(torque, 0.0)[0]] = time.monotonic()
+        publisher.publish(message)
+        time.sleep(PERIOD_S + jitter.uniform(-0.001, 0.001))   # no fixed phase against the loop
+    time.sleep(0.1)
+    snapshot = bridge.loop.snapshot()
+    rows = device.write_log[:device.write_count]
+    first_write = {}
+    for write_s, heave_a, _ in rows:
+        first_write.setdefault(heave_a, write_s)
+    latencies_ms = sorted(1e3 * (first_write[current] - sent_s) for current, sent_s in published.items()
+                          if current in first_write)
+    bridge_executor.shutdown()
+    bridge.release()
+    sender.destroy_node()
+    bridge.destroy_node()
+    rclpy.try_shutdown()
+    p99 = latencies_ms[min(len(latencies_ms) - 1, int(0.99 * len(latencies_ms)))]
+    print(json.dumps({"benchmark": "bridge_latency", "backend": "emulated", "sample_period_ms": 1e3 * PERIOD_S,
+                      "commands": COMMANDS, "reached_device": len(latencies_ms),
+                      "superseded": COMMANDS - len(latencies_ms),   # a newer command arrived in the same period
+                      "median_ms": round(statistics.median(latencies_ms), 2), "p99_ms": round(p99, 2),
+                      "max_ms": round(latencies_ms[-1], 2), "loop_overruns": snapshot.overruns,
+                      "loop_rate_hz": round(snapshot.loop_rate_hz, 1)}))
+
+
+if __name__ == "__main__":
+    main()
