@@ -5,7 +5,7 @@ setup:
 	@bash scripts/setup.sh
 
 demo: setup
-	@bash scripts/run_in_env.sh ros2 run swim_model swim-model-demo --output-dir runs/model-demo
+	@bash scripts/run_in_env.sh ros2 run swim_bringup swim-demo
 
 test: setup
 	@bash scripts/run_tests.sh

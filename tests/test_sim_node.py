@@ -84,7 +84,10 @@ def test_lock_step_is_deterministic_after_reset_and_clock_follows(driver):
     first = driver.drive(torques)
     stamps = [s.header.stamp.sec + 1e-9 * s.header.stamp.nanosec for s in first]
     np.testing.assert_allclose(np.diff(stamps), 0.008, atol=1e-9)    # one period per command, simulated time
-    assert driver.clock and driver.clock[-1] == first[-1].header.stamp
+    deadline = time.monotonic() + 2.0
+    while not (driver.clock and driver.clock[-1] == first[-1].header.stamp) and time.monotonic() < deadline:
+        driver.executor.spin_once(timeout_sec=0.01)
+    assert driver.clock[-1] == first[-1].header.stamp
     assert driver.call(Trigger, "reset", Trigger.Request()).success
     assert driver.wait_for_states(len(driver.states) + 1)
     second = driver.drive(torques)

@@ -50,6 +50,9 @@ RESULT_CODES = {
     Outcome.CANCELED: ExecutePlan.Result.CANCELED,
 }
 
+#: history depth of the per-period topics: 8 s of periods at 8 ms
+RECORDABLE_DEPTH = 1000
+
 PARAMETER_RULES = {
     "sample_period_s": (lambda v: isinstance(v, float) and 0.001 <= v <= 0.1, "a float in [0.001, 0.1] s"),
     "stale_after_periods": (lambda v: isinstance(v, int) and 1 <= v <= 1000, "an integer in [1, 1000]"),
@@ -108,8 +111,10 @@ class TrackerNode(Node):
         self.commands_sent = 0
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
-        self.command_publisher = self.create_publisher(JointState, "joint_commands", 10)
-        self.tracking_publisher = self.create_publisher(TrackingState, "tracking_state", 10)
+        # deep histories: a recorder that falls behind a faster-than-real-time lock-step loop still gets every
+        # period (reliable delivery only covers what the writer's history still holds)
+        self.command_publisher = self.create_publisher(JointState, "joint_commands", RECORDABLE_DEPTH)
+        self.tracking_publisher = self.create_publisher(TrackingState, "tracking_state", RECORDABLE_DEPTH)
         # One thread runs every callback (rclpy.spin): the control period, the stale watchdog and the action
         # never race, so no locks. The execute callback is a coroutine that awaits its goal's end instead of
         # blocking a thread; rclpy's MultiThreadedExecutor with a mutually exclusive group stalled here

@@ -217,10 +217,18 @@ class Plant:
             x_next = self._pin_stopped(x, x_next)
             for i, _, _ in self._dry:
                 if not self.stuck[i] and x_next[nq + i] * x[nq + i] <= 0.0:
-                    x_next[nq + i] = 0.0     # the velocity reached zero: stopped; stiction decides next substep
-                    self.stuck[i] = True
+                    self._stop(x_next, i)    # the velocity reached zero: stopped; stiction decides next substep
             x = x_next
         return x
+
+    def _stop(self, x: Array, index: int) -> None:
+        """Stop coordinate index by a plastic impulse: qdot -= Mm^-1 e_i v_i / (Mm^-1)_ii, the Mm-orthogonal
+        projection onto v_i = 0, which never adds kinetic energy (it removes v_i^2 / (2 (Mm^-1)_ii))."""
+        nq = self.model.nq
+        inverse_mass = np.linalg.inv(self.model.mass_matrix(x[:nq]))
+        x[nq:] -= inverse_mass[:, index] * (x[nq + index] / inverse_mass[index, index])
+        x[nq + index] = 0.0
+        self.stuck[index] = True
 
     def _friction(self, x: Array, torque: Array, wave: Array) -> tuple[Array, Array]:
         """(held force, lock mask) for the next step: stopped coordinates stay locked while the force holding

@@ -22,6 +22,7 @@ sensors.<field> (swim_sim.sensors.SensorNoise); read at start.
 from __future__ import annotations
 
 import dataclasses
+import time
 from typing import Optional
 
 import numpy as np
@@ -40,6 +41,7 @@ from swim_sim.plant import Plant, SimulationError
 from swim_sim.sensors import SensorNoise, Sensors
 
 MOTOR_JOINTS = ["phi", "theta"]
+RECORDABLE_DEPTH = 1000   # 8 s of periods at 8 ms
 
 
 def stamp_of(time_s: float) -> Time:
@@ -100,7 +102,8 @@ class SimNode(Node):
         self._latest_torque = np.zeros(2)
         self._published_stamp: Optional[Time] = None
 
-        self.state_publisher = self.create_publisher(JointState, "joint_states", 10)
+        # a deep history: a recorder behind a faster-than-real-time lock-step loop still gets every period
+        self.state_publisher = self.create_publisher(JointState, "joint_states", RECORDABLE_DEPTH)
         self.clock_publisher = self.create_publisher(Clock, "/clock", 10)
         self.create_subscription(JointState, "joint_commands", self._on_command, 10)
         self.create_service(Trigger, "reset", self._on_reset)
@@ -108,7 +111,8 @@ class SimNode(Node):
         if self.mode == "realtime":
             self.create_timer(self.plant.sample_period_s, self._on_tick)
         else:
-            self.create_timer(value("resend_after_s"), self._resend)   # a controller that starts late gets the state
+            # a controller that starts late, or missed a state, still gets it
+            self.create_timer(0.25 * value("resend_after_s"), self._resend)
         self._publish_state()
         self.get_logger().info(f"simulating the {'constrained' if model.constrained else 'free'} vehicle, "
                                f"{self.mode}, period {self.plant.sample_period_s * 1e3:g} ms")
@@ -140,7 +144,9 @@ class SimNode(Node):
         self._step(self._latest_torque)
 
     def _resend(self) -> None:
-        if self._published_stamp is not None and self.failed is None:
+        """Lock-step: publish the waiting state again if no command has come for it within resend_after_s."""
+        waited_s = time.monotonic() - self._published_monotonic
+        if self.failed is None and waited_s >= self.get_parameter("resend_after_s").value:
             self._publish_state(advance=False)
 
     def _step(self, torque: np.ndarray) -> None:
@@ -169,7 +175,7 @@ class SimNode(Node):
         effort = np.zeros(self.plant.model.nq)
         effort[-2:] = state.torque
         message.effort = effort.tolist()
-        self._published_stamp = stamp
+        self._published_stamp, self._published_monotonic = stamp, time.monotonic()
         self.clock_publisher.publish(Clock(clock=stamp))
         self.state_publisher.publish(message)
 

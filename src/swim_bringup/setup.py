@@ -1,0 +1,29 @@
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = 'swim_bringup'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name + '/config', glob('config/*.yaml')),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='swim maintainers',
+    maintainer_email='swim@example.com',
+    description='Bring-up of the closed loop (simulator or bridge, planner, tracker), recording, analysis, demo.',
+    license='Apache-2.0',
+    tests_require=['pytest'],
+    entry_points={
+        'console_scripts': [
+            'swim-demo = swim_bringup.demo:main',
+            'swim-analyze = swim_bringup.analysis:main',
+        ],
+    },
+)
