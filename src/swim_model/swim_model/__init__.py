@@ -5,17 +5,19 @@ Public API:
     JoukowskiFoil(chord_m, thickness_m, span_m)     the foil; .added_mass(rho_kg_m3) -> AddedMass
     VehicleModel(rig, constrained)                  Mm, Cm, forward/inverse dynamics, energy, momentum
     SinusoidalGait, simulate_gait                   shape-driven swimming
+    Wake(foil, WakeParameters()).step(dt, pose, nu) free-vortex wake: the vortical force the ideal model leaves out
 """
 from swim_model.errors import FoilGeometryError, RigConfigError, StateError, SwimModelError
 from swim_model.gait import ShapeDrivenRun, SinusoidalGait, simulate_gait
 from swim_model.joukowski import AddedMass, JoukowskiFoil
 from swim_model.rig import RigParameters, load_rig
 from swim_model.vehicle import VehicleModel
+from swim_model.wake import Wake, WakeForce, WakeParameters
 
 MODEL_VERSION = "1"  # bump when the equations change: primitive libraries record it
 
 __all__ = [
     "AddedMass", "FoilGeometryError", "JoukowskiFoil", "MODEL_VERSION", "RigConfigError", "RigParameters",
     "ShapeDrivenRun", "SinusoidalGait", "StateError", "SwimModelError", "VehicleModel", "load_rig",
-    "simulate_gait",
+    "Wake", "WakeForce", "WakeParameters", "simulate_gait",
 ]
