@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 
 WORKSPACE = Path(__file__).resolve().parents[1]
-PACKAGES = ("swim_model", "swim_planner", "swim_controller", "swim_sim", "swim_hw_bridge", "swim_interfaces")
+PACKAGES = ("swim_model", "swim_planner", "swim_controller", "swim_sim", "swim_hw_bridge", "swim_bringup",
+            "swim_interfaces")
 
 
 @pytest.fixture(scope="session")

@@ -1,0 +1,58 @@
+"""The run measures against closed forms, on synthetic runs (no ROS)."""
+import math
+
+import numpy as np
+import pytest
+
+from swim_bringup.analysis import Run, measures, summary_table, two_norm
+from swim_bringup.system import NodeSpec
+
+
+def synthetic_run(alpha_offset_rad=0.0, radius_offset_m=0.0, constrained=False):
+    time_s = np.linspace(0.0, 4.0, 4001)
+    alpha = 0.3 * time_s
+    names = ["alpha", "phi", "theta"] if constrained else ["alpha", "R", "phi", "theta"]
+    reference = np.column_stack([alpha] + ([] if constrained else [np.full_like(time_s, 0.43)])
+                                + [np.sin(time_s), np.cos(time_s)])
+    measured = reference.copy()
+    measured[:, 0] += alpha_offset_rad
+    if not constrained:
+        measured[:, 1] += radius_offset_m
+    qdot = np.gradient(measured, time_s, axis=0)
+    torque = np.column_stack([0.5 * np.ones_like(time_s), np.zeros_like(time_s)])
+    return Run(time_s, measured, qdot, reference, torque, np.zeros((len(time_s), 2), bool), names, 0.43, True)
+
+
+def test_two_norm_of_a_constant_is_e_sqrt_t():
+    assert two_norm(np.linspace(0, 4, 101), np.full(101, 0.2)) == pytest.approx(0.2 * 2.0)
+
+
+def test_an_alpha_offset_is_a_chord_of_the_lane():
+    report = measures(synthetic_run(alpha_offset_rad=0.1, constrained=True))
+    assert report["longitudinal_error_two_norm_m_s05"] == pytest.approx(0.43 * 0.1 * 2.0)
+    assert report["cartesian_error_two_norm_m_s05"] == pytest.approx(2 * 0.43 * math.sin(0.05) * 2.0)
+    assert report["lateral_error_two_norm_m_s05"] == 0.0 and report["final_alpha_error_rad"] == pytest.approx(0.1)
+
+
+def test_a_lateral_offset_and_the_energy_used():
+    report = measures(synthetic_run(radius_offset_m=0.01))
+    assert report["lateral_error_two_norm_m_s05"] == pytest.approx(0.01 * 2.0)
+    assert report["final_lateral_offset_m"] == pytest.approx(0.01)
+    # int_0^4 |0.5 N m * d(sin t)/dt| dt = 0.5 int_0^4 |cos t| dt: |cos| integrates to 1 over [0, pi/2] and to
+    # 1 - sin(4) over [pi/2, 4] (4 < 3 pi / 2)
+    expected = 0.5 * (1.0 + (1.0 - math.sin(4.0)))
+    assert report["energy_used_j"] == pytest.approx(expected, rel=1e-3)
+    assert report["duration_s"] == 4.0 and report["peak_heave_torque_n_m"] == 0.5
+
+
+def test_table_puts_runs_side_by_side():
+    table = summary_table({"with": measures(synthetic_run(0.1)), "without": measures(synthetic_run(0.2))})
+    header, *rows = table.splitlines()
+    assert header.split() == ["with", "without"]
+    row = next(r for r in rows if r.startswith("final_alpha_error_rad"))
+    assert [float(v) for v in row.split()[1:]] == pytest.approx([0.1, 0.2])
+
+
+def test_node_command_is_what_ros2_run_takes():
+    spec = NodeSpec("swim_sim", "sim_node", params_file=None, parameters=("seed:=3",))
+    assert spec.command() == ["ros2", "run", "swim_sim", "sim_node", "--ros-args", "-p", "seed:=3"]
