@@ -63,7 +63,7 @@ class WakeParameters:
     # (roll-up) without changing the far field; image and body terms stay exact
     shed_distance_fraction: float = 0.5
     # assumed: a vortex shed over one step sits at the centroid of the vorticity shed during the step,
-    # half the distance the trailing edge moves through the fluid in that step (Katz & Plotkin Sec. 13.8 use 0.2-0.3)
+    # half the distance the trailing edge moves through the fluid in that step (Katz & Plotkin, Ch. 13, use 0.2-0.3)
     min_shed_distance_m: float = 2.0e-4
     # assumed: keeps the new vortex off the cusp (F' = 0) when the trailing edge is nearly at rest
     max_vortex_count: int | None = 300

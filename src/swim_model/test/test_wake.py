@@ -5,7 +5,7 @@
 * Wagner (1925): lift after an impulsive start at a small angle of attack, normalized by the steady Kutta lift of
   the same Joukowski foil (closed form ``rho U 4 pi r_c U sin alpha``), against R. T. Jones's approximation
   ``phi(s) = 1 - 0.165 e^{-0.0455 s} - 0.335 e^{-0.3 s}`` (NACA Report 681, 1940; Bisplinghoff, Ashley &
-  Halfman, Aeroelasticity, 1955, eq. 5-318), s in semichords travelled.
+  Halfman, Aeroelasticity, 1955, Ch. 5), s in semichords travelled.
 * Garrick (1936, NACA Report 567): a foil heaving ``h = h0 e^{i omega t}`` in a stream U, reduced frequency
   ``k = omega b / U`` (b the semichord), Theodorsen's ``C(k) = F + iG = H1(k) / (H1(k) + i H0(k))`` with Hankel
   functions of the second kind: mean thrust coefficient ``C_T = T/(rho U^2 c/2) = 4 pi k^2 (h0/c)^2 (F^2 + G^2)``
