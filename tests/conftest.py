@@ -2,9 +2,6 @@
 import contextlib
 import os
 import random
-import shlex
-import signal
-import subprocess
 from pathlib import Path
 
 import pytest
@@ -35,19 +32,12 @@ def rclpy_context(ros_domain):
 @contextlib.contextmanager
 def running_node(package: str, executable: str, log_path: Path, *ros_args: str):
     """`ros2 run package executable --ros-args ros_args` in its own process group, output to log_path;
-    stopped with SIGINT as a user's Ctrl-C would (SIGKILL if it has not exited 10 s later)."""
-    arguments = " ".join(shlex.quote(a) for a in ros_args)
-    command = f"source scripts/env.sh && exec ros2 run {package} {executable}" + (
-        f" --ros-args {arguments}" if ros_args else "")
-    with open(log_path, "w") as log:
-        process = subprocess.Popen(["bash", "-c", command], cwd=WORKSPACE, env=dict(os.environ), stdout=log,
-                                   stderr=subprocess.STDOUT, text=True, start_new_session=True)
-        try:
-            yield process
-        finally:
-            os.killpg(process.pid, signal.SIGINT)
-            try:
-                process.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                os.killpg(process.pid, signal.SIGKILL)
-                process.wait()
+    stopped with SIGINT as a user's Ctrl-C would (SIGKILL after the grace period): swim_bringup's NodeProcess."""
+    from swim_bringup.system import STOP_GRACE_S, NodeProcess, NodeSpec
+    node = NodeProcess(NodeSpec(package, executable, ros_arguments=ros_args), log_path)
+    try:
+        yield node.process
+    finally:
+        node.interrupt()
+        node.wait(STOP_GRACE_S)
+        node.kill()

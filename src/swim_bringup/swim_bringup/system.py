@@ -30,6 +30,7 @@ class NodeSpec:
     executable: str
     params_file: Optional[Path] = None
     parameters: tuple[str, ...] = ()    # extra `name:=value` overrides
+    ros_arguments: tuple[str, ...] = ()  # any other --ros-args arguments, as given (e.g. "-r", "__ns:=/test")
 
     def command(self) -> list[str]:
         arguments: list[str] = []
@@ -37,6 +38,7 @@ class NodeSpec:
             arguments += ["--params-file", str(self.params_file)]
         for parameter in self.parameters:
             arguments += ["-p", parameter]
+        arguments += list(self.ros_arguments)
         return ["ros2", "run", self.package, self.executable] + (["--ros-args"] + arguments if arguments else [])
 
 

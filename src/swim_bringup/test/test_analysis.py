@@ -54,5 +54,7 @@ def test_table_puts_runs_side_by_side():
 
 
 def test_node_command_is_what_ros2_run_takes():
-    spec = NodeSpec("swim_sim", "sim_node", params_file=None, parameters=("seed:=3",))
-    assert spec.command() == ["ros2", "run", "swim_sim", "sim_node", "--ros-args", "-p", "seed:=3"]
+    spec = NodeSpec("swim_sim", "sim_node", params_file=None, parameters=("seed:=3",),
+                    ros_arguments=("-r", "__ns:=/test"))
+    assert spec.command() == ["ros2", "run", "swim_sim", "sim_node", "--ros-args", "-p", "seed:=3",
+                              "-r", "__ns:=/test"]

@@ -129,11 +129,13 @@ class Plant:
         self._dry = disturbances.coulomb_and_static(model.constrained)
         self._limits = model.torque_limits()
         self.seed = seed
-        self.reset(np.zeros(model.nq) if model.constrained else self._rest_state(), np.zeros(model.nq))
+        self.reset(self.rest_positions(), np.zeros(model.nq))
 
-    def _rest_state(self) -> Array:
+    def rest_positions(self) -> Array:
+        """q of the vehicle at rest at the origin: every coordinate zero, R (free vehicle) on its lane."""
         q = np.zeros(self.model.nq)
-        q[1] = self.model.lane_radius_m
+        if not self.model.constrained:
+            q[1] = self.model.lane_radius_m
         return q
 
     # ----- state ---------------------------------------------------------------------------------

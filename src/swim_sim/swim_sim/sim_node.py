@@ -95,7 +95,8 @@ class SimNode(Node):
         self.plant = Plant(model, disturbances, value("sample_period_s"), value("substeps"), value("seed"))
         self.sensors = Sensors(model, noise, self.plant.sample_period_s)
         self.start_time_s = float(value("start_time_s"))
-        self.initial_q = self._initial_positions(model, value("initial_positions"))
+        initial = value("initial_positions")   # nq entries, or at rest
+        self.initial_q = np.asarray(initial, dtype=float) if len(initial) == model.nq else self.plant.rest_positions()
         self.plant.reset(self.initial_q, np.zeros(model.nq), self.start_time_s)
         self.failed: Optional[str] = None
         self.rejected_commands = 0
@@ -116,16 +117,6 @@ class SimNode(Node):
         self._publish_state()
         self.get_logger().info(f"simulating the {'constrained' if model.constrained else 'free'} vehicle, "
                                f"{self.mode}, period {self.plant.sample_period_s * 1e3:g} ms")
-
-    @staticmethod
-    def _initial_positions(model: VehicleModel, values) -> np.ndarray:
-        """The initial q: the parameter if it has nq entries, else at rest (R on its lane)."""
-        if len(values) == model.nq:
-            return np.asarray(values, dtype=float)
-        q = np.zeros(model.nq)
-        if not model.constrained:
-            q[1] = model.lane_radius_m
-        return q
 
     # ----- stepping ------------------------------------------------------------------------------
     def _on_command(self, message: JointState) -> None:
