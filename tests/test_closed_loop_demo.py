@@ -2,12 +2,11 @@
 planner_node and tracker_node, runs a short maneuver, records and analyses it. The report is checked against
 bounds and against the bag read back with rosbags."""
 import json
-import subprocess
 
 import numpy as np
 import pytest
 
-from conftest import WORKSPACE
+from conftest import run_demo
 
 SHORT = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05"]   # 6 s + 3 s (paper Sec. 7.1)
 
@@ -15,11 +14,7 @@ SHORT = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05"]   # 6 s + 3
 @pytest.fixture(scope="module")
 def demo_run(ros_domain, tmp_path_factory):
     run_dir = tmp_path_factory.mktemp("demo") / "run"
-    command = (f"source scripts/env.sh && ros2 run swim_bringup swim-demo --run-dir {run_dir} "
-               f"--primitives {' '.join(SHORT)} --repeats 1 1 --timeout 120")
-    result = subprocess.run(["bash", "-c", command], cwd=WORKSPACE, capture_output=True, text=True, timeout=300)
-    assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
-    return run_dir, result.stdout
+    return run_dir, run_demo(run_dir, "--primitives", *SHORT, "--repeats", "1", "1", "--timeout", "120")
 
 
 def test_report_is_within_bounds(demo_run):

@@ -106,9 +106,20 @@ class System:
             node.kill()   # whatever of its process group outlived the grace period; closes the log
 
 
+#: the plants a closed loop can run on: (package, executable, parameter file in the config folder)
+PLANTS = {
+    "sim": ("swim_sim", "sim_node", "sim.yaml"),              # the simulator (lock-step by default)
+    "bridge": ("swim_hw_bridge", "bridge_node", "bridge.yaml"),   # the hardware bridge (emulated rig: real time)
+}
+
+
 def closed_loop_specs(config: Path, sim_overrides: tuple[str, ...] = (),
-                      tracker_overrides: tuple[str, ...] = ()) -> list[NodeSpec]:
-    """Simulator, planner and tracker with the parameter files in config."""
-    return [NodeSpec("swim_sim", "sim_node", config / "sim.yaml", sim_overrides),
+                      tracker_overrides: tuple[str, ...] = (), plant: str = "sim") -> list[NodeSpec]:
+    """The plant (sim_node or bridge_node, see PLANTS), planner and tracker with the parameter files in config;
+    sim_overrides go to the plant node, whichever it is."""
+    if plant not in PLANTS:
+        raise ValueError(f"plant must be one of {', '.join(PLANTS)}, got {plant!r}")
+    package, executable, params_file = PLANTS[plant]
+    return [NodeSpec(package, executable, config / params_file, sim_overrides),
             NodeSpec("swim_planner", "planner_node", config / "planner.yaml"),
             NodeSpec("swim_controller", "tracker_node", config / "tracker.yaml", tracker_overrides)]

@@ -1,0 +1,143 @@
+"""The client side of a run over DDS: ask the planner for a maneuver, have the tracker execute it, record the run.
+
+RunClient owns an rclpy context of its own (so a process can hold several, one after another), a node with
+the planner's service client and the tracker's action client, and a rosbag2 MCAP bag (bag.BagWriter) with one raw
+subscription per recorded topic: messages go into the bag as the CDR bytes received, stamped with the wall time
+of receipt. swim-demo uses it for a whole maneuver; the kill-a-node tests use it to stop a node mid-run.
+"""
+from __future__ import annotations
+
+import importlib
+import time
+from pathlib import Path
+from typing import Callable, Optional
+
+from swim_bringup.bag import RUN_TOPICS, BagWriter
+
+STARTUP_TIMEOUT_S = 60.0
+DRAIN_TIMEOUT_S = 60.0
+RECORD_DEPTH = 10000   # the recorder may fall behind a lock-step loop; it must not drop periods
+
+
+class RunError(RuntimeError):
+    """The run could not be done (a node did not start or died, the planner refused, ...)."""
+
+
+def message_class(type_name: str) -> type:
+    """The Python class of a ROS type name such as 'sensor_msgs/msg/JointState'."""
+    package, kind, name = type_name.split("/")
+    return getattr(importlib.import_module(f"{package}.{kind}"), name)
+
+
+class RunClient:
+    """Planner and tracker clients plus a recorder of topics (name -> type name) into the bag at bag_path."""
+
+    def __init__(self, bag_path: Path, topics: dict[str, str] = RUN_TOPICS) -> None:
+        import rclpy
+        from rclpy.action import ActionClient
+        from rclpy.executors import SingleThreadedExecutor
+        from swim_interfaces.action import ExecutePlan
+        from swim_interfaces.srv import RequestManeuver
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)
+        self.bag: Optional[BagWriter] = None
+        try:
+            self.node = rclpy.create_node("swim_run_client", context=self.context)
+            self.executor = SingleThreadedExecutor(context=self.context)
+            self.executor.add_node(self.node)
+            self.bag = BagWriter(bag_path, topics)
+            self.last_plan_time_s = -1.0   # plan time of the latest tracking_state recorded
+            for topic, type_name in topics.items():
+                self._record(topic, type_name)
+            self.planner = self.node.create_client(RequestManeuver, "request_maneuver")
+            self.tracker = ActionClient(self.node, ExecutePlan, "execute_plan")
+        except BaseException:
+            self.close()
+            raise
+
+    def _record(self, topic: str, type_name: str) -> None:
+        from rclpy.qos import QoSDurabilityPolicy, QoSProfile
+        from rclpy.serialization import deserialize_message
+        from swim_interfaces.msg import TrackingState
+
+        def record(cdr: bytes) -> None:
+            self.bag.write(topic, time.time_ns(), cdr)
+            if topic == "tracking_state":
+                self.last_plan_time_s = deserialize_message(cdr, TrackingState).plan_time_s
+        # the plan is latched (transient local): a late subscriber still gets it
+        qos = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL) if topic == "plan" \
+            else RECORD_DEPTH
+        self.node.create_subscription(message_class(type_name), topic, record, qos, raw=True)
+
+    def __enter__(self) -> "RunClient":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Finish the bag and leave DDS; safe to call twice."""
+        import rclpy
+        if self.bag is not None:
+            self.bag.close()
+        rclpy.try_shutdown(context=self.context)
+
+    # --- waiting -------------------------------------------------------------------------------------------
+    def spin_until(self, done: Callable[[], bool], timeout_s: float, what: str = "an answer") -> None:
+        """Serve callbacks (recording included) until done() holds; RunError after timeout_s."""
+        deadline = time.monotonic() + timeout_s
+        while not done():
+            if time.monotonic() > deadline:
+                raise RunError(f"no {what} within {timeout_s:.0f} s")
+            self.executor.spin_once(timeout_sec=0.05)
+
+    def wait_for(self, future, timeout_s: float, what: str = "an answer"):
+        """The future's result, serving callbacks meanwhile."""
+        self.spin_until(future.done, timeout_s, what)
+        return future.result()
+
+    def spin_for(self, seconds: float) -> None:
+        """Serve callbacks (keep recording) for seconds of wall time."""
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=min(0.01, max(end - time.monotonic(), 0.0)))
+
+    # --- the run -------------------------------------------------------------------------------------------
+    def wait_for_nodes(self, timeout_s: float = STARTUP_TIMEOUT_S) -> None:
+        if not self.planner.wait_for_service(timeout_sec=timeout_s):
+            raise RunError("planner_node did not come up")
+        if not self.tracker.wait_for_server(timeout_sec=timeout_s):
+            raise RunError("tracker_node did not come up")
+
+    def request(self, primitive_ids: list[str], repeat_counts: list[int], time_scale: float):
+        """The planner's plan (swim_interfaces/PlannedTrajectory) for the sequence; RunError if refused."""
+        from swim_interfaces.srv import RequestManeuver
+        reply = self.wait_for(self.planner.call_async(RequestManeuver.Request(
+            primitive_ids=primitive_ids, repeat_counts=repeat_counts, time_scale=time_scale)), 60.0,
+            "answer from the planner")
+        if not reply.success:
+            raise RunError(f"the planner refused the maneuver: {reply.message}")
+        return reply.plan
+
+    def execute(self, plan, progress: Optional[Callable[[float], None]] = None):
+        """Send the plan to the tracker; returns the accepted goal's handle (RunError if refused)."""
+        from swim_interfaces.action import ExecutePlan
+
+        def on_feedback(message) -> None:
+            if progress is not None:
+                progress(message.feedback.progress)
+        handle = self.wait_for(self.tracker.send_goal_async(ExecutePlan.Goal(plan=plan),
+                                                            feedback_callback=on_feedback), 30.0,
+                               "answer from the tracker")
+        if not handle.accepted:
+            raise RunError("the tracker refused the goal")
+        return handle
+
+    def drain(self, duration_s: float) -> None:
+        """Record until the plan's last period (plan time duration_s) is in the bag, then a few more periods:
+        the recorder may lag a faster-than-real-time loop."""
+        drain_until = time.monotonic() + DRAIN_TIMEOUT_S
+        while self.last_plan_time_s < duration_s - 1e-6 and time.monotonic() < drain_until:
+            self.executor.spin_once(timeout_sec=0.05)
+        for _ in range(20):   # a few periods of the hold after it
+            self.executor.spin_once(timeout_sec=0.01)
