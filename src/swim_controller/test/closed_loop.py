@@ -1,5 +1,7 @@
-"""A closed loop on the ideal model for the tests: the tracker at its sample period, the plant integrated by
-RK4 substeps with the torque held (zero-order hold), an optional torque disturbance d(t) on the motors."""
+"""A closed loop for the tests: the tracker at its sample period, the plant integrated by RK4 substeps with the
+torque held (zero-order hold), an optional torque disturbance d(t) on the motors. The plant is the ideal model,
+or any stepper with ``reset(q, qdot)`` and ``step(torque) -> state with .q, .qdot`` at the same period (such as
+swim_sim's Plant, with its disturbances and the vortex wake)."""
 from __future__ import annotations
 
 import dataclasses
@@ -30,10 +32,13 @@ class Run:
 
 def simulate(model, tracker: CascadeTracker, reference: Reference, sample_period_s: float = 0.008,
              substeps: int = 8, q0: Optional[np.ndarray] = None, qdot0: Optional[np.ndarray] = None,
-             disturbance: Callable[[float], np.ndarray] = lambda t: np.zeros(2), extra_time_s: float = 0.0) -> Run:
+             disturbance: Callable[[float], np.ndarray] = lambda t: np.zeros(2), extra_time_s: float = 0.0,
+             plant=None) -> Run:
     tracker.start(reference)
     q = reference.q[0].copy() if q0 is None else np.array(q0, dtype=float)
     qdot = reference.qdot[0].copy() if qdot0 is None else np.array(qdot0, dtype=float)
+    if plant is not None:
+        plant.reset(q, qdot)
     periods = int(round((reference.duration_s + extra_time_s) / sample_period_s))
     times, qs, refs, torques, saturations = [], [], [], [], []
     for k in range(periods):
@@ -44,6 +49,10 @@ def simulate(model, tracker: CascadeTracker, reference: Reference, sample_period
         refs.append(out.reference.q.copy())
         torques.append(out.torque.copy())
         saturations.append(out.saturated)
+        if plant is not None:
+            state = plant.step(out.torque + disturbance(t))
+            q, qdot = state.q, state.qdot
+            continue
         applied = np.tile(out.torque + disturbance(t), (substeps, 1))
         trajectory_q, trajectory_qdot = model.integrate_rk4(q, qdot, applied, sample_period_s / substeps)
         q, qdot = trajectory_q[-1], trajectory_qdot[-1]

@@ -31,6 +31,7 @@ import numpy.typing as npt
 
 from swim_model import VehicleModel, codegen
 from swim_sim.disturbances import GRAVITY_M_S2, Disturbances
+from swim_sim.wake_coupling import WakeCoupling
 
 Array = npt.NDArray[np.float64]
 
@@ -141,8 +142,10 @@ class Plant:
     """The vehicle and its disturbances, stepped by control periods. Deterministic for a seed."""
 
     def __init__(self, model: VehicleModel, disturbances: Disturbances = Disturbances(),
-                 sample_period_s: Optional[float] = None, substeps: int = 8, seed: int = 0) -> None:
+                 sample_period_s: Optional[float] = None, substeps: int = 8, seed: int = 0,
+                 wake: Optional[WakeCoupling] = None) -> None:
         disturbances.validate()
+        self.wake = wake   # the vortex wake's force, held over each period (wake_coupling.py); None: off
         self.model, self.disturbances = model, disturbances
         self.sample_period_s = float(sample_period_s or model.rig.sample_period_s)
         if not (self.sample_period_s > 0.0 and substeps >= 1):
@@ -184,6 +187,8 @@ class Plant:
         self.stuck = {i: qdot[i] == 0.0 for i, _, _ in self._dry}
         self.rng = np.random.default_rng(self.seed)
         self._wave_state = 0.0
+        if self.wake is not None:
+            self.wake.reset()   # the fluid at rest again
 
     @property
     def state(self) -> PlantState:
@@ -205,6 +210,8 @@ class Plant:
         applied = np.clip(command, -self._limits, self._limits)
         self.saturated = (bool(abs(command[0]) > self._limits[0]), bool(abs(command[1]) > self._limits[1]))
         wave = self._wave_force()
+        if self.wake is not None:
+            wave = wave + self.wake.step(self.q, self.qdot, self.sample_period_s)
         x = np.concatenate([self.q, self.qdot])
         x_next = self._fast_period(x, applied, wave)
         if x_next is None:
