@@ -19,6 +19,7 @@ RUN_TOPICS = {
     "joint_commands": "sensor_msgs/msg/JointState",
     "tracking_state": "swim_interfaces/msg/TrackingState",
     "plan": "swim_interfaces/msg/PlannedTrajectory",
+    "wake_statistics": "swim_interfaces/msg/WakeStatistics",   # only when the simulator's wake is on
 }
 
 

@@ -5,6 +5,8 @@ Topics:
     joint_states (pub, sensor_msgs/JointState)    alpha, [R,] phi, theta: measured positions (quantized, noisy),
                                                   velocities (velocity_source "model") and applied efforts
     /clock (pub, rosgraph_msgs/Clock)             simulated time, one tick per period
+    wake_statistics (pub, swim_interfaces/WakeStatistics)  with wake.enabled: the vortex wake after each period
+                                                  (vortex count, circulations, the vortical force and its Q)
 Services: ``reset`` (std_srvs/Trigger: back to the initial state, noise restarted from the seed; time runs on),
 ``set_state`` (swim_interfaces/SetVehicleState).
 
@@ -17,7 +19,8 @@ set_state restarts it). Malformed commands are rejected and counted.
 Simulated time starts at ``start_time_s`` (1 s by default: a zero stamp means "not stamped" to consumers).
 Parameters: rig_path, constrained, lane_radius_m, sample_period_s, substeps, mode, seed, start_time_s,
 initial_positions, velocity_source, resend_after_s, disturbances.<field> (swim_sim.disturbances.Disturbances),
-sensors.<field> (swim_sim.sensors.SensorNoise); read at start.
+sensors.<field> (swim_sim.sensors.SensorNoise), wake.enabled (false: the ideal-flow model alone) and
+wake.<field> (swim_sim.wake_coupling.parameter_defaults); read at start.
 """
 from __future__ import annotations
 
@@ -33,12 +36,14 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
+from swim_interfaces.msg import WakeStatistics
 from swim_interfaces.srv import SetVehicleState
 
 from swim_model import StateError, SwimModelError, VehicleModel, load_rig
 from swim_sim.disturbances import Disturbances
 from swim_sim.plant import Plant, SimulationError
 from swim_sim.sensors import SensorNoise, Sensors
+from swim_sim.wake_coupling import WakeCoupling, parameter_defaults, parameters_from_values
 
 MOTOR_JOINTS = ["phi", "theta"]
 RECORDABLE_DEPTH = 1000   # 8 s of periods at 8 ms
@@ -81,6 +86,8 @@ class SimNode(Node):
             declare(f"disturbances.{field.name}", float(field.default))
         for field in dataclasses.fields(SensorNoise):
             declare(f"sensors.{field.name}", field.default)
+        for name, default in parameter_defaults().items():
+            declare(f"wake.{name}", default)
         value = lambda name: self.get_parameter(name).value  # noqa: E731
         self.mode = value("mode")
         if self.mode not in ("lockstep", "realtime"):
@@ -92,7 +99,10 @@ class SimNode(Node):
         fields = dataclasses.fields
         disturbances = Disturbances(**{f.name: value(f"disturbances.{f.name}") for f in fields(Disturbances)})
         noise = SensorNoise(**{f.name: value(f"sensors.{f.name}") for f in fields(SensorNoise)})
-        self.plant = Plant(model, disturbances, value("sample_period_s"), value("substeps"), value("seed"))
+        wake = None
+        if value("wake.enabled"):
+            wake = WakeCoupling(model, parameters_from_values({n: value(f"wake.{n}") for n in parameter_defaults()}))
+        self.plant = Plant(model, disturbances, value("sample_period_s"), value("substeps"), value("seed"), wake)
         self.sensors = Sensors(model, noise, self.plant.sample_period_s)
         self.start_time_s = float(value("start_time_s"))
         initial = value("initial_positions")   # nq entries, or at rest
@@ -106,6 +116,8 @@ class SimNode(Node):
         # a deep history: a recorder behind a faster-than-real-time lock-step loop still gets every period
         self.state_publisher = self.create_publisher(JointState, "joint_states", RECORDABLE_DEPTH)
         self.clock_publisher = self.create_publisher(Clock, "/clock", 10)
+        self.wake_publisher = self.create_publisher(WakeStatistics, "wake_statistics", RECORDABLE_DEPTH) \
+            if wake is not None else None
         self.create_subscription(JointState, "joint_commands", self._on_command, 10)
         self.create_service(Trigger, "reset", self._on_reset)
         self.create_service(SetVehicleState, "set_state", self._on_set_state)
@@ -145,11 +157,13 @@ class SimNode(Node):
             return
         try:
             self.plant.step(torque)
-        except SimulationError as err:
+        except (SimulationError, SwimModelError) as err:   # SwimModelError: the wake met a non-finite value
             self.failed = str(err)
             self.get_logger().error(f"simulation stopped: {err} (call reset or set_state to restart)")
             return
         self._publish_state()
+        if self.wake_publisher is not None:
+            self._publish_wake(self.plant.time_s - self.plant.sample_period_s)
 
     def _publish_state(self, advance: bool = True) -> None:
         state = self.plant.state
@@ -169,6 +183,19 @@ class SimNode(Node):
         self._published_stamp, self._published_monotonic = stamp, time.monotonic()
         self.clock_publisher.publish(Clock(clock=stamp))
         self.state_publisher.publish(message)
+
+    def _publish_wake(self, time_s: float) -> None:
+        """The wake's statistics, stamped with the start of the period its force was held over."""
+        statistics = self.plant.wake.statistics()
+        message = WakeStatistics(
+            vortex_count=statistics.vortex_count, shed_circulation_m2_s=statistics.shed_circulation_m2_s,
+            total_circulation_m2_s=statistics.total_circulation_m2_s, force_x_n=statistics.foil_force[0],
+            force_y_n=statistics.foil_force[1], moment_n_m=statistics.foil_force[2], thrust_n=statistics.thrust_n,
+            joint_names=list(self.plant.model.joint_names), generalized_force=list(statistics.generalized_force),
+            clipped_count=statistics.clipped_count, merged_count=statistics.merged_count,
+            reflected_count=statistics.reflected_count)
+        message.header.stamp = stamp_of(time_s)
+        self.wake_publisher.publish(message)
 
     # ----- services ------------------------------------------------------------------------------
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:

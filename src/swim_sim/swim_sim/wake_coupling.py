@@ -173,3 +173,28 @@ class WakeCoupling:
             total_circulation_m2_s=wake.total_circulation(), foil_force=tuple(float(f) for f in self.foil_force),
             thrust_n=self.thrust_n(), generalized_force=tuple(float(f) for f in self.generalized_force),
             clipped_count=self.clipped_count, merged_count=wake.merged_count, reflected_count=wake.reflected_count)
+
+
+def parameter_defaults() -> dict[str, bool | int | float]:
+    """sim_node's ``wake.*`` parameters and their defaults (``enabled`` off: the ideal-flow model alone).
+
+    ``max_vortex_count`` 0 means never merge; the water density is the rig's.
+    """
+    wake = WakeParameters()
+    return {"enabled": False, "core_radius_m": wake.core_radius_m,
+            "shed_distance_fraction": wake.shed_distance_fraction, "min_shed_distance_m": wake.min_shed_distance_m,
+            "max_vortex_count": wake.max_vortex_count or 0, "protected_vortex_count": wake.protected_vortex_count,
+            "opposite_sign_merge_penalty": wake.opposite_sign_merge_penalty,
+            "force_limit_n": FORCE_LIMIT_N, "moment_limit_n_m": MOMENT_LIMIT_N_M}
+
+
+def parameters_from_values(values: dict[str, bool | int | float]) -> WakeCouplingParameters:
+    """WakeCouplingParameters from sim_node's ``wake.*`` values (keys of parameter_defaults; StateError if bad)."""
+    wake = WakeParameters(core_radius_m=float(values["core_radius_m"]),
+                          shed_distance_fraction=float(values["shed_distance_fraction"]),
+                          min_shed_distance_m=float(values["min_shed_distance_m"]),
+                          max_vortex_count=int(values["max_vortex_count"]) or None,
+                          protected_vortex_count=int(values["protected_vortex_count"]),
+                          opposite_sign_merge_penalty=float(values["opposite_sign_merge_penalty"]))
+    return WakeCouplingParameters(wake=wake, force_limit_n=float(values["force_limit_n"]),
+                                  moment_limit_n_m=float(values["moment_limit_n_m"]))

@@ -1,0 +1,115 @@
+"""sim_node with the vortex wake on (wake.enabled) over DDS: one wake_statistics message per period, equal bit for
+bit to the library's plant and wake driven by the same commands; reset clears the wake; bad wake parameters refuse
+to start with a message naming them."""
+import time
+
+import numpy as np
+import pytest
+
+from conftest import running_node
+from test_sim_node import Driver
+
+SEED = 11
+PERIODS = 120
+
+
+@pytest.fixture(scope="module")
+def wake_sim(ros_domain, tmp_path_factory):
+    log = tmp_path_factory.mktemp("sim_node_wake") / "log.txt"
+    with running_node("swim_sim", "sim_node", log, "-p", "constrained:=true", "-p", f"seed:={SEED}",
+                      "-p", "resend_after_s:=5.0", "-p", "wake.enabled:=true") as process:
+        yield process
+
+
+@pytest.fixture()
+def driver(wake_sim, rclpy_context):
+    from std_srvs.srv import Trigger
+    from swim_interfaces.msg import WakeStatistics
+    driver = Driver(rclpy_context)
+    driver.wakes = []
+    driver.node.create_subscription(WakeStatistics, "wake_statistics", driver.wakes.append, PERIODS + 10)
+    assert driver.call(Trigger, "reset", Trigger.Request()).success
+    assert driver.wait_for_states(1)
+    yield driver
+    driver.executor.shutdown()
+    driver.node.destroy_node()
+
+
+def wait_for_wakes(driver, count, timeout_s=10.0):
+    deadline = time.monotonic() + timeout_s
+    while len(driver.wakes) < count and time.monotonic() < deadline:
+        driver.executor.spin_once(timeout_sec=0.01)
+
+
+def library_run(torques):
+    """The same run in this process: sim_node's defaults (disturbances, sensors drawing on the plant's generator)."""
+    from swim_model import VehicleModel
+    from swim_sim.disturbances import Disturbances
+    from swim_sim.plant import Plant
+    from swim_sim.sensors import Sensors
+    from swim_sim.wake_coupling import WakeCoupling
+    model = VehicleModel(constrained=True)
+    plant = Plant(model, Disturbances(), seed=SEED, wake=WakeCoupling(model))
+    sensors = Sensors(model, sample_period_s=plant.sample_period_s)
+    plant.reset(plant.rest_positions(), np.zeros(model.nq))
+    sensors.measure(plant.q, plant.qdot, plant.rng)       # the state published after the reset
+    statistics = []
+    for torque in torques:
+        plant.step(torque)
+        sensors.measure(plant.q, plant.qdot, plant.rng)
+        statistics.append(plant.wake.statistics())
+    return statistics
+
+
+def test_wake_statistics_every_period_equal_to_the_librarys(driver):
+    torques = 0.3 * np.sin(np.arange(PERIODS)[:, None] * np.array([0.05, 0.08]))
+    start = driver.states[-1].header.stamp
+    states = driver.drive(torques)
+    wait_for_wakes(driver, PERIODS)
+    wakes = driver.wakes
+    assert len(wakes) == PERIODS
+    # each message belongs to the period that starts at the state before it: its force was held over that period
+    assert [w.header.stamp for w in wakes] == [start] + [s.header.stamp for s in states[:-1]]
+    assert [w.vortex_count for w in wakes] == list(range(1, PERIODS + 1))   # one shed per period, none merged yet
+    expected = library_run(torques)
+    assert [list(w.generalized_force) for w in wakes] == [list(e.generalized_force) for e in expected]
+    assert [(w.force_x_n, w.force_y_n, w.moment_n_m) for w in wakes] == [e.foil_force for e in expected]
+    assert [w.thrust_n for w in wakes] == [e.thrust_n for e in expected]
+    assert [w.shed_circulation_m2_s for w in wakes] == [e.shed_circulation_m2_s for e in expected]
+    assert list(wakes[-1].joint_names) == ["alpha", "phi", "theta"]
+    assert max(abs(w.total_circulation_m2_s) for w in wakes) < 1e-12          # Kelvin, to round-off
+    assert max(abs(w.force_y_n) for w in wakes) > 1e-3                        # the foil did shed a wake
+    assert wakes[-1].clipped_count == 0
+
+
+def test_reset_clears_the_wake(driver):
+    from std_srvs.srv import Trigger
+    driver.drive(np.full((20, 2), 0.2))
+    assert driver.call(Trigger, "reset", Trigger.Request()).success
+    assert driver.wait_for_states(len(driver.states) + 1)
+    count = len(driver.wakes)
+    driver.drive(np.full((1, 2), 0.2))
+    wait_for_wakes(driver, count + 1)
+    assert [w.vortex_count for w in driver.wakes[count - 2:]] == [19, 20, 1]
+
+
+def test_bad_wake_parameters_refuse_to_start_with_a_message(ros_domain, tmp_path):
+    log = tmp_path / "log.txt"
+    with running_node("swim_sim", "sim_node", log, "-p", "wake.enabled:=true",
+                      "-p", "wake.core_radius_m:=-1.0") as process:
+        assert process.wait(timeout=60) == 2
+    assert "core_radius_m" in log.read_text()
+
+
+def test_rosbags_reads_wake_statistics():
+    """The bag's type store (swim_bringup.bag, from the installed .msg files) decodes what rclpy serializes."""
+    from rclpy.serialization import serialize_message
+    from swim_interfaces.msg import WakeStatistics
+
+    from swim_bringup.bag import RUN_TOPICS, swim_typestore
+    sent = WakeStatistics(vortex_count=300, total_circulation_m2_s=1e-17, thrust_n=-0.25,
+                          joint_names=["alpha", "phi", "theta"], generalized_force=[0.1, -0.2, 0.003], clipped_count=2)
+    decoded = swim_typestore().deserialize_cdr(serialize_message(sent), RUN_TOPICS["wake_statistics"])
+    assert decoded.vortex_count == 300 and decoded.thrust_n == -0.25 and decoded.clipped_count == 2
+    assert list(decoded.joint_names) == ["alpha", "phi", "theta"]
+    np.testing.assert_array_equal(decoded.generalized_force, [0.1, -0.2, 0.003])
