@@ -1,15 +1,32 @@
-"""A closed loop for the tests: the tracker at its sample period, the plant integrated by RK4 substeps with the
-torque held (zero-order hold), an optional torque disturbance d(t) on the motors. The plant is the ideal model,
-or any stepper with ``reset(q, qdot)`` and ``step(torque) -> state with .q, .qdot`` at the same period (such as
-swim_sim's Plant, with its disturbances and the vortex wake)."""
+"""A closed loop in one process, for tests and benchmarks: the tracker at its sample period and a plant with the
+torque held over each period (zero-order hold), plus an optional torque disturbance d(t) on the motors.
+
+The plant is swim_model's ideal vehicle integrated by RK4 substeps, or any ``Stepper`` at the same period (such
+as swim_sim's Plant, with its disturbances and the vortex wake).
+"""
 from __future__ import annotations
 
 import dataclasses
-from typing import Callable, Optional
+from typing import Callable, Optional, Protocol
 
 import numpy as np
 
 from swim_controller.tracker import CascadeTracker, Reference
+
+
+def reference_of(plan) -> Reference:
+    """The tracker's Reference of a plan (swim_planner.maneuver.Plan: samples, torques and time-scaled gains)."""
+    return Reference(plan.time_s, plan.q, plan.qdot, plan.foil_acceleration, plan.torque, plan.lqr_gain,
+                     plan.sliding_gain)
+
+
+class Stepper(Protocol):
+    """A plant stepped by control periods (swim_sim.plant.Plant is one)."""
+
+    def reset(self, q: np.ndarray, qdot: np.ndarray) -> None: ...
+
+    def step(self, torque: np.ndarray):   # -> a state with .q and .qdot at the period's end
+        ...
 
 
 @dataclasses.dataclass
@@ -33,7 +50,7 @@ class Run:
 def simulate(model, tracker: CascadeTracker, reference: Reference, sample_period_s: float = 0.008,
              substeps: int = 8, q0: Optional[np.ndarray] = None, qdot0: Optional[np.ndarray] = None,
              disturbance: Callable[[float], np.ndarray] = lambda t: np.zeros(2), extra_time_s: float = 0.0,
-             plant=None) -> Run:
+             plant: Optional[Stepper] = None) -> Run:
     tracker.start(reference)
     q = reference.q[0].copy() if q0 is None else np.array(q0, dtype=float)
     qdot = reference.qdot[0].copy() if qdot0 is None else np.array(qdot0, dtype=float)

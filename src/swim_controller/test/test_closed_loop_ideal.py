@@ -1,16 +1,16 @@
 """The cascade tracker in closed loop on the ideal model (no ROS): convergence, sliding mode, limits.
 
 Plans are concatenated from the shipped library with their stored, time-scaled gains; the plant is
-swim_model's vehicle integrated with RK4 substeps, the torque held over each 8 ms period (closed_loop.py).
+swim_model's vehicle integrated with RK4 substeps, the torque held over each 8 ms period (swim_controller.closed_loop).
 """
 import math
 
 import numpy as np
 import pytest
-from closed_loop import simulate
 
+from swim_controller.closed_loop import reference_of, simulate
 from swim_controller.sliding_mode import SlidingMode
-from swim_controller.tracker import CascadeTracker, Reference, model_io_linearization
+from swim_controller.tracker import CascadeTracker, model_io_linearization
 
 CONSTRAINED = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05", "constrained/cruise_to_cruise/E0.05-E0.10",
                "constrained/cruise/E0.10", "constrained/decelerate/E0.10"]
@@ -24,9 +24,7 @@ LANE_CHANGE_ALPHA_BOUND_RAD = FINAL_ALPHA_ERROR_BOUND_RAD
 
 def _plan(library, rig, ids, time_scale=1.0):
     from swim_planner.maneuver import concatenate, expand_sequence
-    plan = concatenate(library, rig, expand_sequence(ids, []), time_scale)
-    return Reference(plan.time_s, plan.q, plan.qdot, plan.foil_acceleration, plan.torque, plan.lqr_gain,
-                     plan.sliding_gain)
+    return reference_of(concatenate(library, rig, expand_sequence(ids, []), time_scale))
 
 
 def _tracker(model, sliding: bool, bound=SlidingMode().disturbance_bound_n_m, sample_period_s=0.008):
