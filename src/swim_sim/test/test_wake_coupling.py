@@ -195,7 +195,7 @@ def test_kelvin_holds_in_the_simulator_with_merging(constrained):
     scale = float(np.sum(np.abs(wake.circulations_m2_s)))
     assert scale > 1e-3
     assert abs(wake.total_circulation()) < 1e-13 * scale
-    assert plant.wake.statistics().total_circulation_m2_s == wake.total_circulation()
+    assert abs(plant.wake.statistics().total_circulation_m2_s - wake.total_circulation()) < 1e-15 * scale
 
 
 def test_a_vehicle_at_rest_stays_exactly_at_rest(constrained):
