@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from swim_model import VehicleModel, load_rig
+from swim_model import VehicleModel
 from swim_sim.disturbances import GRAVITY_M_S2, Disturbances
 from swim_sim.plant import Plant, SimulationError
 from swim_sim.sensors import SensorNoise, Sensors, counts_per_unit
@@ -14,16 +14,6 @@ PERIODS_30_S = 3750   # the paper's maneuver length at 8 ms
 # RK4 at 1 ms on this model over 30 s, relative: energy drifts ~3e-11, p_alpha ~2.4e-9 (measured)
 ENERGY_TOLERANCE = 1e-9
 MOMENTUM_TOLERANCE = 1e-8
-
-
-@pytest.fixture(scope="module")
-def rig():
-    return load_rig()
-
-
-@pytest.fixture(scope="module", params=[True, False], ids=["constrained", "free"])
-def model(request, rig):
-    return VehicleModel(rig, constrained=request.param)
 
 
 def swinging_start(plant):

@@ -17,20 +17,11 @@ import pytest
 from scipy.optimize import brentq
 from scipy.special import hankel2
 
-from swim_model import StateError, VehicleModel, load_rig
+from swim_model import StateError, VehicleModel
 from swim_sim.disturbances import Disturbances
 from swim_sim.plant import Plant
 from swim_sim.wake_coupling import WakeCoupling, WakeCouplingParameters
-
-
-@pytest.fixture(scope="module")
-def rig():
-    return load_rig()
-
-
-@pytest.fixture(scope="module", params=[True, False], ids=["constrained", "free"])
-def model(request, rig):
-    return VehicleModel(rig, constrained=request.param)
+from test_plant import swinging_start
 
 
 @pytest.fixture(scope="module")
@@ -154,10 +145,9 @@ def test_heaving_foil_on_its_lane_pushes_the_hub_forward_as_garrick(constrained,
 
 
 def coasting_plant(model, **wake_options):
+    """The vehicle set swinging (test_plant's start), no disturbance but the wake."""
     plant = Plant(model, Disturbances.none(), wake=WakeCoupling(model, WakeCouplingParameters(**wake_options)))
-    qdot = np.zeros(model.nq)
-    qdot[0], qdot[-2], qdot[-1] = 0.3, 2.0, -3.0
-    plant.reset(plant.q.copy(), qdot)
+    plant.reset(*swinging_start(plant))
     return plant
 
 
