@@ -293,3 +293,80 @@ def test_parameters_are_validated(bridge):
         bridge.executor.spin_until_future_complete(future, timeout_sec=10.0)
         result = future.result().results[0]
         assert not result.successful and name in result.reason
+
+
+def wait_for(client, condition, timeout_s):
+    """Serve the client's callbacks until condition() holds (True) or timeout_s passes (False)."""
+    end = time.monotonic() + timeout_s
+    while not condition():
+        if time.monotonic() > end:
+            return False
+        client.executor.spin_once(timeout_sec=0.005)
+    return True
+
+
+def test_a_device_lost_while_active_takes_deactivate_into_error_processing(ros_domain, rclpy_context, tmp_path):
+    """The board is unplugged while the bridge is active (serial backend on a pty behind a stable name, the emulated
+    firmware in this process). The I/O loop latches the fault and writes zero. Deactivate cannot zero or disable a
+    lost device, so it returns ERROR and rclpy runs error processing: the bridge's on_error releases the device and,
+    returning SUCCESS, leaves the node unconfigured (rclpy's rule; FAILURE would finalize it). /diagnostics'
+    lifecycle_state "unconfigured" is on_error's own doing: rclpy's default on_error would leave "active" there.
+    Plugged in again, configure reconnects with zero current and the amplifiers disabled, and the bridge runs again.
+    """
+    import yaml
+    from lifecycle_msgs.msg import Transition
+    from swim_hw_bridge.backends.serial_fake_firmware import PtyRig
+    from swim_hw_bridge.conversions import default_config_path
+    # firmware watchdogs of 300 ms (the board's own command and enable-toggle timeouts): generous for a loaded host
+    rig = PtyRig(tmp_path / "ttyRIG", command_timeout_ms=300, toggle_timeout_ms=300)
+    config = yaml.safe_load(default_config_path().read_text())
+    config["backend_options"]["serial"].update(port=str(rig.link), read_timeout_s=0.02, open_timeout_s=5.0)
+    config_path = tmp_path / "bridge.yaml"
+    config_path.write_text(yaml.safe_dump(config))
+    # a 25 ms loop with room for a 20 ms read; overruns are not what this test is about
+    with running_node("swim_hw_bridge", "bridge_node", tmp_path / "log.txt", "-r", "__ns:=/error_test",
+                      "-p", "backend:=serial", "-p", f"config_path:={config_path}", "-p", "sample_period_s:=0.025",
+                      "-p", "overrun_limit:=1000", "-p", "watchdog_periods:=80", "-p", "diagnostics_rate_hz:=20.0"):
+        client = BridgeClient(rclpy_context, "/error_test")
+        try:
+            assert client.transition(Transition.TRANSITION_CONFIGURE)
+            firmware = rig.firmware
+            assert not firmware.enable_requested and firmware.commanded_currents_ua == (0, 0)
+            assert client.transition(Transition.TRANSITION_ACTIVATE)
+            assert wait_for(client, lambda: firmware.outputs_enabled and client.states, 2.0)
+            client.send([0.05, 0.0])
+            sent = time.monotonic()
+            assert wait_for(client, lambda: (0.05, 0.0) in [pytest.approx(e) for e in efforts(client, sent)], 2.0)
+            assert firmware.applied_currents_ua[0] > 0 and firmware.applied_currents_ua[1] == 0
+
+            firmware.disconnect()   # the cable is pulled
+            lost = time.monotonic()
+            assert wait_for(client, lambda: efforts(client, lost) and efforts(client, lost)[-1] == (0.0, 0.0), 2.0)
+            status, values = client.latest_diagnostic()
+            assert status.level == status.ERROR and "DEVICE_FAILED" in values["faults"]
+
+            assert not client.transition(Transition.TRANSITION_DEACTIVATE)   # ERROR: not a success
+            assert client.state_label() == "unconfigured"
+            _, values = client.latest_diagnostic()
+            assert values["lifecycle_state"] == "unconfigured" and "loop_running" not in values   # device released
+            client.spin(0.1)
+            client.states.clear()
+            client.spin(0.3)
+            assert not client.states   # nothing published once unconfigured
+            # the lost board switched its amplifiers off by itself: its enable line stopped toggling
+            assert wait_for(client, lambda: not firmware.outputs_enabled, 2.0)
+            assert firmware.applied_currents_ua == (0, 0)
+
+            firmware = rig.plug_in()   # the board is back under the same name: configure reconnects
+            assert client.transition(Transition.TRANSITION_CONFIGURE)
+            assert client.state_label() == "inactive"
+            assert firmware.commands and firmware.commands[-1][1:] == (0, 0, 0)   # zero current, not enabled
+            assert not firmware.outputs_enabled
+            assert client.transition(Transition.TRANSITION_ACTIVATE)
+            assert wait_for(client, lambda: firmware.outputs_enabled, 2.0)
+            assert client.transition(Transition.TRANSITION_DEACTIVATE)   # a device that answers: a plain deactivate
+            assert client.state_label() == "inactive"
+            assert not firmware.enable_requested and firmware.commanded_currents_ua == (0, 0)
+        finally:
+            client.close()
+            rig.close()

@@ -13,7 +13,12 @@
 
 Lifecycle (lifecycle_msgs ChangeState on bridge_node/change_state): configure opens the device with outputs at
 zero; activate enables the amplifiers and starts the I/O loop (io_loop.py); deactivate stops the loop, zeroes,
-disables; cleanup closes the device; shutdown and error zero, then disable, then close. Parameters (validated;
+disables; cleanup closes the device; shutdown and error zero, then disable, then close. A deactivate that cannot
+make the outputs safe (the device refuses the zero or the disable: unplugged, hung; or the loop does not stop)
+returns ERROR: "inactive" would claim an open device at zero current. rclpy then runs error processing: on_error
+zeroes, disables and closes whatever still answers and the node ends unconfigured, where configure reopens
+(reconnects) the device. The amplifiers of a lost device are off by then anyway: its enable line stopped
+toggling (see below). Parameters (validated;
 they take effect at the next configure): backend (emulated | serial | mf624), config_path (bridge.yaml; empty:
 the shipped one), sample_period_s, watchdog_periods, overrun_limit, stale_read_limit, read_failure_limit,
 diagnostics_rate_hz, autostart (configure and activate at start-up, for runs without a lifecycle manager).
@@ -123,8 +128,19 @@ class BridgeNode(LifecycleNode):
 
     def _guard_change_state_service(self) -> None:
         """rclpy 7.1.6 raises out of the change_state service for a transition the current state does not have
-        (activate while unconfigured), which ends spin() and the process; answer success=False instead."""
-        service = self._service_change_state
+        (activate while unconfigured), which ends spin() and the process; answer success=False instead.
+
+        Why through a private attribute: there is no public way in this rclpy. The crash is ros2/rclpy#1209; its
+        fix (ros2/rclpy#1319: __change_state catches the RCLError and returns ERROR) is in rclpy 8 (rolling), not
+        in Jazzy's 7.1.x, the newest on PyPI being 7.1.6. The public alternative, LifecycleNode(...,
+        enable_communication_interface=False) and our own lifecycle services around the public trigger_*
+        methods, would mean serving change_state, get_state (7.1 has no public current-state getter: we would
+        track it ourselves), get_available_states, get_available_transitions, get_transition_graph and the
+        transition_event topic by hand: far more to get wrong than wrapping one callback. On an rclpy that has
+        the fix, or no such attribute, this does nothing harmful: the wrapper only catches what escapes."""
+        service = getattr(self, "_service_change_state", None)
+        if service is None:
+            return
         inner = service.callback
 
         def change_state(request: ChangeState.Request, response: ChangeState.Response) -> ChangeState.Response:
@@ -199,7 +215,10 @@ class BridgeNode(LifecycleNode):
 
     def on_deactivate(self, state: State) -> TransitionCallbackReturn:
         self._stop_state_timer()
-        self._stop_outputs()
+        if not self._stop_outputs():
+            # the outputs are not known to be safe: error processing (on_error) instead of "inactive"
+            self.get_logger().error("deactivate failed: the device did not take the zero current or the disable")
+            return TransitionCallbackReturn.ERROR
         self._state_label = "inactive"
         return super().on_deactivate(state)
 
@@ -231,18 +250,23 @@ class BridgeNode(LifecycleNode):
             self.destroy_timer(self._state_timer)
             self._state_timer = None
 
-    def _stop_outputs(self) -> None:
+    def _stop_outputs(self) -> bool:
+        """Stop the loop, zero, disable; True when all of it was done (or there is no device)."""
         self.active = False
+        done = True
         if self.loop is not None and not self.loop.stop():
             self.get_logger().error("the I/O loop did not stop within 1 s (device call hung?)")
+            done = False
         if self.device is None:
-            return
+            return done
         for action, call in (("zero the currents", lambda: self.device.write_currents(0.0, 0.0)),
                              ("disable the amplifiers", self.device.disable)):
             try:
                 call()
             except DeviceError as err:
                 self.get_logger().error(f"cannot {action}: {err}")
+                done = False
+        return done
 
     def _close_device(self) -> None:
         if self.device is not None:

@@ -5,9 +5,7 @@ independently of serial_protocol.py, so these exchanges check both sides against
 """
 from __future__ import annotations
 
-import os
 import time
-import tty
 
 import pytest
 from hypothesis import given, settings
@@ -16,42 +14,15 @@ from hypothesis import strategies as st
 from swim_hw_bridge.backends import serial_fake_firmware as fake
 from swim_hw_bridge.backends import serial_protocol as protocol
 from swim_hw_bridge.backends.serial_backend import SerialDevice
-from swim_hw_bridge.backends.serial_fake_firmware import FakeSerialFirmware
+from swim_hw_bridge.backends.serial_fake_firmware import PtyRig
 from swim_hw_bridge.device import DeviceError
 
 COUNTS = (1, 2**32 - 1, 123_456_789, 2**31)  # distinct per channel, both ends of the uint32 range
 
 
-class Rig:
-    """A pty pair behind a stable symlink (as /dev/serial/by-id/...), the emulated firmware on the master end."""
-
-    def __init__(self, tmp_path, **firmware_options) -> None:
-        self.link = tmp_path / "ttyRIG"
-        self.firmware_options = firmware_options
-        self.slave_fds: list[int] = []
-        self.firmware: FakeSerialFirmware | None = None
-        self.plug_in()
-
-    def plug_in(self) -> FakeSerialFirmware:
-        master_fd, slave_fd = os.openpty()
-        tty.setraw(slave_fd)  # no echo or line editing before the host opens the port
-        self.slave_fds.append(slave_fd)  # held open so the master side never sees a hang-up of its own
-        if self.link.is_symlink():
-            self.link.unlink()
-        self.link.symlink_to(os.ttyname(slave_fd))
-        self.firmware = FakeSerialFirmware(master_fd, **self.firmware_options).start()
-        self.firmware.counts = list(COUNTS)
-        return self.firmware
-
-    def close(self) -> None:
-        self.firmware.stop()
-        for fd in self.slave_fds:
-            os.close(fd)
-
-
 @pytest.fixture
 def rig(tmp_path):
-    rig = Rig(tmp_path)
+    rig = PtyRig(tmp_path / "ttyRIG", COUNTS)
     yield rig
     rig.close()
 

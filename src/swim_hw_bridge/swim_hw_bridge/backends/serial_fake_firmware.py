@@ -9,6 +9,8 @@ its own struct layouts; it imports nothing from the host side), so a mistake on 
 exchange instead of cancelling out. The counters are whatever the test sets; the outputs are only recorded.
 Fault injection for tests: replies written in several delayed chunks, garbage or a truncated frame before a
 reply, a corrupted CRC, late replies, muteness, a board that stops reading, and disconnect (closing the master end).
+``PtyRig`` puts it behind a pseudo-terminal and a stable symlink (as /dev/serial/by-id/... names a board), so a
+test can pull the cable and plug a board in again under the same name.
 """
 from __future__ import annotations
 
@@ -18,6 +20,9 @@ import select
 import struct
 import threading
 import time
+import tty
+from pathlib import Path
+from typing import Any, Sequence
 
 _HELLO, _COMMAND, _STATE_REQUEST, _HELLO_REPLY, _STATE = 0x01, 0x02, 0x03, 0x81, 0x83
 _ENABLE, _TOGGLE, _CLEAR_WATCHDOG = 0x01, 0x02, 0x04
@@ -267,3 +272,34 @@ class FakeSerialFirmware:
                 os.close(fd)
             except OSError:
                 pass
+
+
+class PtyRig:
+    """A pty pair behind a stable symlink ``link``, a FakeSerialFirmware on the master end: the serial port a
+    SerialDevice (or bridge_node with backend serial) opens by the link's name. ``plug_in()`` again after the
+    firmware disconnected is a board re-enumerating behind the same name."""
+
+    def __init__(self, link: Path, counts: Sequence[int] = (0, 0, 0, 0), **firmware_options: Any) -> None:
+        self.link = Path(link)
+        self.counts = list(counts)
+        self.firmware_options = firmware_options
+        self.slave_fds: list[int] = []
+        self.firmware: FakeSerialFirmware | None = None
+        self.plug_in()
+
+    def plug_in(self) -> FakeSerialFirmware:
+        master_fd, slave_fd = os.openpty()
+        tty.setraw(slave_fd)  # no echo or line editing before the host opens the port
+        self.slave_fds.append(slave_fd)  # held open so the master side never sees a hang-up of its own
+        if self.link.is_symlink():
+            self.link.unlink()
+        self.link.symlink_to(os.ttyname(slave_fd))
+        self.firmware = FakeSerialFirmware(master_fd, **self.firmware_options).start()
+        self.firmware.counts = list(self.counts)
+        return self.firmware
+
+    def close(self) -> None:
+        self.firmware.stop()
+        for fd in self.slave_fds:
+            os.close(fd)
+        self.slave_fds.clear()
