@@ -41,10 +41,11 @@ class Run:
     def error(self) -> np.ndarray:
         return self.q - self.q_reference
 
-    def two_norm(self, column: int) -> float:
-        """sqrt(int e^2 dt) of one coordinate's error (the paper's measure, Sec. 7)."""
+    def two_norm(self, column: int, until_s: Optional[float] = None) -> float:
+        """sqrt(int e^2 dt) of one coordinate's error (the paper's measure, Sec. 7), over the run or its start."""
         step = self.time_s[1] - self.time_s[0]
-        return float(np.sqrt(np.sum(self.error[:, column] ** 2) * step))
+        error = self.error[:, column] if until_s is None else self.error[self.time_s < until_s, column]
+        return float(np.sqrt(np.sum(error ** 2) * step))
 
 
 def simulate(model, tracker: CascadeTracker, reference: Reference, sample_period_s: float = 0.008,
