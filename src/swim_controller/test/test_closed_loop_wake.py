@@ -6,7 +6,7 @@ circulatory force that model leaves out, on the hub (unactuated) as well as on t
 sqrt(int e^2 dt) of alpha, phi, theta in rad s^0.5):
 
     first 2 s            wake off (SM on / off)            wake on, SM on         wake on, SM off
-    two-norms            0.0004 0.0026 0.0040 (both)       0.047 0.688 0.057      0.207 1.495 0.676
+    two-norms            0.0004 0.0026 0.0040 (+-1e-4)     0.047 0.688 0.057      0.207 1.495 0.676
     mean vortical        -                                 +0.093 N m, +0.20 N    +0.54 N m, +1.10 N
     hub torque, thrust
     whole primitive
