@@ -4,7 +4,7 @@ Each case brings the loop up over DDS with swim_bringup's System (parameter file
 a maneuver while a RunClient records every topic to an MCAP bag, kills one node when the plan has run 1 s, keeps
 recording, and then reads the bag back with rosbags: every message written is there, log times and header
 stamps never run backwards. What "safe" means for each node:
-- the simulator dies: tracker_node's stale-state watchdog zeroes the torque (stale_after_periods, here 0.5 s)
+- the simulator dies: tracker_node's stale-state watchdog zeroes the torque (stale_after_periods, here 2 s)
   and the goal aborts with STATE_LOST; it keeps publishing zero commands.
 - the tracker dies, on the bridge: bridge_node's command watchdog (watchdog_periods) zeroes the motor torque;
   its joint_states efforts go to 0 and /diagnostics reports the watchdog EXPIRED.
@@ -28,10 +28,11 @@ PERIOD_S = 0.008
 KILL_AT_PLAN_TIME_S = 1.0
 CONSTRAINED_SHORT = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05"], [1, 1])   # 9 s
 FREE_SHORT = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05"], [1, 1])            # 4 s, real time
-# other builds and tests share this 2-core host: a process can stall longer than the configured 200 ms, which
-# would end the maneuver before the kill; these tests are about the kill, so the tracker waits 0.5 s
-TRACKER_OVERRIDES = (f"stale_after_periods:={round(0.5 / PERIOD_S)}",)
-BRIDGE_TOPICS = {**RUN_TOPICS, "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray"}
+# other builds and tests share this 2-core host (both cores busy): a process can stall for more than the
+# configured 200 ms (0.6 s seen), which would end the maneuver before the kill; these tests are about the kill,
+# so the tracker waits 2 s
+STALE_AFTER_S = 2.0
+TRACKER_OVERRIDES = (f"stale_after_periods:={round(STALE_AFTER_S / PERIOD_S)}",)
 
 
 @contextlib.contextmanager
@@ -88,7 +89,7 @@ def test_killing_the_simulator_makes_the_tracker_zero_its_torque(ros_domain, tmp
     from swim_interfaces.action import ExecutePlan
     with maneuver_under_way(tmp_path, "sim", CONSTRAINED_SHORT) as (system, client, _, result):
         kill(system, "sim_node")
-        outcome = client.wait_for(result, 10.0, "end of the goal").result
+        outcome = client.wait_for(result, STALE_AFTER_S + 10.0, "end of the goal").result
         ended = client.bag.counts["joint_commands"]
         client.spin_until(lambda: client.bag.counts["joint_commands"] >= ended + 20, 10.0, "commands after the end")
         assert system.dead() == ["sim_node"]   # the tracker and the planner carry on
@@ -108,8 +109,8 @@ def test_killing_the_simulator_makes_the_tracker_zero_its_torque(ros_domain, tmp
 
 def test_killing_the_tracker_makes_the_bridge_zero_the_torque(ros_domain, tmp_path):
     settle_s = 0.5   # far beyond the 40 ms watchdog (5 periods, config/bridge.yaml) on a loaded host
-    with maneuver_under_way(tmp_path, "bridge", FREE_SHORT, BRIDGE_TOPICS,
-                            ("diagnostics_rate_hz:=20.0",)) as (system, client, _, result):
+    with maneuver_under_way(tmp_path, "bridge", FREE_SHORT, plant_overrides=("diagnostics_rate_hz:=20.0",)) \
+            as (system, client, _, result):
         killed_ns = kill(system, "tracker_node")
         settled_ns = killed_ns + settle_s * 1e9
         sampled = sampled_stamps(client, "joint_states")
@@ -144,11 +145,12 @@ def test_killing_the_tracker_leaves_the_lock_step_simulator_waiting(ros_domain, 
         client.close()
         topics = read_back(tmp_path / "bag", client.bag.counts)
     # lock-step: the simulator steps only on the command stamped like its state, so simulated time stopped one
-    # period past the last command the tracker sent; that state, the one it waits on, is published again
+    # period past the last command the tracker sent (the recorder may have missed that one: the tracker died
+    # while sending it, so one period more); that state, the one it waits on, is published again
     states = topics["joint_states"]
     last_command_ns = max(stamp_ns(m) for _, m in topics["joint_commands"])
     waiting_ns = max(stamp_ns(m) for _, m in states)
-    assert waiting_ns == last_command_ns + round(PERIOD_S * 1e9)
+    assert waiting_ns - last_command_ns in (round(PERIOD_S * 1e9), round(2 * PERIOD_S * 1e9))
     assert [stamp_ns(m) for _, m in states].count(waiting_ns) >= 2   # resent: the simulator is alive, waiting
 
 

@@ -89,8 +89,24 @@ def measures(run: Run) -> dict:
     }
 
 
+def bridge_measures(bag_path: Path) -> dict:
+    """From a bridge_node's /diagnostics in the bag ({} without any): the faults it latched during the run (a
+    latched fault holds the motors at zero until reset: the vehicle did not swim as commanded from then on) and
+    its count of overrun periods."""
+    faults, overruns = set(), None
+    for _, _, array in read_messages(bag_path, ("/diagnostics",)):
+        for status in array.status:
+            if status.name.endswith("bridge_node: I/O loop"):
+                values = {pair.key: pair.value for pair in status.values}
+                faults.update(name for name in values.get("faults", "NONE").split("|") if name != "NONE")
+                overruns = int(values.get("overruns", overruns or 0))
+    if overruns is None:
+        return {}
+    return {"bridge_faults": "|".join(sorted(faults)) or "NONE", "bridge_overruns": overruns}
+
+
 def analyze(bag_path: Path) -> dict:
-    return measures(load_run(bag_path))
+    return {**measures(load_run(bag_path)), **bridge_measures(bag_path)}
 
 
 def write_figures(bag_path: Path, output_dir: Path) -> list[Path]:

@@ -20,6 +20,7 @@ RUN_TOPICS = {
     "tracking_state": "swim_interfaces/msg/TrackingState",
     "plan": "swim_interfaces/msg/PlannedTrajectory",
     "wake_statistics": "swim_interfaces/msg/WakeStatistics",   # only when the simulator's wake is on
+    "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",      # bridge_node's loop, watchdog and faults
 }
 
 

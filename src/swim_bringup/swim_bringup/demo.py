@@ -104,6 +104,10 @@ def main(argv: list[str] | None = None) -> int:
     write_figures(bag_path, run_dir)
     print(summary_table({run_dir.name: report}))
     print(f"swim-demo: report, figures and bag in {run_dir}")
+    if report.get("bridge_faults", "NONE") != "NONE":
+        print(f"swim-demo: the bridge latched {report['bridge_faults']}: the motors were off from then on",
+              file=sys.stderr)
+        return 1
     return 0 if result["error_code"] == 0 else 1
 
 
