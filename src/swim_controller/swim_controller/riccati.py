@@ -70,12 +70,17 @@ class LqrWeights:
                                          # P_are of the averaged system is ~10x the mid-primitive P, and at
                                          # scale 1 the gains near each primitive's end saturate the motors
     terminal_margin_per_s: float = 0.05  # assumed: mu, the shift that makes the averaged pair stabilizable
+    # A cruise is tiled and repeated, so its gains should not fade toward S at each 1 s cycle's end: they are the
+    # Riccati solution of the cruise continued for this long (0: its own horizon only). Assumed: the paper's
+    # longest maneuver, 30 s. On the ideal model the free lane keeping at E = 0.05 then ends 6 mm from its lane
+    # and 2 mrad behind (was 24 mm and 69 mrad with each 1 s cycle's own horizon; runs of 2026-11-23).
+    cruise_lookahead_s: float = 30.0
 
     def validate(self) -> None:
         """Raise ValueError unless every weight is positive and finite (the margin may be zero)."""
         for field in dataclasses.fields(self):
             value = getattr(self, field.name)
-            low_ok = value >= 0.0 if field.name == "terminal_margin_per_s" else value > 0.0
+            low_ok = value >= 0.0 if field.name in ("terminal_margin_per_s", "cruise_lookahead_s") else value > 0.0
             if not (isinstance(value, (int, float)) and np.isfinite(value) and low_ok):
                 raise ValueError(f"LQR weight {field.name} must be a positive finite number, got {value!r}")
 
@@ -190,6 +195,17 @@ def solve_riccati(time_s: Array, linearization: Linearization, state_weight: Arr
     return 0.5 * (riccati + riccati.transpose(0, 2, 1))
 
 
+def continued_terminal(cycle_time_s: Array, cycle: Linearization, state_weight: Array, input_weight: Array,
+                       terminal: Array, lookahead_s: float) -> Array:
+    """P at the start of a periodic motion's cycle when the motion continues for lookahead_s more (whole
+    cycles, rounded up) and ends with P = terminal: eq. 20 over the one cycle, backward, again and again."""
+    cycle_time_s = np.asarray(cycle_time_s, dtype=float)
+    passes = int(np.ceil(lookahead_s / (cycle_time_s[-1] - cycle_time_s[0]) - 1e-9))
+    for _ in range(passes):
+        terminal = solve_riccati(cycle_time_s, cycle, state_weight, input_weight, terminal)[0]
+    return terminal
+
+
 @dataclasses.dataclass
 class TrackingGains:
     """What the tracker needs along one primitive, at its samples: P(t) and G(t)' P(t)."""
@@ -199,14 +215,23 @@ class TrackingGains:
 
 
 def primitive_gains(model: VehicleModel, time_s: Array, q: Array, qdot: Array, foil_acceleration: Array,
-                    weights: Optional[LqrWeights] = None) -> TrackingGains:
-    """P(t) and G'P along a planned trajectory, for the weights given (the defaults if None)."""
+                    weights: Optional[LqrWeights] = None, cycle_samples: Optional[int] = None) -> TrackingGains:
+    """P(t) and G'P along a planned trajectory, for the weights given (the defaults if None).
+
+    cycle_samples: a cruise, whose first cycle_samples samples are one period of it (the rest are copies):
+    P(T) is then not S but the solution of eq. 20 over ``weights.cruise_lookahead_s`` more seconds of the
+    same cruise, found by integrating one cycle backward again and again (F, G are periodic: alpha does not
+    enter them, Prop. 1)."""
     weights = weights or LqrWeights()
     weights.validate()
     linearization = linearize(model, q, qdot, foil_acceleration)
     state_weight = weights.state_weight_matrix(model.constrained)
     input_weight = weights.input_weight_matrix()
     terminal = terminal_weight(linearization, state_weight, input_weight, weights)
+    if cycle_samples is not None:
+        cycle = Linearization(linearization.state_matrix[:cycle_samples], linearization.input_matrix[:cycle_samples])
+        terminal = continued_terminal(time_s[:cycle_samples], cycle, state_weight, input_weight, terminal,
+                                      weights.cruise_lookahead_s)
     riccati = solve_riccati(time_s, linearization, state_weight, input_weight, terminal)
     input_gain = np.einsum("kni,knm->kim", linearization.input_matrix, riccati)
     return TrackingGains(riccati=riccati, input_gain=input_gain)

@@ -22,9 +22,9 @@ FINAL_R_ERROR_BOUND_M = 0.005
 LANE_CHANGE_ALPHA_BOUND_RAD = FINAL_ALPHA_ERROR_BOUND_RAD
 
 
-def _plan(library, rig, ids, time_scale=1.0):
+def _plan(library, rig, ids, time_scale=1.0, repeats=()):
     from swim_planner.maneuver import concatenate, expand_sequence
-    return reference_of(concatenate(library, rig, expand_sequence(ids, []), time_scale))
+    return reference_of(concatenate(library, rig, expand_sequence(ids, list(repeats)), time_scale))
 
 
 def _tracker(model, sliding: bool, bound=SlidingMode().disturbance_bound_n_m, sample_period_s=0.008):
@@ -57,6 +57,18 @@ def test_lane_change_ends_in_the_new_lane(library, model_for, rig):
     assert abs(run.error[-1, 1]) < FINAL_R_ERROR_BOUND_M
     assert abs(run.q[-1, 1] - 0.48) < FINAL_R_ERROR_BOUND_M
     assert abs(run.error[-1, 0]) < LANE_CHANGE_ALPHA_BOUND_RAD
+
+
+def test_lane_keeping_with_repeated_cruises_stays_in_its_lane(library, model_for, rig):
+    """The paper's lane keeping (Sec. 7.2): 14 one-second cruises in a row. The cruise gains are those of the
+    cruise continued (LqrWeights.cruise_lookahead_s); with each cycle's own horizon the vehicle ended 24 mm
+    off its lane and 69 mrad behind. Measured with the lookahead: 6 mm and 2 mrad."""
+    ids = ["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/decelerate/R0.43/E0.05"]
+    reference = _plan(library, rig, ids, repeats=(1, 14, 1))
+    model = model_for(library.spec(ids[0]))
+    run = simulate(model, _tracker(model, sliding=False), reference)
+    assert abs(run.error[-1, 1]) < 0.01
+    assert abs(run.error[-1, 0]) < FINAL_ALPHA_ERROR_BOUND_RAD
 
 
 def test_sliding_mode_lowers_the_error_under_a_matched_disturbance(library, model_for, rig):

@@ -116,3 +116,35 @@ def test_weights_are_validated():
         LqrWeights(heave_gain=-1.0).validate()
     with pytest.raises(ValueError, match="pitch_input_weight"):
         LqrWeights(pitch_input_weight=float("nan")).validate()
+
+
+def test_continued_terminal_is_one_integration_over_the_tiled_cycles():
+    """The pass-by-pass backward sweep of a periodic F(t), G(t) equals one integration over the cycles tiled."""
+    from swim_controller.riccati import continued_terminal
+    rng = np.random.default_rng(5)
+    f0, f1, g0 = rng.normal(size=(3, 3)), rng.normal(size=(3, 3)), rng.normal(size=(3, 1))
+    period, samples, cycles = 0.7, 41, 5
+    def periodic(t):
+        phase = np.sin(2 * np.pi * t / period)[:, None, None]
+        return Linearization(f0 + phase * f1, np.repeat(g0[None], len(t), 0) * (1.0 + 0.5 * phase))
+    q, r, s = np.eye(3), np.array([[0.3]]), 0.1 * np.eye(3)
+    one = np.linspace(0.0, period, samples)
+    continued = continued_terminal(one, periodic(one), q, r, s, lookahead_s=(cycles - 0.5) * period)
+    tiled = np.linspace(0.0, (cycles + 1) * period, (cycles + 1) * (samples - 1) + 1)
+    direct = solve_riccati(tiled, periodic(tiled), q, r, s)
+    np.testing.assert_allclose(continued, direct[samples - 1], rtol=1e-7)
+
+
+def test_cruise_gains_are_periodic_with_the_lookahead(library, model_for):
+    """A cruise's P(T) is eq. 20 over cruise_lookahead_s more of the same cruise, so its gains nearly repeat
+    from cycle to cycle; with the primitive's own horizon only, P fades to S at its end."""
+    from swim_controller.riccati import primitive_gains
+    primitive = library.get("free/cruise/R0.43/E0.05")
+    model = model_for(primitive.spec)
+    cycle = 2 * primitive.spec.intervals + 1
+    def riccati(weights):
+        return primitive_gains(model, primitive.time_s, primitive.q, primitive.qdot, primitive.foil_acceleration,
+                               weights, cycle_samples=cycle).riccati
+    periodic, plain = riccati(LqrWeights()), riccati(LqrWeights(cruise_lookahead_s=0.0))
+    assert np.abs(periodic[-1] - periodic[0]).max() < 0.05 * np.abs(periodic[0]).max()
+    assert np.abs(plain[-1] - plain[0]).max() > 0.5 * np.abs(plain[0]).max()

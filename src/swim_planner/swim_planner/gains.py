@@ -19,7 +19,7 @@ from swim_controller.riccati import LqrWeights, primitive_gains
 from swim_model import RigParameters, VehicleModel
 from swim_planner.errors import PlannerError, PrimitiveSolveError
 from swim_planner.library import PrimitiveLibrary
-from swim_planner.primitives import Primitive, PrimitiveSpec
+from swim_planner.primitives import Primitive, PrimitiveSpec, PrimitiveType
 
 
 def gains_job(rig: RigParameters, primitive: Primitive, lqr_weights: LqrWeights) -> Primitive:
@@ -27,8 +27,9 @@ def gains_job(rig: RigParameters, primitive: Primitive, lqr_weights: LqrWeights)
     spec = primitive.spec
     model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m)
     try:
+        cycle_samples = 2 * spec.intervals + 1 if spec.primitive_type is PrimitiveType.CRUISE else None
         gains = primitive_gains(model, primitive.time_s, primitive.q, primitive.qdot, primitive.foil_acceleration,
-                                lqr_weights)
+                                lqr_weights, cycle_samples)
     except GainComputationError as err:
         raise PrimitiveSolveError(f"{spec.primitive_id}: {err}") from err
     return dataclasses.replace(primitive, gains=gains)

@@ -21,6 +21,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from typing import Optional
 
 import casadi as ca
 import numpy as np
@@ -124,12 +125,36 @@ def solve_fourier_cruise(model: VehicleModel, spec: PrimitiveSpec, limits: Plann
 
 
 @dataclasses.dataclass(frozen=True)
-class PolynomialSineAccelerate:
-    coefficients: Array         # (4, 5): A1, A2, B1, B2, lowest power first (phases of degree 3: last entry 0)
-    index_j: float
-    boundary_error: float       # largest |psi| or |psidot| mismatch at the two ends, rad or rad/s
+class PolynomialSineSegment:
+    """One segment of eq. 11 on [start_s, start_s + duration_s], in the segment's own time t - start_s."""
+
+    coefficients: Array         # (4, 5): A1, A2, B1, B2, lowest power first (unused powers 0)
+    start_s: float
+    duration_s: float
+    index_j: float              # alpha advance - effort over the segment
+    boundary_error: float       # largest |psi| or |psidot| mismatch at the segment's imposed ends, rad or rad/s
     evaluations: int
+
+
+@dataclasses.dataclass(frozen=True)
+class PolynomialSineAccelerate:
+    """The paper's accelerate: one segment of eq. 11, or segments joined where the foil velocity may jump."""
+
+    segments: tuple[PolynomialSineSegment, ...]
     wall_s: float
+
+    @property
+    def index_j(self) -> float:
+        """With p_alpha = 0 from rest, alphadot depends on (psi, psidot) only: segment indices add up."""
+        return float(sum(s.index_j for s in self.segments))
+
+    @property
+    def boundary_error(self) -> float:
+        return float(max(s.boundary_error for s in self.segments))
+
+    @property
+    def evaluations(self) -> int:
+        return int(sum(s.evaluations for s in self.segments))
 
 
 def polynomial_sine_shape(coefficients: Array, times: Array) -> tuple[Array, Array, Array]:
@@ -146,25 +171,31 @@ def polynomial_sine_shape(coefficients: Array, times: Array) -> tuple[Array, Arr
 
 
 #: which of the (4, 5) coefficients are free: amplitudes A1, B1 of degree 4, phases A2, B2 of degree 3,
-#: 9 per angle and 18 in all, the paper's count
-FREE_COEFFICIENTS = np.array([[True] * 5, [True] * 4 + [False]] * 2)
+#: 9 per angle and 18 in all, the paper's count for its direct 4 s accelerate that "did not converge"
+EIGHTEEN_COEFFICIENTS = np.array([[True] * 5, [True] * 4 + [False]] * 2)
+#: the paper's 9 per segment (Sec. 5) without saying which; assumed: heave amplitude A1 of degree 2, pitch
+#: amplitude B1 and both phases A2, B2 of degree 1 (a stroke whose amplitudes and frequency change linearly)
+NINE_COEFFICIENTS = np.array([[True] * 3 + [False] * 2] + [[True] * 2 + [False] * 3] * 3)
 
 
-def solve_polynomial_sine_accelerate(model: VehicleModel, spec: PrimitiveSpec, end_state: tuple[Array, Array],
-                                     limits: PlanningLimits = PlanningLimits(), samples: int = 200,
-                                     max_evaluations: int = 20000) -> PolynomialSineAccelerate:
-    """Eq. 11 with its 18 coefficients at once, by Nelder-Mead, boundary conditions as penalties."""
-    if spec.primitive_type is not PrimitiveType.ACCELERATE:
-        raise ValueError("solve_polynomial_sine_accelerate solves accelerates")
-    batch = shape_driven_batch(model, samples)
-    times = np.linspace(0.0, spec.duration_s, samples)
-    weights = np.array([spec.heave_effort_weight, spec.pitch_effort_weight])
-    tau_max = limits.torque_fraction * model.torque_limits()
-    target_psi, target_rate = end_state[0][-2:], end_state[1][-2:]
-    # amplitude grows linearly from 0, phase advances at 2 pi rad/s: a swimming stroke, not the answer
-    start = np.zeros(FREE_COEFFICIENTS.shape)
-    start[0, 1], start[2, 1] = 0.3 / spec.duration_s, 0.5 / spec.duration_s
+def _stroke_start(free: Array, duration_s: float) -> Array:
+    """Amplitudes growing linearly from 0, phases advancing at 2 pi rad/s, pitch 90 deg ahead: a swimming
+    stroke to start the search from, not the answer."""
+    start = np.zeros(free.shape)
+    start[0, 1], start[2, 1] = 0.3 / duration_s, 0.5 / duration_s
     start[1, 1], start[3, 0], start[3, 1] = 2 * math.pi, math.pi / 2, 2 * math.pi
+    return np.where(free, start, 0.0)
+
+
+def _solve_segment(batch: ca.Function, samples: int, spec: PrimitiveSpec, tau_max: Array, start_s: float,
+                   duration_s: float, free: Array, start: tuple[Array, Optional[Array]],
+                   end: Optional[tuple[Array, Array]], max_evaluations: int) -> PolynomialSineSegment:
+    """Nelder-Mead on one segment of eq. 11; imposed end values are penalties (fmin takes no constraints).
+
+    start: (psi, psidot) at the segment's start, psidot None where the foil velocity may jump;
+    end: (psi, psidot) to reach, or None for a free end."""
+    times = np.linspace(0.0, duration_s, samples)
+    weights = np.array([spec.heave_effort_weight, spec.pitch_effort_weight])
 
     def evaluate(coefficients: Array) -> tuple[float, float, float]:
         psi, psidot, psiddot = polynomial_sine_shape(coefficients, times)
@@ -173,24 +204,67 @@ def solve_polynomial_sine_accelerate(model: VehicleModel, spec: PrimitiveSpec, e
         alpha_rate, tau, _ = (np.asarray(v) for v in batch(q, qdot, psiddot.T))
         advance = float(np.trapezoid(alpha_rate.ravel(), times))
         effort = float(np.trapezoid((weights[:, None] * tau ** 2).sum(axis=0), times))
-        boundary = max(np.abs(psi[0]).max(), np.abs(psidot[0]).max(),
-                       np.abs(psi[-1] - target_psi).max(), np.abs(psidot[-1] - target_rate).max())
+        errors = [np.abs(psi[0] - start[0])]
+        if start[1] is not None:
+            errors.append(np.abs(psidot[0] - start[1]))
+        if end is not None:
+            errors += [np.abs(psi[-1] - end[0]), np.abs(psidot[-1] - end[1])]
         excess = float(np.maximum(np.abs(tau) / tau_max[:, None] - 1.0, 0.0).sum())
-        return advance - effort, boundary, excess
+        return advance - effort, float(np.concatenate(errors).max()), excess
 
-    def unpack(free: Array) -> Array:
-        coefficients = np.zeros(FREE_COEFFICIENTS.shape)
-        coefficients[FREE_COEFFICIENTS] = free
+    def unpack(values: Array) -> Array:
+        coefficients = np.zeros(free.shape)
+        coefficients[free] = values
         return coefficients
 
-    def cost(free: Array) -> float:
-        index, boundary, excess = evaluate(unpack(free))
+    def cost(values: Array) -> float:
+        index, boundary, excess = evaluate(unpack(values))
         return -index + PENALTY * (boundary ** 2 + excess ** 2)
 
-    started = time.perf_counter()
-    result = optimize.minimize(cost, start[FREE_COEFFICIENTS], method="Nelder-Mead",
-                               options={"maxfev": max_evaluations, "xatol": 1e-8, "fatol": 1e-10,
-                                        "adaptive": True})
+    def violation(values: Array) -> float:
+        _, boundary, excess = evaluate(unpack(values))
+        return boundary ** 2 + excess ** 2
+
+    options = {"maxfev": max_evaluations // 2, "xatol": 1e-8, "fatol": 1e-12, "adaptive": True}
+    # first the boundary conditions alone, then the index from there: from a plain stroke the penalized index
+    # leaves Nelder-Mead far from the ends
+    feasible = optimize.minimize(violation, _stroke_start(free, duration_s)[free], method="Nelder-Mead",
+                                 options=options)
+    result = optimize.minimize(cost, feasible.x, method="Nelder-Mead", options=options)
     index, boundary, _ = evaluate(unpack(result.x))
-    return PolynomialSineAccelerate(unpack(result.x), index, boundary, int(result.nfev),
-                                    time.perf_counter() - started)
+    return PolynomialSineSegment(unpack(result.x), start_s, duration_s, index, boundary,
+                                 int(feasible.nfev + result.nfev))
+
+
+def solve_polynomial_sine_accelerate(model: VehicleModel, spec: PrimitiveSpec, end_state: tuple[Array, Array],
+                                     limits: PlanningLimits = PlanningLimits(), samples: int = 200,
+                                     max_evaluations: int = 20000, segments: int = 1,
+                                     free: Optional[Array] = None) -> PolynomialSineAccelerate:
+    """The paper's accelerate (eq. 11) from rest to the cruise start ``end_state``, by Nelder-Mead.
+
+    segments = 1: all coefficients at once (``free`` defaults to the 18 of EIGHTEEN_COEFFICIENTS);
+    segments = 2: the paper's composite, two halves of ``free`` (default NINE_COEFFICIENTS) each, solved in
+    turn: the first from rest with a free end, the second from the first's end configuration (its foil
+    velocity may jump there, Sec. 4.3) to the cruise's start state. With p_alpha = 0 the halves' indices
+    add up, so solving them in turn is the paper's "suboptimal" composite, not a joint optimum."""
+    if spec.primitive_type is not PrimitiveType.ACCELERATE:
+        raise ValueError("solve_polynomial_sine_accelerate solves accelerates")
+    if segments not in (1, 2):
+        raise ValueError(f"segments must be 1 or 2, not {segments}")
+    if free is None:
+        free = EIGHTEEN_COEFFICIENTS if segments == 1 else NINE_COEFFICIENTS
+    batch = shape_driven_batch(model, samples)
+    tau_max = limits.torque_fraction * model.torque_limits()
+    target = (end_state[0][-2:], end_state[1][-2:])
+    rest = (np.zeros(2), np.zeros(2))
+    started = time.perf_counter()
+    if segments == 1:
+        solved = (_solve_segment(batch, samples, spec, tau_max, 0.0, spec.duration_s, free, rest, target,
+                                 max_evaluations),)
+    else:
+        half = spec.duration_s / 2.0
+        first = _solve_segment(batch, samples, spec, tau_max, 0.0, half, free, rest, None, max_evaluations)
+        joint = polynomial_sine_shape(first.coefficients, np.array([half]))[0][0]
+        second = _solve_segment(batch, samples, spec, tau_max, half, half, free, (joint, None), target, max_evaluations)
+        solved = (first, second)
+    return PolynomialSineAccelerate(solved, time.perf_counter() - started)

@@ -32,3 +32,14 @@ def test_errors_are_one_clear_line(tmp_path, capsys):
     assert "no primitive library" in capsys.readouterr().err
     assert main(["build", str(tmp_path / "x"), "--only", "no/such"]) == 2
     assert "unknown primitive ids: no/such" in capsys.readouterr().err
+
+
+def test_compare_sets_the_papers_method_beside_ours(library, capsys):
+    assert main(["compare", "constrained/cruise/E0.05", "--evaluations", "400"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    spec = library.spec("constrained/cruise/E0.05")
+    assert report["collocation"]["index_j"] == library.entry("constrained/cruise/E0.05")["index_j"] / spec.cycles
+    assert report["paper_method"]["index_j"] < report["collocation"]["index_j"]
+    assert abs(report["paper_method"]["energy_error_j"]) > 0.0
+    assert main(["compare", "free/cruise/R0.43/E0.05"]) == 2
+    assert "constrained cruises and accelerates only" in capsys.readouterr().err

@@ -64,7 +64,7 @@ def test_limits_and_boundary_conditions(library, rig, primitive_id):
         assert low - 1e-6 <= primitive.q[:, 1].min() and primitive.q[:, 1].max() <= high + 1e-6
 
 
-@pytest.mark.parametrize("primitive_id", [i for i in IDS if i.startswith("constrained/")])
+@pytest.mark.parametrize("primitive_id", IDS)
 def test_open_loop_replay_reproduces_the_states(library, rig, primitive_id):
     primitive = library.get(primitive_id)
     # a cruise is one solved cycle tiled: replay that cycle (the copies are it, translated in alpha; u may
