@@ -25,6 +25,7 @@ setup(
         'console_scripts': [
             'swim-demo = swim_bringup.demo:main',
             'swim-analyze = swim_bringup.analysis:main',
+            'swim-experiments = swim_bringup.experiments:main',
         ],
     },
 )

@@ -1,0 +1,44 @@
+"""swim-experiments: the paper's experiment list and how our runs are set beside its results."""
+import pytest
+
+from swim_bringup.experiments import NORMS, compare, paper_experiments, relative_change, results_table
+from swim_model import load_rig
+from swim_planner.library import PrimitiveLibrary
+from swim_planner.paths import default_library_path
+
+
+def test_the_list_is_the_papers():
+    """Sec. 7: constrained at lambda 1, 1.2, 1.67, 0.8; lane keeping at 1, 1.1; lane change at 1, 1.25."""
+    scales = {}
+    for experiment in paper_experiments():
+        scales.setdefault(experiment.name.rsplit("_lambda", 1)[0], []).append(experiment.time_scale)
+    assert scales == {"constrained": [1.0, 1.2, 1.67, 0.8], "lane_keeping": [1.0, 1.1], "lane_change": [1.0, 1.25]}
+
+
+def test_every_experiment_lasts_the_papers_nominal_time():
+    """The primitive durations in the shipped library add up to the paper's 30 s, 20 s and 23 s (Sec. 7)."""
+    library = PrimitiveLibrary.load(default_library_path(), load_rig())
+    for experiment in paper_experiments():
+        total = sum(library.spec(i).duration_s * n for i, n in zip(experiment.primitive_ids, experiment.repeat_counts))
+        assert total == pytest.approx(experiment.nominal_duration_s), experiment.name
+        assert experiment.expected_duration_s() == pytest.approx(total / experiment.time_scale)
+
+
+def _report(scale: float, offset_m: float) -> dict:
+    report = {norm: scale * (i + 1) for i, norm in enumerate(NORMS)}
+    report.update(duration_s=25.0, final_lateral_offset_m=offset_m, final_alpha_error_rad=0.01,
+                  saturated_fraction=0.0, result={"error_code": 0})
+    return report
+
+
+def test_sliding_modes_change_is_relative_to_the_run_without_it():
+    experiment = paper_experiments()[1]      # constrained, lambda = 1.2
+    row = compare(experiment, _report(0.9, 0.001), _report(1.0, 0.002))
+    for norm in NORMS:
+        assert row["two_norms"][norm]["change"] == pytest.approx(-0.1)
+    assert row["two_norms"]["longitudinal_error_two_norm_m_s05"]["paper_change"] == -0.12
+    assert row["paper_duration_s"] == pytest.approx(25.0)
+    assert row["succeeded"]
+    assert relative_change(1.0, 0.0) is None
+    table = results_table([row])
+    assert "-10 %; -12 %" in table and "+0.10/+0.20" in table
