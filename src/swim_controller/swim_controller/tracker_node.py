@@ -14,9 +14,16 @@ STATE_LOST; a state with wrong names, lengths or a non-finite value is rejected,
 Parameters (validated on set, changeable at run time): sample_period_s (0.008, the paper's), stale_after_periods
 (5), sliding_mode_enabled (true), disturbance_bound_n_m, boundary_layer, time_scale (1.0: run plans as
 planned; else re-timed by Theorem 1 when a goal arrives), feedback_rate_hz (10), velocity_cutoff_hz, rig_path.
+
+Speed (in lock-step every period waits on this node): the rig's models are built at start, not by the first goal
+(about half a second of model setup and compilation); per period the command and tracking_state messages are
+reused and their float64[] fields filled with array('d') (rosidl's setters check lists element by element), and
+the per-period topics have no QoS event handlers: rclpy gives each publisher and subscription two by default,
+each a waitable that the executor adds to its wait set again on every spin, in Python.
 """
 from __future__ import annotations
 
+import array
 import math
 import time
 from typing import Optional
@@ -25,6 +32,7 @@ import numpy as np
 import rclpy
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.action import ActionServer, CancelResponse
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.task import Future
@@ -63,6 +71,13 @@ PARAMETER_RULES = {
     "feedback_rate_hz": (lambda v: isinstance(v, float) and 0.1 <= v <= 1000.0, "a float in [0.1, 1000] Hz"),
     "velocity_cutoff_hz": (lambda v: isinstance(v, float) and math.isfinite(v) and v > 0.0, "a float > 0 Hz"),
 }
+
+
+def float_array(values: np.ndarray) -> array.array:
+    """A float64 numpy array as array('d'), which a message's float64[] field takes without a per-element check."""
+    converted = array.array("d")
+    converted.frombytes(np.ascontiguousarray(values, dtype=np.float64).tobytes())
+    return converted
 
 
 class ActiveGoal:
@@ -113,16 +128,25 @@ class TrackerNode(Node):
 
         # deep histories: a recorder that falls behind a faster-than-real-time lock-step loop still gets every
         # period (reliable delivery only covers what the writer's history still holds)
-        self.command_publisher = self.create_publisher(JointState, "joint_commands", RECORDABLE_DEPTH)
-        self.tracking_publisher = self.create_publisher(TrackingState, "tracking_state", RECORDABLE_DEPTH)
+        no_events = PublisherEventCallbacks(use_default_callbacks=False)
+        self.command_publisher = self.create_publisher(JointState, "joint_commands", RECORDABLE_DEPTH,
+                                                       event_callbacks=no_events)
+        self.tracking_publisher = self.create_publisher(TrackingState, "tracking_state", RECORDABLE_DEPTH,
+                                                        event_callbacks=no_events)
+        self._command_message = JointState(name=["phi", "theta"])   # reused every period
+        self._tracking_message_reused = TrackingState(reference=JointTrajectoryPoint(),
+                                                      feedback=JointTrajectoryPoint(), error=JointTrajectoryPoint())
         # One thread runs every callback (rclpy.spin): the control period, the stale watchdog and the action
         # never race, so no locks. The execute callback is a coroutine that awaits its goal's end instead of
         # blocking a thread; rclpy's MultiThreadedExecutor with a mutually exclusive group stalled here
         # (the subscription stopped being served after a few periods, ros2/rclcpp#832 family).
-        self.create_subscription(JointState, "joint_states", self._on_state, 10)
+        self.create_subscription(JointState, "joint_states", self._on_state, 10,
+                                 event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
         self.create_timer(self.get_parameter("sample_period_s").value, self._check_stale)
         self._action = ActionServer(self, ExecutePlan, "execute_plan", execute_callback=self._execute,
                                     cancel_callback=self._on_cancel)
+        for constrained in (True, False):   # the rig's two vehicles on its default lane, ready for a first goal
+            model_io_linearization(self._model(constrained, self.rig.constrained_lane_radius_m))
         self.get_logger().info("tracker ready: waiting for joint_states and execute_plan goals")
 
     # ----- parameters ------------------------------------------------------------------------------
@@ -216,10 +240,9 @@ class TrackerNode(Node):
         self._publish_command(np.zeros(2), self.get_clock().now().to_msg())
 
     def _publish_command(self, torque: np.ndarray, stamp) -> None:
-        command = JointState()
+        command = self._command_message
         command.header.stamp = stamp
-        command.name = ["phi", "theta"]
-        command.effort = [float(torque[0]), float(torque[1])]
+        command.effort = array.array("d", (float(torque[0]), float(torque[1])))
         self.command_publisher.publish(command)
         self.commands_sent += 1
 
@@ -227,16 +250,16 @@ class TrackerNode(Node):
         output = step.output
         reference = output.reference
         supervisor = self._supervisor
-        message = TrackingState()
+        message = self._tracking_message_reused
         message.header.stamp = stamp
         plan = supervisor.tracker.reference
         message.joint_names = list(plan.joint_names)
-        message.reference = JointTrajectoryPoint(positions=reference.q.tolist(), velocities=reference.qdot.tolist())
-        message.feedback = JointTrajectoryPoint(positions=q.tolist(), velocities=qdot.tolist())
-        message.error = JointTrajectoryPoint(positions=(reference.q - q).tolist(),
-                                             velocities=(reference.qdot - qdot).tolist())
-        message.output_torques = output.torque.tolist()
-        message.feedforward_torques = reference.torque.tolist()
+        for point, positions, velocities in ((message.reference, reference.q, reference.qdot),
+                                             (message.feedback, q, qdot),
+                                             (message.error, reference.q - q, reference.qdot - qdot)):
+            point.positions, point.velocities = float_array(positions), float_array(velocities)
+        message.output_torques = float_array(output.torque)
+        message.feedforward_torques = float_array(reference.torque)
         message.torque_saturated = list(output.saturated)
         message.plan_time_s = float(reference.time_s)
         message.time_scale = float(plan.time_scale)

@@ -21,7 +21,7 @@ import subprocess
 import tempfile
 import warnings
 from pathlib import Path
-from typing import Optional
+from typing import Optional, Sequence
 
 import casadi as ca
 import numpy as np
@@ -69,11 +69,13 @@ def compiled(functions: list[ca.Function], tag: str) -> dict[str, ca.Function]:
     return {f.name(): ca.external(f.name(), str(library)) for f in functions}
 
 
-def native(functions: list[ca.Function], tag: str) -> dict[str, "NativeFunction"]:
-    """The functions, compiled to C, as NativeFunction (the fast call path), by name."""
+def native(functions: list[ca.Function], tag: str,
+           names: Optional[Sequence[str]] = None) -> dict[str, "NativeFunction"]:
+    """The functions, compiled to C, as NativeFunction (the fast call path), by name: all of them, or those named
+    (the library is the one ``compiled`` makes of the same list, so it is compiled once for both)."""
     library = compile_library(functions, tag)
     loaded = None if library is None else ctypes.CDLL(str(library))
-    return {f.name(): NativeFunction(f, loaded) for f in functions}
+    return {f.name(): NativeFunction(f, loaded) for f in functions if names is None or f.name() in names}
 
 
 class NativeFunction:

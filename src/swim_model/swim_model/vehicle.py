@@ -165,9 +165,21 @@ class VehicleModel:
     @cached_property
     def numeric(self) -> dict[str, ca.Function]:
         """The symbolic functions compiled to C (cached on disk), plus the RK4 step."""
+        return codegen.compiled(self._numeric_functions(), tag=self._codegen_tag())
+
+    def native_function(self, name: str) -> codegen.NativeFunction:
+        """One of ``numeric``'s functions (dense arguments only) called through its C entry point on buffers it
+        owns (codegen.NativeFunction): the same numbers, ~1 us a call instead of CasADi's ~45 us, for loops
+        that call it every period. One instance per name and model: copy what you keep of its outputs."""
+        loaded = self.__dict__.setdefault("_native", {})   # made on first use, like ``numeric``
+        if name not in loaded:
+            loaded.update(codegen.native(self._numeric_functions(), self._codegen_tag(), names=[name]))
+        return loaded[name]
+
+    def _numeric_functions(self) -> list[ca.Function]:
         functions = dict(self.symbolic.functions)
         functions["rk4_step"] = self.rk4_step_function()
-        return codegen.compiled(list(functions.values()), tag=self._codegen_tag())
+        return list(functions.values())
 
     def _codegen_tag(self) -> str:
         kind = "constrained" if self.constrained else "free"

@@ -21,16 +21,24 @@ Parameters: rig_path, constrained, lane_radius_m, sample_period_s, substeps, mod
 initial_positions, velocity_source, resend_after_s, disturbances.<field> (swim_sim.disturbances.Disturbances),
 sensors.<field> (swim_sim.sensors.SensorNoise), wake.enabled (false: the ideal-flow model alone) and
 wake.<field> (swim_sim.wake_coupling.parameter_defaults); read at start.
+
+Speed (lock-step: each period waits for a round trip through the controller). The per-period path reuses its
+messages and fills their arrays with array('d') (rosidl's setters check a list element by element), and the
+per-period topics have no QoS event handlers: rclpy gives every publisher and subscription two by default
+(incompatible QoS and type), each a waitable the executor re-adds to its wait set on every spin, in Python.
 """
 from __future__ import annotations
 
+import array
 import dataclasses
+import math
 import time
 from typing import Optional
 
 import numpy as np
 import rclpy
 from builtin_interfaces.msg import Time
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
@@ -57,14 +65,24 @@ def stamp_of(time_s: float) -> Time:
 
 def command_torque(message: JointState) -> np.ndarray:
     """(heave, pitch) torque from a joint_commands message; ValueError naming what is wrong."""
-    names = list(message.name)
-    if sorted(names) != MOTOR_JOINTS or len(message.effort) != 2:
-        raise ValueError(f"a command names {MOTOR_JOINTS} with 2 efforts; got names {names}, "
-                         f"{len(message.effort)} efforts")
-    torque = np.array([message.effort[names.index(j)] for j in MOTOR_JOINTS], dtype=float)
-    if not np.all(np.isfinite(torque)):
-        raise ValueError(f"non-finite torque {torque}")
-    return torque
+    names, effort = message.name, message.effort
+    if len(effort) == 2 and names == MOTOR_JOINTS:
+        heave, pitch = effort[0], effort[1]
+    elif len(effort) == 2 and names == MOTOR_JOINTS[::-1]:
+        heave, pitch = effort[1], effort[0]
+    else:
+        raise ValueError(f"a command names {MOTOR_JOINTS} with 2 efforts; got names {list(names)}, "
+                         f"{len(effort)} efforts")
+    if not (math.isfinite(heave) and math.isfinite(pitch)):
+        raise ValueError(f"non-finite torque {[heave, pitch]}")
+    return np.array([heave, pitch])
+
+
+def float_array(values: np.ndarray) -> array.array:
+    """A float64 numpy array as array('d'), which a message's float64[] field takes without a per-element check."""
+    converted = array.array("d")
+    converted.frombytes(np.ascontiguousarray(values, dtype=np.float64).tobytes())
+    return converted
 
 
 class SimNode(Node):
@@ -112,13 +130,20 @@ class SimNode(Node):
         self.rejected_commands = 0
         self._latest_torque = np.zeros(2)
         self._published_stamp: Optional[Time] = None
+        self._velocity_source = value("velocity_source")
+        self._state_message = JointState(name=list(model.joint_names))   # reused every period
+        self._clock_message = Clock()
+        self._efforts = np.zeros(model.nq)   # the unactuated coordinates' entries stay zero
 
         # a deep history: a recorder behind a faster-than-real-time lock-step loop still gets every period
-        self.state_publisher = self.create_publisher(JointState, "joint_states", RECORDABLE_DEPTH)
-        self.clock_publisher = self.create_publisher(Clock, "/clock", 10)
+        no_events = PublisherEventCallbacks(use_default_callbacks=False)
+        self.state_publisher = self.create_publisher(JointState, "joint_states", RECORDABLE_DEPTH,
+                                                     event_callbacks=no_events)
+        self.clock_publisher = self.create_publisher(Clock, "/clock", 10, event_callbacks=no_events)
         self.wake_publisher = self.create_publisher(WakeStatistics, "wake_statistics", RECORDABLE_DEPTH) \
             if wake is not None else None
-        self.create_subscription(JointState, "joint_commands", self._on_command, 10)
+        self.create_subscription(JointState, "joint_commands", self._on_command, 10,
+                                 event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
         self.create_service(Trigger, "reset", self._on_reset)
         self.create_service(SetVehicleState, "set_state", self._on_set_state)
         if self.mode == "realtime":
@@ -166,22 +191,21 @@ class SimNode(Node):
             self._publish_wake(self.plant.time_s - self.plant.sample_period_s)
 
     def _publish_state(self, advance: bool = True) -> None:
-        state = self.plant.state
-        stamp = stamp_of(state.time_s)
-        message = JointState()
+        plant = self.plant
+        stamp = stamp_of(plant.time_s)
+        message = self._state_message
         message.header.stamp = stamp
-        message.name = list(self.plant.model.joint_names)
         if advance:   # a resend repeats the last measurement: the noise sequence depends on steps only
-            self._last_measurement = self.sensors.measure(state.q, state.qdot, self.plant.rng)
+            self._last_measurement = self.sensors.measure(plant.q, plant.qdot, plant.rng)
         positions, velocities = self._last_measurement
-        message.position = positions.tolist()
-        if self.get_parameter("velocity_source").value == "model":
-            message.velocity = velocities.tolist()
-        effort = np.zeros(self.plant.model.nq)
-        effort[-2:] = state.torque
-        message.effort = effort.tolist()
+        message.position = float_array(positions)
+        if self._velocity_source == "model":
+            message.velocity = float_array(velocities)
+        self._efforts[-2:] = plant.torque
+        message.effort = float_array(self._efforts)
         self._published_stamp, self._published_monotonic = stamp, time.monotonic()
-        self.clock_publisher.publish(Clock(clock=stamp))
+        self._clock_message.clock = stamp
+        self.clock_publisher.publish(self._clock_message)
         self.state_publisher.publish(message)
 
     def _publish_wake(self, time_s: float) -> None:
