@@ -122,8 +122,11 @@ def _dynamics(model: VehicleModel, substeps: int) -> list[ca.Function]:
     speed2 = foil_velocity[0] ** 2 + foil_velocity[1] ** 2
     wave = ca.Function("sim_wave_force", [q, qdot, coefficient, level],
                        [s.foil_velocity_map[1, :].T * (coefficient * speed2 * level)])
+    # Mm(q) for the plastic impulse that stops a coordinate (here, not the model's own numeric functions: those
+    # would be generated and loaded in the middle of a run, at the first stop, ~0.1 s)
+    mass = ca.Function("sim_mass_matrix", [q], [s.mass])
     return [step, forward, potential, wave, _period(step, "sim_period_locked", nq, substeps),
-            _period(free_step, "sim_period_unlocked", nq, substeps)]
+            _period(free_step, "sim_period_unlocked", nq, substeps), mass]
 
 
 def _period(step: ca.Function, name: str, nq: int, substeps: int) -> ca.Function:
@@ -154,9 +157,9 @@ class Plant:
         self._parameters = _parameter_vector(model, disturbances)
         tag = f"sim_{model._codegen_tag()}_{hashlib.sha256(b'sim-dynamics-2').hexdigest()[:8]}"
         native = codegen.native(_dynamics(model, self.substeps), tag=tag)
-        self._step, self._forward, self._potential, self._wave, self._period_locked, self._period_unlocked = (
-            native[n] for n in ("sim_rk4_step", "sim_forward", "sim_potential", "sim_wave_force",
-                                "sim_period_locked", "sim_period_unlocked"))
+        (self._step, self._forward, self._potential, self._wave, self._period_locked, self._period_unlocked,
+         self._mass) = (native[n] for n in ("sim_rk4_step", "sim_forward", "sim_potential", "sim_wave_force",
+                                            "sim_period_locked", "sim_period_unlocked", "sim_mass_matrix"))
         # the inputs that never change: parameters, substep length, the wave's coefficient
         step_s = self.sample_period_s / self.substeps
         for function in (self._step, self._period_locked):
@@ -280,7 +283,9 @@ class Plant:
         """Stop coordinate index by a plastic impulse: qdot -= Mm^-1 e_i v_i / (Mm^-1)_ii, the Mm-orthogonal
         projection onto v_i = 0, which never adds kinetic energy (it removes v_i^2 / (2 (Mm^-1)_ii))."""
         nq = self.model.nq
-        inverse_mass = np.linalg.inv(self.model.mass_matrix(x[:nq]))
+        self._mass.inputs[0][:] = x[:nq]
+        self._mass()
+        inverse_mass = np.linalg.inv(self._mass.outputs[0].reshape((nq, nq), order="F"))
         x[nq:] -= inverse_mass[:, index] * (x[nq + index] / inverse_mass[index, index])
         x[nq + index] = 0.0
         self.stuck[index] = True
