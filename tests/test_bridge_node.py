@@ -19,7 +19,7 @@ WATCHDOG_S = WATCHDOG_PERIODS * PERIOD_S
 class BridgeClient:
     """The test's side of the bridge: lifecycle and e-stop services, commands out, states and diagnostics in."""
 
-    def __init__(self, context, namespace=""):
+    def __init__(self, context, namespace="", log_path=None):
         from diagnostic_msgs.msg import DiagnosticArray
         from lifecycle_msgs.srv import ChangeState, GetState
         from rclpy.executors import SingleThreadedExecutor
@@ -27,6 +27,7 @@ class BridgeClient:
         from std_msgs.msg import Bool
         from std_srvs.srv import Trigger
         import rclpy
+        self.log_path = log_path   # the bridge's output, shown when it does not answer
         self.node = rclpy.create_node("bridge_test_client", namespace=namespace or "/", context=context)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
@@ -39,14 +40,15 @@ class BridgeClient:
         self.commands = self.node.create_publisher(JointState, f"{prefix}joint_commands", 10)
         self.estop_topic = self.node.create_publisher(Bool, f"{prefix}emergency_stop", 10)
         self.states = []        # (monotonic receive time, JointState)
-        self.diagnostics = []   # DiagnosticStatus of this bridge
+        self.diagnostics = []   # (stamp ns, DiagnosticStatus) of this bridge
         self.node.create_subscription(JointState, f"{prefix}joint_states",
                                       lambda m: self.states.append((time.monotonic(), m)), 50)
         self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diagnostics, 10)
         assert self.change_state.wait_for_service(timeout_sec=30.0), "bridge_node did not come up"
 
     def _on_diagnostics(self, array):
-        self.diagnostics += [s for s in array.status if s.name.startswith(self.fully_qualified + ":")]
+        stamp_ns = array.header.stamp.sec * 1_000_000_000 + array.header.stamp.nanosec
+        self.diagnostics += [(stamp_ns, s) for s in array.status if s.name.startswith(self.fully_qualified + ":")]
 
     def close(self):
         self.executor.shutdown()
@@ -60,8 +62,11 @@ class BridgeClient:
     def call(self, client, request):
         future = client.call_async(request)
         self.executor.spin_until_future_complete(future, timeout_sec=10.0)
-        assert future.done(), f"no reply from {client.srv_name}"
+        assert future.done(), f"no reply from {client.srv_name}; the bridge's log ends:\n{self.log_tail()}"
         return future.result()
+
+    def log_tail(self, characters=3000):
+        return self.log_path.read_text()[-characters:] if self.log_path is not None else "(not kept)"
 
     def transition(self, transition_id):
         from lifecycle_msgs.msg import Transition
@@ -96,13 +101,16 @@ class BridgeClient:
                            for j, (kp, kd) in zip((2, 3), gains)])
 
     def latest_diagnostic(self, timeout_s=2.0):
+        """The bridge's first status made after this call began (the bridge stamps /diagnostics with the wall
+        clock when it reads its loop): one already in flight or queued would describe the loop before."""
+        called_ns = time.time_ns()
         self.diagnostics.clear()
         end = time.monotonic() + timeout_s
-        while not self.diagnostics and time.monotonic() < end:
+        while not any(stamp_ns >= called_ns for stamp_ns, _ in self.diagnostics) and time.monotonic() < end:
             self.executor.spin_once(timeout_sec=0.01)
-        assert self.diagnostics, "no /diagnostics from the bridge"
-        status = self.diagnostics[-1]
-        return status, {kv.key: kv.value for kv in status.values}
+        fresh = [status for stamp_ns, status in self.diagnostics if stamp_ns >= called_ns]
+        assert fresh, "no /diagnostics from the bridge"
+        return fresh[0], {kv.key: kv.value for kv in fresh[0].values}
 
 
 def efforts(client, since):
@@ -110,18 +118,18 @@ def efforts(client, since):
 
 
 @pytest.fixture(scope="module")
-def bridge_process(ros_domain, tmp_path_factory):
+def bridge_log(ros_domain, tmp_path_factory):
     log = tmp_path_factory.mktemp("bridge_node") / "log.txt"
     with running_node("swim_hw_bridge", "bridge_node", log, "-p", f"watchdog_periods:={WATCHDOG_PERIODS}",
-                      "-p", "diagnostics_rate_hz:=20.0") as process:
-        yield process
+                      "-p", "diagnostics_rate_hz:=20.0"):
+        yield log
 
 
 @pytest.fixture()
-def bridge(bridge_process, rclpy_context):
+def bridge(bridge_log, rclpy_context):
     """The shared bridge, active, no e-stop, the foil held at rest."""
     from lifecycle_msgs.msg import Transition
-    client = BridgeClient(rclpy_context)
+    client = BridgeClient(rclpy_context, log_path=bridge_log)
     if client.state_label() == "unconfigured":
         assert client.transition(Transition.TRANSITION_CONFIGURE)
     if client.state_label() == "inactive":
@@ -137,7 +145,7 @@ def test_lifecycle_transitions_open_enable_and_release_the_device(ros_domain, rc
     from lifecycle_msgs.msg import Transition
     with running_node("swim_hw_bridge", "bridge_node", tmp_path / "log.txt", "-r", "__ns:=/lifecycle_test",
                       "-p", "diagnostics_rate_hz:=20.0"):
-        client = BridgeClient(rclpy_context, "/lifecycle_test")
+        client = BridgeClient(rclpy_context, "/lifecycle_test", tmp_path / "log.txt")
         try:
             assert client.state_label() == "unconfigured"
             assert not client.transition(Transition.TRANSITION_ACTIVATE)   # not from unconfigured
@@ -184,7 +192,7 @@ def test_a_bad_configuration_fails_configure_and_the_node_carries_on(ros_domain,
     from lifecycle_msgs.msg import Transition
     with running_node("swim_hw_bridge", "bridge_node", tmp_path / "log.txt", "-r", "__ns:=/bad_config",
                       "-p", f"config_path:={tmp_path / 'missing.yaml'}") as process:
-        client = BridgeClient(rclpy_context, "/bad_config")
+        client = BridgeClient(rclpy_context, "/bad_config", tmp_path / "log.txt")
         try:
             assert not client.transition(Transition.TRANSITION_CONFIGURE)
             assert client.state_label() == "unconfigured" and process.poll() is None
@@ -327,7 +335,7 @@ def test_a_device_lost_while_active_takes_deactivate_into_error_processing(ros_d
     with running_node("swim_hw_bridge", "bridge_node", tmp_path / "log.txt", "-r", "__ns:=/error_test",
                       "-p", "backend:=serial", "-p", f"config_path:={config_path}", "-p", "sample_period_s:=0.025",
                       "-p", "overrun_limit:=1000", "-p", "watchdog_periods:=80", "-p", "diagnostics_rate_hz:=20.0"):
-        client = BridgeClient(rclpy_context, "/error_test")
+        client = BridgeClient(rclpy_context, "/error_test", tmp_path / "log.txt")
         try:
             assert client.transition(Transition.TRANSITION_CONFIGURE)
             firmware = rig.firmware

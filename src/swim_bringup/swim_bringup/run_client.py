@@ -17,6 +17,7 @@ from swim_bringup.bag import RUN_TOPICS, BagWriter
 STARTUP_TIMEOUT_S = 60.0
 DRAIN_TIMEOUT_S = 60.0
 RECORD_DEPTH = 10000   # the recorder may fall behind a lock-step loop; it must not drop periods
+LOOP_TOPICS = ("joint_states", "joint_commands", "tracking_state")   # published every period by the nodes of a run
 
 
 class RunError(RuntimeError):
@@ -47,6 +48,7 @@ class RunClient:
             self.executor.add_node(self.node)
             self.bag = BagWriter(bag_path, topics)
             self.last_plan_time_s = -1.0   # plan time of the latest tracking_state recorded
+            self.recordings = {}           # topic -> the recorder's subscription
             for topic, type_name in topics.items():
                 self._record(topic, type_name)
             self.planner = self.node.create_client(RequestManeuver, "request_maneuver")
@@ -67,7 +69,7 @@ class RunClient:
         # the plan is latched (transient local): a late subscriber still gets it
         qos = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL) if topic == "plan" \
             else RECORD_DEPTH
-        self.node.create_subscription(message_class(type_name), topic, record, qos, raw=True)
+        self.recordings[topic] = self.node.create_subscription(message_class(type_name), topic, record, qos, raw=True)
 
     def __enter__(self) -> "RunClient":
         return self
@@ -108,6 +110,12 @@ class RunClient:
             raise RunError("planner_node did not come up")
         if not self.tracker.wait_for_server(timeout_sec=timeout_s):
             raise RunError("tracker_node did not come up")
+        # discovery matches each topic on its own: a recorder that met tracking_state before joint_states would
+        # miss the first states the tracker answered
+        def unmatched() -> list[str]:
+            return [topic for topic in LOOP_TOPICS
+                    if topic in self.recordings and self.recordings[topic].get_publisher_count() == 0]
+        self.spin_until(lambda: not unmatched(), timeout_s, f"publisher on each of {', '.join(LOOP_TOPICS)}")
 
     def request(self, primitive_ids: list[str], repeat_counts: list[int], time_scale: float):
         """The planner's plan (swim_interfaces/PlannedTrajectory) for the sequence; RunError if refused."""

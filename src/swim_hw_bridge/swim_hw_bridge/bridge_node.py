@@ -99,6 +99,10 @@ class BridgeSettings:
     diagnostics_rate_hz: float
     autostart: bool
 
+#: history depth of joint_states: 8 s of periods at 8 ms. A reliable keep-last writer overwrites samples a reader has
+#: not yet acknowledged, so with 10 a recorder that stalled 80 ms (a loaded host) lost states (sim_node's depth too)
+RECORDABLE_DEPTH = 1000
+
 
 class BridgeNode(LifecycleNode):
     def __init__(self) -> None:
@@ -108,7 +112,7 @@ class BridgeNode(LifecycleNode):
             self.declare_parameter(name, default, ParameterDescriptor(description=description))
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.settings = self._read_settings()
-        self.state_publisher = self.create_lifecycle_publisher(JointState, "joint_states", 10)
+        self.state_publisher = self.create_lifecycle_publisher(JointState, "joint_states", RECORDABLE_DEPTH)
         self.diagnostics_publisher = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.create_subscription(JointState, "joint_commands", self._on_command, 10)
         self.create_subscription(Bool, "emergency_stop", self._on_emergency_stop_topic, 10)
