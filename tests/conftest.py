@@ -44,11 +44,12 @@ def running_node(package: str, executable: str, log_path: Path, *ros_args: str):
         node.kill()
 
 
-def run_demo(run_dir: Path, *arguments: str, timeout_s: float = 300.0) -> str:
+def run_demo(run_dir: Path, *arguments: str, timeout_s: float = 300.0, expected_returncode: int = 0) -> str:
     """`ros2 run swim_bringup swim-demo --run-dir run_dir arguments` in the workspace's environment; its stdout
-    (the summary table). Fails the test with the tail of its output if it does not succeed."""
+    (the summary table) and stderr. Fails the test with the tail of its output if it does not exit with
+    expected_returncode."""
     command = f"source scripts/env.sh && ros2 run swim_bringup swim-demo --run-dir {run_dir} {' '.join(arguments)}"
     result = subprocess.run(["bash", "-c", command], cwd=WORKSPACE, capture_output=True, text=True,
                             timeout=timeout_s)
-    assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
-    return result.stdout
+    assert result.returncode == expected_returncode, result.stdout[-2000:] + result.stderr[-2000:]
+    return result.stdout + result.stderr

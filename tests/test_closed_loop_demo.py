@@ -8,7 +8,7 @@ import pytest
 
 from conftest import run_demo
 
-SHORT = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05"]   # 6 s + 3 s (paper Sec. 7.1)
+SHORT = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05"]   # 4 s + 5 s (the library's)
 
 
 @pytest.fixture(scope="module")
@@ -44,7 +44,14 @@ def test_bag_reads_back_and_agrees_with_the_report(demo_run):
         counts = {c.topic: c.msgcount for c in reader.connections}
         assert reader.connections[0].msgdef.data   # definitions stored: readable by any rosbag2 reader
     assert counts["plan"] == 1 and counts["tracking_state"] >= 1125 and counts["joint_commands"] >= 1125
-    states = [m for _, _, m in read_messages(run_dir / "bag", ("joint_states",))]
+    # a state recorded twice is one the simulator resent (lock-step: no command came for it within resend_after_s,
+    # as at start-up while the tracker is still being discovered): identical, one period
+    states = []
+    for _, _, message in read_messages(run_dir / "bag", ("joint_states",)):
+        if states and message.header.stamp == states[-1].header.stamp:
+            assert list(message.position) == list(states[-1].position)
+            continue
+        states.append(message)
     stamps = np.array([s.header.stamp.sec + 1e-9 * s.header.stamp.nanosec for s in states])
     np.testing.assert_allclose(np.diff(stamps), 0.008, atol=1e-6)   # lock-step: one period per state, none lost
     # energy used, independently: from the simulator's applied efforts and velocities over the tracked stretch
@@ -56,3 +63,28 @@ def test_bag_reads_back_and_agrees_with_the_report(demo_run):
     energy = np.sum(np.abs(efforts * rates)) * 0.008
     report = json.loads((run_dir / "report.json").read_text())
     assert energy == pytest.approx(report["energy_used_j"], rel=0.05)
+
+
+def test_tolerance_options_default_to_the_runs_and_refuse_nonsense():
+    from swim_bringup.demo import RUN_TOLERANCES, parse_arguments
+    assert parse_arguments([]).tolerances == RUN_TOLERANCES
+    assert parse_arguments(["--goal-tolerance-r", "0"]).tolerances.goal_r_m == 0.0   # 0: not checked
+    for bad in ("-0.1", "nan", "inf"):
+        with pytest.raises(SystemExit):
+            parse_arguments(["--path-tolerance-alpha", bad])
+
+
+def test_a_run_that_misses_its_goal_tolerance_fails(ros_domain, tmp_path):
+    """The tracker checks the demo's tolerances: a goal tolerance no closed loop meets (1 urad of alpha at the
+    end) turns the same kind of run into GOAL_TOLERANCE_VIOLATED, a failing exit and the reason printed."""
+    run_dir = tmp_path / "run"
+    output = run_demo(run_dir, "--primitives", SHORT[0], "--goal-tolerance-alpha", "1e-6", "--timeout", "120",
+                      expected_returncode=1)
+    assert (run_dir / "report.json").exists(), output[-3000:]   # it failed after the run, not before
+    report = json.loads((run_dir / "report.json").read_text())
+    assert report["result"]["error_code"] == -5   # swim_interfaces ExecutePlan GOAL_TOLERANCE_VIOLATED
+    assert abs(report["result"]["final_alpha_error_rad"]) > 1e-6
+    # it ran to the plan's end: a goal check, not a path check
+    assert report["duration_s"] == pytest.approx(report["result"]["duration_s"], abs=1e-9)
+    assert report["duration_s"] == pytest.approx(4.0, abs=0.02)   # the library's accelerate (E = 0.05)
+    assert "the tracker ended with goal tolerance violated" in output

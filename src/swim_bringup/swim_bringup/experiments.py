@@ -27,9 +27,10 @@ import time
 from pathlib import Path
 from typing import Optional
 
-from swim_bringup.analysis import analyze, write_figures
-from swim_bringup.demo import PAPER_CONSTRAINED, PAPER_LANE_KEEPING, DemoError, run_maneuver
-from swim_bringup.system import System, closed_loop_specs, config_dir
+from swim_bringup.demo import (PAPER_CONSTRAINED, PAPER_LANE_KEEPING, RUN_TOLERANCES, DemoError,
+                               add_tolerance_arguments, run_failures, run_recorded, tolerances_of)
+from swim_bringup.system import closed_loop_specs, config_dir
+from swim_controller.supervisor import Tolerances
 
 NORMS = ("longitudinal_error_two_norm_m_s05", "lateral_error_two_norm_m_s05", "cartesian_error_two_norm_m_s05")
 #: the paper's lane change (Sec. 7.3) at E = 0.05: accelerate, 5 cruises in lane 1, the change, 10 in lane 2, stop
@@ -71,24 +72,14 @@ def paper_experiments() -> list[Experiment]:
     return experiments
 
 
-def run_one(experiment: Experiment, sliding_mode: bool, run_dir: Path, config: Path, timeout_s: float) -> dict:
+def run_one(experiment: Experiment, sliding_mode: bool, run_dir: Path, config: Path, timeout_s: float,
+            tolerances: Tolerances = RUN_TOLERANCES) -> dict:
     """One closed-loop run in a fresh bring-up; its report (analysis measures, the action's result, wall time)."""
     run_dir.mkdir(parents=True, exist_ok=True)
     specs = closed_loop_specs(config, sim_overrides=(f"constrained:={str(experiment.constrained).lower()}",),
                               tracker_overrides=(f"sliding_mode_enabled:={str(sliding_mode).lower()}",))
-    started = time.monotonic()
-    with System(specs, run_dir / "logs") as system:
-        def progress(_: float) -> None:
-            if system.dead():
-                raise DemoError(f"{', '.join(system.dead())} died (see {run_dir / 'logs'})")
-        result = run_maneuver(run_dir / "bag", list(experiment.primitive_ids), list(experiment.repeat_counts),
-                              experiment.time_scale, timeout_s, progress)
-    report = analyze(run_dir / "bag")
-    report["result"] = result
-    report["wall_time_s"] = time.monotonic() - started
-    (run_dir / "report.json").write_text(json.dumps(report, indent=2))
-    write_figures(run_dir / "bag", run_dir)
-    return report
+    return run_recorded(specs, run_dir, list(experiment.primitive_ids), list(experiment.repeat_counts),
+                        experiment.time_scale, timeout_s, tolerances)
 
 
 def relative_change(with_sliding: float, without_sliding: float) -> Optional[float]:
@@ -111,7 +102,9 @@ def compare(experiment: Experiment, on: dict, off: dict) -> dict:
         "two_norms": {norm: {"sliding_on": on[norm], "sliding_off": off[norm],
                              "change": relative_change(on[norm], off[norm]),
                              "paper_change": experiment.paper_sliding_change.get(norm)} for norm in NORMS},
-        "succeeded": on["result"]["error_code"] == 0 and off["result"]["error_code"] == 0,
+        "succeeded": not run_failures(on) and not run_failures(off),
+        "outcome": {"sliding_on": "; ".join(run_failures(on)) or "ok",
+                    "sliding_off": "; ".join(run_failures(off)) or "ok"},
     }
 
 
@@ -119,9 +112,10 @@ def results_table(rows: list[dict]) -> str:
     """A Markdown table of the rows (README's results section is this table)."""
     def percent(value: Optional[float]) -> str:
         return "" if value is None else f"{100 * value:+.0f} %"
-    lines = ["| experiment | duration s (paper) | final lateral offset cm (on/off) | final alpha error mrad (on/off) "
-             "| longitudinal two-norm (on/off, change; paper) | lateral | Cartesian |",
-             "|---|---|---|---|---|---|---|"]
+    lines = ["| experiment | outcome (on/off) | duration s (paper) | final lateral offset cm (on/off) "
+             "| final alpha error mrad (on/off) | longitudinal two-norm (on/off, change; paper) | lateral "
+             "| Cartesian |",
+             "|---|---|---|---|---|---|---|---|"]
     for row in rows:
         norms = []
         for norm in NORMS:
@@ -129,7 +123,8 @@ def results_table(rows: list[dict]) -> str:
             paper = f"; {percent(entry['paper_change'])}" if entry["paper_change"] is not None else ""
             norms.append(f"{entry['sliding_on']:.4f}/{entry['sliding_off']:.4f}, {percent(entry['change'])}{paper}")
         offset, alpha = row["final_lateral_offset_m"], row["final_alpha_error_rad"]
-        lines.append(f"| {row['experiment']} | {row['duration_s']:.2f} ({row['paper_duration_s']:.2f}) "
+        lines.append(f"| {row['experiment']} | {row['outcome']['sliding_on']}/{row['outcome']['sliding_off']} "
+                     f"| {row['duration_s']:.2f} ({row['paper_duration_s']:.2f}) "
                      f"| {100 * offset['sliding_on']:+.2f}/{100 * offset['sliding_off']:+.2f} "
                      f"| {1000 * alpha['sliding_on']:+.1f}/{1000 * alpha['sliding_off']:+.1f} | "
                      + " | ".join(norms) + " |")
@@ -143,7 +138,13 @@ def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
     parser.add_argument("--run-dir", type=Path, default=None, help="output folder (default runs/experiments-<time>)")
     parser.add_argument("--config", type=Path, default=None, help="folder of sim/planner/tracker YAML files")
     parser.add_argument("--timeout", type=float, default=600.0, help="wall-time limit of one run, s")
-    return parser.parse_args(argv)
+    add_tolerance_arguments(parser)
+    args = parser.parse_args(argv)
+    try:
+        args.tolerances = tolerances_of(args)
+    except ValueError as err:
+        parser.error(str(err))
+    return args
 
 
 def main(argv: Optional[list[str]] = None) -> int:
@@ -165,7 +166,7 @@ def main(argv: Optional[list[str]] = None) -> int:
                 bar.set_description(label)
                 try:
                     reports[sliding_mode] = run_one(experiment, sliding_mode, run_dir / label,
-                                                    args.config or config_dir(), args.timeout)
+                                                    args.config or config_dir(), args.timeout, args.tolerances)
                 except DemoError as err:
                     print(f"swim-experiments: {label}: {err}", file=sys.stderr)
                     return 1

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from swim_bringup.bag import RUN_TOPICS, BagWriter
+from swim_controller.supervisor import Tolerances
 
 STARTUP_TIMEOUT_S = 60.0
 DRAIN_TIMEOUT_S = 60.0
@@ -66,9 +67,14 @@ class RunClient:
             self.bag.write(topic, time.time_ns(), cdr)
             if topic == "tracking_state":
                 self.last_plan_time_s = deserialize_message(cdr, TrackingState).plan_time_s
-        # the plan is latched (transient local): a late subscriber still gets it
-        qos = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL) if topic == "plan" \
-            else RECORD_DEPTH
+        # the plan is latched, and the loop's topics keep their history for late joiners (both transient local):
+        # asking for it gets what was published before this recorder's match completed
+        if topic == "plan":
+            qos = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
+        elif topic in LOOP_TOPICS:
+            qos = QoSProfile(depth=RECORD_DEPTH, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
+        else:
+            qos = QoSProfile(depth=RECORD_DEPTH)
         self.recordings[topic] = self.node.create_subscription(message_class(type_name), topic, record, qos, raw=True)
 
     def __enter__(self) -> "RunClient":
@@ -127,15 +133,20 @@ class RunClient:
             raise RunError(f"the planner refused the maneuver: {reply.message}")
         return reply.plan
 
-    def execute(self, plan, progress: Optional[Callable[[float], None]] = None):
-        """Send the plan to the tracker; returns the accepted goal's handle (RunError if refused)."""
+    def execute(self, plan, progress: Optional[Callable[[float], None]] = None,
+                tolerances: Optional[Tolerances] = None):
+        """Send the plan to the tracker with tolerances (default: none checked); returns the accepted goal's
+        handle (RunError if refused)."""
         from swim_interfaces.action import ExecutePlan
+        goal = ExecutePlan.Goal(plan=plan)
+        if tolerances is not None:
+            goal.path_tolerance_alpha_rad, goal.path_tolerance_r_m = tolerances.path_alpha_rad, tolerances.path_r_m
+            goal.goal_tolerance_alpha_rad, goal.goal_tolerance_r_m = tolerances.goal_alpha_rad, tolerances.goal_r_m
 
         def on_feedback(message) -> None:
             if progress is not None:
                 progress(message.feedback.progress)
-        handle = self.wait_for(self.tracker.send_goal_async(ExecutePlan.Goal(plan=plan),
-                                                            feedback_callback=on_feedback), 30.0,
+        handle = self.wait_for(self.tracker.send_goal_async(goal, feedback_callback=on_feedback), 30.0,
                                "answer from the tracker")
         if not handle.accepted:
             raise RunError("the tracker refused the goal")

@@ -24,10 +24,10 @@ def test_every_experiment_lasts_the_papers_nominal_time():
         assert experiment.expected_duration_s() == pytest.approx(total / experiment.time_scale)
 
 
-def _report(scale: float, offset_m: float) -> dict:
+def _report(scale: float, offset_m: float, error_code: int = 0, error_string: str = "plan completed") -> dict:
     report = {norm: scale * (i + 1) for i, norm in enumerate(NORMS)}
     report.update(duration_s=25.0, final_lateral_offset_m=offset_m, final_alpha_error_rad=0.01,
-                  saturated_fraction=0.0, result={"error_code": 0})
+                  saturated_fraction=0.0, result={"error_code": error_code, "error_string": error_string})
     return report
 
 
@@ -41,4 +41,15 @@ def test_sliding_modes_change_is_relative_to_the_run_without_it():
     assert row["succeeded"]
     assert relative_change(1.0, 0.0) is None
     table = results_table([row])
-    assert "-10 %; -12 %" in table and "+0.10/+0.20" in table
+    assert "-10 %; -12 %" in table and "+0.10/+0.20" in table and "| ok/ok |" in table
+
+
+def test_a_run_the_tracker_aborted_is_not_a_success():
+    lost = _report(1.0, 0.3, -4, "path tolerance violated: alpha error 1.2 rad")
+    row = compare(paper_experiments()[4], lost, _report(1.0, 0.001))
+    assert not row["succeeded"]
+    assert row["outcome"]["sliding_on"] == "the tracker ended with path tolerance violated: alpha error 1.2 rad"
+    assert row["outcome"]["sliding_off"] == "ok"
+    faulted = _report(1.0, 0.001)
+    faulted["bridge_faults"] = "OVERRUN"
+    assert not compare(paper_experiments()[4], faulted, _report(1.0, 0.001))["succeeded"]

@@ -134,3 +134,31 @@ class Supervisor:
                 torque, saturated = self.tracker.hold(q, qdot, self._hold_target)
                 return Step(torque, saturated, output, outcome)
         return Step(output.torque, output.saturated, output, outcome)
+
+
+class StaleStateWatch:
+    """Is the newest state older than limit_s? Asked every check_period_s by a timer; times in seconds on any
+    monotonic clock.
+
+    A check that comes more than late_periods check periods after the one before means the asker itself was held
+    up (its process did not run, or a callback held its executor): states that arrived meanwhile are still unread,
+    so that check does not judge. At most one check in a row is skipped, so a dead plant is caught on a host that
+    is always late, at most one check period later than on time.
+    """
+
+    def __init__(self, now_s: float, check_period_s: float, late_periods: float = 3.0) -> None:
+        self.check_period_s = check_period_s
+        self.late_periods = late_periods
+        self.last_state_s = now_s
+        self._last_check_s = now_s
+        self._skipped = False
+
+    def state_arrived(self, now_s: float) -> None:
+        self.last_state_s = now_s
+
+    def stale(self, now_s: float, limit_s: float) -> bool:
+        """The check: True if no state arrived within limit_s of now_s (and this check may judge)."""
+        came_late = now_s - self._last_check_s > self.late_periods * self.check_period_s
+        skip = came_late and not self._skipped
+        self._last_check_s, self._skipped = now_s, skip
+        return not skip and now_s - self.last_state_s > limit_s

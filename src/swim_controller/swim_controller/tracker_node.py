@@ -35,6 +35,7 @@ from rclpy.action import ActionServer, CancelResponse
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
+from rclpy.qos import QoSDurabilityPolicy, QoSProfile, QoSReliabilityPolicy
 from rclpy.task import Future
 from sensor_msgs.msg import JointState
 from swim_interfaces.action import ExecutePlan
@@ -44,7 +45,7 @@ from trajectory_msgs.msg import JointTrajectoryPoint
 from swim_controller.errors import PlanError, StateMessageError
 from swim_controller.messages import reference_from_message, state_from_message
 from swim_controller.sliding_mode import SlidingMode
-from swim_controller.supervisor import Mode, Outcome, Step, Supervisor, Tolerances
+from swim_controller.supervisor import Mode, Outcome, StaleStateWatch, Step, Supervisor, Tolerances
 from swim_controller.tracker import CascadeTracker, model_io_linearization
 from swim_controller.velocity_filter import DEFAULT_CUTOFF_HZ, VelocityEstimator
 from swim_model import SwimModelError, VehicleModel, load_rig
@@ -58,9 +59,13 @@ RESULT_CODES = {
     Outcome.CANCELED: ExecutePlan.Result.CANCELED,
 }
 
-#: history depth of the per-period topics: 8 s of periods at 8 ms
-RECORDABLE_DEPTH = 1000
-
+#: the per-period topics' QoS, for recorders: 8 s of periods at 8 ms, kept for late joiners. A reliable keep-last
+#: writer overwrites samples a reader has not acknowledged (a recorder behind a lock-step loop, or stalled on a
+#: loaded host, would lose periods with a shallow history), and discovery matches each endpoint pair in each
+#: direction on its own (a recorder can see this writer before the writer sees it, and miss what is published
+#: meanwhile): transient local hands a late reader the history. Volatile readers (the nodes) still match.
+RECORDABLE_QOS = QoSProfile(depth=1000, reliability=QoSReliabilityPolicy.RELIABLE,
+                            durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
 PARAMETER_RULES = {
     "sample_period_s": (lambda v: isinstance(v, float) and 0.001 <= v <= 0.1, "a float in [0.001, 0.1] s"),
     "stale_after_periods": (lambda v: isinstance(v, int) and 1 <= v <= 1000, "an integer in [1, 1000]"),
@@ -119,19 +124,17 @@ class TrackerNode(Node):
         self._supervisor: Optional[Supervisor] = None
         self._goal: Optional[ActiveGoal] = None
         self._last_q: Optional[np.ndarray] = None
-        self._last_state_monotonic = time.monotonic()
+        self._stale_watch = StaleStateWatch(time.monotonic(), self.get_parameter("sample_period_s").value)
         self._last_tracking: Optional[TrackingState] = None
         self._velocity = VelocityEstimator(self.get_parameter("velocity_cutoff_hz").value)
         self.rejected_states = 0
         self.commands_sent = 0
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
-        # deep histories: a recorder that falls behind a faster-than-real-time lock-step loop still gets every
-        # period (reliable delivery only covers what the writer's history still holds)
         no_events = PublisherEventCallbacks(use_default_callbacks=False)
-        self.command_publisher = self.create_publisher(JointState, "joint_commands", RECORDABLE_DEPTH,
+        self.command_publisher = self.create_publisher(JointState, "joint_commands", RECORDABLE_QOS,
                                                        event_callbacks=no_events)
-        self.tracking_publisher = self.create_publisher(TrackingState, "tracking_state", RECORDABLE_DEPTH,
+        self.tracking_publisher = self.create_publisher(TrackingState, "tracking_state", RECORDABLE_QOS,
                                                         event_callbacks=no_events)
         self._command_message = JointState(name=["phi", "theta"])   # reused every period
         self._tracking_message_reused = TrackingState(reference=JointTrajectoryPoint(),
@@ -191,7 +194,7 @@ class TrackerNode(Node):
             self.get_logger().warning(f"state rejected ({self.rejected_states} so far): {err}",
                                       throttle_duration_sec=1.0)
             return
-        self._last_state_monotonic = time.monotonic()
+        self._stale_watch.state_arrived(time.monotonic())
         self._last_q = q
         if supervisor is None:
             self._publish_command(np.zeros(2), message.header.stamp)
@@ -229,7 +232,7 @@ class TrackerNode(Node):
 
     def _check_stale(self) -> None:
         limit = self.get_parameter("stale_after_periods").value * self.get_parameter("sample_period_s").value
-        if time.monotonic() - self._last_state_monotonic <= limit:
+        if not self._stale_watch.stale(time.monotonic(), limit):
             return
         if self._supervisor is not None and self._supervisor.mode is not Mode.STOPPED:
             self._supervisor.state_lost()
@@ -300,7 +303,7 @@ class TrackerNode(Node):
         goal.supervisor.begin(reference, tolerances)
         self._goal, self._supervisor, self._last_tracking = goal, goal.supervisor, None
         # a new goal's first state is due within stale_after_periods from now, not from the last one seen
-        self._last_state_monotonic = time.monotonic()
+        self._stale_watch.state_arrived(time.monotonic())
         self.get_logger().info(f"executing a {reference.duration_s:.2f} s plan ({len(plan.segments)} segments)")
         await goal.done
         return self._finish(goal)

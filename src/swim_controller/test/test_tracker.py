@@ -109,3 +109,29 @@ def test_supervisor_reports_tolerances_and_holds_after_the_plan():
     np.testing.assert_allclose(held.torque, np.diag([2.0, 0.5]) @ (-100.0 * np.array([0.1, -0.2])))
     supervisor.state_lost()
     assert np.all(supervisor.on_state(1.4, np.zeros(3), np.zeros(3)).torque == 0.0)
+
+
+def test_stale_state_watch_judges_on_time_checks_and_skips_one_late_check():
+    from swim_controller.supervisor import StaleStateWatch
+    period, limit = 0.008, 0.096
+    watch = StaleStateWatch(0.0, period)
+    # on-time checks: stale exactly once the newest state is older than the limit
+    checks = [k * period for k in range(1, 20)]
+    verdicts = [watch.stale(t, limit) for t in checks]
+    assert verdicts == [t > limit for t in checks]
+    # the asker was held up 0.2 s: the first check after the stall does not judge (a state may wait unread) ...
+    watch = StaleStateWatch(0.0, period)
+    watch.state_arrived(0.0)
+    assert not watch.stale(0.2, limit)
+    watch.state_arrived(0.2001)             # ... and the queued state is then read
+    assert not watch.stale(0.208, limit)
+    # ... but with no state at all, the next check judges even if it is late too
+    watch = StaleStateWatch(0.0, period)
+    assert not watch.stale(0.2, limit)
+    assert watch.stale(0.4, limit)
+    # on a host where every check is late, a dead plant is still caught within one extra check
+    watch = StaleStateWatch(0.0, period)
+    late = [0.05 * k for k in range(1, 8)]
+    verdicts = [watch.stale(t, limit) for t in late]
+    first = late[verdicts.index(True)]
+    assert limit < first <= limit + 2 * 0.05

@@ -47,6 +47,7 @@ from rclpy.duration import Duration
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.lifecycle import Node as LifecycleNode
 from rclpy.lifecycle import State, TransitionCallbackReturn
+from rclpy.qos import QoSDurabilityPolicy, QoSProfile, QoSReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
 from std_srvs.srv import Trigger
@@ -99,9 +100,13 @@ class BridgeSettings:
     diagnostics_rate_hz: float
     autostart: bool
 
-#: history depth of joint_states: 8 s of periods at 8 ms. A reliable keep-last writer overwrites samples a reader has
-#: not yet acknowledged, so with 10 a recorder that stalled 80 ms (a loaded host) lost states (sim_node's depth too)
-RECORDABLE_DEPTH = 1000
+#: the per-period topics' QoS, for recorders: 8 s of periods at 8 ms, kept for late joiners. A reliable keep-last
+#: writer overwrites samples a reader has not acknowledged (a recorder behind a lock-step loop, or stalled on a
+#: loaded host, would lose periods with a shallow history), and discovery matches each endpoint pair in each
+#: direction on its own (a recorder can see this writer before the writer sees it, and miss what is published
+#: meanwhile): transient local hands a late reader the history. Volatile readers (the nodes) still match.
+RECORDABLE_QOS = QoSProfile(depth=1000, reliability=QoSReliabilityPolicy.RELIABLE,
+                            durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
 
 
 class BridgeNode(LifecycleNode):
@@ -112,7 +117,7 @@ class BridgeNode(LifecycleNode):
             self.declare_parameter(name, default, ParameterDescriptor(description=description))
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.settings = self._read_settings()
-        self.state_publisher = self.create_lifecycle_publisher(JointState, "joint_states", RECORDABLE_DEPTH)
+        self.state_publisher = self.create_lifecycle_publisher(JointState, "joint_states", RECORDABLE_QOS)
         self.diagnostics_publisher = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.create_subscription(JointState, "joint_commands", self._on_command, 10)
         self.create_subscription(Bool, "emergency_stop", self._on_emergency_stop_topic, 10)

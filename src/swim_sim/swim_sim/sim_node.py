@@ -41,6 +41,7 @@ from builtin_interfaces.msg import Time
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
+from rclpy.qos import QoSDurabilityPolicy, QoSProfile, QoSReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
@@ -54,7 +55,13 @@ from swim_sim.sensors import SensorNoise, Sensors
 from swim_sim.wake_coupling import WakeCoupling, parameter_defaults, parameters_from_values
 
 MOTOR_JOINTS = ["phi", "theta"]
-RECORDABLE_DEPTH = 1000   # 8 s of periods at 8 ms
+#: the per-period topics' QoS, for recorders: 8 s of periods at 8 ms, kept for late joiners. A reliable keep-last
+#: writer overwrites samples a reader has not acknowledged (a recorder behind a lock-step loop, or stalled on a
+#: loaded host, would lose periods with a shallow history), and discovery matches each endpoint pair in each
+#: direction on its own (a recorder can see this writer before the writer sees it, and miss what is published
+#: meanwhile): transient local hands a late reader the history. Volatile readers (the nodes) still match.
+RECORDABLE_QOS = QoSProfile(depth=1000, reliability=QoSReliabilityPolicy.RELIABLE,
+                            durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
 
 
 def stamp_of(time_s: float) -> Time:
@@ -135,12 +142,11 @@ class SimNode(Node):
         self._clock_message = Clock()
         self._efforts = np.zeros(model.nq)   # the unactuated coordinates' entries stay zero
 
-        # a deep history: a recorder behind a faster-than-real-time lock-step loop still gets every period
         no_events = PublisherEventCallbacks(use_default_callbacks=False)
-        self.state_publisher = self.create_publisher(JointState, "joint_states", RECORDABLE_DEPTH,
+        self.state_publisher = self.create_publisher(JointState, "joint_states", RECORDABLE_QOS,
                                                      event_callbacks=no_events)
         self.clock_publisher = self.create_publisher(Clock, "/clock", 10, event_callbacks=no_events)
-        self.wake_publisher = self.create_publisher(WakeStatistics, "wake_statistics", RECORDABLE_DEPTH) \
+        self.wake_publisher = self.create_publisher(WakeStatistics, "wake_statistics", RECORDABLE_QOS) \
             if wake is not None else None
         self.create_subscription(JointState, "joint_commands", self._on_command, 10,
                                  event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
