@@ -374,7 +374,9 @@ def test_a_device_lost_while_active_takes_deactivate_into_error_processing(ros_d
             assert wait_for(client, lambda: firmware.outputs_enabled, 2.0)
             assert client.transition(Transition.TRANSITION_DEACTIVATE)   # a device that answers: a plain deactivate
             assert client.state_label() == "inactive"
-            assert not firmware.enable_requested and firmware.commanded_currents_ua == (0, 0)
+            # the board's firmware (a thread of this process) reads the bridge's last frames when it next runs
+            assert wait_for(client, lambda: not firmware.enable_requested and firmware.commanded_currents_ua == (0, 0),
+                            2.0)
         finally:
             client.close()
             rig.close()

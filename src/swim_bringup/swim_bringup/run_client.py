@@ -8,6 +8,7 @@ of receipt. swim-demo uses it for a whole maneuver; the kill-a-node tests use it
 from __future__ import annotations
 
 import importlib
+import struct
 import time
 from pathlib import Path
 from typing import Callable, Optional
@@ -48,8 +49,8 @@ class RunClient:
             self.executor = SingleThreadedExecutor(context=self.context)
             self.executor.add_node(self.node)
             self.bag = BagWriter(bag_path, topics)
-            self.last_plan_time_s = -1.0   # plan time of the latest tracking_state recorded
-            self.recordings = {}           # topic -> the recorder's subscription
+            self.latest_cdr: dict[str, bytes] = {}   # topic -> the latest message recorded, as received
+            self.recordings = {}                       # topic -> the recorder's subscription
             for topic, type_name in topics.items():
                 self._record(topic, type_name)
             self.planner = self.node.create_client(RequestManeuver, "request_maneuver")
@@ -60,22 +61,22 @@ class RunClient:
 
     def _record(self, topic: str, type_name: str) -> None:
         from rclpy.qos import QoSDurabilityPolicy, QoSProfile
-        from rclpy.serialization import deserialize_message
-        from swim_interfaces.msg import TrackingState
 
         def record(cdr: bytes) -> None:
             self.bag.write(topic, time.time_ns(), cdr)
-            if topic == "tracking_state":
-                self.last_plan_time_s = deserialize_message(cdr, TrackingState).plan_time_s
-        # the plan is latched, and the loop's topics keep their history for late joiners (both transient local):
-        # asking for it gets what was published before this recorder's match completed
-        if topic == "plan":
-            qos = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
-        elif topic in LOOP_TOPICS:
-            qos = QoSProfile(depth=RECORD_DEPTH, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
-        else:
-            qos = QoSProfile(depth=RECORD_DEPTH)
+            self.latest_cdr[topic] = cdr
+        # the plan is latched (transient local): a late subscriber still gets it
+        qos = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL) if topic == "plan" \
+            else RECORD_DEPTH
         self.recordings[topic] = self.node.create_subscription(message_class(type_name), topic, record, qos, raw=True)
+
+    @property
+    def last_plan_time_s(self) -> float:
+        """Plan time of the latest tracking_state recorded (-1 before the first)."""
+        from rclpy.serialization import deserialize_message
+        from swim_interfaces.msg import TrackingState
+        cdr = self.latest_cdr.get("tracking_state")
+        return -1.0 if cdr is None else deserialize_message(cdr, TrackingState).plan_time_s
 
     def __enter__(self) -> "RunClient":
         return self
@@ -153,10 +154,32 @@ class RunClient:
         return handle
 
     def drain(self, duration_s: float) -> None:
-        """Record until the plan's last period (plan time duration_s) is in the bag, then a few more periods:
-        the recorder may lag a faster-than-real-time loop."""
-        drain_until = time.monotonic() + DRAIN_TIMEOUT_S
-        while self.last_plan_time_s < duration_s - 1e-6 and time.monotonic() < drain_until:
+        """Record until the plan's last period (plan time duration_s) is in the bag on every loop topic, then a
+        few more periods. The recorder may lag a faster-than-real-time loop, and by more on joint_states and
+        joint_commands, which flowed (and queued) before the plan while tracking_state did not. RunError if
+        that does not happen within DRAIN_TIMEOUT_S."""
+        deadline = time.monotonic() + DRAIN_TIMEOUT_S
+        final_stamp_ns, checked = None, None
+        while not self._recorded_up_to(final_stamp_ns):
+            if time.monotonic() > deadline:
+                raise RunError(f"the recorder did not get the plan's last period within {DRAIN_TIMEOUT_S:.0f} s")
             self.executor.spin_once(timeout_sec=0.05)
+            latest = self.latest_cdr.get("tracking_state")
+            if final_stamp_ns is None and latest is not checked:   # deserialize each tracking_state once
+                checked = latest
+                if self.last_plan_time_s >= duration_s - 1e-6:
+                    final_stamp_ns = header_stamp_ns(latest)
         for _ in range(20):   # a few periods of the hold after it
             self.executor.spin_once(timeout_sec=0.01)
+
+    def _recorded_up_to(self, stamp_ns: Optional[int]) -> bool:
+        return stamp_ns is not None and all(
+            topic in self.latest_cdr and header_stamp_ns(self.latest_cdr[topic]) >= stamp_ns
+            for topic in LOOP_TOPICS if topic in self.recordings)
+
+
+def header_stamp_ns(cdr: bytes) -> int:
+    """The header stamp of a serialized message that starts with a std_msgs/Header (CDR: a 4-byte encapsulation
+    header, its second byte 1 for little-endian, then the stamp's int32 sec and uint32 nanosec)."""
+    sec, nanosec = struct.unpack_from("<iI" if cdr[1] == 1 else ">iI", cdr, 4)
+    return sec * 1_000_000_000 + nanosec

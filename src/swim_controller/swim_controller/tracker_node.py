@@ -35,7 +35,7 @@ from rclpy.action import ActionServer, CancelResponse
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.qos import QoSDurabilityPolicy, QoSProfile, QoSReliabilityPolicy
+from rclpy.qos import QoSProfile, QoSReliabilityPolicy
 from rclpy.task import Future
 from sensor_msgs.msg import JointState
 from swim_interfaces.action import ExecutePlan
@@ -59,13 +59,10 @@ RESULT_CODES = {
     Outcome.CANCELED: ExecutePlan.Result.CANCELED,
 }
 
-#: the per-period topics' QoS, for recorders: 8 s of periods at 8 ms, kept for late joiners. A reliable keep-last
-#: writer overwrites samples a reader has not acknowledged (a recorder behind a lock-step loop, or stalled on a
-#: loaded host, would lose periods with a shallow history), and discovery matches each endpoint pair in each
-#: direction on its own (a recorder can see this writer before the writer sees it, and miss what is published
-#: meanwhile): transient local hands a late reader the history. Volatile readers (the nodes) still match.
-RECORDABLE_QOS = QoSProfile(depth=1000, reliability=QoSReliabilityPolicy.RELIABLE,
-                            durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
+#: the per-period topics' QoS, for recorders: 8 s of periods at 8 ms kept by the writer. A reliable keep-last
+#: writer overwrites samples a reader has not acknowledged: with a shallow history a recorder behind a lock-step
+#: loop, or stalled on a loaded host, would lose periods.
+RECORDABLE_QOS = QoSProfile(depth=1000, reliability=QoSReliabilityPolicy.RELIABLE)
 PARAMETER_RULES = {
     "sample_period_s": (lambda v: isinstance(v, float) and 0.001 <= v <= 0.1, "a float in [0.001, 0.1] s"),
     "stale_after_periods": (lambda v: isinstance(v, int) and 1 <= v <= 1000, "an integer in [1, 1000]"),

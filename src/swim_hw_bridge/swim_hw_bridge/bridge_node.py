@@ -47,7 +47,7 @@ from rclpy.duration import Duration
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.lifecycle import Node as LifecycleNode
 from rclpy.lifecycle import State, TransitionCallbackReturn
-from rclpy.qos import QoSDurabilityPolicy, QoSProfile, QoSReliabilityPolicy
+from rclpy.qos import QoSProfile, QoSReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
 from std_srvs.srv import Trigger
@@ -100,13 +100,10 @@ class BridgeSettings:
     diagnostics_rate_hz: float
     autostart: bool
 
-#: the per-period topics' QoS, for recorders: 8 s of periods at 8 ms, kept for late joiners. A reliable keep-last
-#: writer overwrites samples a reader has not acknowledged (a recorder behind a lock-step loop, or stalled on a
-#: loaded host, would lose periods with a shallow history), and discovery matches each endpoint pair in each
-#: direction on its own (a recorder can see this writer before the writer sees it, and miss what is published
-#: meanwhile): transient local hands a late reader the history. Volatile readers (the nodes) still match.
-RECORDABLE_QOS = QoSProfile(depth=1000, reliability=QoSReliabilityPolicy.RELIABLE,
-                            durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
+#: the per-period topics' QoS, for recorders: 8 s of periods at 8 ms kept by the writer. A reliable keep-last
+#: writer overwrites samples a reader has not acknowledged: with a shallow history a recorder behind a lock-step
+#: loop, or stalled on a loaded host, would lose periods.
+RECORDABLE_QOS = QoSProfile(depth=1000, reliability=QoSReliabilityPolicy.RELIABLE)
 
 
 class BridgeNode(LifecycleNode):

@@ -41,7 +41,7 @@ from builtin_interfaces.msg import Time
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.qos import QoSDurabilityPolicy, QoSProfile, QoSReliabilityPolicy
+from rclpy.qos import QoSProfile, QoSReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
@@ -55,13 +55,10 @@ from swim_sim.sensors import SensorNoise, Sensors
 from swim_sim.wake_coupling import WakeCoupling, parameter_defaults, parameters_from_values
 
 MOTOR_JOINTS = ["phi", "theta"]
-#: the per-period topics' QoS, for recorders: 8 s of periods at 8 ms, kept for late joiners. A reliable keep-last
-#: writer overwrites samples a reader has not acknowledged (a recorder behind a lock-step loop, or stalled on a
-#: loaded host, would lose periods with a shallow history), and discovery matches each endpoint pair in each
-#: direction on its own (a recorder can see this writer before the writer sees it, and miss what is published
-#: meanwhile): transient local hands a late reader the history. Volatile readers (the nodes) still match.
-RECORDABLE_QOS = QoSProfile(depth=1000, reliability=QoSReliabilityPolicy.RELIABLE,
-                            durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
+#: the per-period topics' QoS, for recorders: 8 s of periods at 8 ms kept by the writer. A reliable keep-last
+#: writer overwrites samples a reader has not acknowledged: with a shallow history a recorder behind a lock-step
+#: loop, or stalled on a loaded host, would lose periods.
+RECORDABLE_QOS = QoSProfile(depth=1000, reliability=QoSReliabilityPolicy.RELIABLE)
 
 
 def stamp_of(time_s: float) -> Time:
