@@ -45,6 +45,9 @@ def load_run(bag_path: Path) -> Run:
         rows.append(message)
     if not rows:
         raise ValueError(f"{bag_path}: no tracking_state messages (was a plan executed while recording?)")
+    if lane_radius_m is None and "R" not in rows[0].joint_names:
+        raise ValueError(f"{bag_path}: no plan message: the constrained vehicle's lane radius, which turns its "
+                         f"alpha errors into metres, is unknown")
     return Run(time_s=np.array([r.plan_time_s for r in rows]),
                q=np.array([r.feedback.positions for r in rows]),
                qdot=np.array([r.feedback.velocities for r in rows]),

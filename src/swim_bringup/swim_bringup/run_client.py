@@ -154,10 +154,10 @@ class RunClient:
         return handle
 
     def drain(self, duration_s: float) -> None:
-        """Record until the plan's last period (plan time duration_s) is in the bag on every loop topic, then a
-        few more periods. The recorder may lag a faster-than-real-time loop, and by more on joint_states and
-        joint_commands, which flowed (and queued) before the plan while tracking_state did not. RunError if
-        that does not happen within DRAIN_TIMEOUT_S."""
+        """Record until the plan's last period (plan time duration_s) is in the bag on every loop topic, and the
+        plan itself, then a few more periods. The recorder may lag a faster-than-real-time loop, and by more on
+        joint_states and joint_commands, which flowed (and queued) before the plan while tracking_state did not.
+        RunError if that does not happen within DRAIN_TIMEOUT_S."""
         deadline = time.monotonic() + DRAIN_TIMEOUT_S
         final_stamp_ns, checked = None, None
         while not self._recorded_up_to(final_stamp_ns):
@@ -173,7 +173,9 @@ class RunClient:
             self.executor.spin_once(timeout_sec=0.01)
 
     def _recorded_up_to(self, stamp_ns: Optional[int]) -> bool:
-        return stamp_ns is not None and all(
+        """Every loop topic recorded up to stamp_ns, and the plan recorded: a plan of thousands of samples goes out
+        in fragments, and one lost beside a fast loop is repaired only at the writer's next heartbeat."""
+        return stamp_ns is not None and ("plan" not in self.recordings or "plan" in self.latest_cdr) and all(
             topic in self.latest_cdr and header_stamp_ns(self.latest_cdr[topic]) >= stamp_ns
             for topic in LOOP_TOPICS if topic in self.recordings)
 

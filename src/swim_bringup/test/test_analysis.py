@@ -58,3 +58,28 @@ def test_node_command_is_what_ros2_run_takes():
                     ros_arguments=("-r", "__ns:=/test"))
     assert spec.command() == ["ros2", "run", "swim_sim", "sim_node", "--ros-args", "-p", "seed:=3",
                               "-r", "__ns:=/test"]
+
+
+def test_a_constrained_run_without_its_plan_is_refused_not_measured_at_radius_zero(tmp_path):
+    """The constrained vehicle's lane radius comes only with the plan: a bag that lacks it (a recorder stopped
+    before the plan's fragments arrived) must not give two-norms of zero."""
+    from swim_bringup.analysis import load_run
+    from swim_bringup.bag import BagWriter, swim_typestore
+    store = swim_typestore()
+    types = store.types
+    Time, Duration = types["builtin_interfaces/msg/Time"], types["builtin_interfaces/msg/Duration"]
+
+    def point(positions):
+        empty = np.zeros(0)
+        return types["trajectory_msgs/msg/JointTrajectoryPoint"](np.array(positions, float), np.zeros(3), empty,
+                                                                 empty, Duration(0, 0))
+    writer = BagWriter(tmp_path / "bag")
+    for k in range(3):
+        message = types["swim_interfaces/msg/TrackingState"](
+            types["std_msgs/msg/Header"](Time(1, 8_000_000 * k), ""), ["alpha", "phi", "theta"],
+            point([0.0] * 3), point([0.01 * k, 0.0, 0.0]), point([-0.01 * k, 0.0, 0.0]), np.zeros(2), np.zeros(2),
+            np.zeros(2, bool), 0.008 * k, 1.0, 0, True)
+        writer.write("tracking_state", k + 1, bytes(store.serialize_cdr(message, message.__msgtype__)))
+    writer.close()
+    with pytest.raises(ValueError, match="no plan message"):
+        load_run(tmp_path / "bag")
