@@ -162,7 +162,8 @@ class RunClient:
         final_stamp_ns, checked = None, None
         while not self._recorded_up_to(final_stamp_ns):
             if time.monotonic() > deadline:
-                raise RunError(f"the recorder did not get the plan's last period within {DRAIN_TIMEOUT_S:.0f} s")
+                raise RunError(f"the recorder did not get the plan's last period within {DRAIN_TIMEOUT_S:.0f} s "
+                               f"({self._recording_status(final_stamp_ns)})")
             self.executor.spin_once(timeout_sec=0.05)
             latest = self.latest_cdr.get("tracking_state")
             if final_stamp_ns is None and latest is not checked:   # deserialize each tracking_state once
@@ -178,6 +179,13 @@ class RunClient:
         return stamp_ns is not None and ("plan" not in self.recordings or "plan" in self.latest_cdr) and all(
             topic in self.latest_cdr and header_stamp_ns(self.latest_cdr[topic]) >= stamp_ns
             for topic in LOOP_TOPICS if topic in self.recordings)
+
+
+    def _recording_status(self, final_stamp_ns: Optional[int]) -> str:
+        latest = {topic: header_stamp_ns(cdr) * 1e-9 for topic, cdr in self.latest_cdr.items() if topic in LOOP_TOPICS}
+        return (f"last period {'not seen' if final_stamp_ns is None else f'{final_stamp_ns * 1e-9:.3f} s'}, "
+                f"latest stamps {', '.join(f'{t} {v:.3f} s' for t, v in latest.items())}, "
+                f"plan {'recorded' if 'plan' in self.latest_cdr else 'missing'}")
 
 
 def header_stamp_ns(cdr: bytes) -> int:
