@@ -96,11 +96,18 @@ def add_tolerance_arguments(parser: argparse.ArgumentParser) -> None:
                             help=f"tracker tolerance, {unit} (0: not checked; default %(default)s)")
 
 
-def tolerances_of(args: argparse.Namespace) -> Tolerances:
-    """The Tolerances the options name; ValueError for a negative or non-finite one."""
-    tolerances = Tolerances(**{field.name: getattr(args, field.name) for field in dataclasses.fields(Tolerances)})
-    tolerances.validate()
-    return tolerances
+def parse_with_tolerances(parser: argparse.ArgumentParser, argv: list[str] | None) -> argparse.Namespace:
+    """parser's arguments plus the tolerance options; args.tolerances is the Tolerances they name (a negative or
+    non-finite one is a usage error)."""
+    add_tolerance_arguments(parser)
+    args = parser.parse_args(argv)
+    try:
+        args.tolerances = Tolerances(**{field.name: getattr(args, field.name)
+                                        for field in dataclasses.fields(Tolerances)})
+        args.tolerances.validate()
+    except ValueError as err:
+        parser.error(str(err))
+    return args
 
 
 def parse_arguments(argv: list[str] | None) -> argparse.Namespace:
@@ -115,12 +122,7 @@ def parse_arguments(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--sliding-mode", choices=("on", "off"), default="on")
     parser.add_argument("--config", type=Path, default=None, help="folder of sim/planner/tracker YAML files")
     parser.add_argument("--timeout", type=float, default=600.0, help="wall-time limit of the maneuver, s")
-    add_tolerance_arguments(parser)
-    args = parser.parse_args(argv)
-    try:
-        args.tolerances = tolerances_of(args)
-    except ValueError as err:
-        parser.error(str(err))
+    args = parse_with_tolerances(parser, argv)
     default = PAPER_LANE_KEEPING if args.plant == "bridge" else PAPER_CONSTRAINED
     if args.primitives is None:
         args.primitives, args.repeats = default[0], args.repeats or default[1]

@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Optional
 
 from swim_bringup.demo import (PAPER_CONSTRAINED, PAPER_LANE_KEEPING, RUN_TOLERANCES, DemoError,
-                               add_tolerance_arguments, run_failures, run_recorded, tolerances_of)
+                               parse_with_tolerances, run_failures, run_recorded)
 from swim_bringup.system import closed_loop_specs, config_dir
 from swim_controller.supervisor import Tolerances
 
@@ -138,13 +138,7 @@ def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
     parser.add_argument("--run-dir", type=Path, default=None, help="output folder (default runs/experiments-<time>)")
     parser.add_argument("--config", type=Path, default=None, help="folder of sim/planner/tracker YAML files")
     parser.add_argument("--timeout", type=float, default=600.0, help="wall-time limit of one run, s")
-    add_tolerance_arguments(parser)
-    args = parser.parse_args(argv)
-    try:
-        args.tolerances = tolerances_of(args)
-    except ValueError as err:
-        parser.error(str(err))
-    return args
+    return parse_with_tolerances(parser, argv)
 
 
 def main(argv: Optional[list[str]] = None) -> int:
