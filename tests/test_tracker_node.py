@@ -225,12 +225,8 @@ def test_parameters_are_validated_and_switch_sliding_mode_mid_plan(rig_loop, pla
     assert parameters.wait_for_services(timeout_sec=10.0)
 
     def set_parameter(name, value):
-        """Set it while the lock-step plant keeps stepping, as the simulator would: a parameter round trip on a
-        loaded host can take longer than the node's stale-state limit."""
         future = parameters.set_parameters([Parameter(name, value=value)])
-        deadline = time.monotonic() + 10.0
-        while not future.done() and time.monotonic() < deadline:
-            plant.step()
+        plant.executor.spin_until_future_complete(future, timeout_sec=10.0)
         return future.result().results[0]
 
     for name, value in [("sample_period_s", 0.5), ("stale_after_periods", 0), ("time_scale", float("nan")),
