@@ -158,9 +158,10 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     print(summary_table({run_dir.name: report}))
     print(f"swim-demo: report, figures and bag in {run_dir}")
-    for failure in run_failures(report):
+    failures = run_failures(report)
+    for failure in failures:
         print(f"swim-demo: {failure}", file=sys.stderr)
-    return 1 if run_failures(report) else 0
+    return 1 if failures else 0
 
 
 if __name__ == "__main__":

@@ -89,6 +89,7 @@ def relative_change(with_sliding: float, without_sliding: float) -> Optional[flo
 
 def compare(experiment: Experiment, on: dict, off: dict) -> dict:
     """One experiment's row: ours beside the paper's."""
+    failures = {"sliding_on": run_failures(on), "sliding_off": run_failures(off)}
     return {
         "experiment": experiment.name,
         "time_scale": experiment.time_scale,
@@ -102,9 +103,8 @@ def compare(experiment: Experiment, on: dict, off: dict) -> dict:
         "two_norms": {norm: {"sliding_on": on[norm], "sliding_off": off[norm],
                              "change": relative_change(on[norm], off[norm]),
                              "paper_change": experiment.paper_sliding_change.get(norm)} for norm in NORMS},
-        "succeeded": not run_failures(on) and not run_failures(off),
-        "outcome": {"sliding_on": "; ".join(run_failures(on)) or "ok",
-                    "sliding_off": "; ".join(run_failures(off)) or "ok"},
+        "succeeded": not failures["sliding_on"] and not failures["sliding_off"],
+        "outcome": {label: "; ".join(reasons) or "ok" for label, reasons in failures.items()},
     }
 
 

@@ -180,7 +180,6 @@ class RunClient:
             topic in self.latest_cdr and header_stamp_ns(self.latest_cdr[topic]) >= stamp_ns
             for topic in LOOP_TOPICS if topic in self.recordings)
 
-
     def _recording_status(self, final_stamp_ns: Optional[int]) -> str:
         latest = {topic: header_stamp_ns(cdr) * 1e-9 for topic, cdr in self.latest_cdr.items() if topic in LOOP_TOPICS}
         return (f"last period {'not seen' if final_stamp_ns is None else f'{final_stamp_ns * 1e-9:.3f} s'}, "

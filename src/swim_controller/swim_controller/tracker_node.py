@@ -63,6 +63,7 @@ RESULT_CODES = {
 #: writer overwrites samples a reader has not acknowledged: with a shallow history a recorder behind a lock-step
 #: loop, or stalled on a loaded host, would lose periods.
 RECORDABLE_QOS = QoSProfile(depth=1000, reliability=QoSReliabilityPolicy.RELIABLE)
+
 PARAMETER_RULES = {
     "sample_period_s": (lambda v: isinstance(v, float) and 0.001 <= v <= 0.1, "a float in [0.001, 0.1] s"),
     "stale_after_periods": (lambda v: isinstance(v, int) and 1 <= v <= 1000, "an integer in [1, 1000]"),

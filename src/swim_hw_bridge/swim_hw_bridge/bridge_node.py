@@ -100,6 +100,7 @@ class BridgeSettings:
     diagnostics_rate_hz: float
     autostart: bool
 
+
 #: the per-period topics' QoS, for recorders: 8 s of periods at 8 ms kept by the writer. A reliable keep-last
 #: writer overwrites samples a reader has not acknowledged: with a shallow history a recorder behind a lock-step
 #: loop, or stalled on a loaded host, would lose periods.
