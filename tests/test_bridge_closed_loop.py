@@ -73,6 +73,12 @@ def test_the_bag_holds_the_bridges_states_in_real_time(bridge_run):
         states[(message.header.stamp.sec, message.header.stamp.nanosec)] = message
     tracked = [(log_ns, m) for _, log_ns, m in read_messages(run_dir / "bag", ("tracking_state",))]
     # the tracker's feedback is exactly the bridge's state it answered (same stamp, same positions)
+    missing = [index for index, (_, m) in enumerate(tracked) if (m.header.stamp.sec, m.header.stamp.nanosec)
+               not in states]
+    assert not missing, (f"{len(missing)} of {len(tracked)} tracked states absent from the bag's {len(states)} "
+                         f"joint_states, at tracked indices {missing[:10]}...{missing[-3:]}; recorded stamps "
+                         f"{min(states)}..{max(states)}, tracked {tracked[0][1].header.stamp}.."
+                         f"{tracked[-1][1].header.stamp}")
     for _, message in tracked:
         state = states[(message.header.stamp.sec, message.header.stamp.nanosec)]
         assert list(message.feedback.positions) == list(state.position)

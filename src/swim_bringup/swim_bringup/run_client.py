@@ -20,6 +20,7 @@ STARTUP_TIMEOUT_S = 60.0
 DRAIN_TIMEOUT_S = 60.0
 RECORD_DEPTH = 10000   # the recorder may fall behind a lock-step loop; it must not drop periods
 LOOP_TOPICS = ("joint_states", "joint_commands", "tracking_state")   # published every period by the nodes of a run
+IDLE_LOOP_TOPICS = ("joint_states", "joint_commands")   # ... these also before a plan (plant and idle tracker)
 
 
 class RunError(RuntimeError):
@@ -51,8 +52,10 @@ class RunClient:
             self.bag = BagWriter(bag_path, topics)
             self.latest_cdr: dict[str, bytes] = {}   # topic -> the latest message recorded, as received
             self.recordings = {}                       # topic -> the recorder's subscription
-            for topic, type_name in topics.items():
-                self._record(topic, type_name)
+            # the idle loop's topics last: a publisher learns of a process's readers in the order they were made,
+            # so a first message on them (wait_for_nodes) shows the others were matched too
+            for topic in sorted(topics, key=lambda t: t in IDLE_LOOP_TOPICS):
+                self._record(topic, topics[topic])
             self.planner = self.node.create_client(RequestManeuver, "request_maneuver")
             self.tracker = ActionClient(self.node, ExecutePlan, "execute_plan")
         except BaseException:
@@ -63,8 +66,15 @@ class RunClient:
         from rclpy.qos import QoSDurabilityPolicy, QoSProfile
 
         def record(cdr: bytes) -> None:
-            self.bag.write(topic, time.time_ns(), cdr)
-            self.latest_cdr[topic] = cdr
+            # the executor hands over one message per subscription per wait, at ~0.2 ms of Python each: slower
+            # than a lock-step loop on 2 busy cores. So take every message queued now, in one callback.
+            subscription = self.recordings[topic]
+            with subscription.handle:
+                while cdr is not None:
+                    self.bag.write(topic, time.time_ns(), cdr)
+                    self.latest_cdr[topic] = cdr
+                    taken = subscription.handle.take_message(subscription.msg_type, True)
+                    cdr = None if taken is None else taken[0]
         # the plan is latched (transient local): a late subscriber still gets it
         qos = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL) if topic == "plan" \
             else RECORD_DEPTH
@@ -117,12 +127,18 @@ class RunClient:
             raise RunError("planner_node did not come up")
         if not self.tracker.wait_for_server(timeout_sec=timeout_s):
             raise RunError("tracker_node did not come up")
-        # discovery matches each topic on its own: a recorder that met tracking_state before joint_states would
-        # miss the first states the tracker answered
+        # discovery matches each topic on its own, and each side of it on its own: a recorder that has seen a
+        # publisher may not yet be seen by it, and a volatile writer sends nothing to a reader it has not matched
+        # (a bridge run's bag once lacked the first 56 ms of joint_states). A first message received proves the
+        # writer's side; tracking_state has none before the plan, but the tracker that sent joint_commands to
+        # this recorder already knew its tracking_state reader (made before, see __init__).
         def unmatched() -> list[str]:
-            return [topic for topic in LOOP_TOPICS
-                    if topic in self.recordings and self.recordings[topic].get_publisher_count() == 0]
-        self.spin_until(lambda: not unmatched(), timeout_s, f"publisher on each of {', '.join(LOOP_TOPICS)}")
+            return [topic for topic in LOOP_TOPICS if topic in self.recordings and (
+                self.recordings[topic].get_publisher_count() == 0
+                or topic in IDLE_LOOP_TOPICS and topic not in self.latest_cdr)]
+        self.spin_until(lambda: not unmatched(), timeout_s,
+                        f"publisher on each of {', '.join(LOOP_TOPICS)} and a first message on "
+                        f"{', '.join(IDLE_LOOP_TOPICS)}")
 
     def request(self, primitive_ids: list[str], repeat_counts: list[int], time_scale: float):
         """The planner's plan (swim_interfaces/PlannedTrajectory) for the sequence; RunError if refused."""
