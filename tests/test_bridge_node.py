@@ -368,7 +368,8 @@ def test_a_device_lost_while_active_takes_deactivate_into_error_processing(ros_d
             firmware = rig.plug_in()   # the board is back under the same name: configure reconnects
             assert client.transition(Transition.TRANSITION_CONFIGURE)
             assert client.state_label() == "inactive"
-            assert firmware.commands and firmware.commands[-1][1:] == (0, 0, 0)   # zero current, not enabled
+            # zero current, not enabled (read by the firmware's thread when it next runs)
+            assert wait_for(client, lambda: firmware.commands and firmware.commands[-1][1:] == (0, 0, 0), 2.0)
             assert not firmware.outputs_enabled
             assert client.transition(Transition.TRANSITION_ACTIVATE)
             assert wait_for(client, lambda: firmware.outputs_enabled, 2.0)

@@ -44,8 +44,8 @@ def test_bag_reads_back_and_agrees_with_the_report(demo_run):
         counts = {c.topic: c.msgcount for c in reader.connections}
         assert reader.connections[0].msgdef.data   # definitions stored: readable by any rosbag2 reader
     assert counts["plan"] == 1 and counts["tracking_state"] >= 1125 and counts["joint_commands"] >= 1125
-    # a state recorded twice is one the simulator resent (lock-step: no command came for it within resend_after_s,
-    # as at start-up while the tracker is still being discovered): identical, one period
+    # a state recorded twice is one the simulator published again: the held initial state until the first torque
+    # (hold_until_torque), or a resend (no command came for it within resend_after_s): identical, one period
     states = []
     for _, _, message in read_messages(run_dir / "bag", ("joint_states",)):
         if states and message.header.stamp == states[-1].header.stamp:
@@ -88,3 +88,22 @@ def test_a_run_that_misses_its_goal_tolerance_fails(ros_domain, tmp_path):
     assert report["duration_s"] == pytest.approx(report["result"]["duration_s"], abs=1e-9)
     assert report["duration_s"] == pytest.approx(4.0, abs=0.02)   # the library's accelerate (E = 0.05)
     assert "the tracker ended with goal tolerance violated" in output
+
+
+def test_a_second_run_repeats_the_first_bit_for_bit(demo_run, tmp_path):
+    """sim.yaml holds the vehicle until the tracker's first torque (hold_until_torque): however long each bring-up
+    idled, the plan starts at the simulator's first step with the same disturbance sequence, so a second run of the
+    same maneuver measures exactly what the first did (the experiments compare sliding mode on and off this way)."""
+    from swim_bringup.bag import read_messages
+    first_dir, _ = demo_run
+    second_dir = tmp_path / "run"
+    run_demo(second_dir, "--primitives", *SHORT, "--repeats", "1", "1", "--timeout", "120")
+    runs = [json.loads((d / "report.json").read_text()) for d in (first_dir, second_dir)]
+    for measure in ("longitudinal_error_two_norm_m_s05", "final_alpha_error_rad", "peak_heave_torque_n_m",
+                    "peak_pitch_torque_n_m", "energy_used_j", "saturated_fraction"):
+        assert runs[0][measure] == runs[1][measure], measure
+    tracked = [[m for _, _, m in read_messages(d / "bag", ("tracking_state",))] for d in (first_dir, second_dir)]
+    for run in tracked:   # the plan began at the held initial state: simulated time start_time_s (1 s)
+        assert (run[0].header.stamp.sec, run[0].header.stamp.nanosec) == (1, 0)
+    assert [list(m.feedback.positions) for m in tracked[0]] == [list(m.feedback.positions) for m in tracked[1]]
+    assert [list(m.output_torques) for m in tracked[0]] == [list(m.output_torques) for m in tracked[1]]

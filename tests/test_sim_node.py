@@ -1,4 +1,5 @@
-"""sim_node over DDS: lock-step determinism, /clock, set_state, reset, malformed commands, blow-up stop."""
+"""sim_node over DDS: lock-step determinism, /clock, set_state, reset, malformed commands, blow-up stop, the hold
+until the first torque."""
 import time
 
 import numpy as np
@@ -20,12 +21,12 @@ def sim(ros_domain, tmp_path_factory):
 class Driver:
     """The test's side of the lock-step: answers each state with a command stamped like it."""
 
-    def __init__(self, context):
+    def __init__(self, context, namespace=""):
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         from rosgraph_msgs.msg import Clock
         from sensor_msgs.msg import JointState
-        self.node = rclpy.create_node("sim_test_driver", context=context)
+        self.node = rclpy.create_node("sim_test_driver", namespace=namespace, context=context)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
         self.states, self.clock = [], []
@@ -137,3 +138,40 @@ def test_blow_up_stops_publishing_until_reset(driver):
     assert all(np.all(np.isfinite(s.position)) for s in driver.states)
     assert driver.call(Trigger, "reset", Trigger.Request()).success
     assert driver.wait_for_states(count + 1)
+
+
+@pytest.fixture(scope="module")
+def held_sim(ros_domain, tmp_path_factory):
+    """A second simulator with hold_until_torque, in a namespace of its own (beside the module's other one)."""
+    log = tmp_path_factory.mktemp("held_sim_node") / "log.txt"
+    with running_node("swim_sim", "sim_node", log, "-p", "constrained:=true", "-p", f"seed:={SEED}",
+                      "-p", "resend_after_s:=5.0", "-p", "hold_until_torque:=true", "-r", "__ns:=/held") as process:
+        yield process
+
+
+def test_hold_until_torque_keeps_the_state_until_a_nonzero_command(held_sim, rclpy_context):
+    from std_srvs.srv import Trigger
+    driver = Driver(rclpy_context, namespace="/held")
+    try:
+        assert driver.call(Trigger, "reset", Trigger.Request()).success
+        assert driver.wait_for_states(1)
+        held = driver.states[-1]
+        started = time.monotonic()
+        held_states = driver.drive(np.zeros((10, 2)))   # zero commands: the same state, published again
+        elapsed_s = time.monotonic() - started
+        for state in held_states:
+            assert state.header.stamp == held.header.stamp and list(state.position) == list(held.position)
+        # at most one republication per timer period (8 ms): not an idle loop as fast as the CPU
+        assert elapsed_s >= 8 * 0.008 * 0.75
+        moved = driver.drive([(0.3, 0.0)] + [(0.0, 0.0)] * 5)   # the first torque starts it; then zeros step too
+        stamps = [s.header.stamp.sec + 1e-9 * s.header.stamp.nanosec for s in [held] + moved]
+        np.testing.assert_allclose(np.diff(stamps), 0.008, atol=1e-9)
+        assert list(moved[0].effort) == [0.0, 0.3, 0.0]
+        assert driver.call(Trigger, "reset", Trigger.Request()).success   # a reset holds it again
+        assert driver.wait_for_states(len(driver.states) + 1)
+        reset_state = driver.states[-1]
+        again = driver.drive(np.zeros((3, 2)))
+        assert all(s.header.stamp == reset_state.header.stamp for s in again)
+    finally:
+        driver.executor.shutdown()
+        driver.node.destroy_node()

@@ -13,14 +13,20 @@ Services: ``reset`` (std_srvs/Trigger: back to the initial state, noise restarte
 Modes: ``lockstep`` (default): each state is published, the step waits for the command stamped with that
 state's stamp, then integrates one period and publishes the next: deterministic for a seed and as fast as the
 controller answers. ``realtime``: a timer steps every period with the latest command held.
+With ``hold_until_torque`` (lock-step only; false by default, true in swim_bringup's sim.yaml) the vehicle is held
+at its initial state, simulated time and the noise sequence stopped, until the first command with a nonzero torque
+(after start, reset or set_state); an all-zero command for the held state is answered by publishing the same
+state again one period of wall time later. So a maneuver starts at the same simulated step, with the same
+disturbance sequence, however long the system idled before its goal: runs with the same seed and plan repeat bit
+for bit (the experiments compare sliding mode on and off this way).
 A state with a non-finite or absurd value is never published: the simulator stops with an error (reset or
 set_state restarts it). Malformed commands are rejected and counted.
 
 Simulated time starts at ``start_time_s`` (1 s by default: a zero stamp means "not stamped" to consumers).
 Parameters: rig_path, constrained, lane_radius_m, sample_period_s, substeps, mode, seed, start_time_s,
-initial_positions, velocity_source, resend_after_s, disturbances.<field> (swim_sim.disturbances.Disturbances),
-sensors.<field> (swim_sim.sensors.SensorNoise), wake.enabled (false: the ideal-flow model alone) and
-wake.<field> (swim_sim.wake_coupling.parameter_defaults); read at start.
+initial_positions, velocity_source, resend_after_s, hold_until_torque, disturbances.<field>
+(swim_sim.disturbances.Disturbances), sensors.<field> (swim_sim.sensors.SensorNoise), wake.enabled (false: the
+ideal-flow model alone) and wake.<field> (swim_sim.wake_coupling.parameter_defaults); read at start.
 
 Speed (lock-step: each period waits for a round trip through the controller). The per-period path reuses its
 messages and fills their arrays with array('d') (rosidl's setters check a list element by element), and the
@@ -104,6 +110,7 @@ class SimNode(Node):
         declare("initial_positions", [0.0])
         declare("velocity_source", "model")
         declare("resend_after_s", 0.5)
+        declare("hold_until_torque", False)
         for field in dataclasses.fields(Disturbances):
             declare(f"disturbances.{field.name}", float(field.default))
         for field in dataclasses.fields(SensorNoise):
@@ -138,6 +145,9 @@ class SimNode(Node):
         self._state_message = JointState(name=list(model.joint_names))   # reused every period
         self._clock_message = Clock()
         self._efforts = np.zeros(model.nq)   # the unactuated coordinates' entries stay zero
+        self._hold_enabled = bool(value("hold_until_torque")) and self.mode == "lockstep"
+        self.holding = self._hold_enabled
+        self._held_state_answered = False
 
         no_events = PublisherEventCallbacks(use_default_callbacks=False)
         self.state_publisher = self.create_publisher(JointState, "joint_states", RECORDABLE_QOS,
@@ -154,6 +164,8 @@ class SimNode(Node):
         else:
             # a controller that starts late, or missed a state, still gets it
             self.create_timer(0.25 * value("resend_after_s"), self._resend)
+            if self._hold_enabled:
+                self.create_timer(self.plant.sample_period_s, self._republish_held_state)
         self._publish_state()
         self.get_logger().info(f"simulating the {'constrained' if model.constrained else 'free'} vehicle, "
                                f"{self.mode}, period {self.plant.sample_period_s * 1e3:g} ms")
@@ -169,6 +181,10 @@ class SimNode(Node):
             return
         self._latest_torque = torque
         if self.mode == "lockstep" and message.header.stamp == self._published_stamp:
+            if self.holding and not np.any(torque):
+                self._held_state_answered = True   # the hold timer publishes it again
+                return
+            self.holding = False
             self._step(torque)
 
     def _on_tick(self) -> None:
@@ -178,6 +194,13 @@ class SimNode(Node):
         """Lock-step: publish the waiting state again if no command has come for it within resend_after_s."""
         waited_s = time.monotonic() - self._published_monotonic
         if self.failed is None and waited_s >= self.get_parameter("resend_after_s").value:
+            self._publish_state(advance=False)
+
+    def _republish_held_state(self) -> None:
+        """Holding: the held state again, at most once a period of wall time and only once it was answered (a
+        zero command answered at once would otherwise make an idle loop as fast as the CPU allows)."""
+        if self.holding and self._held_state_answered and self.failed is None:
+            self._held_state_answered = False
             self._publish_state(advance=False)
 
     def _step(self, torque: np.ndarray) -> None:
@@ -262,6 +285,7 @@ class SimNode(Node):
         except StateError as err:
             raise ValueError(str(err)) from err
         self.failed = None
+        self.holding, self._held_state_answered = self._hold_enabled, False
         self._publish_state()
 
 
