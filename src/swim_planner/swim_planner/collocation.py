@@ -31,12 +31,36 @@ class Transcription:
     u_mid: ca.MX
     step_s: float
 
+    @property
+    def intervals(self) -> int:
+        return self.x_mid.shape[1]
+
     def all_states(self) -> ca.MX:
         """States on the fine grid (knots and midpoints interleaved), 2N + 1 columns."""
         return _interleave(self.x, self.x_mid)
 
     def all_inputs(self) -> ca.MX:
         return _interleave(self.u, self.u_mid)
+
+    def variables(self) -> ca.MX:
+        """All the grid's variables in one column."""
+        return ca.vertcat(*(ca.vec(v) for v in (self.x, self.u, self.x_mid, self.u_mid)))
+
+    def points(self) -> ca.MX:
+        """(x; u) at the knots, then at the midpoints: the 2N + 1 points where a pointwise function is
+        evaluated (``knots`` and ``midpoints`` split its values)."""
+        return ca.horzcat(ca.vertcat(self.x, self.u), ca.vertcat(self.x_mid, self.u_mid))
+
+    def knots(self, values: ca.MX) -> ca.MX:
+        """The columns of values over ``points`` that belong to the knots."""
+        return values[:, :self.intervals + 1]
+
+    def midpoints(self, values: ca.MX) -> ca.MX:
+        return values[:, self.intervals + 1:]
+
+    def fine(self, values: ca.MX) -> ca.MX:
+        """Values over ``points`` in the fine grid's order (knots and midpoints interleaved)."""
+        return _interleave(self.knots(values), self.midpoints(values))
 
 
 def _interleave(knots: ca.MX, mids: ca.MX) -> ca.MX:
@@ -47,28 +71,27 @@ def _interleave(knots: ca.MX, mids: ca.MX) -> ca.MX:
     return ca.horzcat(*columns)
 
 
-def hermite_simpson(opti: ca.Opti, dynamics: ca.Function, nx: int, nu: int, intervals: int,
-                    duration_s: float) -> Transcription:
-    """Add the grid variables and the collocation constraints of ``xdot = dynamics(x, u)``."""
-    x = opti.variable(nx, intervals + 1)
-    u = opti.variable(nu, intervals + 1)
-    x_mid = opti.variable(nx, intervals)
-    u_mid = opti.variable(nu, intervals)
-    h = duration_s / intervals
-    f_knots = dynamics.map(intervals + 1)(x, u)
-    f_mid = dynamics.map(intervals)(x_mid, u_mid)
+def collocation_grid(opti: ca.Opti, nx: int, nu: int, intervals: int, duration_s: float) -> Transcription:
+    """The grid's variables: states and inputs at the N + 1 knots and the N midpoints."""
+    return Transcription(opti=opti, x=opti.variable(nx, intervals + 1), u=opti.variable(nu, intervals + 1),
+                         x_mid=opti.variable(nx, intervals), u_mid=opti.variable(nu, intervals),
+                         step_s=duration_s / intervals)
+
+
+def hermite_simpson(grid: Transcription, state_derivative: ca.MX) -> None:
+    """Add the collocation constraints of xdot = f(x, u), given f's values over ``grid.points()``."""
+    x, h = grid.x, grid.step_s
+    f_knots, f_mid = grid.knots(state_derivative), grid.midpoints(state_derivative)
     f_start, f_end = f_knots[:, :-1], f_knots[:, 1:]
-    opti.subject_to(x_mid == 0.5 * (x[:, :-1] + x[:, 1:]) + h / 8.0 * (f_start - f_end))
-    opti.subject_to(x[:, 1:] - x[:, :-1] == h / 6.0 * (f_start + 4.0 * f_mid + f_end))
-    return Transcription(opti=opti, x=x, u=u, x_mid=x_mid, u_mid=u_mid, step_s=h)
+    grid.opti.subject_to(grid.x_mid == 0.5 * (x[:, :-1] + x[:, 1:]) + h / 8.0 * (f_start - f_end))
+    grid.opti.subject_to(x[:, 1:] - x[:, :-1] == h / 6.0 * (f_start + 4.0 * f_mid + f_end))
 
 
-def simpson_integral(transcription: Transcription, integrand: ca.Function) -> ca.MX:
-    """Integral over [0, T] of integrand(x, u) by Simpson's rule on each interval."""
-    n = transcription.x_mid.shape[1]
-    at_knots = integrand.map(n + 1)(transcription.x, transcription.u)
-    at_mid = integrand.map(n)(transcription.x_mid, transcription.u_mid)
-    return transcription.step_s / 6.0 * (ca.sum2(at_knots[:, :-1]) + 4.0 * ca.sum2(at_mid) + ca.sum2(at_knots[:, 1:]))
+def simpson_integral(grid: Transcription, integrand: ca.MX) -> ca.MX:
+    """Integral over [0, T] by Simpson's rule on each interval, given the integrand over ``grid.points()``
+    (a row; several rows give several integrals)."""
+    at_knots, at_mid = grid.knots(integrand), grid.midpoints(integrand)
+    return grid.step_s / 6.0 * (ca.sum2(at_knots[:, :-1]) + 4.0 * ca.sum2(at_mid) + ca.sum2(at_knots[:, 1:]))
 
 
 def fine_grid_times(duration_s: float, intervals: int) -> Array:

@@ -149,9 +149,10 @@ class PrimitiveLibrary:
             raise LibraryError(f"{directory} was built with swim_model version {manifest.get('model_version')!r}, "
                                f"this is version {MODEL_VERSION}; rebuild it")
         try:
-            library = cls(directory, rig, SolverSettings(**manifest.get("solver", {})),
-                          LqrWeights(**manifest.get("lqr_weights", {})))
-        except TypeError as err:
+            # manifests written before SolverSettings.derivatives existed were solved with CasADi's own AD
+            solver = SolverSettings(**{"derivatives": "casadi", **manifest.get("solver", {})})
+            library = cls(directory, rig, solver, LqrWeights(**manifest.get("lqr_weights", {})))
+        except (TypeError, ValueError) as err:
             raise LibraryError(f"{directory / MANIFEST}: unknown solver or LQR setting: {err}") from err
         entries = manifest.get("primitives")
         if not isinstance(entries, dict):

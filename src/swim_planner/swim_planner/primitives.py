@@ -44,8 +44,10 @@ import numpy.typing as npt
 
 from swim_controller.riccati import TrackingGains
 from swim_model import SinusoidalGait, VehicleModel, simulate_gait
-from swim_planner.collocation import fine_grid_times, hermite_simpson, simpson_integral
+from swim_planner.collocation import collocation_grid, fine_grid_times, hermite_simpson, simpson_integral
 from swim_planner.errors import PrimitiveSolveError
+from swim_planner import pointwise
+from swim_planner.pointwise import PointwiseFunction, PointwiseNlp
 
 Array = npt.NDArray[np.float64]
 
@@ -139,26 +141,50 @@ CONVERGED_STATUSES = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 @dataclasses.dataclass(frozen=True)
 class SolverSettings:
     """IPOPT's settings. The defaults were measured on the constrained E = 0.05 cruise (80 intervals):
-    IPOPT's monotone barrier took 99 iterations, the adaptive one 40 to the same J (to 1e-6); expanding the
-    NLP into one SX graph spent 9 of 13 s building its Hessian, while the MX graph of mapped SX functions
-    builds in 0.5 s and evaluates its Hessian in 66 ms instead of 30 ms: 3.4 s in all, instead of 13.7 s."""
+    IPOPT's monotone barrier took 99 iterations, the adaptive one 40-70 to the same J (to 1e-6).
+
+    Derivatives: "pointwise" assembles them from the model's pointwise function compiled to C
+    (swim_planner.pointwise): 0.44 s for that cruise. "casadi" lets CasADi differentiate the whole NLP graph:
+    3.4 s, 2.6 s of it in the Hessian (66 ms a call); with expand_to_sx it first expands the graph into one
+    SX graph, whose Hessian is fast to evaluate (30 ms) but took 9 s to build: 13.7 s in all."""
 
     tolerance: float = 1e-8
     max_iterations: int = 3000
     print_level: int = 0
     barrier_strategy: str = "adaptive"   # IPOPT's mu_strategy: "adaptive" or "monotone"
-    expand_to_sx: bool = False           # CasADi's expand: one SX graph (slow to build, fast to evaluate)
+    expand_to_sx: bool = False           # derivatives "casadi" only: CasADi's expand into one SX graph
+    derivatives: str = "pointwise"       # "pointwise" or "casadi" (see above)
+
+    def __post_init__(self) -> None:
+        if self.derivatives not in ("pointwise", "casadi"):
+            raise ValueError(f"derivatives must be 'pointwise' or 'casadi', got {self.derivatives!r}")
 
 
-def _ocp_functions(model: VehicleModel) -> tuple[ca.Function, ca.Function, ca.Function]:
-    """xdot(x, u), tau(x, u), and the kinetic energy T(x)."""
-    s = model.symbolic
-    x = ca.vertcat(s.q, s.qdot)
-    qddot, tau = s.functions["shape_dynamics"](s.q, s.qdot, s.u)
-    dynamics = ca.Function("xdot", [x, s.u], [ca.vertcat(s.qdot, qddot)])
-    torque = ca.Function("tau", [x, s.u], [tau])
-    energy = ca.Function("T", [x], [s.functions["kinetic_energy"](s.q, s.qdot)])
-    return dynamics, torque, energy
+# Rows of the pointwise function phi(x, u; w_h, w_p) of every primitive's NLP (swim_planner.pointwise)
+EFFORT_ROW = 0       # w_h tau_h^2 + w_p tau_p^2, the integrand of eq. 10's effort
+ENERGY_ROW = 1       # kinetic energy T(q, qdot)
+MOMENTUM_ROW = 2     # p_alpha (SPEC.md P1)
+TORQUE_ROWS = slice(3, 5)
+STATE_DERIVATIVE_ROWS = slice(5, None)
+
+GUESS_TOLERANCE = 1e-6   # relative tolerance of the simulated gait that is a cruise's initial guess
+
+#: the compiled pointwise functions of the models used in this process, by (rig digest, constrained, lane)
+_POINTWISE: dict[tuple, PointwiseFunction] = {}
+
+
+def pointwise_function(model: VehicleModel) -> PointwiseFunction:
+    """phi(y, theta) with y = (q, qdot, u), theta = (w_h, w_p): the rows above, compiled once per model."""
+    key = (model.rig.digest(), model.constrained, model.lane_radius_m)
+    if key not in _POINTWISE:
+        s = model.symbolic
+        y, theta = ca.SX.sym("y", 2 * model.nq + 2), ca.SX.sym("theta", 2)
+        q, qdot, u = y[:model.nq], y[model.nq:2 * model.nq], y[2 * model.nq:]
+        qddot, tau = s.functions["shape_dynamics"](q, qdot, u)
+        phi = ca.vertcat(ca.dot(theta, tau ** 2), s.functions["kinetic_energy"](q, qdot),
+                         s.functions["momentum"](q, qdot)[0], tau, qdot, qddot)
+        _POINTWISE[key] = PointwiseFunction.compiled(phi, y, theta, tag="primitive_pointwise")
+    return _POINTWISE[key]
 
 
 def rest_state(model: VehicleModel, lane_radius_m: float) -> tuple[Array, Array]:
@@ -166,6 +192,21 @@ def rest_state(model: VehicleModel, lane_radius_m: float) -> tuple[Array, Array]
     if not model.constrained:
         q[1] = lane_radius_m
     return q, np.zeros(model.nq)
+
+
+@dataclasses.dataclass(frozen=True)
+class PrimitiveNlp:
+    """One primitive's NLP (swim_planner.pointwise form), its initial guess and constraint bounds, and the
+    expressions of the solution's samples on the fine grid."""
+
+    nlp: PointwiseNlp
+    z0: Array
+    lbg: Array
+    ubg: Array
+    states: ca.MX     # nx x (2N + 1)
+    inputs: ca.MX     # 2 x (2N + 1)
+    torques: ca.MX    # 2 x (2N + 1), in terms of Phi
+    effort: ca.MX     # int (w_h tau_h^2 + w_p tau_p^2) dt over the solved horizon, in terms of Phi
 
 
 def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits = PlanningLimits(),
@@ -181,18 +222,53 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
     Raises:
         PrimitiveSolveError: IPOPT did not converge; the message gives its status.
     """
+    problem = primitive_nlp(model, spec, limits, start, end, guess)
+    nlp = problem.nlp
+    ipopt_options = {"print_level": settings.print_level, "tol": settings.tolerance,
+                     "max_iter": settings.max_iterations, "mu_strategy": settings.barrier_strategy, "sb": "yes"}
+    started = time.perf_counter()
+    result = pointwise.solve(nlp, problem.z0, problem.lbg, problem.ubg, ipopt_options, settings.derivatives,
+                             settings.expand_to_sx)
+    elapsed = time.perf_counter() - started
+    if result.status not in CONVERGED_STATUSES:
+        raise PrimitiveSolveError(f"{spec.primitive_id}: IPOPT did not converge ({result.status})")
+    samples = 2 * spec.intervals + 1
+    values = ca.Function("values", [nlp.z], [nlp.substitute(e) for e in
+                                             (problem.states, problem.inputs, problem.torques, problem.effort)])
+    state_values, input_values, torque_values, effort_value = values(result.z)
+    state_values = np.asarray(state_values).reshape(2 * model.nq, samples).T
+    input_values = np.asarray(input_values).reshape(2, samples).T
+    torque_values = np.asarray(torque_values).reshape(2, samples).T
+    effort_value = float(effort_value)
+    time_s = fine_grid_times(spec.solved_duration_s, spec.intervals)
+    q, qdot = state_values[:, :model.nq], state_values[:, model.nq:]
+    if spec.cycles > 1:
+        time_s, q, qdot, input_values, torque_values = _repeat_cycle(
+            spec.cycles, time_s, q, qdot, input_values, torque_values)
+        effort_value *= spec.cycles
+    return Primitive(spec=spec, time_s=time_s, q=q, qdot=qdot, foil_acceleration=input_values,
+                     torque=torque_values, index_j=float(spec.index_sign() * q[-1, 0] - effort_value),
+                     effort=effort_value, solver_status=result.status, solve_time_s=elapsed,
+                     iterations=result.iterations)
+
+
+def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits = PlanningLimits(),
+                  start: Optional[tuple[Array, Array]] = None, end: Optional[tuple[Array, Array]] = None,
+                  guess: Optional[Primitive] = None) -> PrimitiveNlp:
+    """The NLP of one primitive (arguments as for ``solve_primitive``)."""
     nq = model.nq
     nx = 2 * nq
-    dynamics, torque, energy = _ocp_functions(model)
+    phi_function = pointwise_function(model)
     opti = ca.Opti()
-    grid = hermite_simpson(opti, dynamics, nx, 2, spec.intervals, spec.solved_duration_s)
-    states, inputs = grid.all_states(), grid.all_inputs()
+    grid = collocation_grid(opti, nx, 2, spec.intervals, spec.solved_duration_s)
     samples = 2 * spec.intervals + 1
-    torques = torque.map(samples)(states, inputs)
-    weights = ca.DM([spec.heave_effort_weight, spec.pitch_effort_weight])
-    xs, us = ca.SX.sym("x", nx), ca.SX.sym("u", 2)
-    effort_integrand = ca.Function("effort", [xs, us], [ca.dot(weights, torque(xs, us) ** 2)])
-    effort = simpson_integral(grid, effort_integrand)
+    # Phi, the pointwise function's values over grid.points(): a placeholder the NLP is written in (an Opti
+    # variable, as Opti takes no constraint without one; the NLP solved has the grid's variables only)
+    phi = opti.variable(phi_function.value.size1_out(0), samples)
+    hermite_simpson(grid, phi[STATE_DERIVATIVE_ROWS, :])
+    states, inputs = grid.all_states(), grid.all_inputs()
+    torques = grid.fine(phi[TORQUE_ROWS, :])
+    effort = simpson_integral(grid, phi[EFFORT_ROW, :])
     x_end = grid.x[:, -1]
     sign = spec.index_sign()
     # w_u int |udot|^2 dt on the fine grid: without it the optimizer makes the light pitch axis ring at the
@@ -220,34 +296,15 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
         start = rest_state(model, spec.lane_radius_m)
     if spec.primitive_type is PrimitiveType.DECELERATE:
         end = rest_state(model, spec.end_lane_radius_m)
-    _boundary_conditions(opti, model, spec, limits, grid, energy, start, end)
+    _boundary_conditions(opti, model, spec, limits, grid, phi, start, end)
     _initial_guess(opti, model, spec, grid, start, end, guess)
 
-    opti.solver("ipopt", {"print_time": False, "expand": settings.expand_to_sx},
-                {"print_level": settings.print_level, "tol": settings.tolerance,
-                 "max_iter": settings.max_iterations, "mu_strategy": settings.barrier_strategy, "sb": "yes"})
-    started = time.perf_counter()
-    try:
-        solution = opti.solve()
-    except RuntimeError as err:
-        status = opti.stats().get("return_status", "unknown")
-        raise PrimitiveSolveError(f"{spec.primitive_id}: IPOPT did not converge ({status})") from err
-    elapsed = time.perf_counter() - started
-    stats = opti.stats()
-    state_values = np.asarray(solution.value(states)).reshape(nx, samples).T
-    input_values = np.asarray(solution.value(inputs)).reshape(2, samples).T
-    torque_values = np.asarray(solution.value(torques)).reshape(2, samples).T
-    effort_value = float(solution.value(effort))
-    time_s = fine_grid_times(spec.solved_duration_s, spec.intervals)
-    q, qdot = state_values[:, :nq], state_values[:, nq:]
-    if spec.cycles > 1:
-        time_s, q, qdot, input_values, torque_values = _repeat_cycle(
-            spec.cycles, time_s, q, qdot, input_values, torque_values)
-        effort_value *= spec.cycles
-    return Primitive(spec=spec, time_s=time_s, q=q, qdot=qdot, foil_acceleration=input_values,
-                     torque=torque_values, index_j=float(sign * q[-1, 0] - effort_value),
-                     effort=effort_value, solver_status=str(stats["return_status"]), solve_time_s=elapsed,
-                     iterations=int(stats["iter_count"]))
+    nlp = PointwiseNlp(z=grid.variables(), f=opti.f, g=opti.g, points=grid.points(), phi_placeholder=phi,
+                       pointwise=phi_function, theta=np.array([spec.heave_effort_weight, spec.pitch_effort_weight]))
+    return PrimitiveNlp(nlp=nlp, z0=np.asarray(opti.value(nlp.z, opti.initial()), dtype=float).ravel(),
+                        lbg=np.asarray(ca.evalf(opti.lbg), dtype=float).ravel(),
+                        ubg=np.asarray(ca.evalf(opti.ubg), dtype=float).ravel(),
+                        states=states, inputs=inputs, torques=torques, effort=effort)
 
 
 def _repeat_cycle(cycles: int, time_s: Array, q: Array, qdot: Array, u: Array, tau: Array):
@@ -269,7 +326,7 @@ def _without_alpha(x: ca.MX, nq: int) -> ca.MX:
 
 
 def _boundary_conditions(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits,
-                         grid, energy: ca.Function, start, end) -> None:
+                         grid, phi: ca.MX, start, end) -> None:
     nq = model.nq
     x0, x_end = grid.x[:, 0], grid.x[:, -1]
     opti.subject_to(x0[0] == 0.0)
@@ -279,14 +336,11 @@ def _boundary_conditions(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec
             raise ValueError(f"{spec.primitive_id}: a cruise needs energy_j")
         opti.subject_to(x0[nq - 2:nq] == x_end[nq - 2:nq])          # psi periodic
         opti.subject_to(x0[nq:] == x_end[nq:])                      # qdot periodic
-        momentum = model.symbolic.functions["momentum"]
-        opti.subject_to(momentum(x0[:nq], x0[nq:])[0] == 0.0)       # reachable from rest: p_alpha = 0
+        opti.subject_to(grid.knots(phi)[MOMENTUM_ROW, 0] == 0.0)    # reachable from rest: p_alpha = 0
         # cut the cycle where the vehicle moves forward: a decelerate from here can keep alphadot >= v_min
         opti.subject_to(x0[nq] >= limits.min_alpha_rate_rad_s)
         # energy level: the cycle's mean kinetic energy (see the module docstring)
-        xs = ca.SX.sym("x", 2 * nq)
-        energy_of = ca.Function("T", [xs, ca.SX.sym("u", 2)], [energy(xs)])
-        mean_energy = simpson_integral(grid, energy_of) / spec.solved_duration_s
+        mean_energy = simpson_integral(grid, phi[ENERGY_ROW, :]) / spec.solved_duration_s
         opti.subject_to(mean_energy == spec.energy_j)
         if not model.constrained:
             opti.subject_to(x0[1] == spec.lane_radius_m)
@@ -321,8 +375,9 @@ def _initial_guess(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, grid
 def _gait_guess(model: VehicleModel, spec: PrimitiveSpec, times: Array) -> tuple[Array, Array]:
     """A fish-like gait: pitch leads heave by 90 deg (paper Sec. 5.1), one cycle per second."""
     gait = SinusoidalGait(0.35, 0.6, 1.0)
+    # a guess needs no 1e-10 accuracy: 1e-6 takes a third of the model evaluations
     run = simulate_gait(model, gait, times[-1], sample_period_s=times[1] - times[0],
-                        initial_y=None if model.constrained else [0.0, spec.lane_radius_m])
+                        initial_y=None if model.constrained else [0.0, spec.lane_radius_m], rtol=GUESS_TOLERANCE)
     return np.column_stack([run.q, run.qdot]), np.array([gait.shape(t)[2] for t in times])
 
 

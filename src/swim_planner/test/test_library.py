@@ -36,6 +36,14 @@ def test_round_trip(library, rig, copy):
     assert manifest["lqr_weights"] == dataclasses.asdict(library.lqr_weights)
 
 
+def test_solver_settings_round_trip_and_older_manifests_say_casadi(library, rig, copy):
+    """A manifest records how its primitives were solved; one written before ``derivatives`` existed (the
+    shipped library's) was solved by CasADi's own AD, and loads saying so."""
+    assert "derivatives" not in json.loads((library.path / MANIFEST).read_text())["solver"]
+    assert library.solver.derivatives == "casadi"
+    assert PrimitiveLibrary.load(copy, rig).solver.derivatives == "pointwise"
+
+
 def _edit_manifest(path, change):
     manifest = json.loads((path / MANIFEST).read_text())
     change(manifest)
@@ -51,6 +59,7 @@ def test_other_rig_is_refused(rig, copy):
     (lambda m: m.__setitem__("format_version", 99), "library format 99"),
     (lambda m: m.__setitem__("model_version", "0"), "swim_model version"),
     (lambda m: m.__setitem__("primitives", []), "must be a mapping"),
+    (lambda m: m["solver"].__setitem__("derivatives", "symbolic"), "derivatives must be"),
 ])
 def test_bad_manifest_is_refused(rig, copy, change, message):
     _edit_manifest(copy, change)
