@@ -68,13 +68,18 @@ class RunClient:
         def record(cdr: bytes) -> None:
             # the executor hands over one message per subscription per wait, at ~0.2 ms of Python each: slower
             # than a lock-step loop on 2 busy cores. So take every message queued now, in one callback.
+            # At most a queue's depth per callback: the rest stays queued, and the other topics get their turn.
             subscription = self.recordings[topic]
             with subscription.handle:
-                while cdr is not None:
+                for written in range(1, RECORD_DEPTH + 1):
                     self.bag.write(topic, time.time_ns(), cdr)
                     self.latest_cdr[topic] = cdr
+                    if written == RECORD_DEPTH:
+                        break
                     taken = subscription.handle.take_message(subscription.msg_type, True)
-                    cdr = None if taken is None else taken[0]
+                    if taken is None:
+                        break
+                    cdr = taken[0]
         # the plan is latched (transient local): a late subscriber still gets it
         qos = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL) if topic == "plan" \
             else RECORD_DEPTH
