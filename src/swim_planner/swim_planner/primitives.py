@@ -227,8 +227,11 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
     ipopt_options = {"print_level": settings.print_level, "tol": settings.tolerance,
                      "max_iter": settings.max_iterations, "mu_strategy": settings.barrier_strategy, "sb": "yes"}
     started = time.perf_counter()
-    result = pointwise.solve(nlp, problem.z0, problem.lbg, problem.ubg, ipopt_options, settings.derivatives,
-                             settings.expand_to_sx)
+    try:
+        result = pointwise.solve(nlp, problem.z0, problem.lbg, problem.ubg, ipopt_options, settings.derivatives,
+                                 settings.expand_to_sx)
+    except RuntimeError as err:   # CasADi refused the problem (e.g. bounds that contradict each other)
+        raise PrimitiveSolveError(f"{spec.primitive_id}: the NLP was refused: {err}") from err
     elapsed = time.perf_counter() - started
     if result.status not in CONVERGED_STATUSES:
         raise PrimitiveSolveError(f"{spec.primitive_id}: IPOPT did not converge ({result.status})")
@@ -255,7 +258,16 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
 def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits = PlanningLimits(),
                   start: Optional[tuple[Array, Array]] = None, end: Optional[tuple[Array, Array]] = None,
                   guess: Optional[Primitive] = None) -> PrimitiveNlp:
-    """The NLP of one primitive (arguments as for ``solve_primitive``)."""
+    """The NLP of one primitive (arguments as for ``solve_primitive``).
+
+    Raises:
+        ValueError: a start or end state that is not (q, qdot) of finite numbers of the model's size.
+    """
+    for name, state in (("start", start), ("end", end)):
+        if state is not None and not (len(state) == 2 and all(np.shape(part) == (model.nq,) for part in state)
+                                      and np.all(np.isfinite(state))):
+            raise ValueError(f"{spec.primitive_id}: the {name} state must be (q, qdot), {model.nq} finite numbers "
+                             f"each; got {state!r}")
     nq = model.nq
     nx = 2 * nq
     phi_function = pointwise_function(model)

@@ -117,3 +117,15 @@ def test_both_derivative_paths_reach_the_same_cruise(rig, small_cruise):
 def test_unknown_derivatives_are_refused():
     with pytest.raises(ValueError, match="derivatives"):
         SolverSettings(derivatives="finite differences")
+
+
+def test_a_start_state_with_nan_is_refused_with_a_clear_message(rig, small_cruise):
+    model, cruise_spec = small_cruise
+    spec = next(s for s in constrained_specs(rig) if s.primitive_type.value == "decelerate")
+    spec = dataclasses.replace(spec, intervals=8)
+    start = (np.zeros(model.nq), np.array([np.nan] + [0.0] * (model.nq - 1)))
+    with pytest.raises(ValueError, match="start state must be .* finite"):
+        solve_primitive(model, spec, start=start)
+    with pytest.raises(ValueError, match="end state"):
+        solve_primitive(model, dataclasses.replace(cruise_spec, primitive_type=spec.primitive_type.ACCELERATE),
+                        end=(np.zeros(model.nq), np.zeros(model.nq + 1)))
