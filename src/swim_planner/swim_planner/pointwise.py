@@ -72,9 +72,9 @@ class PointwiseNlp:
         phi = self.pointwise.symbolic if symbolic else self.pointwise.value
         return phi.map(self.points.shape[1])(self.points, self.theta)
 
-    def substitute(self, expression: ca.MX, symbolic: bool = False) -> ca.MX:
-        """An expression of (z, Phi) as one of z alone."""
-        return ca.substitute(expression, self.phi_placeholder, self.phi_of_z(symbolic))
+    def substitute(self, *expressions: ca.MX, symbolic: bool = False) -> list[ca.MX]:
+        """Expressions of (z, Phi) as expressions of z alone, sharing one evaluation of Phi."""
+        return ca.substitute(list(expressions), [self.phi_placeholder], [self.phi_of_z(symbolic)])
 
 
 def _constant(expression: ca.MX, symbols: list[ca.MX], what: str) -> ca.DM:
@@ -83,7 +83,7 @@ def _constant(expression: ca.MX, symbols: list[ca.MX], what: str) -> ca.DM:
         if ca.depends_on(expression, symbol):
             raise ValueError(f"pointwise NLP: {what} is not constant: f must be linear in Phi and quadratic in z, "
                              f"g affine in (z, Phi), the points linear in z")
-    return ca.evalf(ca.substitute([expression], symbols, [ca.MX.zeros(s.sparsity()) for s in symbols])[0])
+    return ca.evalf(expression)
 
 
 def _block_diagonal(block: ca.Sparsity, count: int) -> ca.Sparsity:
@@ -128,8 +128,8 @@ def derivative_functions(nlp: PointwiseNlp, structure: Structure) -> dict[str, c
     count = nlp.points.shape[1]
     jac_map = nlp.pointwise.jacobian.map(count)(nlp.points, nlp.theta)
     jac_blocks = ca.sparsity_cast(jac_map, _block_diagonal(nlp.pointwise.jacobian.sparsity_out(0), count))
-    f_z, g_z = nlp.substitute(nlp.f), nlp.substitute(nlp.g)
-    grad_f = nlp.substitute(ca.gradient(nlp.f, z)) + ca.mtimes(st.s.T, ca.mtimes(jac_blocks.T, st.b_f))
+    f_z, g_z, grad_f_z = nlp.substitute(nlp.f, nlp.g, ca.gradient(nlp.f, z))
+    grad_f = grad_f_z + ca.mtimes(st.s.T, ca.mtimes(jac_blocks.T, st.b_f))
     jac_g = st.a + ca.mtimes(st.b_g, ca.mtimes(jac_blocks, st.s))
     p = ca.MX.sym("p", 0)
     sigma, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", nlp.g.numel())
@@ -188,7 +188,8 @@ def solve(nlp: PointwiseNlp, z0: Array, lbg: Array, ubg: Array, ipopt_options: d
     keep, lbx, ubx = simple_bounds(structure, lbg, ubg)
     nlp = dataclasses.replace(nlp, g=nlp.g[keep])
     symbolic = derivatives == "casadi"
-    problem = {"x": nlp.z, "f": nlp.substitute(nlp.f, symbolic), "g": nlp.substitute(nlp.g, symbolic)}
+    f_z, g_z = nlp.substitute(nlp.f, nlp.g, symbolic=symbolic)
+    problem = {"x": nlp.z, "f": f_z, "g": g_z}
     options = {"print_time": False, "ipopt": ipopt_options}
     if derivatives == "pointwise":
         options.update(derivative_functions(nlp, structure.rows(keep)))

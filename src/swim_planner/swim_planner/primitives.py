@@ -145,7 +145,7 @@ class SolverSettings:
 
     Derivatives: "pointwise" assembles them from the model's pointwise function compiled to C
     (swim_planner.pointwise): 0.44 s for that cruise. "casadi" lets CasADi differentiate the whole NLP graph:
-    3.4 s, 2.6 s of it in the Hessian (66 ms a call); with expand_to_sx it first expands the graph into one
+    3.4-3.8 s, 2.6 s of it in the Hessian (66 ms a call); with expand_to_sx it first expands the graph into one
     SX graph, whose Hessian is fast to evaluate (30 ms) but took 9 s to build: 13.7 s in all."""
 
     tolerance: float = 1e-8
@@ -236,8 +236,8 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
     if result.status not in CONVERGED_STATUSES:
         raise PrimitiveSolveError(f"{spec.primitive_id}: IPOPT did not converge ({result.status})")
     samples = 2 * spec.intervals + 1
-    values = ca.Function("values", [nlp.z], [nlp.substitute(e) for e in
-                                             (problem.states, problem.inputs, problem.torques, problem.effort)])
+    values = ca.Function("values", [nlp.z], nlp.substitute(problem.states, problem.inputs, problem.torques,
+                                                            problem.effort))
     state_values, input_values, torque_values, effort_value = values(result.z)
     state_values = np.asarray(state_values).reshape(2 * model.nq, samples).T
     input_values = np.asarray(input_values).reshape(2, samples).T

@@ -23,8 +23,8 @@ def small_cruise(rig):
 
 def _casadi_derivatives(nlp: PointwiseNlp, keep: list[int]):
     """grad f, jac g and the Lagrangian's Hessian by CasADi's AD of the NLP written with the SX phi."""
-    f = nlp.substitute(nlp.f, symbolic=True)
-    g = nlp.substitute(nlp.g, symbolic=True)[keep]
+    f, g = nlp.substitute(nlp.f, nlp.g, symbolic=True)
+    g = g[keep]
     sigma, lam = ca.MX.sym("sigma"), ca.MX.sym("lam", len(keep))
     hessian = ca.hessian(sigma * f + ca.dot(lam, g), nlp.z)[0]
     return ca.Function("ad", [nlp.z, sigma, lam], [f, ca.gradient(f, nlp.z), g, ca.jacobian(g, nlp.z), hessian])
