@@ -269,11 +269,17 @@ def plain(value: object) -> object:
     return value if isinstance(value, (bool, int, float, str)) else list(value)
 
 
-def call(executor, client, request):
-    future = client.call_async(request)
-    executor.spin_until_future_complete(future, timeout_sec=30.0)
-    assert future.done(), f"no answer from {client.srv_name}"
-    return future.result()
+def call(executor, client, request, attempts: int = 3, timeout_s: float = 10.0):
+    """The service's answer. The parameter services are idempotent, so a request is sent again when its answer
+    is lost: a service that answers before discovery has matched the client's response reader drops the answer
+    (rmw_fastrtps logs "failed to send response (timeout)"; one CI run on a loaded host lost sim_node's)."""
+    for _ in range(attempts):
+        future = client.call_async(request)
+        executor.spin_until_future_complete(future, timeout_sec=timeout_s)
+        if future.done():
+            return future.result()
+        client.remove_pending_request(future)
+    raise AssertionError(f"no answer from {client.srv_name} to {attempts} requests of {timeout_s:.0f} s each")
 
 
 def parameter_argument(name: str, value: object) -> str:
