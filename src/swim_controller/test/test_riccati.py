@@ -35,6 +35,49 @@ def test_long_horizon_riccati_reaches_the_algebraic_solution():
     np.testing.assert_allclose(p[0], scipy.linalg.solve_continuous_are(f, g, q, r), rtol=1e-7)
 
 
+def _time_varying(time_s):
+    """A smooth time-varying F (4 x 4) and G (4 x 2) with fast and slow parts, sampled at time_s."""
+    rng = np.random.default_rng(11)
+    f0, f1, g0, g1 = rng.normal(size=(4, 4)), rng.normal(size=(4, 4)), rng.normal(size=(4, 2)), rng.normal(size=(4, 2))
+    wave = np.sin(7.0 * time_s)[:, None, None]
+    return Linearization(f0 + 2.0 * wave * f1, g0 + wave * g1 + np.cos(time_s)[:, None, None] * g0)
+
+
+def test_time_varying_riccati_matches_an_independent_integration():
+    """P(t) against eq. 20 itself integrated by DOP853 at tight tolerances (F, G linear between samples)."""
+    import scipy.integrate
+    time_s = np.linspace(0.0, 2.0, 81)
+    lin = _time_varying(time_s)
+    q, r, s = np.diag([1.0, 2.0, 0.5, 3.0]), np.diag([0.3, 0.1]), 0.2 * np.eye(4)
+    p = solve_riccati(time_s, lin, q, r, s)
+
+    def minus_p_dot(t, p_flat):
+        f = np.array([np.interp(t, time_s, lin.state_matrix[:, i, j]) for i in range(4) for j in range(4)])
+        g = np.array([np.interp(t, time_s, lin.input_matrix[:, i, j]) for i in range(4) for j in range(2)])
+        f, g, pm = f.reshape(4, 4), g.reshape(4, 2), p_flat.reshape(4, 4)
+        return -(pm @ f + f.T @ pm - pm @ g @ np.linalg.solve(r, g.T) @ pm + q).ravel()
+    exact = scipy.integrate.solve_ivp(minus_p_dot, (2.0, 0.0), s.ravel(), method="DOP853", t_eval=time_s[::-1],
+                                      rtol=1e-12, atol=1e-12).y.T[::-1].reshape(-1, 4, 4)
+    assert np.abs(p - exact).max() < 1e-7 * np.abs(exact).max()
+
+
+def test_merged_transitions_carry_p_as_the_single_ones():
+    """merge_transitions multiplies consecutive maps; P carried through them equals P carried one by one, and
+    the product's norm bound splits a long span into several maps."""
+    from swim_controller.riccati import backward_transitions, merge_transitions, sweep_backward
+    time_s = np.linspace(0.0, 2.0, 81)
+    q, r, s = np.eye(4), np.diag([0.3, 0.1]), 0.2 * np.eye(4)
+    transitions = backward_transitions(time_s, _time_varying(time_s), q, r)
+    single = sweep_backward(transitions, s)[0]
+    for bound in (1e3, 30.0):
+        merged = merge_transitions(transitions, bound)
+        assert 1 <= len(merged) < len(transitions)
+        single_norms = {float(np.linalg.norm(t)) for t in transitions}
+        assert all(np.linalg.norm(m) <= bound or float(np.linalg.norm(m)) in single_norms for m in merged)
+        np.testing.assert_allclose(sweep_backward(merged, s)[0], single, rtol=1e-9)
+    assert len(merge_transitions(transitions, 30.0)) > len(merge_transitions(transitions, 1e3))
+
+
 def test_bad_time_grid_is_refused():
     lin = Linearization(np.zeros((3, 1, 1)), np.zeros((3, 1, 1)))
     with pytest.raises(GainComputationError):
@@ -120,7 +163,7 @@ def test_weights_are_validated():
 
 def test_continued_terminal_is_one_integration_over_the_tiled_cycles():
     """The pass-by-pass backward sweep of a periodic F(t), G(t) equals one integration over the cycles tiled."""
-    from swim_controller.riccati import continued_terminal
+    from swim_controller.riccati import backward_transitions, continued_terminal
     rng = np.random.default_rng(5)
     f0, f1, g0 = rng.normal(size=(3, 3)), rng.normal(size=(3, 3)), rng.normal(size=(3, 1))
     period, samples, cycles = 0.7, 41, 5
@@ -129,7 +172,8 @@ def test_continued_terminal_is_one_integration_over_the_tiled_cycles():
         return Linearization(f0 + phase * f1, np.repeat(g0[None], len(t), 0) * (1.0 + 0.5 * phase))
     q, r, s = np.eye(3), np.array([[0.3]]), 0.1 * np.eye(3)
     one = np.linspace(0.0, period, samples)
-    continued = continued_terminal(one, periodic(one), q, r, s, lookahead_s=(cycles - 0.5) * period)
+    transitions = backward_transitions(one, periodic(one), q, r)
+    continued = continued_terminal(transitions, period, s, lookahead_s=(cycles - 0.5) * period)
     tiled = np.linspace(0.0, (cycles + 1) * period, (cycles + 1) * (samples - 1) + 1)
     direct = solve_riccati(tiled, periodic(tiled), q, r, s)
     np.testing.assert_allclose(continued, direct[samples - 1], rtol=1e-7)

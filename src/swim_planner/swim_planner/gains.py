@@ -2,7 +2,7 @@
 
 The gains P(t), G'P of every primitive are computed once, off-line, for the library's LQ weights and stored
 with it. To compare tunings (paper Sec. 7) without rebuilding, ``RetunedLibrary`` shows the same library with
-gains for other weights, each primitive's computed on first use (about 1 s, a backward Riccati solve) and
+gains for other weights, each primitive's computed on first use (0.1-0.3 s, a backward Riccati solve) and
 kept; the control loop itself never solves a Riccati equation.
 """
 from __future__ import annotations
@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import threading
 from pathlib import Path
 
 import yaml
@@ -55,6 +56,7 @@ class RetunedLibrary:
 
     It answers what ``maneuver.concatenate`` and the graph ask of a library (ids, spec, get, digest,
     lqr_weights, path); the digest names the weights too, so a plan says which tuning its gains are for.
+    Thread-safe: each primitive's gains are computed once, and computing one blocks only those asking for it.
     """
 
     def __init__(self, library: PrimitiveLibrary, lqr_weights: LqrWeights) -> None:
@@ -62,6 +64,8 @@ class RetunedLibrary:
         self.library, self.lqr_weights = library, lqr_weights
         self.path = library.path
         self._retuned: dict[str, Primitive] = {}
+        self._locks: dict[str, threading.Lock] = {}
+        self._locks_lock = threading.Lock()
 
     def ids(self) -> list[str]:
         return self.library.ids()
@@ -76,10 +80,13 @@ class RetunedLibrary:
         return self.library.spec(primitive_id)
 
     def get(self, primitive_id: str) -> Primitive:
-        if primitive_id not in self._retuned:
-            self._retuned[primitive_id] = gains_job(self.library.rig, self.library.get(primitive_id),
-                                                    self.lqr_weights)
-        return self._retuned[primitive_id]
+        with self._locks_lock:
+            lock = self._locks.setdefault(primitive_id, threading.Lock())
+        with lock:
+            if primitive_id not in self._retuned:
+                self._retuned[primitive_id] = gains_job(self.library.rig, self.library.get(primitive_id),
+                                                        self.lqr_weights)
+            return self._retuned[primitive_id]
 
     def digest(self) -> str:
         """SHA-256 of the library's digest and the weights."""

@@ -22,6 +22,7 @@ import io
 import json
 import os
 import re
+import threading
 from pathlib import Path
 from typing import Iterable, Iterator, Optional
 
@@ -72,6 +73,7 @@ class PrimitiveLibrary:
         self.lqr_weights = lqr_weights
         self._entries: dict[str, dict] = {}
         self._cache: dict[str, Primitive] = {}
+        self._read_lock = threading.Lock()   # several planner threads may ask for one primitive at once
 
     # ----- writing -------------------------------------------------------------------------------
     @classmethod
@@ -180,9 +182,13 @@ class PrimitiveLibrary:
         return _spec_from_json(self.entry(primitive_id)["spec"])
 
     def get(self, primitive_id: str) -> Primitive:
-        """Read one primitive, verifying its array file against the manifest."""
-        if primitive_id in self._cache:
+        """Read one primitive, verifying its array file against the manifest (once; thread-safe)."""
+        with self._read_lock:
+            if primitive_id not in self._cache:
+                self._cache[primitive_id] = self._read(primitive_id)
             return self._cache[primitive_id]
+
+    def _read(self, primitive_id: str) -> Primitive:
         record = self.entry(primitive_id)
         file = self.path / "primitives" / record["file"]
         try:
@@ -201,11 +207,9 @@ class PrimitiveLibrary:
                                           input_gain=np.array(arrays["riccati_input_gain"]))
         except (OSError, ValueError, KeyError) as err:
             raise LibraryError(f"{file}: not a valid primitive array file: {err}") from err
-        primitive = Primitive(spec=self.spec(primitive_id), index_j=record["index_j"], effort=record["effort"],
-                              solver_status=record["solver_status"], solve_time_s=record["solve_time_s"],
-                              iterations=record["iterations"], gains=gains, **data)
-        self._cache[primitive_id] = primitive
-        return primitive
+        return Primitive(spec=self.spec(primitive_id), index_j=record["index_j"], effort=record["effort"],
+                         solver_status=record["solver_status"], solve_time_s=record["solve_time_s"],
+                         iterations=record["iterations"], gains=gains, **data)
 
     def __iter__(self) -> Iterator[Primitive]:
         return (self.get(i) for i in self.ids())
