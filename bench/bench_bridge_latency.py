@@ -8,7 +8,6 @@ picks up a command at its next period, so about half a period (4 ms) of the medi
 Prints one JSON line.
 """
 import json
-import os
 import random
 import statistics
 import tempfile
@@ -23,8 +22,8 @@ COMMANDS = 600
 
 
 def main() -> None:
-    os.environ["ROS_DOMAIN_ID"] = str(random.Random(os.getpid()).randint(101, 200))
-    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    from swim_ros.domains import run_domain
+    run_domain()   # a domain of our own unless the user chose one: never another session's nodes
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from sensor_msgs.msg import JointState

@@ -16,8 +16,6 @@ Prints one JSON line.
 from __future__ import annotations
 
 import json
-import os
-import random
 import tempfile
 from pathlib import Path
 
@@ -43,7 +41,7 @@ def record_run(period_s: float, work: Path) -> Path:
     with System(specs, work / f"logs_{period_s * 1e3:g}ms"), RunClient(bag, topics) as client:
         client.wait_for_nodes()
         handle = client.execute(client.request(*MANEUVER, 1.0))
-        result = client.wait_for(handle.get_result_async(), 120.0, "end of the maneuver").result
+        result = client.result(handle, 120.0)
         client.drain(result.duration_s)
     return bag
 
@@ -81,9 +79,8 @@ def loop_timing(bag: Path, period_s: float) -> dict:
 
 
 def main() -> None:
-    # a domain of our own: never another session's nodes
-    os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(101, 200)))
-    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    from swim_ros.domains import run_domain
+    run_domain()   # a domain of our own unless the user chose one: never another session's nodes
     results = {}
     with tempfile.TemporaryDirectory() as work:
         for period_s in PERIODS_S:

@@ -6,7 +6,6 @@ and worst round-trip time.
 """
 import json
 import os
-import random
 import signal
 import statistics
 import subprocess
@@ -18,8 +17,8 @@ TARGET_MS = 50.0
 
 
 def main() -> None:
-    os.environ["ROS_DOMAIN_ID"] = str(random.Random(os.getpid()).randint(101, 200))
-    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    from swim_ros.domains import run_domain
+    run_domain()   # a domain of our own unless the user chose one: never another session's nodes
     import rclpy
     from swim_interfaces.srv import RequestManeuver
     node_process = subprocess.Popen(["bash", "-c", "source scripts/env.sh && exec ros2 run swim_planner planner_node"],

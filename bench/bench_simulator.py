@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import json
 import os
-import random
 import statistics
 import tempfile
 import time
@@ -126,8 +125,8 @@ class LoopClient:
 def loop_realtime_factors() -> tuple[list[float], list[float]]:
     """Steady-state and whole-goal factors of LOOP_REPEATS executions in one bring-up."""
     from swim_bringup.system import System, closed_loop_specs, config_dir
-    os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(101, 200)))   # a domain of our own, as swim-demo
-    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    from swim_ros.domains import run_domain
+    run_domain()   # a domain of our own unless the user chose one: never another session's nodes
     steady, whole = [], []
     with tempfile.TemporaryDirectory() as logs, System(closed_loop_specs(config_dir()), Path(logs)):
         client = LoopClient()

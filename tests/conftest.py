@@ -1,24 +1,20 @@
 """Workspace tests: shared fixtures. DDS traffic stays on this host and in a domain of our own."""
 import contextlib
-import os
-import random
 import subprocess
 from pathlib import Path
 
 import pytest
 
 WORKSPACE = Path(__file__).resolve().parents[1]
-PACKAGES = ("swim_model", "swim_planner", "swim_controller", "swim_sim", "swim_hw_bridge", "swim_bringup",
+PACKAGES = ("swim_model", "swim_ros", "swim_planner", "swim_controller", "swim_sim", "swim_hw_bridge", "swim_bringup",
             "swim_interfaces")
 
 
 @pytest.fixture(scope="session")
 def ros_domain():
-    """A ROS_DOMAIN_ID of our own for this test session, discovery limited to localhost."""
-    domain = random.Random(os.getpid()).randint(1, 100)
-    os.environ["ROS_DOMAIN_ID"] = str(domain)
-    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    return domain
+    """A ROS_DOMAIN_ID no other live test process holds (swim_ros.domains), discovery limited to localhost."""
+    from swim_ros.domains import claim_ros_domain
+    return claim_ros_domain()
 
 
 @pytest.fixture()

@@ -9,6 +9,11 @@ import time
 import pytest
 
 from conftest import running_node
+from swim_ros.calls import ParameterCalls, RetryPolicy
+
+#: the bridge answers its services within a period or two; a try waits 10 s for a loaded host, a lost answer is
+#: asked again (lifecycle transitions only after reading the node's state)
+POLICY = RetryPolicy(attempt_timeout_s=10.0, attempts=3, discovery_timeout_s=30.0)
 
 PERIOD_S = 0.008
 # a long watchdog (200 ms) keeps "the old command is still within the watchdog after a reset" observable
@@ -60,18 +65,23 @@ class BridgeClient:
             self.executor.spin_once(timeout_sec=0.002)
 
     def call(self, client, request):
-        future = client.call_async(request)
-        self.executor.spin_until_future_complete(future, timeout_sec=10.0)
-        assert future.done(), f"no reply from {client.srv_name}; the bridge's log ends:\n{self.log_tail()}"
-        return future.result()
+        """An idempotent service's answer (asked again if lost); fails the test with the bridge's log if none."""
+        from swim_ros.calls import CallFailed, call_service
+        try:
+            return call_service(self.executor, client, request, POLICY)
+        except CallFailed as err:
+            raise AssertionError(f"{err}; the bridge's log ends:\n{self.log_tail()}") from err
 
     def log_tail(self, characters=3000):
         return self.log_path.read_text()[-characters:] if self.log_path is not None else "(not kept)"
 
     def transition(self, transition_id):
-        from lifecycle_msgs.msg import Transition
-        from lifecycle_msgs.srv import ChangeState
-        return self.call(self.change_state, ChangeState.Request(transition=Transition(id=transition_id))).success
+        """A lifecycle transition, asked again only if the node's state shows it was not made (swim_ros.calls)."""
+        from swim_ros.calls import CallFailed, change_lifecycle_state
+        try:
+            return change_lifecycle_state(self.node, self.executor, self.fully_qualified, transition_id, POLICY)
+        except CallFailed as err:
+            raise AssertionError(f"{err}; the bridge's log ends:\n{self.log_tail()}") from err
 
     def state_label(self):
         from lifecycle_msgs.srv import GetState
@@ -292,14 +302,10 @@ def test_diagnostics_report_the_loop(bridge):
 
 def test_parameters_are_validated(bridge):
     from rclpy.parameter import Parameter
-    from rclpy.parameter_client import AsyncParameterClient
-    parameters = AsyncParameterClient(bridge.node, "bridge_node")
-    assert parameters.wait_for_services(timeout_sec=10.0)
+    parameters = ParameterCalls(bridge.node, bridge.executor, "bridge_node", POLICY)
     for name, value in [("sample_period_s", 5.0), ("watchdog_periods", 0), ("backend", "ethercat"),
                         ("diagnostics_rate_hz", -1.0)]:
-        future = parameters.set_parameters([Parameter(name, value=value)])
-        bridge.executor.spin_until_future_complete(future, timeout_sec=10.0)
-        result = future.result().results[0]
+        result = parameters.set([Parameter(name, value=value)])[0]
         assert not result.successful and name in result.reason
 
 

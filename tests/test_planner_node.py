@@ -1,10 +1,15 @@
 """planner_node over DDS: a real node in its own process, requests through rclpy, the latched plan topic."""
-import time
 
 import numpy as np
 import pytest
 
 from conftest import running_node
+from swim_ros.calls import ParameterCalls, RetryPolicy, call_service, spin_until
+
+#: a try's wait: planning takes milliseconds, new gains 0.1-0.3 s a primitive; a lost answer is asked again
+POLICY = RetryPolicy(attempt_timeout_s=10.0, attempts=3, discovery_timeout_s=30.0)
+#: a late subscriber's wait for the latched plan: discovery of a new reader on a loaded host takes seconds
+LATCHED_DELIVERY_S = 10.0
 
 PAPER = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05", "constrained/cruise_to_cruise/E0.05-E0.10",
           "constrained/cruise/E0.10", "constrained/decelerate/E0.10"], [1, 2, 1, 2, 1])
@@ -23,7 +28,6 @@ def client(planner, rclpy_context):
     from swim_interfaces.srv import RequestManeuver
     node = rclpy.create_node("planner_test_client", context=rclpy_context)
     service = node.create_client(RequestManeuver, "request_maneuver")
-    assert service.wait_for_service(timeout_sec=30.0), "planner_node did not come up"
     executor = SingleThreadedExecutor(context=rclpy_context)
     executor.add_node(node)
     yield executor, service
@@ -33,11 +37,10 @@ def client(planner, rclpy_context):
 
 def call(executor, service, ids, counts, time_scale=1.0, mode=0):
     from swim_interfaces.srv import RequestManeuver
-    request = RequestManeuver.Request(mode=mode, primitive_ids=ids, repeat_counts=counts, time_scale=time_scale)
-    future = service.call_async(request)
-    executor.spin_until_future_complete(future, timeout_sec=30.0)
-    assert future.done(), "no reply within 30 s"
-    return future.result()
+    from swim_ros.calls import new_request_id
+    request = RequestManeuver.Request(mode=mode, primitive_ids=ids, repeat_counts=counts, time_scale=time_scale,
+                                      request_id=new_request_id())
+    return call_service(executor, service, request, POLICY)
 
 
 def test_valid_request_returns_the_paper_maneuver(client):
@@ -75,29 +78,25 @@ def test_goal_request(client):
     executor, service = client
     request = RequestManeuver.Request(mode=RequestManeuver.Request.MODE_GOAL, goal_state="constrained/rest",
                                       goal_alpha_rad=3.0, time_scale=1.0)
-    future = service.call_async(request)
-    executor.spin_until_future_complete(future, timeout_sec=30.0)
-    reply = future.result()
+    reply = call_service(executor, service, request, POLICY)
     assert reply.success, reply.message
     positions = np.asarray(reply.plan.positions).reshape(-1, 3)
     assert positions[-1, 0] - positions[0, 0] >= 3.0
     assert reply.plan.segments[0].primitive_type == "accelerate"
     assert reply.plan.segments[-1].primitive_type == "decelerate"
     request.goal_state = "constrained/cruise/E9.99"
-    future = service.call_async(request)
-    executor.spin_until_future_complete(future, timeout_sec=30.0)
-    assert not future.result().success and "unknown goal state" in future.result().message
+    reply = call_service(executor, service, request, POLICY)
+    assert not reply.success and "unknown goal state" in reply.message
 
 
 def test_concurrent_requests(client):
     executor, service = client
     from swim_interfaces.srv import RequestManeuver
+    call(executor, service, *PAPER)          # discovery complete both ways before the concurrent requests
     futures = [service.call_async(RequestManeuver.Request(primitive_ids=PAPER[0], repeat_counts=PAPER[1],
                                                           time_scale=scale))
                for scale in (0.8, 1.0, 1.1, 1.2)]
-    deadline = time.monotonic() + 30
-    while not all(f.done() for f in futures) and time.monotonic() < deadline:
-        executor.spin_once(timeout_sec=0.05)
+    spin_until(executor, lambda: all(f.done() for f in futures), POLICY.attempt_timeout_s)
     durations = [f.result().plan.time_from_start_s[-1] for f in futures]
     np.testing.assert_allclose(durations, [30 / 0.8, 30.0, 30 / 1.1, 30 / 1.2])
 
@@ -113,9 +112,7 @@ def test_last_plan_is_latched(client, rclpy_context):
     late.create_subscription(PlannedTrajectory, "plan", received.append,
                              QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL))
     executor.add_node(late)
-    deadline = time.monotonic() + 10
-    while not received and time.monotonic() < deadline:
-        executor.spin_once(timeout_sec=0.1)
+    spin_until(executor, lambda: bool(received), LATCHED_DELIVERY_S)
     executor.remove_node(late)
     late.destroy_node()
     assert received and received[-1].time_from_start_s[-1] == pytest.approx(30.0)
@@ -124,15 +121,11 @@ def test_last_plan_is_latched(client, rclpy_context):
 def test_lqr_weights_switch_at_run_time(client, tmp_path):
     """Plans after a new lqr_weights_path carry gains for it; a bad file is refused and changes nothing."""
     from rclpy.parameter import Parameter
-    from rclpy.parameter_client import AsyncParameterClient
     executor, service = client
-    parameters = AsyncParameterClient(executor.get_nodes()[0], "planner_node")
-    assert parameters.wait_for_services(timeout_sec=10.0)
+    parameters = ParameterCalls(executor.get_nodes()[0], executor, "planner_node", POLICY)
 
     def set_weights_path(path):
-        future = parameters.set_parameters([Parameter("lqr_weights_path", value=str(path))])
-        executor.spin_until_future_complete(future, timeout_sec=10.0)
-        return future.result().results[0]
+        return parameters.set([Parameter("lqr_weights_path", value=str(path))])[0]
 
     def heave_gains(reply):
         assert reply.success, reply.message

@@ -12,8 +12,6 @@ import argparse
 import dataclasses
 import datetime
 import json
-import os
-import random
 import sys
 import time
 from pathlib import Path
@@ -46,7 +44,7 @@ def run_maneuver(bag_path: Path, primitive_ids: list[str], repeat_counts: list[i
     with RunClient(bag_path) as client:
         client.wait_for_nodes(STARTUP_TIMEOUT_S)
         handle = client.execute(client.request(primitive_ids, repeat_counts, time_scale), progress, tolerances)
-        result = client.wait_for(handle.get_result_async(), timeout_s, "end of the maneuver").result
+        result = client.result(handle, timeout_s)
         client.drain(result.duration_s)
         return {"error_code": result.error_code, "error_string": result.error_string,
                 "final_alpha_error_rad": result.final_alpha_error_rad, "duration_s": result.duration_s}
@@ -137,9 +135,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parse_arguments(argv)
     run_dir = args.run_dir or Path("runs") / datetime.datetime.now().strftime("demo-%Y%m%d-%H%M%S")
     run_dir.mkdir(parents=True, exist_ok=True)
-    # a domain of our own unless the user chose one: a demo never talks to another session's nodes
-    os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(101, 200)))
-    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    from swim_ros.domains import run_domain
+    run_domain()   # a domain of our own unless the user chose one: never another session's nodes
     bag_path = run_dir / "bag"
     if bag_path.exists():
         print(f"swim-demo: {bag_path} exists; choose another --run-dir", file=sys.stderr)

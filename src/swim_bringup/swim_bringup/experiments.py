@@ -20,15 +20,13 @@ import argparse
 import dataclasses
 import datetime
 import json
-import os
-import random
 import sys
 import time
 from pathlib import Path
 from typing import Optional
 
-from swim_bringup.demo import (PAPER_CONSTRAINED, PAPER_LANE_KEEPING, RUN_TOLERANCES, DemoError,
-                               parse_with_tolerances, run_failures, run_recorded)
+from swim_bringup.demo import (PAPER_CONSTRAINED, PAPER_LANE_KEEPING, RUN_TOLERANCES, parse_with_tolerances,
+                               run_failures, run_recorded)
 from swim_bringup.system import closed_loop_specs, config_dir
 from swim_controller.supervisor import Tolerances
 
@@ -147,11 +145,11 @@ def main(argv: Optional[list[str]] = None) -> int:
     if (run_dir / "experiments.json").exists():
         print(f"swim-experiments: {run_dir} holds results already; choose another --run-dir", file=sys.stderr)
         return 2
-    os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(101, 200)))
-    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    from swim_ros.domains import run_domain
+    run_domain()   # a domain of our own unless the user chose one: never another session's nodes
     from tqdm import tqdm
     experiments = [e for e in paper_experiments() if args.only is None or e.name in args.only]
-    rows, started = [], time.monotonic()
+    rows, started, stopped = [], time.monotonic(), None
     with tqdm(total=2 * len(experiments), unit="run", file=sys.stderr) as bar:
         for experiment in experiments:
             reports = {}
@@ -161,13 +159,22 @@ def main(argv: Optional[list[str]] = None) -> int:
                 try:
                     reports[sliding_mode] = run_one(experiment, sliding_mode, run_dir / label,
                                                     args.config or config_dir(), args.timeout, args.tolerances)
-                except DemoError as err:
-                    print(f"swim-experiments: {label}: {err}", file=sys.stderr)
-                    return 1
+                except Exception as err:   # noqa: BLE001 - whatever stops a run is named, and what was done kept
+                    stopped = {"run": label, "reason": f"{type(err).__name__}: {err}"}
+                    break
                 bar.update(1)
+            if stopped is not None:
+                break
             rows.append(compare(experiment, reports[True], reports[False]))
     summary = {"experiments": rows, "wall_time_s": time.monotonic() - started}
+    if stopped is not None:
+        summary["stopped"] = stopped
+    run_dir.mkdir(parents=True, exist_ok=True)
     (run_dir / "experiments.json").write_text(json.dumps(summary, indent=2))
+    if stopped is not None:
+        print(f"swim-experiments: stopped at {stopped['run']}: {stopped['reason']}; the {len(rows)} experiments "
+              f"done are in {run_dir / 'experiments.json'}", file=sys.stderr)
+        return 1
     table = results_table(rows)
     (run_dir / "results.md").write_text(table + "\n")
     print(table)

@@ -15,8 +15,13 @@ from typing import Callable, Optional
 
 from swim_bringup.bag import RUN_TOPICS, BagWriter
 from swim_controller.supervisor import Tolerances
+from swim_ros.calls import (CallFailed, GoalStatusWatch, RetryPolicy, call_service, goal_result, new_request_id,
+                            send_goal, wait_for_server)
 
 STARTUP_TIMEOUT_S = 60.0
+#: a maneuver request: a plan of primitives whose gains are new takes 0.1-0.3 s each, so 20 s a try is generous;
+#: a repeat carries the same request id, so the planner never plans twice
+PLANNER_POLICY = RetryPolicy(attempt_timeout_s=20.0, attempts=3, discovery_timeout_s=STARTUP_TIMEOUT_S)
 DRAIN_TIMEOUT_S = 60.0
 RECORD_DEPTH = 10000   # the recorder may fall behind a lock-step loop; it must not drop periods
 LOOP_TOPICS = ("joint_states", "joint_commands", "tracking_state")   # published every period by the nodes of a run
@@ -58,6 +63,7 @@ class RunClient:
                 self._record(topic, topics[topic])
             self.planner = self.node.create_client(RequestManeuver, "request_maneuver")
             self.tracker = ActionClient(self.node, ExecutePlan, "execute_plan")
+            self.goal_status = GoalStatusWatch(self.node, "execute_plan")
         except BaseException:
             self.close()
             raise
@@ -128,10 +134,11 @@ class RunClient:
 
     # --- the run -------------------------------------------------------------------------------------------
     def wait_for_nodes(self, timeout_s: float = STARTUP_TIMEOUT_S) -> None:
-        if not self.planner.wait_for_service(timeout_sec=timeout_s):
-            raise RunError("planner_node did not come up")
-        if not self.tracker.wait_for_server(timeout_sec=timeout_s):
-            raise RunError("tracker_node did not come up")
+        try:
+            wait_for_server(self.executor, self.planner.service_is_ready, "planner_node", timeout_s)
+            wait_for_server(self.executor, self.tracker.server_is_ready, "tracker_node", timeout_s)
+        except CallFailed as err:
+            raise RunError(f"{err.service} did not come up within {timeout_s:.0f} s") from err
         # discovery matches each topic on its own, and each side of it on its own: a recorder that has seen a
         # publisher may not yet be seen by it, and a volatile writer sends nothing to a reader it has not matched
         # (a bridge run's bag once lacked the first 56 ms of joint_states). A first message received proves the
@@ -148,9 +155,12 @@ class RunClient:
     def request(self, primitive_ids: list[str], repeat_counts: list[int], time_scale: float):
         """The planner's plan (swim_interfaces/PlannedTrajectory) for the sequence; RunError if refused."""
         from swim_interfaces.srv import RequestManeuver
-        reply = self.wait_for(self.planner.call_async(RequestManeuver.Request(
-            primitive_ids=primitive_ids, repeat_counts=repeat_counts, time_scale=time_scale)), 60.0,
-            "answer from the planner")
+        request = RequestManeuver.Request(primitive_ids=primitive_ids, repeat_counts=repeat_counts,
+                                          time_scale=time_scale, request_id=new_request_id())
+        try:
+            reply = call_service(self.executor, self.planner, request, PLANNER_POLICY)
+        except CallFailed as err:
+            raise RunError(str(err)) from err
         if not reply.success:
             raise RunError(f"the planner refused the maneuver: {reply.message}")
         return reply.plan
@@ -168,11 +178,20 @@ class RunClient:
         def on_feedback(message) -> None:
             if progress is not None:
                 progress(message.feedback.progress)
-        handle = self.wait_for(self.tracker.send_goal_async(goal, feedback_callback=on_feedback), 30.0,
-                               "answer from the tracker")
+        try:
+            handle = send_goal(self.executor, self.tracker, goal, self.goal_status, on_feedback)
+        except CallFailed as err:
+            raise RunError(str(err)) from err
         if not handle.accepted:
             raise RunError("the tracker refused the goal")
         return handle
+
+    def result(self, handle, timeout_s: float):
+        """The accepted goal's result (ExecutePlan.Result) within timeout_s, or RunError."""
+        try:
+            return goal_result(self.executor, handle, timeout_s).result
+        except CallFailed as err:
+            raise RunError(f"no end of the maneuver within {timeout_s:.0f} s") from err
 
     def drain(self, duration_s: float) -> None:
         """Record until the plan's last period (plan time duration_s) is in the bag on every loop topic, and the

@@ -53,3 +53,25 @@ def test_a_run_the_tracker_aborted_is_not_a_success():
     faulted = _report(1.0, 0.001)
     faulted["bridge_faults"] = "OVERRUN"
     assert not compare(paper_experiments()[4], faulted, _report(1.0, 0.001))["succeeded"]
+
+
+def test_whatever_stops_a_run_is_named_and_the_experiments_done_are_kept(tmp_path, monkeypatch, capsys):
+    """A run that raises (a node died, a bug) stops swim-experiments with exit 1, the run and the reason on
+    stderr and in experiments.json beside the experiments completed before it."""
+    import json
+
+    import swim_bringup.experiments as experiments
+    names = [e.name for e in paper_experiments()[:2]]
+    done = []
+
+    def run_one(experiment, sliding_mode, run_dir, *_):
+        if len(done) == 3:
+            raise RuntimeError("sim_node died (exit -9)")
+        done.append((experiment.name, sliding_mode))
+        return _report(1.0, 0.001)
+    monkeypatch.setattr(experiments, "run_one", run_one)
+    assert experiments.main(["--only", *names, "--run-dir", str(tmp_path)]) == 1
+    summary = json.loads((tmp_path / "experiments.json").read_text())
+    assert [row["experiment"] for row in summary["experiments"]] == names[:1]
+    assert summary["stopped"] == {"run": f"{names[1]}/sliding_off", "reason": "RuntimeError: sim_node died (exit -9)"}
+    assert f"stopped at {names[1]}/sliding_off: RuntimeError: sim_node died" in capsys.readouterr().err

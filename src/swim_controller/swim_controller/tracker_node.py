@@ -9,7 +9,9 @@ Topics:
 Action ``execute_plan`` (swim_interfaces/action/ExecutePlan): one active goal; a new goal preempts it
 (PREEMPTED); cancel holds the foil where it is (CANCELED); feedback at ``feedback_rate_hz``.
 Safety: no valid state for ``stale_after_periods`` sample periods -> zero torque, the goal aborts with
-STATE_LOST; a state with wrong names, lengths or a non-finite value is rejected, counted, never used.
+STATE_LOST (a command a period, stamped with the last valid state's stamp, zero before any: command stamps never
+run backwards, and a lock-step simulator never takes one as the answer to a newer state); a state with wrong
+names, lengths or a non-finite value is rejected, counted, never used.
 
 Parameters (validated on set, changeable at run time): sample_period_s (0.008, the paper's), stale_after_periods
 (5), sliding_mode_enabled (true), disturbance_bound_n_m, boundary_layer, time_scale (1.0: run plans as
@@ -23,19 +25,15 @@ each a waitable that the executor adds to its wait set again on every spin, in P
 """
 from __future__ import annotations
 
-import array
 import math
 import time
 from typing import Optional
 
 import numpy as np
-import rclpy
+from builtin_interfaces.msg import Time
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.action import ActionServer, CancelResponse
-from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, QoSReliabilityPolicy
 from rclpy.task import Future
 from sensor_msgs.msg import JointState
 from swim_interfaces.action import ExecutePlan
@@ -49,6 +47,9 @@ from swim_controller.supervisor import Mode, Outcome, StaleStateWatch, Step, Sup
 from swim_controller.tracker import CascadeTracker, model_io_linearization
 from swim_controller.velocity_filter import DEFAULT_CUTOFF_HZ, VelocityEstimator
 from swim_model import SwimModelError, VehicleModel, load_rig
+from swim_ros.codecs import float_array
+from swim_ros.entry import run_node
+from swim_ros.qos import per_period_publisher, per_period_subscription
 
 RESULT_CODES = {
     Outcome.SUCCEEDED: ExecutePlan.Result.SUCCESSFUL,
@@ -58,11 +59,6 @@ RESULT_CODES = {
     Outcome.PREEMPTED: ExecutePlan.Result.PREEMPTED,
     Outcome.CANCELED: ExecutePlan.Result.CANCELED,
 }
-
-#: the per-period topics' QoS, for recorders: 8 s of periods at 8 ms kept by the writer. A reliable keep-last
-#: writer overwrites samples a reader has not acknowledged: with a shallow history a recorder behind a lock-step
-#: loop, or stalled on a loaded host, would lose periods.
-RECORDABLE_QOS = QoSProfile(depth=1000, reliability=QoSReliabilityPolicy.RELIABLE)
 
 PARAMETER_RULES = {
     "sample_period_s": (lambda v: isinstance(v, float) and 0.001 <= v <= 0.1, "a float in [0.001, 0.1] s"),
@@ -74,13 +70,6 @@ PARAMETER_RULES = {
     "feedback_rate_hz": (lambda v: isinstance(v, float) and 0.1 <= v <= 1000.0, "a float in [0.1, 1000] Hz"),
     "velocity_cutoff_hz": (lambda v: isinstance(v, float) and math.isfinite(v) and v > 0.0, "a float > 0 Hz"),
 }
-
-
-def float_array(values: np.ndarray) -> array.array:
-    """A float64 numpy array as array('d'), which a message's float64[] field takes without a per-element check."""
-    converted = array.array("d")
-    converted.frombytes(np.ascontiguousarray(values, dtype=np.float64).tobytes())
-    return converted
 
 
 class ActiveGoal:
@@ -122,6 +111,7 @@ class TrackerNode(Node):
         self._supervisor: Optional[Supervisor] = None
         self._goal: Optional[ActiveGoal] = None
         self._last_q: Optional[np.ndarray] = None
+        self._last_state_stamp = Time()      # zero: "not stamped", before any valid state
         self._stale_watch = StaleStateWatch(time.monotonic(), self.get_parameter("sample_period_s").value)
         self._last_tracking: Optional[TrackingState] = None
         self._velocity = VelocityEstimator(self.get_parameter("velocity_cutoff_hz").value)
@@ -129,11 +119,8 @@ class TrackerNode(Node):
         self.commands_sent = 0
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
-        no_events = PublisherEventCallbacks(use_default_callbacks=False)
-        self.command_publisher = self.create_publisher(JointState, "joint_commands", RECORDABLE_QOS,
-                                                       event_callbacks=no_events)
-        self.tracking_publisher = self.create_publisher(TrackingState, "tracking_state", RECORDABLE_QOS,
-                                                        event_callbacks=no_events)
+        self.command_publisher = per_period_publisher(self, JointState, "joint_commands")
+        self.tracking_publisher = per_period_publisher(self, TrackingState, "tracking_state")
         self._command_message = JointState(name=["phi", "theta"])   # reused every period
         self._tracking_message_reused = TrackingState(reference=JointTrajectoryPoint(),
                                                       feedback=JointTrajectoryPoint(), error=JointTrajectoryPoint())
@@ -141,8 +128,7 @@ class TrackerNode(Node):
         # never race, so no locks. The execute callback is a coroutine that awaits its goal's end instead of
         # blocking a thread; rclpy's MultiThreadedExecutor with a mutually exclusive group stalled here
         # (the subscription stopped being served after a few periods, ros2/rclcpp#832 family).
-        self.create_subscription(JointState, "joint_states", self._on_state, 10,
-                                 event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
+        per_period_subscription(self, JointState, "joint_states", self._on_state)
         self.create_timer(self.get_parameter("sample_period_s").value, self._check_stale)
         self._action = ActionServer(self, ExecutePlan, "execute_plan", execute_callback=self._execute,
                                     cancel_callback=self._on_cancel)
@@ -194,6 +180,7 @@ class TrackerNode(Node):
             return
         self._stale_watch.state_arrived(time.monotonic())
         self._last_q = q
+        self._last_state_stamp = message.header.stamp
         if supervisor is None:
             self._publish_command(np.zeros(2), message.header.stamp)
             return
@@ -238,12 +225,12 @@ class TrackerNode(Node):
             if self._goal is not None:
                 self._goal.finish(Outcome.STATE_LOST, f"no valid joint_states for {limit * 1e3:.0f} ms")
         self._velocity.reset()
-        self._publish_command(np.zeros(2), self.get_clock().now().to_msg())
+        self._publish_command(np.zeros(2), self._last_state_stamp)
 
     def _publish_command(self, torque: np.ndarray, stamp) -> None:
         command = self._command_message
         command.header.stamp = stamp
-        command.effort = array.array("d", (float(torque[0]), float(torque[1])))
+        command.effort = float_array(torque)
         self.command_publisher.publish(command)
         self.commands_sent += 1
 
@@ -324,19 +311,7 @@ class TrackerNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
-    # this rclpy's init() is not a context manager, hence try/finally
-    rclpy.init(args=args)
-    try:
-        try:
-            node = TrackerNode()
-        except (ValueError, SwimModelError) as err:
-            rclpy.logging.get_logger("tracker_node").fatal(str(err))
-            raise SystemExit(2) from err
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        rclpy.try_shutdown()
+    run_node(TrackerNode, args, name="tracker_node", fatal_errors=(ValueError, SwimModelError))
 
 
 if __name__ == "__main__":

@@ -38,16 +38,13 @@ import dataclasses
 import time
 from typing import Any
 
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from lifecycle_msgs.srv import ChangeState
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.duration import Duration
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.lifecycle import Node as LifecycleNode
 from rclpy.lifecycle import State, TransitionCallbackReturn
-from rclpy.qos import QoSProfile, QoSReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
 from std_srvs.srv import Trigger
@@ -58,6 +55,8 @@ from swim_hw_bridge.device import Device, DeviceError
 from swim_hw_bridge.io_loop import IoLoop, Snapshot
 from swim_hw_bridge.safety import (Command, FaultCode, MalformedCommand, SafetyLayer, SafetyLimits, WatchdogState,
                                    fault_names, parse_command)
+from swim_ros.entry import run_node
+from swim_ros.qos import RECORDABLE_QOS
 
 STATE_NAMES = ["alpha", "R", "phi", "theta"]
 
@@ -99,12 +98,6 @@ class BridgeSettings:
     read_failure_limit: int
     diagnostics_rate_hz: float
     autostart: bool
-
-
-#: the per-period topics' QoS, for recorders: 8 s of periods at 8 ms kept by the writer. A reliable keep-last
-#: writer overwrites samples a reader has not acknowledged: with a shallow history a recorder behind a lock-step
-#: loop, or stalled on a loaded host, would lose periods.
-RECORDABLE_QOS = QoSProfile(depth=1000, reliability=QoSReliabilityPolicy.RELIABLE)
 
 
 class BridgeNode(LifecycleNode):
@@ -389,26 +382,15 @@ class BridgeNode(LifecycleNode):
         return status
 
 
+def autostart(node: BridgeNode) -> None:
+    """With the autostart parameter: configure, then activate (each only if the one before succeeded)."""
+    if node.settings.autostart and node.trigger_configure() == TransitionCallbackReturn.SUCCESS:
+        node.trigger_activate()
+
+
 def main(args: list[str] | None = None) -> None:
-    # this rclpy's init() is not a context manager, hence try/finally
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = BridgeNode()
-        if node.settings.autostart and node.trigger_configure() == TransitionCallbackReturn.SUCCESS:
-            node.trigger_activate()
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        executor.spin()
-    except ValueError as err:   # a parameter given on the command line that does not validate
-        rclpy.logging.get_logger("bridge_node").fatal(str(err))
-        raise SystemExit(2) from err
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.release()   # zero, then disable, then close: never leave the amplifiers driven
-        rclpy.try_shutdown()
+    # release: zero, then disable, then close, however the node stops: never leave the amplifiers driven
+    run_node(BridgeNode, args, name="bridge_node", start=autostart, stop=BridgeNode.release)
 
 
 if __name__ == "__main__":

@@ -3,8 +3,9 @@
 Service ``request_maneuver`` (swim_interfaces/srv/RequestManeuver): an explicit primitive sequence with
 repeat counts (MODE_SEQUENCE), or a goal state of the lane/energy graph with a distance to cover at least
 (MODE_GOAL, answered by the quickest path), concatenated and time-scaled. A request that cannot be planned
-gets success = false and a message saying why; nothing else changes. Topic ``plan`` (PlannedTrajectory,
-transient local): the last plan made.
+gets success = false and a message saying why; nothing else changes. A request with a ``request_id`` seen among
+the last ANSWERS_KEPT gets that request's reply again (a client repeats a request whose answer DDS lost): nothing
+is planned or published twice. Topic ``plan`` (PlannedTrajectory, transient local): the last plan made.
 
 Parameters: ``library_path`` (default: the shipped library), ``rig_path`` (default: the shipped rig),
 ``default_time_scale`` (used when a request's time_scale is 0; default 1.0), ``lqr_weights_path`` (a YAML of
@@ -15,12 +16,14 @@ nothing.
 """
 from __future__ import annotations
 
-import rclpy
+import collections
+import functools
+import threading
+
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import ReentrantCallbackGroup
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import QoSDurabilityPolicy, QoSProfile
 from swim_interfaces.msg import PlannedTrajectory, PrimitiveSegment
 from swim_interfaces.srv import RequestManeuver
 
@@ -31,6 +34,42 @@ from swim_planner.graph import build_graph, plan_to_goal, rest_node
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.maneuver import Plan, concatenate, expand_sequence
 from swim_planner.paths import default_library_path
+from swim_ros.codecs import float_array
+from swim_ros.entry import run_node
+from swim_ros.qos import LATCHED_QOS
+
+#: threads serving requests at once: a request whose primitives need new gains does not hold up the others
+SERVICE_THREADS = 4
+#: replies kept by request id for repeated requests; assumed: a client repeats within seconds, and 64 replies
+#: cover every client of a rig many times over
+ANSWERS_KEPT = 64
+
+
+class AnswerMemory:
+    """Replies by request id, the latest ANSWERS_KEPT. A repeat that arrives while the first is still being
+    planned waits for that reply instead of planning again."""
+
+    def __init__(self, size: int = ANSWERS_KEPT) -> None:
+        self.size = size
+        self._lock = threading.Lock()
+        self._answers: collections.OrderedDict[str, tuple[threading.Event, list]] = collections.OrderedDict()
+
+    def claim(self, request_id: str) -> tuple[bool, threading.Event, list]:
+        """(first, done, box): first is True for the first request with this id, which must answer() it."""
+        with self._lock:
+            if request_id in self._answers:
+                done, box = self._answers[request_id]
+                return False, done, box
+            done, box = threading.Event(), []
+            self._answers[request_id] = (done, box)
+            while len(self._answers) > self.size:
+                self._answers.popitem(last=False)
+            return True, done, box
+
+    @staticmethod
+    def answer(done: threading.Event, box: list, response) -> None:
+        box.append(response)
+        done.set()
 
 
 def plan_to_message(plan: Plan, stamp) -> PlannedTrajectory:
@@ -40,13 +79,13 @@ def plan_to_message(plan: Plan, stamp) -> PlannedTrajectory:
     message.constrained = plan.constrained
     message.lane_radius_m = float(plan.lane_radius_m)
     message.joint_names = list(plan.joint_names)
-    message.time_from_start_s = plan.time_s.tolist()
-    message.positions = plan.q.ravel().tolist()
-    message.velocities = plan.qdot.ravel().tolist()
-    message.foil_accelerations = plan.foil_acceleration.ravel().tolist()
-    message.feedforward_torques = plan.torque.ravel().tolist()
-    message.lqr_gains = plan.lqr_gain.ravel().tolist()
-    message.sliding_gains = plan.sliding_gain.ravel().tolist()
+    message.time_from_start_s = float_array(plan.time_s)
+    message.positions = float_array(plan.q)
+    message.velocities = float_array(plan.qdot)
+    message.foil_accelerations = float_array(plan.foil_acceleration)
+    message.feedforward_torques = float_array(plan.torque)
+    message.lqr_gains = float_array(plan.lqr_gain)
+    message.sliding_gains = float_array(plan.sliding_gain)
     message.segments = [PrimitiveSegment(
         primitive_id=s.primitive_id, primitive_type=s.primitive_type, repeat_index=s.repeat_index,
         start_time_s=s.start_time_s, duration_s=s.duration_s, time_scale=s.time_scale,
@@ -69,11 +108,11 @@ class PlannerNode(Node):
         self.library = PrimitiveLibrary.load(library_path, self.rig)
         self.graph = build_graph(self.library)
         self._plan_library = self._retuned(self.get_parameter("lqr_weights_path").value)
+        self.answers = AnswerMemory()
         self.add_on_set_parameters_callback(self._on_set_parameters)
         for line in self.graph.mismatches:
             self.get_logger().warning(f"junction mismatch, primitive dropped from the graph: {line}")
-        latched = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
-        self.plan_publisher = self.create_publisher(PlannedTrajectory, "plan", latched)
+        self.plan_publisher = self.create_publisher(PlannedTrajectory, "plan", LATCHED_QOS)
         self.create_service(RequestManeuver, "request_maneuver", self.on_request,
                             callback_group=ReentrantCallbackGroup())
         self.get_logger().info(f"serving {len(self.library)} primitives from {self.library.path}")
@@ -97,6 +136,21 @@ class PlannerNode(Node):
 
     def on_request(self, request: RequestManeuver.Request,
                    response: RequestManeuver.Response) -> RequestManeuver.Response:
+        if not request.request_id:
+            return self._answer(request, response)
+        first, done, box = self.answers.claim(request.request_id)
+        if not first:
+            done.wait()
+            self.get_logger().info(f"request {request.request_id} repeated: its reply sent again")
+            return box[0]
+        try:
+            response = self._answer(request, response)
+        finally:
+            self.answers.answer(done, box, response)
+        return response
+
+    def _answer(self, request: RequestManeuver.Request,
+                response: RequestManeuver.Response) -> RequestManeuver.Response:
         try:
             plan = self.plan(request)
         except PlannerError as err:
@@ -127,21 +181,8 @@ class PlannerNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
-    # this rclpy's init() is not a context manager, hence try/finally
-    rclpy.init(args=args)
-    try:
-        try:
-            node = PlannerNode()
-        except (PlannerError, SwimModelError) as err:
-            rclpy.logging.get_logger("planner_node").fatal(str(err))
-            raise SystemExit(2) from err
-        executor = MultiThreadedExecutor(num_threads=4)
-        executor.add_node(node)
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        rclpy.try_shutdown()
+    run_node(PlannerNode, args, name="planner_node", fatal_errors=(PlannerError, SwimModelError),
+             executor=functools.partial(MultiThreadedExecutor, num_threads=SERVICE_THREADS))
 
 
 if __name__ == "__main__":

@@ -71,3 +71,34 @@ def test_bad_weights_files_are_refused(tmp_path, text, message):
         load_lqr_weights(path)
     with pytest.raises(PlannerError, match="not a valid"):
         load_lqr_weights(tmp_path / "missing.yaml")
+
+
+def test_one_primitives_gains_being_computed_holds_up_only_those_asking_for_it(library, monkeypatch):
+    """While one primitive's gains are computed, another's are served; a second asker of the first waits for
+    the same computation instead of starting another."""
+    import threading
+
+    import swim_planner.gains as gains_module
+    release, computing, jobs = threading.Event(), threading.Event(), []
+    real_job = gains_module.gains_job
+
+    def slow_job(rig, primitive, weights):
+        jobs.append(primitive.spec.primitive_id)
+        if primitive.spec.primitive_id == PRIMITIVE:
+            computing.set()
+            assert release.wait(30.0)
+        return real_job(rig, primitive, weights)
+    monkeypatch.setattr(gains_module, "gains_job", slow_job)
+    retuned = RetunedLibrary(library, dataclasses.replace(library.lqr_weights, heave_input_weight=0.05))
+    results = {}
+    threads = [threading.Thread(target=lambda key=key: results.__setitem__(key, retuned.get(PRIMITIVE)))
+               for key in ("first", "second")]
+    threads[0].start()
+    assert computing.wait(30.0)
+    threads[1].start()
+    other = retuned.get("constrained/cruise/E0.05")        # answered while PRIMITIVE's gains are held up
+    assert other.gains is not None and not results
+    release.set()
+    for thread in threads:
+        thread.join(30.0)
+    assert results["first"] is results["second"] and jobs.count(PRIMITIVE) == 1

@@ -35,19 +35,14 @@ per-period topics have no QoS event handlers: rclpy gives every publisher and su
 """
 from __future__ import annotations
 
-import array
 import dataclasses
 import math
 import time
 from typing import Optional
 
 import numpy as np
-import rclpy
 from builtin_interfaces.msg import Time
-from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, QoSReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
@@ -55,24 +50,15 @@ from swim_interfaces.msg import WakeStatistics
 from swim_interfaces.srv import SetVehicleState
 
 from swim_model import StateError, SwimModelError, VehicleModel, load_rig
+from swim_ros.codecs import float_array, stamp_of
+from swim_ros.entry import run_node
+from swim_ros.qos import per_period_publisher, per_period_subscription
 from swim_sim.disturbances import Disturbances
 from swim_sim.plant import Plant, SimulationError
 from swim_sim.sensors import SensorNoise, Sensors
 from swim_sim.wake_coupling import WakeCoupling, parameter_defaults, parameters_from_values
 
 MOTOR_JOINTS = ["phi", "theta"]
-#: the per-period topics' QoS, for recorders: 8 s of periods at 8 ms kept by the writer. A reliable keep-last
-#: writer overwrites samples a reader has not acknowledged: with a shallow history a recorder behind a lock-step
-#: loop, or stalled on a loaded host, would lose periods.
-RECORDABLE_QOS = QoSProfile(depth=1000, reliability=QoSReliabilityPolicy.RELIABLE)
-
-
-def stamp_of(time_s: float) -> Time:
-    """A builtin_interfaces/Time from seconds, rounded to the nanosecond (so stamps compare exactly)."""
-    nanoseconds = int(round(time_s * 1e9))
-    return Time(sec=nanoseconds // 1_000_000_000, nanosec=nanoseconds % 1_000_000_000)
-
-
 def command_torque(message: JointState) -> np.ndarray:
     """(heave, pitch) torque from a joint_commands message; ValueError naming what is wrong."""
     names, effort = message.name, message.effort
@@ -86,13 +72,6 @@ def command_torque(message: JointState) -> np.ndarray:
     if not (math.isfinite(heave) and math.isfinite(pitch)):
         raise ValueError(f"non-finite torque {[heave, pitch]}")
     return np.array([heave, pitch])
-
-
-def float_array(values: np.ndarray) -> array.array:
-    """A float64 numpy array as array('d'), which a message's float64[] field takes without a per-element check."""
-    converted = array.array("d")
-    converted.frombytes(np.ascontiguousarray(values, dtype=np.float64).tobytes())
-    return converted
 
 
 class SimNode(Node):
@@ -149,14 +128,11 @@ class SimNode(Node):
         self.holding = self._hold_enabled
         self._held_state_answered = False
 
-        no_events = PublisherEventCallbacks(use_default_callbacks=False)
-        self.state_publisher = self.create_publisher(JointState, "joint_states", RECORDABLE_QOS,
-                                                     event_callbacks=no_events)
-        self.clock_publisher = self.create_publisher(Clock, "/clock", 10, event_callbacks=no_events)
-        self.wake_publisher = self.create_publisher(WakeStatistics, "wake_statistics", RECORDABLE_QOS) \
+        self.state_publisher = per_period_publisher(self, JointState, "joint_states")
+        self.clock_publisher = per_period_publisher(self, Clock, "/clock", 10)
+        self.wake_publisher = per_period_publisher(self, WakeStatistics, "wake_statistics") \
             if wake is not None else None
-        self.create_subscription(JointState, "joint_commands", self._on_command, 10,
-                                 event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
+        per_period_subscription(self, JointState, "joint_commands", self._on_command)
         self.create_service(Trigger, "reset", self._on_reset)
         self.create_service(SetVehicleState, "set_state", self._on_set_state)
         if self.mode == "realtime":
@@ -290,19 +266,7 @@ class SimNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
-    # this rclpy's init() is not a context manager, hence try/finally
-    rclpy.init(args=args)
-    try:
-        try:
-            node = SimNode()
-        except (ValueError, SwimModelError) as err:
-            rclpy.logging.get_logger("sim_node").fatal(str(err))
-            raise SystemExit(2) from err
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        rclpy.try_shutdown()
+    run_node(SimNode, args, name="sim_node", fatal_errors=(ValueError, SwimModelError))
 
 
 if __name__ == "__main__":

@@ -1,0 +1,82 @@
+"""planner_node in this process, over DDS, with its answers lost the way Fast DDS loses them: a repeated request
+id gets the first reply, and nothing is planned or published twice."""
+import threading
+
+import pytest
+
+from swim_ros.calls import RetryPolicy, call_service, new_request_id
+
+SEQUENCE = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05", "constrained/decelerate/E0.05"], [1, 2, 1])
+#: a plan of stored gains takes milliseconds: a 2 s try is ample, and short enough to keep the test quick
+QUICK = RetryPolicy(attempt_timeout_s=2.0, attempts=3, discovery_timeout_s=30.0)
+
+
+@pytest.fixture()
+def planner():
+    """(planner node spinning in a thread, a client node, the client's executor)."""
+    import rclpy
+    from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+    from swim_planner.planner_node import PlannerNode
+    from swim_ros.domains import claim_ros_domain
+    claim_ros_domain()
+    rclpy.init()
+    node = PlannerNode()
+    spinner = MultiThreadedExecutor(num_threads=4)
+    spinner.add_node(node)
+    thread = threading.Thread(target=spinner.spin, daemon=True)
+    thread.start()
+    client = rclpy.create_node("planner_requests_test")
+    executor = SingleThreadedExecutor()
+    executor.add_node(client)
+    yield node, client, executor
+    spinner.shutdown()
+    thread.join(timeout=10.0)
+    client.destroy_node()
+    node.destroy_node()
+    rclpy.shutdown()
+
+
+def counted(obj, name):
+    """Wrap obj.name (a method) to count its calls; returns the list of calls."""
+    calls, original = [], getattr(obj, name)
+
+    def wrapper(*args, **kwargs):
+        calls.append(args)
+        return original(*args, **kwargs)
+    setattr(obj, name, wrapper)
+    return calls
+
+
+def test_a_repeated_request_id_gets_the_first_reply_without_planning_again(planner):
+    from swim_interfaces.srv import RequestManeuver
+    node, client, executor = planner
+    service = next(s for s in node.services if s.srv_name.endswith("request_maneuver"))
+    original, lost = service.send_response, []
+    service.send_response = lambda response, header: lost.append(response) if not lost else original(response, header)
+    plans, published = counted(node, "plan"), counted(node.plan_publisher, "publish")
+    request = RequestManeuver.Request(primitive_ids=SEQUENCE[0], repeat_counts=SEQUENCE[1], time_scale=1.2,
+                                      request_id=new_request_id())
+    reply = call_service(executor, client.create_client(RequestManeuver, "request_maneuver"), request, QUICK)
+    assert reply.success and len(lost) == 1
+    assert len(plans) == 1 and len(published) == 1
+    assert list(reply.plan.time_from_start_s) == list(lost[0].plan.time_from_start_s)
+    assert reply.plan.header.stamp == lost[0].plan.header.stamp          # the same reply, not a new plan
+    # a new id plans again; no id plans every time
+    call_service(executor, client.create_client(RequestManeuver, "request_maneuver"),
+                 RequestManeuver.Request(primitive_ids=SEQUENCE[0], repeat_counts=SEQUENCE[1],
+                                         request_id=new_request_id()), QUICK)
+    assert len(plans) == 2
+
+
+def test_answer_memory_keeps_the_latest_and_waits_for_a_reply_in_progress():
+    from swim_planner.planner_node import AnswerMemory
+    memory = AnswerMemory(size=2)
+    first, done, box = memory.claim("a")
+    assert first and not done.is_set()
+    again = memory.claim("a")
+    assert again[0] is False and again[1] is done
+    threading.Timer(0.2, memory.answer, (done, box, "reply a")).start()
+    assert again[1].wait(5.0) and again[2] == ["reply a"]
+    memory.claim("b")
+    memory.claim("c")                       # "a" is the oldest of three: forgotten
+    assert memory.claim("a")[0] is True

@@ -1,0 +1,21 @@
+from setuptools import find_packages, setup
+
+package_name = 'swim_ros'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='swim maintainers',
+    maintainer_email='swim@example.com',
+    description='The ROS boundary every swim node and client shares.',
+    license='Apache-2.0',
+    tests_require=['pytest'],
+    entry_points={'console_scripts': []},
+)

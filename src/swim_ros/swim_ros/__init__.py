@@ -1,0 +1,10 @@
+"""swim_ros: the ROS boundary every swim node and client shares, and nothing else (no physics).
+
+- ``qos``: the QoS profiles of our topics and the publisher/subscription factories.
+- ``entry``: ``run_node``, the one ``main()`` of every node (init, spin, clean stop, exit status 2 on a fatal
+  start-up error).
+- ``codecs``: between messages and numpy: float64[] fields, stamps.
+- ``domains``: ``claim_ros_domain``, a ROS_DOMAIN_ID no other live test or run on this host holds.
+- ``calls``: service calls that survive a lost answer (Fast DDS can drop a response sent before the server
+  matched the client's response reader).
+"""

@@ -1,0 +1,55 @@
+"""``run_node``: the one ``main()`` of every swim node.
+
+Follows ros2/demos: init, make the node, spin; Ctrl-C (SIGINT) and an external shutdown are a normal stop; the
+context is shut down however the process ends. A node whose construction raises one of ``fatal_errors`` (a bad
+parameter, a library that does not load) logs the reason as fatal and exits with status 2, without a traceback.
+"""
+from __future__ import annotations
+
+from typing import Callable, Optional, TypeVar
+
+import rclpy
+from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+
+NodeT = TypeVar("NodeT", bound=Node)
+
+#: the exit status of a node that could not start (bad parameters or files): a usage error, as argparse's
+FATAL_EXIT_STATUS = 2
+
+
+def run_node(make_node: Callable[[], NodeT], args: Optional[list[str]] = None, *, name: str,
+             fatal_errors: tuple[type[BaseException], ...] = (ValueError,),
+             executor: Callable[[], Executor] = SingleThreadedExecutor,
+             start: Optional[Callable[[NodeT], object]] = None,
+             stop: Optional[Callable[[NodeT], object]] = None) -> None:
+    """Run one node until SIGINT or shutdown.
+
+    Args:
+        make_node: builds the node (after rclpy.init).
+        args: the command line (ROS arguments), as rclpy.init takes it.
+        name: the logger a fatal start-up error is reported on (the node's name).
+        fatal_errors: exceptions from make_node or start that stop the process with FATAL_EXIT_STATUS.
+        executor: makes the executor to spin in (single-threaded by default).
+        start: called once with the node before spinning (for example a lifecycle node's autostart).
+        stop: called with the node however spinning ends, before shutdown (for example to release hardware).
+    """
+    rclpy.init(args=args)   # this rclpy's init() is not a context manager, hence try/finally
+    node: Optional[NodeT] = None
+    try:
+        try:
+            node = make_node()
+            if start is not None:
+                start(node)
+        except fatal_errors as err:
+            rclpy.logging.get_logger(name).fatal(str(err))
+            raise SystemExit(FATAL_EXIT_STATUS) from err
+        spinner = executor()
+        spinner.add_node(node)
+        spinner.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None and stop is not None:
+            stop(node)
+        rclpy.try_shutdown()

@@ -1,0 +1,73 @@
+"""run_node in a real process: a fatal start-up error exits 2 with its reason; SIGINT stops cleanly, stop runs.
+claim_ros_domain: two live processes never hold the same domain."""
+import os
+import signal
+import subprocess
+import sys
+import select
+import textwrap
+
+NODE_SCRIPT = textwrap.dedent("""
+    import sys
+    from rclpy.node import Node
+    from swim_ros.entry import run_node
+
+    class Demo(Node):
+        def __init__(self):
+            super().__init__("entry_demo")
+            if sys.argv[1] == "fail":
+                raise ValueError("lane_radius_m must be positive, got -1.0")
+            self.create_timer(0.05, lambda: print("spinning", flush=True))
+
+    run_node(Demo, name="entry_demo", stop=lambda node: print("stopped", node.get_name(), flush=True))
+""")
+#: how long a child process may take to start rclpy and spin (seconds): generous for a loaded 2-core host
+START_TIMEOUT_S = 30.0
+
+
+def _start(mode):
+    return subprocess.Popen([sys.executable, "-c", NODE_SCRIPT, mode], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def test_fatal_start_up_error_exits_2_with_the_reason(ros_domain):
+    process = _start("fail")
+    out, err = process.communicate(timeout=START_TIMEOUT_S)
+    assert process.returncode == 2, out + err
+    assert "lane_radius_m must be positive" in err and "Traceback" not in err
+    assert "stopped" not in out                  # no node was made, so nothing to stop
+
+
+def test_sigint_stops_cleanly_and_runs_stop(ros_domain):
+    process = _start("ok")
+    ready, _, _ = select.select([process.stdout], [], [], START_TIMEOUT_S)
+    if not ready:
+        process.kill()
+    assert ready and process.stdout.readline().strip() == "spinning"   # the first timer tick: the node spins
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=START_TIMEOUT_S)
+    assert process.returncode == 0, err
+    assert "stopped entry_demo" in out and "Traceback" not in err
+
+
+def test_two_processes_never_claim_the_same_domain(tmp_path):
+    script = textwrap.dedent(f"""
+        import sys, time
+        from pathlib import Path
+        from swim_ros.domains import claim_ros_domain
+        print(claim_ros_domain(range(1, 3), Path({str(tmp_path)!r})), flush=True)
+        sys.stdin.readline()
+    """)
+    holders = [subprocess.Popen([sys.executable, "-c", script], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True) for _ in range(2)]
+    claimed = [int(h.stdout.readline()) for h in holders]
+    assert sorted(claimed) == [1, 2]
+    third = subprocess.run([sys.executable, "-c", script], input="\n", capture_output=True, text=True,
+                           timeout=START_TIMEOUT_S)
+    assert third.returncode != 0 and "every ROS domain" in third.stderr
+    for holder in holders:
+        holder.communicate("\n", timeout=START_TIMEOUT_S)
+    # released with the processes: a new one gets one again
+    again = subprocess.run([sys.executable, "-c", script], input="\n", capture_output=True, text=True,
+                           timeout=START_TIMEOUT_S, env=dict(os.environ))
+    assert again.returncode == 0 and int(again.stdout) in (1, 2)
