@@ -45,7 +45,11 @@ def run_maneuver(bag_path: Path, primitive_ids: list[str], repeat_counts: list[i
         client.wait_for_nodes(STARTUP_TIMEOUT_S)
         handle = client.execute(client.request(primitive_ids, repeat_counts, time_scale), progress, tolerances)
         result = client.result(handle, timeout_s)
-        client.drain(result.duration_s)
+        try:
+            client.drain(result.duration_s)
+        except RunError as err:   # name how the goal ended: a goal lost at its start leaves nothing to drain
+            raise RunError(f"{err}; the goal ended after {result.duration_s:.3f} s with code {result.error_code}: "
+                           f"{result.error_string}") from err
         return {"error_code": result.error_code, "error_string": result.error_string,
                 "final_alpha_error_rad": result.final_alpha_error_rad, "duration_s": result.duration_s}
 

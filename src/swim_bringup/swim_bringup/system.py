@@ -15,6 +15,8 @@ import time
 from pathlib import Path
 from typing import Optional, Sequence
 
+import yaml
+
 STOP_GRACE_S = 10.0
 
 
@@ -113,12 +115,35 @@ PLANTS = {
 }
 
 
+#: the tracker's stale-state limit when the simulator runs in lock-step. A stalled process stops simulated time
+#: with it, so the watch only has to notice a simulator that died; 2 s covers a loaded 2-core host, whose stalls
+#: reach 0.6 s and ended runs with "no valid joint_states for 200 ms" (tracker.yaml's, which a real-time plant needs)
+LOCKSTEP_STALE_OVERRIDE = "stale_after_periods:=250"
+
+
+def sim_mode(params_file: Path, overrides: tuple[str, ...]) -> str:
+    """sim_node's mode as a run would start it: the last mode:= override, else its parameter file's, else
+    sim_node's default (lockstep)."""
+    for override in reversed(overrides):
+        if override.startswith("mode:="):
+            return override.split(":=", 1)[1]
+    try:
+        parameters = yaml.safe_load(params_file.read_text())["sim_node"]["ros__parameters"]
+    except (OSError, yaml.YAMLError, KeyError, TypeError):
+        return "lockstep"
+    return str(parameters.get("mode", "lockstep"))
+
+
 def closed_loop_specs(config: Path, sim_overrides: tuple[str, ...] = (),
                       tracker_overrides: tuple[str, ...] = (), plant: str = "sim") -> list[NodeSpec]:
     """The plant (sim_node or bridge_node, see PLANTS), planner and tracker with the parameter files in config;
-    sim_overrides go to the plant node, whichever it is."""
+    sim_overrides go to the plant node, whichever it is. With the simulator in lock-step (unless overridden to
+    real time) the tracker's stale limit is LOCKSTEP_STALE_OVERRIDE unless tracker_overrides set one."""
     if plant not in PLANTS:
         raise ValueError(f"plant must be one of {', '.join(PLANTS)}, got {plant!r}")
+    if plant == "sim" and sim_mode(config / PLANTS["sim"][2], sim_overrides) == "lockstep" \
+            and not any(o.startswith("stale_after_periods:=") for o in tracker_overrides):
+        tracker_overrides = (LOCKSTEP_STALE_OVERRIDE, *tracker_overrides)
     package, executable, params_file = PLANTS[plant]
     return [NodeSpec(package, executable, config / params_file, sim_overrides),
             NodeSpec("swim_planner", "planner_node", config / "planner.yaml"),

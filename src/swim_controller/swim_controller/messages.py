@@ -9,7 +9,9 @@ import numpy.typing as npt
 from swim_controller.errors import PlanError, StateMessageError
 from swim_controller.riccati import error_state_size
 from swim_controller.tracker import Reference
-from swim_controller.velocity_filter import VelocityEstimator
+from swim_model.velocity_filter import VelocityEstimator
+from swim_model.vehicle import JOINT_NAMES_CONSTRAINED, JOINT_NAMES_UNCONSTRAINED
+from swim_ros.codecs import MessageError, joint_state_arrays, seconds_of
 
 Array = npt.NDArray[np.float64]
 SUPPORTED_INTERFACE_VERSION = 2
@@ -46,28 +48,14 @@ def state_from_message(message, joint_names: Optional[Sequence[str]], velocity: 
 
     The time is the message's stamp, or receipt_time_s when the stamp is zero (a source that does not stamp).
     Velocities come from the message, or, when it has none, from the filtered differences of positions.
+    joint_names None (no plan yet): either vehicle's joints are accepted.
     Raises StateMessageError for unknown or missing joints, wrong lengths and non-finite values."""
-    names = list(message.name)
-    if joint_names is None:   # no plan yet: accept either vehicle's joints
-        joint_names = names if names in (["alpha", "phi", "theta"], ["alpha", "R", "phi", "theta"]) else None
-        if joint_names is None:
-            raise StateMessageError(f"joint names {names} are not [alpha, phi, theta] or [alpha, R, phi, theta]")
-    if sorted(names) != sorted(joint_names) or len(set(names)) != len(names):
-        raise StateMessageError(f"joint names {names}, expected {list(joint_names)}")
-    positions = np.asarray(message.position, dtype=float)
-    if positions.shape != (len(names),):
-        raise StateMessageError(f"{len(positions)} positions for {len(names)} joints")
-    order = [names.index(j) for j in joint_names]
-    q = positions[order]
-    if not np.all(np.isfinite(q)):
-        raise StateMessageError(f"non-finite position: {q}")
-    time_s = message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec or receipt_time_s
-    if len(message.velocity) == 0:
-        return time_s, q, velocity.update(time_s, q)
-    velocities = np.asarray(message.velocity, dtype=float)
-    if velocities.shape != (len(names),):
-        raise StateMessageError(f"{len(velocities)} velocities for {len(names)} joints")
-    qdot = velocities[order]
-    if not np.all(np.isfinite(qdot)):
-        raise StateMessageError(f"non-finite velocity: {qdot}")
-    return time_s, q, qdot
+    if joint_names is None:
+        joint_names = JOINT_NAMES_UNCONSTRAINED if len(message.name) == len(JOINT_NAMES_UNCONSTRAINED) \
+            else JOINT_NAMES_CONSTRAINED
+    try:
+        q, qdot = joint_state_arrays(message.name, message.position, message.velocity, joint_names)
+    except MessageError as err:
+        raise StateMessageError(str(err)) from err
+    time_s = seconds_of(message.header.stamp) or receipt_time_s
+    return time_s, q, (qdot if qdot is not None else velocity.update(time_s, q))

@@ -45,9 +45,9 @@ from swim_controller.messages import reference_from_message, state_from_message
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.supervisor import Mode, Outcome, StaleStateWatch, Step, Supervisor, Tolerances
 from swim_controller.tracker import CascadeTracker, model_io_linearization
-from swim_controller.velocity_filter import DEFAULT_CUTOFF_HZ, VelocityEstimator
+from swim_model.velocity_filter import DEFAULT_CUTOFF_HZ, VelocityEstimator
 from swim_model import SwimModelError, VehicleModel, load_rig
-from swim_ros.codecs import float_array
+from swim_ros.codecs import ACTUATED_JOINTS, float_array
 from swim_ros.entry import run_node
 from swim_ros.qos import per_period_publisher, per_period_subscription
 
@@ -121,7 +121,7 @@ class TrackerNode(Node):
 
         self.command_publisher = per_period_publisher(self, JointState, "joint_commands")
         self.tracking_publisher = per_period_publisher(self, TrackingState, "tracking_state")
-        self._command_message = JointState(name=["phi", "theta"])   # reused every period
+        self._command_message = JointState(name=list(ACTUATED_JOINTS))   # reused every period
         self._tracking_message_reused = TrackingState(reference=JointTrajectoryPoint(),
                                                       feedback=JointTrajectoryPoint(), error=JointTrajectoryPoint())
         # One thread runs every callback (rclpy.spin): the control period, the stale watchdog and the action

@@ -179,16 +179,20 @@ def test_continued_terminal_is_one_integration_over_the_tiled_cycles():
     np.testing.assert_allclose(continued, direct[samples - 1], rtol=1e-7)
 
 
-def test_cruise_gains_are_periodic_with_the_lookahead(library, model_for):
+def test_cruise_gains_are_periodic_with_the_lookahead(model_for):
     """A cruise's P(T) is eq. 20 over cruise_lookahead_s more of the same cruise, so its gains nearly repeat
-    from cycle to cycle; with the primitive's own horizon only, P fades to S at its end."""
+    from cycle to cycle; with the primitive's own horizon only, P(T) is S."""
+    from conftest import StrokeSpec, make_stroke
     from swim_controller.riccati import primitive_gains
-    primitive = library.get("free/cruise/R0.43/E0.05")
-    model = model_for(primitive.spec)
-    cycle = 2 * primitive.spec.intervals + 1
-    def riccati(weights):
-        return primitive_gains(model, primitive.time_s, primitive.q, primitive.qdot, primitive.foil_acceleration,
-                               weights, cycle_samples=cycle).riccati
-    periodic, plain = riccati(LqrWeights()), riccati(LqrWeights(cruise_lookahead_s=0.0))
+    spec = StrokeSpec("free cruise", False, 0.43, 40)
+    model = model_for(spec)
+    stroke = make_stroke(model, spec, cycles=1, cycle_samples=True)
+    periodic = stroke.gains.riccati
+    weights = LqrWeights()
+    q, r = weights.state_weight_matrix(False), weights.input_weight_matrix()
+    terminal = terminal_weight(linearize(model, stroke.q, stroke.qdot, stroke.foil_acceleration), q, r, weights)
+    plain = primitive_gains(model, stroke.time_s, stroke.q, stroke.qdot, stroke.foil_acceleration,
+                            LqrWeights(cruise_lookahead_s=0.0), cycle_samples=len(stroke.time_s)).riccati
     assert np.abs(periodic[-1] - periodic[0]).max() < 0.05 * np.abs(periodic[0]).max()
-    assert np.abs(plain[-1] - plain[0]).max() > 0.5 * np.abs(plain[0]).max()
+    np.testing.assert_allclose(plain[-1], terminal, rtol=1e-12, atol=1e-12 * np.abs(terminal).max())
+    assert np.abs(periodic[-1] - terminal).max() > 0.5 * np.abs(periodic[-1]).max()

@@ -9,7 +9,6 @@ from swim_controller.errors import PlanError
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.supervisor import Mode, Outcome, Supervisor, Tolerances
 from swim_controller.tracker import CascadeTracker, Reference, saturate
-from swim_controller.velocity_filter import VelocityEstimator
 
 
 def _reference(time_s, q, qdot, u=None, gain=0.0):
@@ -69,16 +68,6 @@ def test_sliding_term_makes_the_lyapunov_derivative_nonpositive(s0, s1, angle, f
         assert s @ (eps + d) <= 1e-12
     else:   # inside the layer: linear in s, never larger than D
         np.testing.assert_allclose(eps, -0.3 * s, atol=1e-15)
-
-
-def test_velocity_estimate_of_a_ramp_follows_its_closed_form():
-    """For q = v t the estimate is v (1 - a^k) after k differences, a = exp(-2 pi fc h)."""
-    estimator = VelocityEstimator(cutoff_hz=10.0)
-    h, v = 0.008, np.array([0.3, -2.0, 1.0])
-    a = math.exp(-2 * math.pi * 10.0 * h)
-    for k in range(40):
-        rate = estimator.update(k * h, v * k * h)
-    np.testing.assert_allclose(rate, v * (1 - a ** 39), rtol=1e-12)
 
 
 def _static_io(q, qdot):

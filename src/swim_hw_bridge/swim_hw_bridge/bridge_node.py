@@ -53,12 +53,12 @@ from swim_hw_bridge.backends import BACKENDS, UnknownBackend, make_device
 from swim_hw_bridge.conversions import BridgeConfigError, Conversions, load_bridge_config
 from swim_hw_bridge.device import Device, DeviceError
 from swim_hw_bridge.io_loop import IoLoop, Snapshot
-from swim_hw_bridge.safety import (Command, FaultCode, MalformedCommand, SafetyLayer, SafetyLimits, WatchdogState,
-                                   fault_names, parse_command)
+from swim_hw_bridge.safety import Command, FaultCode, SafetyLayer, SafetyLimits, WatchdogState, fault_names
+from swim_model.vehicle import JOINT_NAMES_UNCONSTRAINED
+from swim_ros.codecs import MessageError, torque_from_command
 from swim_ros.entry import run_node
 from swim_ros.qos import RECORDABLE_QOS
 
-STATE_NAMES = ["alpha", "R", "phi", "theta"]
 
 #: name -> (default, description); the checks are in validate_parameter
 PARAMETERS: dict[str, tuple[Any, str]] = {
@@ -282,8 +282,8 @@ class BridgeNode(LifecycleNode):
         if not self.active or self.loop is None:
             return
         try:
-            heave_n_m, pitch_n_m = parse_command(message.name, message.effort)
-        except MalformedCommand as err:
+            heave_n_m, pitch_n_m = torque_from_command(message.name, message.effort)
+        except MessageError as err:
             self.malformed_commands += 1
             self.get_logger().warning(f"joint_commands refused ({self.malformed_commands} so far): {err}",
                                       throttle_duration_sec=1.0)
@@ -326,7 +326,7 @@ class BridgeNode(LifecycleNode):
         message = JointState()
         age_s = max(time.monotonic() - snapshot.monotonic_s, 0.0)
         message.header.stamp = (self.get_clock().now() - Duration(nanoseconds=int(age_s * 1e9))).to_msg()
-        message.name = STATE_NAMES
+        message.name = list(JOINT_NAMES_UNCONSTRAINED)   # the rig's free vehicle: the bridge reads every encoder
         message.position = list(snapshot.positions)
         message.velocity = list(snapshot.velocities)
         message.effort = [0.0, 0.0, snapshot.torques_n_m[0], snapshot.torques_n_m[1]]

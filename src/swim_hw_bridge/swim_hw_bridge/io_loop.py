@@ -1,7 +1,7 @@
 """The I/O loop: one thread, absolute deadlines t_k = t_0 + k h (h = sample_period_s, time.monotonic()).
 
 Each period: read the counters, unwrap and convert them (unwrap.py, conversions.py), estimate velocities by
-filtered differences (swim_controller.velocity_filter), apply the safety rules (safety.py) to the latest
+filtered differences (swim_model.velocity_filter), apply the safety rules (safety.py) to the latest
 command, write the currents, toggle the amplifier-enable line (while enabled and no fault is latched), publish
 a snapshot. Then sleep until the next deadline. Nothing in the period logs, blocks on ROS or builds more than
 a few small tuples.
@@ -23,7 +23,7 @@ import threading
 import time
 
 import numpy as np
-from swim_controller.velocity_filter import VelocityEstimator
+from swim_model.velocity_filter import VelocityEstimator
 
 from swim_hw_bridge.conversions import Conversions
 from swim_hw_bridge.device import Device, DeviceError

@@ -17,20 +17,16 @@ Faults latch until reset(); after a reset the output stays zero until a command 
 Device reads: the same sample sequence stale_read_limit times in a row latches STALE_READ; read_failure_limit
 failed reads in a row latch READ_FAILED (check_read).
 
-Commands (parse_command): sensor_msgs/JointState-like names and efforts; names exactly {phi, theta} once each,
-as many efforts as names, all finite; anything else raises MalformedCommand (the node counts and drops it).
+Commands reach the layer already decoded (swim_ros.codecs.torque_from_command: names exactly {phi, theta} once
+each, as many efforts as names, all finite; the node counts and drops anything else).
 """
 from __future__ import annotations
 
 import dataclasses
 import enum
 import math
-from collections.abc import Sequence
 
 from swim_hw_bridge.conversions import BridgeConfig
-
-COMMAND_JOINTS = ("phi", "theta")
-
 
 class FaultCode(enum.IntFlag):
     """Latched faults, a bit each (several may be latched at once)."""
@@ -59,10 +55,6 @@ class WatchdogState(enum.IntEnum):
     EXPIRED = 2   # the latest command is older than the timeout: torque zero
 
 
-class MalformedCommand(ValueError):
-    """A joint command the bridge refuses: wrong names, wrong size, or a non-finite effort."""
-
-
 @dataclasses.dataclass(frozen=True)
 class Command:
     """The latest torque command as the I/O loop sees it.
@@ -75,19 +67,6 @@ class Command:
     pitch_torque_n_m: float
     received_monotonic_s: float
     stamp_ns: int = 0
-
-
-def parse_command(names: Sequence[str], efforts: Sequence[float]) -> tuple[float, float]:
-    """(heave, pitch) joint torques, N m, from a JointState's names and efforts. Raises MalformedCommand."""
-    names = list(names)
-    if sorted(names) != sorted(COMMAND_JOINTS):
-        raise MalformedCommand(f"joint names must be {list(COMMAND_JOINTS)} (any order), got {names}")
-    if len(efforts) != len(names):
-        raise MalformedCommand(f"{len(names)} names but {len(efforts)} efforts")
-    torque = dict(zip(names, (float(e) for e in efforts)))
-    if not all(math.isfinite(v) for v in torque.values()):
-        raise MalformedCommand(f"efforts must be finite, got {list(efforts)}")
-    return torque["phi"], torque["theta"]
 
 
 def soft_limit_scale(position: float, torque: float, lower: float, upper: float, margin: float) -> float:

@@ -6,8 +6,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from conftest import PERIOD_S, READ_FAILURE_LIMIT, STALE_READ_LIMIT, WATCHDOG_PERIODS
-from swim_hw_bridge.safety import (Command, FaultCode, MalformedCommand, SafetyLayer, WatchdogState,
-                                   parse_command, soft_limit_scale)
+from swim_hw_bridge.safety import Command, FaultCode, SafetyLayer, WatchdogState, soft_limit_scale
+from swim_ros.codecs import MessageError, torque_from_command
 
 T0 = 100.0
 
@@ -134,25 +134,6 @@ def test_failing_reads_latch_after_the_limit(safety):
     assert safety.faults == FaultCode.READ_FAILED
 
 
-@pytest.mark.parametrize("names, efforts", [
-    (["phi"], [0.1]),
-    (["phi", "theta", "alpha"], [0.1, 0.1, 0.1]),
-    (["phi", "phi"], [0.1, 0.1]),
-    (["heave", "theta"], [0.1, 0.1]),
-    (["phi", "theta"], [0.1]),
-    (["phi", "theta"], [0.1, 0.2, 0.3]),
-    (["phi", "theta"], [math.nan, 0.1]),
-    (["phi", "theta"], [0.1, -math.inf]),
-])
-def test_malformed_commands_are_refused(names, efforts):
-    with pytest.raises(MalformedCommand):
-        parse_command(names, efforts)
-
-
-def test_names_in_any_order():
-    assert parse_command(["theta", "phi"], [0.2, 0.1]) == (0.1, 0.2)
-
-
 any_float = st.floats(allow_nan=True, allow_infinity=True)
 
 
@@ -162,8 +143,8 @@ any_float = st.floats(allow_nan=True, allow_infinity=True)
 def test_fuzzed_commands_never_exceed_a_current_limit(limits, names, efforts, phi, theta, dt):
     safety = SafetyLayer(limits)
     try:
-        torques = parse_command(names, efforts)
-    except MalformedCommand:
+        torques = torque_from_command(names, efforts)
+    except MessageError:
         torques = (efforts + [0.0, 0.0])[:2]   # push the refused values straight into the layer anyway
     safety.check_positions(phi, theta)
     output = safety.output(T0 + dt, Command(torques[0], torques[1], T0), phi, theta)

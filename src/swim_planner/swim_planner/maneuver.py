@@ -28,6 +28,7 @@ import numpy.typing as npt
 
 from swim_controller.time_scaling import retime_feedback, scale_feedback
 from swim_model import RigParameters
+from swim_model.vehicle import JOINT_NAMES_CONSTRAINED, JOINT_NAMES_UNCONSTRAINED
 from swim_planner.errors import LibraryError, ManeuverError
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.primitives import Primitive
@@ -154,7 +155,7 @@ def concatenate(library: PrimitiveLibrary, rig: RigParameters, sequence: Sequenc
         sample += count
     time_s, q, qdot, u, tau, lqr_gain, sliding_gain = (np.concatenate(parts) for parts in zip(*pieces))
     first = primitives[0]
-    names = ("alpha", "phi", "theta") if first.spec.constrained else ("alpha", "R", "phi", "theta")
+    names = JOINT_NAMES_CONSTRAINED if first.spec.constrained else JOINT_NAMES_UNCONSTRAINED
     return Plan(constrained=first.spec.constrained, lane_radius_m=first.spec.lane_radius_m, joint_names=names,
                 time_s=time_s, q=q, qdot=qdot, foil_acceleration=u, torque=tau, lqr_gain=lqr_gain,
                 sliding_gain=sliding_gain, segments=segments, library_digest=library.digest())

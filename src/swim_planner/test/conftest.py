@@ -13,3 +13,17 @@ def rig():
 @pytest.fixture(scope="session")
 def library(rig):
     return PrimitiveLibrary.load(default_library_path(), rig)
+
+
+@pytest.fixture(scope="session")
+def model_for(rig):
+    """VehicleModel for a primitive's spec, built once per (constrained, lane)."""
+    from swim_model import VehicleModel
+    cache = {}
+
+    def make(spec):
+        key = (spec.constrained, spec.lane_radius_m)
+        if key not in cache:
+            cache[key] = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m)
+        return cache[key]
+    return make

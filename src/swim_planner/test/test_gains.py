@@ -102,3 +102,13 @@ def test_one_primitives_gains_being_computed_holds_up_only_those_asking_for_it(l
     for thread in threads:
         thread.join(30.0)
     assert results["first"] is results["second"] and jobs.count(PRIMITIVE) == 1
+
+
+def test_stored_input_gain_is_g_transpose_p(library, rig):
+    from swim_controller.riccati import linearize
+    from swim_model import VehicleModel
+    primitive = library.get("free/cruise_to_cruise/R0.43/E0.05-E0.10")
+    model = VehicleModel(rig, constrained=False, lane_radius_m=primitive.spec.lane_radius_m)
+    lin = linearize(model, primitive.q, primitive.qdot, primitive.foil_acceleration)
+    expected = np.einsum("kni,knm->kim", lin.input_matrix, primitive.gains.riccati)
+    np.testing.assert_allclose(primitive.gains.input_gain, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())

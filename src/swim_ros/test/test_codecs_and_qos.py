@@ -1,8 +1,11 @@
 """Codecs against rclpy's own serialization; the per-period factories' QoS and event handlers."""
+import math
+
 import numpy as np
 import pytest
 
-from swim_ros.codecs import float_array, seconds_of, stamp_of
+from swim_ros.codecs import (MessageError, float_array, joint_state_arrays, seconds_of, stamp_of,
+                             torque_from_command)
 
 
 def test_float_array_fills_a_message_field_with_the_same_values():
@@ -38,3 +41,43 @@ def test_per_period_factories_have_no_event_handlers_and_recordable_qos(rclpy_co
         assert len(default.event_handlers) > 0        # what the factories leave out
     finally:
         node.destroy_node()
+
+
+@pytest.mark.parametrize("names, efforts", [
+    (["phi"], [0.1]),
+    (["phi", "theta", "alpha"], [0.1, 0.1, 0.1]),
+    (["phi", "phi"], [0.1, 0.1]),
+    (["heave", "theta"], [0.1, 0.1]),
+    (["phi", "theta"], [0.1]),
+    (["phi", "theta"], [0.1, 0.2, 0.3]),
+    (["phi", "theta"], [math.nan, 0.1]),
+    (["phi", "theta"], [0.1, -math.inf]),
+])
+def test_malformed_commands_are_refused(names, efforts):
+    with pytest.raises(MessageError):
+        torque_from_command(names, efforts)
+
+
+def test_names_in_any_order():
+    assert torque_from_command(["theta", "phi"], [0.2, 0.1]) == (0.1, 0.2)
+
+
+@pytest.mark.parametrize("names, positions, velocities, message", [
+    (["alpha", "phi"], [0.0, 0.0], [], "joint names"),
+    (["alpha", "phi", "phi"], [0.0, 0.0, 0.0], [], "joint names"),
+    (["theta", "alpha", "phi"], [0.0, 0.0], [], "2 positions for 3 joints"),
+    (["theta", "alpha", "phi"], [0.0, 0.0, 0.0], [1.0], "1 velocities for 3 joints"),
+    (["theta", "alpha", "phi"], [0.0, math.nan, 0.0], [], "non-finite position"),
+    (["theta", "alpha", "phi"], [0.0, 0.0, 0.0], [0.0, math.inf, 0.0], "non-finite velocity"),
+])
+def test_bad_joint_states_are_refused(names, positions, velocities, message):
+    with pytest.raises(MessageError, match=message):
+        joint_state_arrays(names, positions, velocities, ("alpha", "phi", "theta"))
+
+
+def test_joint_states_in_any_order_come_back_in_the_models():
+    q, qdot = joint_state_arrays(["theta", "alpha", "R", "phi"], [4.0, 1.0, 2.0, 3.0], [40.0, 10.0, 20.0, 30.0],
+                                 ("alpha", "R", "phi", "theta"))
+    np.testing.assert_array_equal(q, [1.0, 2.0, 3.0, 4.0])
+    np.testing.assert_array_equal(qdot, [10.0, 20.0, 30.0, 40.0])
+    assert joint_state_arrays(["phi", "alpha", "theta"], [2.0, 1.0, 3.0], [], ("alpha", "phi", "theta"))[1] is None

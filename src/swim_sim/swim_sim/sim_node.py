@@ -36,7 +36,6 @@ per-period topics have no QoS event handlers: rclpy gives every publisher and su
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 from typing import Optional
 
@@ -50,29 +49,13 @@ from swim_interfaces.msg import WakeStatistics
 from swim_interfaces.srv import SetVehicleState
 
 from swim_model import StateError, SwimModelError, VehicleModel, load_rig
-from swim_ros.codecs import float_array, stamp_of
+from swim_ros.codecs import MessageError, float_array, joint_state_arrays, stamp_of, torque_from_command
 from swim_ros.entry import run_node
 from swim_ros.qos import per_period_publisher, per_period_subscription
 from swim_sim.disturbances import Disturbances
 from swim_sim.plant import Plant, SimulationError
 from swim_sim.sensors import SensorNoise, Sensors
 from swim_sim.wake_coupling import WakeCoupling, parameter_defaults, parameters_from_values
-
-MOTOR_JOINTS = ["phi", "theta"]
-def command_torque(message: JointState) -> np.ndarray:
-    """(heave, pitch) torque from a joint_commands message; ValueError naming what is wrong."""
-    names, effort = message.name, message.effort
-    if len(effort) == 2 and names == MOTOR_JOINTS:
-        heave, pitch = effort[0], effort[1]
-    elif len(effort) == 2 and names == MOTOR_JOINTS[::-1]:
-        heave, pitch = effort[1], effort[0]
-    else:
-        raise ValueError(f"a command names {MOTOR_JOINTS} with 2 efforts; got names {list(names)}, "
-                         f"{len(effort)} efforts")
-    if not (math.isfinite(heave) and math.isfinite(pitch)):
-        raise ValueError(f"non-finite torque {[heave, pitch]}")
-    return np.array([heave, pitch])
-
 
 class SimNode(Node):
     def __init__(self) -> None:
@@ -149,8 +132,8 @@ class SimNode(Node):
     # ----- stepping ------------------------------------------------------------------------------
     def _on_command(self, message: JointState) -> None:
         try:
-            torque = command_torque(message)
-        except ValueError as err:
+            torque = np.array(torque_from_command(message.name, message.effort))
+        except MessageError as err:
             self.rejected_commands += 1
             self.get_logger().warning(f"command rejected ({self.rejected_commands} so far): {err}",
                                       throttle_duration_sec=1.0)
@@ -241,17 +224,9 @@ class SimNode(Node):
         return response
 
     def _state_from_request(self, state: JointState) -> tuple[np.ndarray, np.ndarray]:
-        names, joints = list(state.name), list(self.plant.model.joint_names)
-        if sorted(names) != sorted(joints) or len(state.position) != len(joints) or \
-                len(state.velocity) not in (0, len(joints)):
-            raise ValueError(f"the state must name {joints} with {len(joints)} positions and 0 or {len(joints)} "
-                             f"velocities; got {names}, {len(state.position)}, {len(state.velocity)}")
-        order = [names.index(j) for j in joints]
-        q = np.asarray(state.position, dtype=float)[order]
-        qdot = np.asarray(state.velocity, dtype=float)[order] if len(state.velocity) else np.zeros(len(joints))
-        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qdot))):
-            raise ValueError("the state has a non-finite value")
-        return q, qdot
+        """(q, qdot) of a set_state request (no velocities: at rest); MessageError (a ValueError) if unusable."""
+        q, qdot = joint_state_arrays(state.name, state.position, state.velocity, self.plant.model.joint_names)
+        return q, qdot if qdot is not None else np.zeros_like(q)
 
     def _restart(self, q: np.ndarray, qdot: np.ndarray) -> None:
         """Put the vehicle at (q, qdot) at the current simulated time (time never runs backwards)."""

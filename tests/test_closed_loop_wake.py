@@ -28,6 +28,25 @@ from swim_controller.closed_loop import reference_of, simulate
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.tracker import CascadeTracker, model_io_linearization
 
+
+@pytest.fixture(scope="module")
+def rig():
+    from swim_model import load_rig
+    return load_rig()
+
+
+@pytest.fixture(scope="module")
+def library(rig):
+    from swim_planner.library import PrimitiveLibrary
+    from swim_planner.paths import default_library_path
+    return PrimitiveLibrary.load(default_library_path(), rig)
+
+
+@pytest.fixture(scope="module")
+def model_for(rig):
+    from swim_model import VehicleModel
+    return lambda spec: VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m)
+
 ACCELERATE = "constrained/accelerate/E0.05"
 EARLY_S = 2.0                    # s: before the plan is lost (runs repeatable to round-off; see the docstring)
 TRACKED_ALPHA_TWO_NORM = 0.002   # rad s^0.5: the ideal-flow plant tracks to this (measured 0.0006)
