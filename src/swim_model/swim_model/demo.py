@@ -5,6 +5,10 @@ Joukowski map and the added-mass coefficients of the rig's foil, simulates the c
 free vehicle swimming with a sinusoidal heave/pitch gait (pitch leading heave by 90 deg) from zero
 momentum, prints the distance covered, the mean speed and the torques the gait needs against the
 motor limits, and saves a figure of the runs.
+
+With ``--flow-comparison`` it draws instead the towed-foil comparison of swim_model.flow_comparison: thrust
+coefficient and efficiency against Strouhal number from the reduced flow model, the vortex wake and Anderson et
+al.'s tank (flow_comparison.png and .json; about a minute, most of it the wake).
 """
 from __future__ import annotations
 
@@ -29,6 +33,10 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--heave-amplitude", type=float, default=20.0, help="heave amplitude, deg")
     parser.add_argument("--pitch-amplitude", type=float, default=35.0, help="pitch amplitude, deg")
     parser.add_argument("--pitch-lead", type=float, default=90.0, help="phase of pitch ahead of heave, deg")
+    parser.add_argument("--flow-comparison", action="store_true",
+                        help="draw the towed-foil comparison of the flow models with the tank data instead")
+    parser.add_argument("--measurements", type=Path, default=None,
+                        help="tank data CSV for --flow-comparison (default: the tests' copy in the source tree)")
     return parser.parse_args(argv)
 
 
@@ -82,6 +90,12 @@ def plot(runs: dict[str, tuple[VehicleModel, ShapeDrivenRun]], path: Path) -> No
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
+    if args.flow_comparison:
+        from swim_model import flow_comparison
+        print("Towed foil (Anderson et al. 1998): reduced flow model and vortex wake ...", flush=True)
+        figure = flow_comparison.run(args.output_dir, args.measurements)
+        print(f"Wrote {figure} and {figure.with_suffix('.json')}")
+        return 0
     try:
         rig = load_rig(args.rig)
         gait = SinusoidalGait(heave_amplitude_rad=math.radians(args.heave_amplitude),

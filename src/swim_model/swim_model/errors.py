@@ -15,3 +15,7 @@ class FoilGeometryError(SwimModelError, ValueError):
 
 class StateError(SwimModelError, ValueError):
     """A state, velocity or torque vector has the wrong shape or a non-finite entry."""
+
+
+class FlowModelError(SwimModelError, ValueError):
+    """A flow model's name, coefficients or experiment settings are not valid."""

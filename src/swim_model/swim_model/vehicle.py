@@ -17,6 +17,15 @@ Partition (eqs. 14-15, 22-23), y = the unactuated coordinates, psi = (phi, theta
     Mio = Mm22 - Mm21 Mm11^-1 Mm12,   Cio qdot = Cm2 qdot - Mm21 Mm11^-1 Cm1 qdot,
     tau = Mio psiddot + Cio qdot.
 
+Flow models. ``flow="ideal"`` (the default) is the paper's: the fluid enters through the added mass in Mm only.
+``flow="circulatory"`` adds the circulatory force of :mod:`swim_model.flow` as a generalized force
+``Q_flow = Q2(q)' f(Q2 qdot, z)`` on the right-hand side, and the flow's two lag states z (m/s) to the state:
+
+    Mm qddot + Cm qdot = B tau + Q_flow(q, qdot, z),     zdot = g(Q2 qdot, z).
+
+T and p = Mm qdot keep their meaning (z holds no energy or momentum), so dT/dt = phidot tau_h + thetadot tau_p +
+qdot' Q_flow and dp_alpha/dt = Q_flow[0]. Every dynamics function takes z as its last input.
+
 All expressions are CasADi SX (for optimization and exact Jacobians, ``VehicleModel.symbolic``);
 the numeric methods evaluate the same expressions compiled to C (:mod:`swim_model.codegen`).
 """
@@ -24,6 +33,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import math
 from functools import cached_property
 from typing import Sequence
 
@@ -32,7 +42,8 @@ import numpy as np
 import numpy.typing as npt
 
 from swim_model import codegen
-from swim_model.errors import StateError
+from swim_model.errors import FlowModelError, StateError
+from swim_model.flow import FLOW_MODELS, LAG_STATE_NAMES, CirculatoryFlow, FlowParameters
 from swim_model.joukowski import AddedMass, JoukowskiFoil
 from swim_model.kinematics import Coordinates, foil_velocity_map, rigid_mass_matrix
 from swim_model.rig import RigParameters, load_rig
@@ -64,6 +75,9 @@ class SymbolicModel:
     mass: ca.SX
     coriolis: ca.SX
     functions: dict[str, ca.Function]
+    lag: ca.SX | None = None          # the flow's lag states z (circulatory flow), m/s
+    flow_force: ca.SX | None = None   # (fx, fy, mz) in foil axes at the foil frame's origin (circulatory flow)
+    generalized_flow_force: ca.SX | None = None  # Q2' f, one entry per coordinate (circulatory flow)
 
 
 class VehicleModel:
@@ -73,13 +87,23 @@ class VehicleModel:
         rig: rig parameters (default: the shipped rig file).
         constrained: lock the rails (q = (alpha, phi, theta)).
         lane_radius_m: R of the locked rails (default: the rig's constrained_lane_radius).
+        flow: "ideal" (the paper's added mass only) or "circulatory" (plus swim_model.flow's lift, suction, drag
+            and stall, with n_lag = 2 lag states).
+        flow_parameters: the circulatory model's coefficients (default: FlowParameters()).
 
     All numeric methods take and return numpy arrays: q and qdot of length nq (3 or 4), tau the
-    2-vector (heave, pitch) of joint torques in N m.
+    2-vector (heave, pitch) of joint torques in N m. With the circulatory flow the dynamics methods also take
+    ``lag``, the 2 lag states in m/s (``lag=`` is refused by the ideal model, required by the circulatory one);
+    the state for integrators is x = (q, qdot, lag), nx = 2 nq + n_lag.
     """
 
     def __init__(self, rig: RigParameters | None = None, constrained: bool = False,
-                 lane_radius_m: float | None = None) -> None:
+                 lane_radius_m: float | None = None, flow: str = "ideal",
+                 flow_parameters: FlowParameters | None = None) -> None:
+        if flow not in FLOW_MODELS:
+            raise FlowModelError(f"VehicleModel: flow must be one of {FLOW_MODELS}, got {flow!r}")
+        if flow == "ideal" and flow_parameters is not None:
+            raise FlowModelError("VehicleModel: flow_parameters are for flow='circulatory'")
         self.rig = rig if rig is not None else load_rig()
         self.constrained = bool(constrained)
         self.lane_radius_m = float(lane_radius_m if lane_radius_m is not None
@@ -89,6 +113,13 @@ class VehicleModel:
         self.n_unactuated = self.nq - 2
         self.foil = JoukowskiFoil(self.rig.foil_chord_m, self.rig.foil_max_thickness_m, self.rig.foil_span_m)
         self.added_mass: AddedMass = self.foil.added_mass(self.rig.water_density_kg_m3)
+        self.flow = flow
+        self.circulatory_flow: CirculatoryFlow | None = (
+            CirculatoryFlow(self.foil, self.rig.water_density_kg_m3, flow_parameters) if flow == "circulatory"
+            else None)
+        self.lag_names: tuple[str, ...] = LAG_STATE_NAMES if flow == "circulatory" else ()
+        self.n_lag = len(self.lag_names)
+        self.nx = 2 * self.nq + self.n_lag
 
     # ----- symbolic model ----------------------------------------------------------------------
     def coordinates(self, q: ca.SX) -> Coordinates:
@@ -111,6 +142,15 @@ class VehicleModel:
         # Cm qdot = Mmdot qdot - dT/dq (Euler-Lagrange): one forward and one reverse derivative, far
         # cheaper for optimizers to differentiate twice than the matrix Cm times qdot
         bias = ca.jtimes(mass @ qdot, q, qdot) - ca.gradient(0.5 * qdot.T @ mass @ qdot, q)
+        lag, flow_force, generalized_flow, lag_rate = None, None, None, None
+        if self.circulatory_flow is not None:
+            # the flow's force moves to the left-hand side with the bias: Mm qddot + (Cm qdot - Q_flow) = B tau
+            lag = ca.SX.sym("lag", self.n_lag)
+            terms = self.circulatory_flow.terms(q2 @ qdot, lag)
+            flow_force, lag_rate = terms.force, terms.lag_rate
+            generalized_flow = q2.T @ flow_force
+            bias = bias - generalized_flow
+        extra, extra_names = ([lag], ["lag"]) if lag is not None else ([], [])
         acceleration = ca.solve(mass, input_map @ tau - bias)
         generalized_force = mass @ qddot + bias
         # partition (eqs. 14-15, 22-23)
@@ -127,33 +167,45 @@ class VehicleModel:
         functions = {
             "mass_matrix": ca.Function("mass_matrix", [q], [mass], ["q"], ["Mm"]),
             "coriolis_matrix": ca.Function("coriolis_matrix", [q, qdot], [coriolis], ["q", "qdot"], ["Cm"]),
-            "forward_dynamics": ca.Function("forward_dynamics", [q, qdot, tau], [acceleration],
-                                            ["q", "qdot", "tau"], ["qddot"]),
-            "generalized_force": ca.Function("generalized_force", [q, qdot, qddot], [generalized_force],
-                                             ["q", "qdot", "qddot"], ["force"]),
+            "forward_dynamics": ca.Function("forward_dynamics", [q, qdot, tau, *extra], [acceleration],
+                                            ["q", "qdot", "tau", *extra_names], ["qddot"]),
+            "generalized_force": ca.Function("generalized_force", [q, qdot, qddot, *extra], [generalized_force],
+                                             ["q", "qdot", "qddot", *extra_names], ["force"]),
             "kinetic_energy": ca.Function("kinetic_energy", [q, qdot], [energy], ["q", "qdot"], ["T"]),
             "momentum": ca.Function("momentum", [q, qdot], [mass @ qdot], ["q", "qdot"], ["p"]),
-            "io_linearization": ca.Function("io_linearization", [q, qdot], [mio, cio_qdot],
-                                            ["q", "qdot"], ["Mio", "Cio_qdot"]),
-            "shape_dynamics": ca.Function("shape_dynamics", [q, qdot, u], [shape_qddot, shape_tau],
-                                          ["q", "qdot", "u"], ["qddot", "tau"]),
+            "io_linearization": ca.Function("io_linearization", [q, qdot, *extra], [mio, cio_qdot],
+                                            ["q", "qdot", *extra_names], ["Mio", "Cio_qdot"]),
+            "shape_dynamics": ca.Function("shape_dynamics", [q, qdot, u, *extra], [shape_qddot, shape_tau],
+                                          ["q", "qdot", "u", *extra_names], ["qddot", "tau"]),
             "foil_velocity_map": ca.Function("foil_velocity_map", [q], [q2], ["q"], ["Q2"]),
             "rigid_mass_matrix": ca.Function("rigid_mass_matrix", [q], [rigid], ["q"], ["M"]),
         }
+        if lag is not None:
+            functions["flow_force"] = ca.Function("flow_force", [q, qdot, lag], [flow_force, generalized_flow],
+                                                  ["q", "qdot", "lag"], ["f", "Q_flow"])
+            functions["lag_rate"] = ca.Function("lag_rate", [q, qdot, lag], [lag_rate],
+                                                ["q", "qdot", "lag"], ["lag_dot"])
         return SymbolicModel(q=q, qdot=qdot, qddot=qddot, tau=tau, u=u, foil_velocity_map=q2,
-                             rigid_mass=rigid, mass=mass, coriolis=coriolis, functions=functions)
+                             rigid_mass=rigid, mass=mass, coriolis=coriolis, functions=functions, lag=lag,
+                             flow_force=flow_force, generalized_flow_force=generalized_flow)
 
     def state_derivative_function(self) -> ca.Function:
-        """f(x, tau) = (qdot, qddot) with x = (q, qdot): the state equation for integrators."""
+        """f(x, tau) = (qdot, qddot[, lag_dot]) with x = (q, qdot[, lag]): the state equation for integrators."""
         s = self.symbolic
-        x = ca.vertcat(s.q, s.qdot)
-        qddot = s.functions["forward_dynamics"](s.q, s.qdot, s.tau)
-        return ca.Function("state_derivative", [x, s.tau], [ca.vertcat(s.qdot, qddot)], ["x", "tau"], ["xdot"])
+        if s.lag is None:
+            x = ca.vertcat(s.q, s.qdot)
+            qddot = s.functions["forward_dynamics"](s.q, s.qdot, s.tau)
+            return ca.Function("state_derivative", [x, s.tau], [ca.vertcat(s.qdot, qddot)], ["x", "tau"], ["xdot"])
+        x = ca.vertcat(s.q, s.qdot, s.lag)
+        qddot = s.functions["forward_dynamics"](s.q, s.qdot, s.tau, s.lag)
+        lag_dot = s.functions["lag_rate"](s.q, s.qdot, s.lag)
+        return ca.Function("state_derivative", [x, s.tau], [ca.vertcat(s.qdot, qddot, lag_dot)], ["x", "tau"],
+                           ["xdot"])
 
     def rk4_step_function(self) -> ca.Function:
         """x(t + h) by one classical Runge-Kutta step with tau held: (x, tau, h) -> x_next."""
         f = self.state_derivative_function()
-        x, tau, h = ca.SX.sym("x", 2 * self.nq), ca.SX.sym("tau", 2), ca.SX.sym("h")
+        x, tau, h = ca.SX.sym("x", self.nx), ca.SX.sym("tau", 2), ca.SX.sym("h")
         k1 = f(x, tau)
         k2 = f(x + 0.5 * h * k1, tau)
         k3 = f(x + 0.5 * h * k2, tau)
@@ -184,16 +236,38 @@ class VehicleModel:
     def _codegen_tag(self) -> str:
         kind = "constrained" if self.constrained else "free"
         key = f"{self.rig.digest()}:{self.lane_radius_m!r}".encode()
+        if self.circulatory_flow is not None:
+            key += f":circulatory:{self.circulatory_flow.params.digest()}".encode()
+            kind += "_circulatory"
         return f"vehicle_{kind}_{hashlib.sha256(key).hexdigest()[:16]}"
 
     def _vector(self, value: npt.ArrayLike, size: int, name: str) -> Array:
         array = np.asarray(value, dtype=float).reshape(-1)
         if array.shape != (size,):
-            names = ", ".join(self.joint_names) if size == self.nq else "heave, pitch"
+            if size == self.nq:
+                names = ", ".join(self.joint_names)
+            elif name == "lag":
+                names = ", ".join(self.lag_names)
+            elif name == "x":
+                names = f"q, qdot{', lag' if self.n_lag else ''}"
+            else:
+                names = "heave, pitch"
             raise StateError(f"{name} must have {size} entries ({names}), got shape {np.shape(value)}")
         if not np.all(np.isfinite(array)):
             raise StateError(f"{name} has a non-finite entry: {array}")
         return array
+
+    def _lag(self, lag: npt.ArrayLike | None) -> list[Array]:
+        """The lag argument as the compiled functions take it: none for the ideal flow, checked for the other."""
+        if self.n_lag == 0:
+            if lag is not None and np.size(lag) != 0:
+                raise StateError("the ideal-flow model has no lag states: call it without lag "
+                                 "(VehicleModel(..., flow='circulatory') has them)")
+            return []
+        if lag is None:
+            raise StateError(f"flow='circulatory' needs the flow's lag states: lag=({', '.join(self.lag_names)}), "
+                             "m/s (zeros for a flow at rest)")
+        return [self._vector(lag, self.n_lag, "lag")]
 
     def _call(self, name: str, *args: Array) -> Sequence[Array]:
         outputs = self.numeric[name].call(list(args))
@@ -207,68 +281,113 @@ class VehicleModel:
         """Cm(q, qdot), nq x nq, linear in qdot (eq. 6)."""
         return self._call("coriolis_matrix", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"))[0]
 
-    def forward_dynamics(self, q: npt.ArrayLike, qdot: npt.ArrayLike, tau: npt.ArrayLike) -> Array:
-        """qddot = Mm^-1 (B tau - Cm qdot) (eqs. 6-7)."""
+    def forward_dynamics(self, q: npt.ArrayLike, qdot: npt.ArrayLike, tau: npt.ArrayLike,
+                         lag: npt.ArrayLike | None = None) -> Array:
+        """qddot = Mm^-1 (B tau - Cm qdot [+ Q_flow]) (eqs. 6-7)."""
         out = self._call("forward_dynamics", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
-                         self._vector(tau, 2, "tau"))[0]
+                         self._vector(tau, 2, "tau"), *self._lag(lag))[0]
         return out.reshape(-1)
 
-    def generalized_force(self, q: npt.ArrayLike, qdot: npt.ArrayLike, qddot: npt.ArrayLike) -> Array:
-        """Mm qddot + Cm qdot: the force on every coordinate (zero on the unactuated ones if feasible)."""
+    def generalized_force(self, q: npt.ArrayLike, qdot: npt.ArrayLike, qddot: npt.ArrayLike,
+                          lag: npt.ArrayLike | None = None) -> Array:
+        """Mm qddot + Cm qdot [- Q_flow]: the force the joints must supply on every coordinate (zero on the
+        unactuated ones if feasible)."""
         return self._call("generalized_force", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
-                          self._vector(qddot, self.nq, "qddot"))[0].reshape(-1)
+                          self._vector(qddot, self.nq, "qddot"), *self._lag(lag))[0].reshape(-1)
 
-    def inverse_dynamics(self, q: npt.ArrayLike, qdot: npt.ArrayLike, qddot: npt.ArrayLike) -> Array:
-        """tau = (Mm qddot + Cm qdot) on the actuated rows (heave, pitch), N m."""
-        return self.generalized_force(q, qdot, qddot)[self.n_unactuated:]
+    def inverse_dynamics(self, q: npt.ArrayLike, qdot: npt.ArrayLike, qddot: npt.ArrayLike,
+                         lag: npt.ArrayLike | None = None) -> Array:
+        """tau = (Mm qddot + Cm qdot [- Q_flow]) on the actuated rows (heave, pitch), N m."""
+        return self.generalized_force(q, qdot, qddot, lag)[self.n_unactuated:]
 
-    def kinetic_energy(self, q: npt.ArrayLike, qdot: npt.ArrayLike) -> float:
-        """T = 1/2 qdot' Mm qdot, J (eq. 5)."""
+    def kinetic_energy(self, q: npt.ArrayLike, qdot: npt.ArrayLike, lag: npt.ArrayLike | None = None) -> float:
+        """T = 1/2 qdot' Mm qdot, J (eq. 5). The lag states hold no energy; ``lag`` is only checked."""
+        if lag is not None:
+            self._lag(lag)
         energy = self._call("kinetic_energy", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"))[0]
         return energy.item()
 
-    def momentum(self, q: npt.ArrayLike, qdot: npt.ArrayLike) -> Array:
-        """Generalized momentum p = dT/dqdot = Mm qdot; p[0] = p_alpha is conserved (Prop. 1)."""
+    def momentum(self, q: npt.ArrayLike, qdot: npt.ArrayLike, lag: npt.ArrayLike | None = None) -> Array:
+        """Generalized momentum p = dT/dqdot = Mm qdot; p[0] = p_alpha is conserved (Prop. 1) by the ideal model
+        and changes at Q_flow[0] with the circulatory flow. The lag states hold no momentum; ``lag`` is only
+        checked."""
+        if lag is not None:
+            self._lag(lag)
         return self._call("momentum", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"))[0].reshape(-1)
 
-    def io_linearization(self, q: npt.ArrayLike, qdot: npt.ArrayLike) -> tuple[Array, Array]:
-        """(Mio, Cio qdot) of eqs. 22-23: tau = Mio psiddot + Cio qdot."""
-        mio, cio = self._call("io_linearization", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"))
+    def io_linearization(self, q: npt.ArrayLike, qdot: npt.ArrayLike,
+                         lag: npt.ArrayLike | None = None) -> tuple[Array, Array]:
+        """(Mio, Cio qdot) of eqs. 22-23: tau = Mio psiddot + Cio qdot (Cio qdot includes the flow's force)."""
+        mio, cio = self._call("io_linearization", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
+                              *self._lag(lag))
         return mio, cio.reshape(-1)
 
-    def shape_dynamics(self, q: npt.ArrayLike, qdot: npt.ArrayLike, psi_ddot: npt.ArrayLike) -> tuple[Array, Array]:
+    def shape_dynamics(self, q: npt.ArrayLike, qdot: npt.ArrayLike, psi_ddot: npt.ArrayLike,
+                       lag: npt.ArrayLike | None = None) -> tuple[Array, Array]:
         """With the foil accelerations u = psiddot prescribed: (qddot, tau) from eqs. 14-15."""
         qddot, tau = self._call("shape_dynamics", self._vector(q, self.nq, "q"),
-                                self._vector(qdot, self.nq, "qdot"), self._vector(psi_ddot, 2, "psi_ddot"))
+                                self._vector(qdot, self.nq, "qdot"), self._vector(psi_ddot, 2, "psi_ddot"),
+                                *self._lag(lag))
         return qddot.reshape(-1), tau.reshape(-1)
 
     def foil_velocity_map(self, q: npt.ArrayLike) -> Array:
         """Q2(q), 3 x nq: (U, V, Omega) = Q2 qdot (eq. 40)."""
         return self._call("foil_velocity_map", self._vector(q, self.nq, "q"))[0]
 
-    def rk4_step(self, q: npt.ArrayLike, qdot: npt.ArrayLike, tau: npt.ArrayLike, step_s: float) -> tuple[Array, Array]:
-        """One RK4 step of step_s seconds with tau held; returns (q, qdot)."""
-        x = np.concatenate([self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot")])
+    def angle_of_attack(self, q: npt.ArrayLike, qdot: npt.ArrayLike) -> float:
+        """atan2(-V, U) of the foil frame's velocity in foil axes (eq. 40), rad (swim_model.flow.angle_of_attack)."""
+        u, v, _ = self.foil_velocity_map(q) @ self._vector(qdot, self.nq, "qdot")
+        return math.atan2(-v, u)
+
+    def flow_force(self, q: npt.ArrayLike, qdot: npt.ArrayLike, lag: npt.ArrayLike) -> tuple[Array, Array]:
+        """The circulatory flow's (fx, fy, mz) in foil axes at the foil frame's origin (N, N, N m) and its
+        generalized force Q_flow = Q2' f (one entry per coordinate)."""
+        if self.n_lag == 0:
+            raise StateError("flow_force: the ideal-flow model has no circulatory force")
+        f, generalized = self._call("flow_force", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
+                                    *self._lag(lag))
+        return f.reshape(-1), generalized.reshape(-1)
+
+    def lag_rate(self, q: npt.ArrayLike, qdot: npt.ArrayLike, lag: npt.ArrayLike) -> Array:
+        """d(lag)/dt, m/s^2 (swim_model.flow, Jones's two-state Wagner lag)."""
+        if self.n_lag == 0:
+            raise StateError("lag_rate: the ideal-flow model has no lag states")
+        return self._call("lag_rate", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
+                          *self._lag(lag))[0].reshape(-1)
+
+    def rk4_step(self, q: npt.ArrayLike, qdot: npt.ArrayLike, tau: npt.ArrayLike, step_s: float,
+                 lag: npt.ArrayLike | None = None) -> tuple[Array, ...]:
+        """One RK4 step of step_s seconds with tau held; returns (q, qdot), or (q, qdot, lag) with the
+        circulatory flow."""
+        x = np.concatenate([self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"), *self._lag(lag)])
         x_next = self._call("rk4_step", x, self._vector(tau, 2, "tau"), np.array(float(step_s)))[0].reshape(-1)
-        return x_next[:self.nq], x_next[self.nq:]
+        return self._split(x_next)
+
+    def _split(self, x: Array) -> tuple[Array, ...]:
+        nq = self.nq
+        if self.n_lag == 0:
+            return x[..., :nq], x[..., nq:]
+        return x[..., :nq], x[..., nq:2 * nq], x[..., 2 * nq:]
 
     def integrate_rk4(self, q: npt.ArrayLike, qdot: npt.ArrayLike, torques: npt.ArrayLike,
-                      step_s: float) -> tuple[Array, Array]:
+                      step_s: float, lag: npt.ArrayLike | None = None) -> tuple[Array, ...]:
         """RK4 steps of step_s seconds, torques[k] held over step k, in one compiled call.
 
         Args:
             torques: (n, 2) heave and pitch torques, N m.
+            lag: the flow's lag states at the start (circulatory flow only), m/s.
         Returns:
-            (q, qdot) at the n + 1 step boundaries, shapes (n + 1, nq).
+            (q, qdot) at the n + 1 step boundaries, shapes (n + 1, nq); with the circulatory flow
+            (q, qdot, lag), lag of shape (n + 1, n_lag).
         """
         torque_array = np.asarray(torques, dtype=float)
         if torque_array.ndim != 2 or torque_array.shape[1] != 2 or not np.all(np.isfinite(torque_array)):
             raise StateError(f"torques must be a finite (n, 2) array, got shape {torque_array.shape}")
-        x0 = np.concatenate([self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot")])
+        x0 = np.concatenate([self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"), *self._lag(lag)])
         steps = self._rk4_accumulator(len(torque_array))
         states = np.asarray(steps(x0, torque_array.T, float(step_s)), dtype=float)
         trajectory = np.column_stack([x0, states]).T
-        return trajectory[:, :self.nq], trajectory[:, self.nq:]
+        return self._split(trajectory)
 
     def _rk4_accumulator(self, steps: int) -> ca.Function:
         cache = self.__dict__.setdefault("_rk4_accumulators", {})

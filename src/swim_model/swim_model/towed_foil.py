@@ -1,0 +1,283 @@
+"""The towed oscillating foil: the flume experiment run on the reduced flow model or on the vortex wake.
+
+Kinematics (Anderson, Streitlien, Barrett & Triantafyllou, J. Fluid Mech. 360, 1998): a carriage tows the pivot at
+``speed_m_s`` along +X of the tank frame; the pivot heaves ``h = h0 sin(w t)`` along +Y and the foil pitches about it,
+``theta = theta0 sin(w t + psi)``, theta the chord's angle from +X, counter-clockwise (leading edge toward +Y). The
+chord points along +X at theta = 0, so the foil moves leading edge first; psi = 90 deg (pitch leading heave) turns
+the nose along the path and makes thrust. The pivot sits ``pivot_from_leading_edge_m`` behind the leading edge.
+
+Definitions, as the paper's:
+* Strouhal number ``St = 2 h0 f / U`` (the heave's peak-to-peak excursion as the wake width).
+* Angle of attack at the pivot: ``atan2(-V_P, U_P)`` of the pivot's velocity (U, h') in foil axes, which is
+  ``theta - atan(h'/U)``; at the instant of largest heave velocity (t = 0, where theta = theta0 for psi = 90 deg)
+  it is ``theta0 - atan(pi St)``, the paper's ``-alpha0`` (its nominal maximum angle of attack, same size).
+* Thrust ``T``: the mean fluid force along +X; ``C_T = T / (1/2 rho U^2 c s)``.
+* Input power ``P``: the mean power the heave and pitch drives put in, ``-(F_Y h' + M_P theta')`` (M_P about the
+  pivot), which is ``-(F . v_F + M_F Omega) + F_X U``; efficiency ``eta = T U / P``.
+
+The project's own angle of attack (``peak_angle_of_attack_rad``) is ``atan2(-V, U)`` at the foil frame's origin F
+(the map origin, near mid-chord: eq. 40's U, V); the pivot's is reported beside it.
+
+Fluid force: the added-mass (Kirchhoff) force of the ideal model, eq. 46, from the prescribed foil velocity and
+its rate, plus either the circulatory model of ``flow.py`` (its lag states integrated by RK4 with the motion
+prescribed, started from the steady state of the initial velocity), or the vortical force of ``wake.py`` plus the
+same profile drag. The means are taken over the last ``averaged_cycles`` whole cycles; over whole cycles the added
+mass contributes nothing to either mean (it is the derivative of a periodic impulse and energy).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+import numpy.typing as npt
+
+from swim_model.errors import FlowModelError
+from swim_model.joukowski import AddedMass, JoukowskiFoil
+from swim_model.wake import Wake, WakeParameters
+
+if TYPE_CHECKING:
+    from swim_model.flow import FlowParameters
+
+Array = npt.NDArray[np.float64]
+
+WATER_DENSITY_KG_M3 = 998.2  # fresh water at 20 C, as rig.yaml
+# numerical settings (assumed, each with its reason)
+REDUCED_MIN_STEPS_PER_CYCLE = 200          # 200 samples resolve the forces' harmonics for the cycle means
+REDUCED_MAX_TRAVEL_PER_STEP_CHORDS = 0.1   # cycle means within 1e-5 of those with 2000 steps a cycle
+REDUCED_STARTUP_CHORDS = 30.0              # Jones's slow lag decays as e^{-0.0455 s}: 6 % left after 30 chords
+WAKE_MIN_STEPS_PER_CYCLE = 96              # as the wake's Garrick test (test_wake.py)
+WAKE_MAX_TRAVEL_PER_STEP_CHORDS = 1.0 / 30.0  # the trailing edge's travel per shed vortex, as test_wake.py
+WAKE_STARTUP_CHORDS = 8.0                  # the starting vortex is 8 chords behind before averaging starts
+
+
+@dataclasses.dataclass(frozen=True)
+class TowedFoilKinematics:
+    """Prescribed heave and pitch of a towed foil (module docstring); all methods take time arrays in s."""
+
+    speed_m_s: float
+    heave_amplitude_m: float
+    pitch_amplitude_rad: float
+    frequency_hz: float
+    phase_rad: float
+    pivot_x_m: float  # the pivot's x in the foil frame (x toward the leading edge from the map origin)
+
+    @property
+    def omega_rad_s(self) -> float:
+        return 2.0 * math.pi * self.frequency_hz
+
+    def heave(self, t: Array) -> tuple[Array, Array, Array]:
+        """(h, h', h''): m, m/s, m/s^2."""
+        w = self.omega_rad_s
+        return (self.heave_amplitude_m * np.sin(w * t), self.heave_amplitude_m * w * np.cos(w * t),
+                -self.heave_amplitude_m * w * w * np.sin(w * t))
+
+    def pitch(self, t: Array) -> tuple[Array, Array, Array]:
+        """(theta, theta', theta''): rad, rad/s, rad/s^2."""
+        w = self.omega_rad_s
+        arg = w * t + self.phase_rad
+        return (self.pitch_amplitude_rad * np.sin(arg), self.pitch_amplitude_rad * w * np.cos(arg),
+                -self.pitch_amplitude_rad * w * w * np.sin(arg))
+
+    def pose(self, t: Array) -> tuple[Array, Array, Array]:
+        """(X, Y, theta) of the foil frame's origin F in the tank frame: m, m, rad."""
+        h, _, _ = self.heave(t)
+        theta, _, _ = self.pitch(t)
+        return (self.speed_m_s * t - self.pivot_x_m * np.cos(theta), h - self.pivot_x_m * np.sin(theta), theta)
+
+    def velocity(self, t: Array) -> Array:
+        """(U, V, Omega) of F in foil axes (eq. 40's frame), shape (n, 3)."""
+        _, hd, _ = self.heave(t)
+        theta, thetad, _ = self.pitch(t)
+        c, s = np.cos(theta), np.sin(theta)
+        u = self.speed_m_s * c + hd * s
+        v = -self.speed_m_s * s + hd * c - self.pivot_x_m * thetad
+        return np.column_stack([u, v, thetad])
+
+    def acceleration(self, t: Array) -> Array:
+        """d/dt of (U, V, Omega) (components in the turning foil axes), shape (n, 3)."""
+        _, hd, hdd = self.heave(t)
+        theta, thetad, thetadd = self.pitch(t)
+        c, s = np.cos(theta), np.sin(theta)
+        along = self.speed_m_s * c + hd * s        # pivot velocity . chord
+        across = -self.speed_m_s * s + hd * c      # pivot velocity . normal
+        return np.column_stack([hdd * s + thetad * across, hdd * c - thetad * along - self.pivot_x_m * thetadd,
+                                thetadd])
+
+    def pivot_velocity(self, t: Array) -> Array:
+        """(U_P, V_P) of the pivot in foil axes, shape (n, 2)."""
+        _, hd, _ = self.heave(t)
+        theta, _, _ = self.pitch(t)
+        c, s = np.cos(theta), np.sin(theta)
+        return np.column_stack([self.speed_m_s * c + hd * s, -self.speed_m_s * s + hd * c])
+
+
+def kirchhoff_force(added: AddedMass, velocity: Array, acceleration: Array) -> Array:
+    """The ideal model's added-mass force and moment (eq. 46) in foil axes at F, (n, 3), from (n, 3) arrays."""
+    u, v, w = velocity.T
+    ud, vd, wd = acceleration.T
+    return np.column_stack([-added.m11 * ud + added.m22 * w * v + added.m26 * w * w,
+                            -added.m22 * vd - added.m26 * wd - added.m11 * w * u,
+                            -added.m26 * vd - added.m66 * wd - added.m26 * w * u + (added.m11 - added.m22) * u * v])
+
+
+@dataclasses.dataclass(frozen=True)
+class OscillatingFoilResult:
+    """Cycle means and time series of a towed oscillating foil (module docstring for signs and definitions).
+
+    Scalars: ``mean_thrust_n`` (N, +X), ``mean_power_w`` (W, put in by the heave and pitch drives),
+    ``thrust_coefficient`` T / (1/2 rho U^2 c s), ``power_coefficient`` P / (1/2 rho U^3 c s), ``efficiency`` T U / P,
+    ``strouhal`` 2 h0 f / U, ``reduced_frequency`` w c / (2 U), ``peak_angle_of_attack_rad`` (largest |atan2(-V, U)| at
+    the foil frame's origin), ``peak_angle_of_attack_at_pivot_rad``, ``lift_amplitude_n`` (first harmonic of the
+    force along +Y), ``mean_lift_n``. Series over the averaged cycles, shape (n,): ``time_s``, ``thrust_n``,
+    ``lift_n``, ``power_w``, ``angle_of_attack_rad``.
+    """
+
+    model: str
+    mean_thrust_n: float
+    mean_power_w: float
+    thrust_coefficient: float
+    power_coefficient: float
+    efficiency: float
+    strouhal: float
+    reduced_frequency: float
+    peak_angle_of_attack_rad: float
+    peak_angle_of_attack_at_pivot_rad: float
+    lift_amplitude_n: float
+    mean_lift_n: float
+    cycles: int
+    averaged_cycles: int
+    steps_per_cycle: int
+    time_s: Array = dataclasses.field(repr=False)
+    thrust_n: Array = dataclasses.field(repr=False)
+    lift_n: Array = dataclasses.field(repr=False)
+    power_w: Array = dataclasses.field(repr=False)
+    angle_of_attack_rad: Array = dataclasses.field(repr=False)
+
+
+def _positive(name: str, value: float) -> float:
+    value = float(value)
+    if not (math.isfinite(value) and value > 0.0):
+        raise FlowModelError(f"oscillating_foil: {name} must be positive and finite, got {value!r}")
+    return value
+
+
+def oscillating_foil(foil: JoukowskiFoil, speed_m_s: float, heave_amplitude_m: float, pitch_amplitude_rad: float,
+                     frequency_hz: float, phase_rad: float, pivot_from_leading_edge_m: float,
+                     model: str = "circulatory", cycles: int | None = None, *, averaged_cycles: int = 2,
+                     steps_per_cycle: int | None = None, water_density_kg_m3: float = WATER_DENSITY_KG_M3,
+                     flow_parameters: "FlowParameters | None" = None,
+                     wake_parameters: WakeParameters | None = None) -> OscillatingFoilResult:
+    """Tow the foil at constant speed while it heaves and pitches; return thrust, power and efficiency.
+
+    Args:
+        foil: the Joukowski foil (its chord and span set the coefficients' reference area c s).
+        speed_m_s: towing speed U > 0.
+        heave_amplitude_m: h0 >= 0 of h = h0 sin(w t).
+        pitch_amplitude_rad: theta0 of theta = theta0 sin(w t + phase).
+        frequency_hz: f > 0.
+        phase_rad: psi, pitch ahead of heave (pi/2 makes thrust).
+        pivot_from_leading_edge_m: pitch axis position behind the leading edge along the chord.
+        model: "circulatory" (flow.py's reduced model) or "wake" (wake.py's vortices plus flow.py's profile drag).
+        cycles: total cycles simulated (default: enough start-up cycles to travel 30 chords for the reduced model,
+            8 for the wake, at least 2, plus ``averaged_cycles``).
+        averaged_cycles: the last cycles, averaged.
+        steps_per_cycle: time steps per cycle (default: see the module constants).
+        water_density_kg_m3: rho.
+        flow_parameters: the reduced model's coefficients (the wake uses its profile drag coefficient).
+        wake_parameters: the wake's numerical parameters (default: WakeParameters with room for one cycle of
+            unmerged vortices).
+    """
+    from swim_model.flow import CirculatoryFlow, FlowParameters
+
+    if model not in ("circulatory", "wake"):
+        raise FlowModelError(f"oscillating_foil: model must be 'circulatory' or 'wake', got {model!r}")
+    speed = _positive("speed_m_s", speed_m_s)
+    frequency = _positive("frequency_hz", frequency_hz)
+    rho = _positive("water_density_kg_m3", water_density_kg_m3)
+    for name, value in (("heave_amplitude_m", heave_amplitude_m), ("pitch_amplitude_rad", pitch_amplitude_rad),
+                        ("phase_rad", phase_rad), ("pivot_from_leading_edge_m", pivot_from_leading_edge_m)):
+        if not math.isfinite(float(value)):
+            raise FlowModelError(f"oscillating_foil: {name} must be finite, got {value!r}")
+    if heave_amplitude_m < 0.0:
+        raise FlowModelError("oscillating_foil: heave_amplitude_m must be >= 0")
+    if averaged_cycles < 1:
+        raise FlowModelError("oscillating_foil: averaged_cycles must be at least 1")
+    flow = CirculatoryFlow(foil, rho, flow_parameters or FlowParameters())
+    chord = flow.chord_m
+    kinematics = TowedFoilKinematics(speed, float(heave_amplitude_m), float(pitch_amplitude_rad), frequency,
+                                     float(phase_rad), foil.leading_edge_x_m - float(pivot_from_leading_edge_m))
+    period = 1.0 / frequency
+
+    # the trailing edge's path through the water over one cycle sets the resolution
+    t_cycle = np.linspace(0.0, period, 400, endpoint=False)
+    nu_cycle = kinematics.velocity(t_cycle)
+    te_path_m = float(np.mean(np.hypot(nu_cycle[:, 0], nu_cycle[:, 1] + nu_cycle[:, 2] * foil.trailing_edge_x_m))
+                      * period)
+    wake_model = model == "wake"
+    if steps_per_cycle is None:
+        minimum, travel = ((WAKE_MIN_STEPS_PER_CYCLE, WAKE_MAX_TRAVEL_PER_STEP_CHORDS) if wake_model else
+                           (REDUCED_MIN_STEPS_PER_CYCLE, REDUCED_MAX_TRAVEL_PER_STEP_CHORDS))
+        steps_per_cycle = max(minimum, math.ceil(te_path_m / (travel * chord)))
+    if steps_per_cycle < 8:
+        raise FlowModelError("oscillating_foil: steps_per_cycle must be at least 8")
+    if cycles is None:
+        startup = WAKE_STARTUP_CHORDS if wake_model else REDUCED_STARTUP_CHORDS
+        cycles = max(2, math.ceil(startup * chord / (speed * period))) + averaged_cycles
+    if cycles <= averaged_cycles:
+        raise FlowModelError(f"oscillating_foil: cycles ({cycles}) must exceed averaged_cycles ({averaged_cycles})")
+    dt = period / steps_per_cycle
+    total_steps = cycles * steps_per_cycle
+    averaged_steps = averaged_cycles * steps_per_cycle
+
+    if wake_model:
+        params = wake_parameters or WakeParameters(rho_kg_m3=rho,
+                                                   max_vortex_count=max(300, steps_per_cycle + 100),
+                                                   protected_vortex_count=steps_per_cycle + 50)
+        wake = Wake(foil, params)
+        steps = np.arange(1, total_steps + 1)
+        x, y, theta = kinematics.pose(steps * dt)
+        nu_end = kinematics.velocity(steps * dt)
+        vortical = np.zeros((total_steps, 3))
+        for i in range(total_steps):
+            force = wake.step(dt, (x[i], y[i], theta[i]), (nu_end[i, 0], nu_end[i, 1], nu_end[i, 2]))
+            vortical[i] = (force.fx_n, force.fy_n, force.moment_n_m)
+        time = (steps - 0.5) * dt          # the wake's force belongs to the middle of its step
+        window = slice(total_steps - averaged_steps, total_steps)
+        time = time[window]
+        velocity = kinematics.velocity(time)
+        drag = np.asarray(flow.functions["profile_drag"].map(time.size)(velocity.T), dtype=float).T
+        fluid = vortical[window] + drag
+    else:
+        half_steps = np.arange(2 * total_steps + 1) * (0.5 * dt)
+        velocities = kinematics.velocity(half_steps)
+        lag = flow.integrate_lag(velocities, dt, flow.steady_lag(velocities[0]))
+        window = slice(total_steps - averaged_steps, total_steps)
+        time = np.arange(total_steps + 1)[window] * dt
+        velocity = velocities[0::2][window]
+        fluid = flow.evaluate(velocity, lag[window])["f"]
+    force = fluid + kirchhoff_force(flow.added_mass, velocity, kinematics.acceleration(time))
+
+    _, _, theta = kinematics.pose(time)
+    c, s = np.cos(theta), np.sin(theta)
+    thrust = force[:, 0] * c - force[:, 1] * s
+    lift = force[:, 0] * s + force[:, 1] * c
+    power = -np.sum(force * velocity, axis=1) + thrust * speed
+    angle = np.arctan2(-velocity[:, 1], velocity[:, 0])
+    pivot = kinematics.pivot_velocity(time)
+    pivot_angle = np.arctan2(-pivot[:, 1], pivot[:, 0])
+    mean_thrust, mean_power = float(np.mean(thrust)), float(np.mean(power))
+    reference_force = 0.5 * rho * speed ** 2 * chord * foil.span_m
+    harmonic = 2.0 * np.mean(lift * np.exp(-1j * kinematics.omega_rad_s * time))
+    return OscillatingFoilResult(
+        model=model, mean_thrust_n=mean_thrust, mean_power_w=mean_power,
+        thrust_coefficient=mean_thrust / reference_force, power_coefficient=mean_power / (reference_force * speed),
+        efficiency=mean_thrust * speed / mean_power if mean_power != 0.0 else float("nan"),
+        strouhal=2.0 * heave_amplitude_m * frequency / speed,
+        reduced_frequency=kinematics.omega_rad_s * chord / (2.0 * speed),
+        peak_angle_of_attack_rad=float(np.max(np.abs(angle))),
+        peak_angle_of_attack_at_pivot_rad=float(np.max(np.abs(pivot_angle))),
+        lift_amplitude_n=float(abs(harmonic)), mean_lift_n=float(np.mean(lift)),
+        cycles=int(cycles), averaged_cycles=int(averaged_cycles), steps_per_cycle=int(steps_per_cycle),
+        time_s=time, thrust_n=thrust, lift_n=lift, power_w=power, angle_of_attack_rad=angle)
