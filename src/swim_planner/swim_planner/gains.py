@@ -79,6 +79,9 @@ class RetunedLibrary:
     def spec(self, primitive_id: str) -> PrimitiveSpec:
         return self.library.spec(primitive_id)
 
+    def sample_count(self, primitive_id: str) -> int:
+        return self.library.sample_count(primitive_id)
+
     def get(self, primitive_id: str) -> Primitive:
         with self._locks_lock:
             lock = self._locks.setdefault(primitive_id, threading.Lock())

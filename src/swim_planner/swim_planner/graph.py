@@ -114,11 +114,15 @@ def _live_nodes(edges: list[Edge]) -> set[str]:
     return reach(rests, forward) & reach(rests, backward)
 
 
-def plan_to_goal(graph: StateGraph, start: str, goal: str, min_advance_rad: float = 0.0) -> list[tuple[str, int]]:
+def plan_to_goal(graph: StateGraph, start: str, goal: str, min_advance_rad: float = 0.0,
+                 max_duration_s: float = math.inf) -> list[tuple[str, int]]:
     """The quickest primitive sequence from ``start`` to ``goal`` covering at least ``min_advance_rad``.
 
-    Returns [(primitive_id, repeat_index), ...]. Raises ManeuverError if the goal cannot be reached.
+    Returns [(primitive_id, repeat_index), ...]. Raises ManeuverError if the goal cannot be reached, the
+    distance is not finite, or the sequence would last longer than max_duration_s (at lambda = 1).
     """
+    if not math.isfinite(min_advance_rad):
+        raise ManeuverError(f"the goal distance must be finite, got {min_advance_rad!r} rad")
     nodes = graph.nodes
     for name, node in (("start", start), ("goal", goal)):
         if node not in nodes:
@@ -150,6 +154,10 @@ def plan_to_goal(graph: StateGraph, start: str, goal: str, min_advance_rad: floa
             raise ManeuverError(f"the path to '{goal}' covers {advance:.3f} rad and passes no cruise to repeat")
         fastest = max(cruises, key=lambda e: e.advance_rad / e.duration_s)
         repeats = math.ceil((min_advance_rad - advance) / fastest.advance_rad)
+        duration_s = sum(e.duration_s for e in path) + repeats * fastest.duration_s
+        if duration_s > max_duration_s:
+            raise ManeuverError(f"covering {min_advance_rad:.6g} rad takes {duration_s:.6g} s of swimming, longer "
+                                f"than the longest plan served ({max_duration_s:g} s)")
         where = next(i for i, e in enumerate(path) if e.target == fastest.source) + 1
         sequence[where:where] = [(fastest.primitive_id, k) for k in range(repeats)]
     return sequence

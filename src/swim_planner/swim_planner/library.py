@@ -211,6 +211,10 @@ class PrimitiveLibrary:
                          solver_status=record["solver_status"], solve_time_s=record["solve_time_s"],
                          iterations=record["iterations"], gains=gains, **data)
 
+    def sample_count(self, primitive_id: str) -> int:
+        """Samples of the primitive's arrays (read once and kept, as get)."""
+        return len(self.get(primitive_id).time_s)
+
     def __iter__(self) -> Iterator[Primitive]:
         return (self.get(i) for i in self.ids())
 

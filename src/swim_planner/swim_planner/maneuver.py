@@ -87,6 +87,52 @@ def junction_mismatch(previous: Primitive, following: Primitive) -> float:
     return float(max(np.abs(q_end[1:] - q_start[1:]).max(), np.abs(qdot_end - qdot_start).max()))
 
 
+@dataclasses.dataclass(frozen=True)
+class PlanBounds:
+    """The largest plan a request may ask for. A request past a bound is refused by name before any work."""
+
+    max_duration_s: float = 7200.0
+    # assumed: two hours of swimming, longer than any run on the rig; a 1000-cruise plan (5008 s) fits
+    max_samples: int = 1_000_000
+    # assumed from memory: a free-vehicle sample is 52 float64 (416 B), so 1e6 samples hold ~0.4 GB in the plan
+    # and as much again in its message
+    max_abs_start_alpha_rad: float = 1.0e6
+    # assumed: float64 keeps alpha to 1e-10 rad up to here (and swimming 1e6 rad would take weeks)
+
+    def validate(self) -> None:
+        """ValueError unless every bound is positive and finite."""
+        for field in dataclasses.fields(self):
+            value = getattr(self, field.name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise ValueError(f"plan bound {field.name} must be a positive finite number, got {value!r}")
+
+
+DEFAULT_BOUNDS = PlanBounds()
+
+
+def check_plan_size(library: PrimitiveLibrary, primitive_ids: Sequence[str], repeat_counts: Sequence[int],
+                    time_scale: float, bounds: PlanBounds = DEFAULT_BOUNDS) -> None:
+    """Refuse (ManeuverError) a sequence whose plan would pass bounds, from the library's specs alone: nothing
+    is expanded or built. Unknown ids and mismatched lengths are left to concatenate and expand_sequence."""
+    check_time_scale(time_scale)
+    counts = list(repeat_counts) or [1] * len(primitive_ids)
+    known = [(pid, int(count)) for pid, count in zip(primitive_ids, counts) if pid in library]
+    duration_s = sum(library.spec(pid).duration_s * count for pid, count in known) / time_scale
+    if duration_s > bounds.max_duration_s:
+        raise ManeuverError(f"the plan would last {duration_s:.6g} s, longer than the longest plan served "
+                            f"({bounds.max_duration_s:g} s; planner_node parameter max_plan_duration_s)")
+    samples = sum(library.sample_count(pid) * count for pid, count in known)
+    if samples > bounds.max_samples:
+        raise ManeuverError(f"the plan would have {samples} samples, more than the largest plan served "
+                            f"({bounds.max_samples}; planner_node parameter max_plan_samples)")
+
+
+def check_start_alpha(start_alpha_rad: float, bounds: PlanBounds = DEFAULT_BOUNDS) -> None:
+    if not (math.isfinite(start_alpha_rad) and abs(start_alpha_rad) <= bounds.max_abs_start_alpha_rad):
+        raise ManeuverError(f"start alpha must be finite and within +-{bounds.max_abs_start_alpha_rad:g} rad, "
+                            f"got {start_alpha_rad!r}")
+
+
 def check_time_scale(time_scale: float) -> None:
     if not (isinstance(time_scale, (int, float)) and math.isfinite(time_scale) and time_scale > 0.0):
         raise ManeuverError(f"time scale must be a positive finite number, got {time_scale!r}")
@@ -108,6 +154,7 @@ def concatenate(library: PrimitiveLibrary, rig: RigParameters, sequence: Sequenc
                 time_scale: float = 1.0, start_alpha_rad: float = 0.0) -> Plan:
     """The plan that runs the primitives of ``sequence`` one after another at time scale lambda."""
     check_time_scale(time_scale)
+    check_start_alpha(start_alpha_rad)
     unknown = sorted({pid for pid, _ in sequence if pid not in library})
     if unknown:
         raise ManeuverError(f"unknown primitives: {', '.join(unknown)} (see `swim-primitives list`)")

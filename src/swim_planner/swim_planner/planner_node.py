@@ -12,7 +12,8 @@ Parameters: ``library_path`` (default: the shipped library), ``rig_path`` (defau
 swim_controller LqrWeights fields; empty: the gains stored in the library). Setting ``lqr_weights_path`` at run
 time retunes the plans made after it: each primitive's gains for the new weights are computed on its first use
 (0.1-0.3 s each) and kept, while other requests are answered; a file that does not load is refused and changes
-nothing.
+nothing. ``max_plan_duration_s`` and ``max_plan_samples`` (maneuver.PlanBounds) bound what a request may ask for:
+a longer plan, a non-finite start alpha or goal distance is refused by name before any work is done.
 """
 from __future__ import annotations
 
@@ -32,7 +33,8 @@ from swim_planner.errors import PlannerError
 from swim_planner.gains import RetunedLibrary, load_lqr_weights
 from swim_planner.graph import build_graph, plan_to_goal, rest_node
 from swim_planner.library import PrimitiveLibrary
-from swim_planner.maneuver import Plan, concatenate, expand_sequence
+from swim_planner.maneuver import (DEFAULT_BOUNDS, Plan, PlanBounds, check_plan_size, check_start_alpha,
+                                   concatenate, expand_sequence)
 from swim_planner.paths import default_library_path
 from swim_ros.codecs import float_array
 from swim_ros.entry import run_node
@@ -102,6 +104,9 @@ class PlannerNode(Node):
         self.declare_parameter("rig_path", "")
         self.declare_parameter("default_time_scale", 1.0)
         self.declare_parameter("lqr_weights_path", "")
+        self.declare_parameter("max_plan_duration_s", DEFAULT_BOUNDS.max_duration_s)
+        self.declare_parameter("max_plan_samples", DEFAULT_BOUNDS.max_samples)
+        self.bounds = self._bounds({})
         rig_path = self.get_parameter("rig_path").value or None
         library_path = self.get_parameter("library_path").value or default_library_path()
         self.rig = load_rig(rig_path)
@@ -123,7 +128,22 @@ class PlannerNode(Node):
             return self.library
         return RetunedLibrary(self.library, load_lqr_weights(lqr_weights_path))
 
+    def _bounds(self, changed: dict) -> PlanBounds:
+        """PlanBounds from the parameters, with changed (name -> value) applied; ValueError if not valid."""
+        def value(name: str):
+            return changed.get(name, self.get_parameter(name).value)
+        bounds = PlanBounds(max_duration_s=value("max_plan_duration_s"), max_samples=value("max_plan_samples"),
+                            max_abs_start_alpha_rad=DEFAULT_BOUNDS.max_abs_start_alpha_rad)
+        bounds.validate()
+        return bounds
+
     def _on_set_parameters(self, parameters) -> SetParametersResult:
+        changed = {p.name: p.value for p in parameters if p.name in ("max_plan_duration_s", "max_plan_samples")}
+        if changed:
+            try:
+                self.bounds = self._bounds(changed)
+            except ValueError as err:
+                return SetParametersResult(successful=False, reason=str(err))
         for parameter in parameters:
             if parameter.name == "lqr_weights_path":
                 try:
@@ -165,19 +185,25 @@ class PlannerNode(Node):
 
     def plan(self, request: RequestManeuver.Request) -> Plan:
         time_scale = request.time_scale or self.get_parameter("default_time_scale").value
+        bounds, library = self.bounds, self._plan_library
+        check_start_alpha(request.start_alpha_rad, bounds)
         if request.mode == RequestManeuver.Request.MODE_SEQUENCE:
+            check_plan_size(library, list(request.primitive_ids), list(request.repeat_counts), time_scale, bounds)
             sequence = expand_sequence(list(request.primitive_ids), list(request.repeat_counts))
         elif request.mode == RequestManeuver.Request.MODE_GOAL:
             start = request.start_state or rest_node(request.goal_state.startswith("constrained"),
                                                      self.rig.lane_1_radius_m)
-            sequence = plan_to_goal(self.graph, start, request.goal_state, request.goal_alpha_rad)
+            check_plan_size(library, [], [], time_scale, bounds)      # the time scale, before it divides
+            sequence = plan_to_goal(self.graph, start, request.goal_state, request.goal_alpha_rad,
+                                    bounds.max_duration_s * time_scale)
+            check_plan_size(library, [pid for pid, _ in sequence], [], time_scale, bounds)
         else:
             modes = RequestManeuver.Request
             raise PlannerError(f"unknown mode {request.mode}: use MODE_SEQUENCE ({modes.MODE_SEQUENCE}) "
                                f"or MODE_GOAL ({modes.MODE_GOAL})")
         # the libraries are thread-safe; requests run concurrently (reentrant group), so one whose new gains are
         # being computed does not hold up the others
-        return concatenate(self._plan_library, self.rig, sequence, time_scale, request.start_alpha_rad)
+        return concatenate(library, self.rig, sequence, time_scale, request.start_alpha_rad)
 
 
 def main(args: list[str] | None = None) -> None:

@@ -80,3 +80,19 @@ def test_ramped_scale_lasts_the_closed_form_time(library, rig):
         vary_time_scale(nominal, lambda s: 1.0 - s, rig)
     with pytest.raises(ManeuverError, match="torque limits"):
         vary_time_scale(nominal, lambda s: 3.0, rig)
+
+
+def test_plan_bounds_refuse_by_the_specs_alone_and_admit_a_thousand_cruises(library):
+    """The 1000-cruise request (5008 s, 0.8 M samples) is within the default bounds; 100,000 cruises are not,
+    and are refused without reading more than the three primitives' specs and sample counts."""
+    from swim_planner.maneuver import PlanBounds, check_plan_size
+    ids = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05", "constrained/decelerate/E0.05"]
+    check_plan_size(library, ids, [1, 1000, 1], 1.0)
+    with pytest.raises(ManeuverError, match="longer than the longest plan served"):
+        check_plan_size(library, ids, [1, 100_000, 1], 1.0)
+    with pytest.raises(ManeuverError, match="more than the largest plan served"):
+        check_plan_size(library, ids, [1, 1000, 1], 1.0, PlanBounds(max_samples=100_000))
+    samples = sum(library.sample_count(i) * n for i, n in zip(ids, [1, 1000, 1]))
+    check_plan_size(library, ids, [1, 1000, 1], 1.0, PlanBounds(max_samples=samples))   # the bound itself passes
+    with pytest.raises(ValueError, match="max_duration_s"):
+        PlanBounds(max_duration_s=float("nan")).validate()

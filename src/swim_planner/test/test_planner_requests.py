@@ -80,3 +80,39 @@ def test_answer_memory_keeps_the_latest_and_waits_for_a_reply_in_progress():
     memory.claim("b")
     memory.claim("c")                       # "a" is the oldest of three: forgotten
     assert memory.claim("a")[0] is True
+
+
+@pytest.mark.parametrize("fields, message", [
+    (dict(primitive_ids=SEQUENCE[0], repeat_counts=[1, 4_000_000_000, 1]), "longer than the longest plan"),
+    (dict(primitive_ids=SEQUENCE[0], repeat_counts=[1, 100_000, 1]), "longer than the longest plan"),
+    (dict(primitive_ids=SEQUENCE[0], repeat_counts=SEQUENCE[1], start_alpha_rad=float("nan")), "start alpha"),
+    (dict(primitive_ids=SEQUENCE[0], repeat_counts=SEQUENCE[1], start_alpha_rad=1e300), "start alpha"),
+    (dict(mode=1, goal_state="constrained/rest", goal_alpha_rad=float("nan")), "must be finite"),
+    (dict(mode=1, goal_state="constrained/rest", goal_alpha_rad=1e12), "longer than the longest plan"),
+    (dict(mode=1, goal_state="constrained/rest", goal_alpha_rad=3.0, time_scale=float("inf")), "time scale"),
+])
+def test_requests_past_a_bound_are_refused_at_once_and_the_node_serves_on(planner, fields, message):
+    import time
+
+    from swim_interfaces.srv import RequestManeuver
+    node, client, executor = planner
+    service = client.create_client(RequestManeuver, "request_maneuver")
+    plans = counted(node, "_answer")
+    start = time.monotonic()
+    reply = call_service(executor, service, RequestManeuver.Request(request_id=new_request_id(), **fields), QUICK)
+    assert not reply.success and message in reply.message, reply.message
+    assert time.monotonic() - start < QUICK.attempt_timeout_s and len(plans) == 1   # answered on the first try
+    good = call_service(executor, service, RequestManeuver.Request(primitive_ids=SEQUENCE[0],
+                                                                   repeat_counts=SEQUENCE[1]), QUICK)
+    assert good.success
+
+
+def test_plan_bounds_are_parameters_checked_on_set(planner):
+    from rclpy.parameter import Parameter
+    from swim_ros.calls import ParameterCalls
+    node, client, executor = planner
+    parameters = ParameterCalls(client, executor, "planner_node", QUICK)
+    assert not parameters.set([Parameter("max_plan_duration_s", value=-1.0)])[0].successful
+    assert node.bounds.max_duration_s == 7200.0
+    assert parameters.set([Parameter("max_plan_duration_s", value=10.0)])[0].successful
+    assert node.bounds.max_duration_s == 10.0
