@@ -16,7 +16,7 @@ setup(
     zip_safe=True,
     maintainer='swim maintainers',
     maintainer_email='swim@example.com',
-    description='The motor/encoder hardware bridge node and its safety layer (issue 5).',
+    description='The motor/encoder hardware bridge node and its safety layer.',
     license='Apache-2.0',
     tests_require=['pytest'],
     entry_points={

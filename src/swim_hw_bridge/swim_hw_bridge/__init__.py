@@ -1,1 +1,1 @@
-"""The motor/encoder hardware bridge node and its safety layer (issue 5)."""
+"""The motor/encoder hardware bridge node and its safety layer."""

@@ -189,7 +189,8 @@ class IoLoop:
             self._take_sample(sample.counts, sample.monotonic_s, sample.sequence)
             phi, theta = self._positions[2], self._positions[3]
             safety.check_positions(phi, theta)
-            heave_a, pitch_a, heave_n_m, pitch_n_m = safety.output(now_s, command, phi, theta)
+            heave_a, pitch_a, heave_n_m, pitch_n_m = safety.output(now_s, command, phi, theta,
+                                                                   self._velocities[2], self._velocities[3])
             currents, torques = (heave_a, pitch_a), (heave_n_m, pitch_n_m)
         toggling = self.enable_toggling and not safety.faults
         try:

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from swim_model import VehicleModel, load_rig
@@ -126,13 +126,15 @@ class EmulatedDevice(Device):
         """The counter registers for the present state (quantized, wrapped)."""
         modulus = 1 << self.counter_bits
         steps = np.floor((self.q - self.home) * self.counts_per_unit)
-        return tuple((initial + int(n)) % modulus for initial, n in zip(self.initial_counts, steps))
+        return cast(tuple[int, int, int, int],
+                    tuple((initial + int(n)) % modulus for initial, n in zip(self.initial_counts, steps)))
 
     def _advance(self, now_s: float) -> None:
         elapsed_s = min(now_s - self._time_s, self.max_integration_s)
         self._time_s = now_s
         if elapsed_s <= 0.0:
             return
+        assert self.model is not None   # read_counters checked it
         currents = self.motor_currents_a(now_s)
         self._torques[:, 0] = currents[0] * self.torque_gains[0]
         self._torques[:, 1] = currents[1] * self.torque_gains[1]

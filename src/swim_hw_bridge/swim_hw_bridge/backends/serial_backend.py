@@ -29,7 +29,7 @@ import math
 import os
 import select
 import time
-from typing import Any
+from typing import Any, cast
 
 import serial
 
@@ -145,6 +145,7 @@ class SerialDevice(Device):
             self.unexpected_frames += 1
             raise DeviceError(f"serial backend: malformed STATE from {self.port_name!r}: {error} "
                               "(firmware of another protocol version?)") from error
+        assert isinstance(state, protocol.State)   # the frame's type is STATE
         self.last_state = state
         self.device_rx_errors = state.rx_error_count
         if self._device_sequence is not None:
@@ -157,7 +158,7 @@ class SerialDevice(Device):
         if self._enabled:
             self._check_outputs(state.status)
         modulus = 1 << self.counter_bits
-        counts = tuple(count % modulus for count in state.counts)
+        counts = cast(tuple[int, int, int, int], tuple(count % modulus for count in state.counts))
         return CounterSample(counts=counts, monotonic_s=time.monotonic(), sequence=self._sample_sequence)
 
     def write_currents(self, heave_a: float, pitch_a: float) -> None:
@@ -231,6 +232,7 @@ class SerialDevice(Device):
         is 5 ms) turns a complete write into a false timeout. This writes to the non-blocking descriptor that
         pyserial opened and only waits, with the timeout, when the kernel buffer is actually full.
         """
+        assert self._port is not None   # called on an open port only
         if self._fd is None:  # a URL handler without a descriptor
             self._port.write(data)
             return
@@ -249,6 +251,7 @@ class SerialDevice(Device):
                     raise serial.SerialTimeoutException("Write timeout")
 
     def _await_reply(self, message_type: MessageType, request_sequence: int, timeout_s: float) -> protocol.Frame:
+        assert self._port is not None   # called on an open port only
         deadline = time.monotonic() + timeout_s
         while True:
             try:
@@ -287,6 +290,7 @@ class SerialDevice(Device):
             info = protocol.parse_payload(frame)
         except protocol.ProtocolError as error:
             raise DeviceError(f"serial backend: malformed HELLO_REPLY from {self.port_name!r}: {error}") from error
+        assert isinstance(info, protocol.HelloReply)   # the frame's type is HELLO_REPLY
         if info.protocol_version != protocol.PROTOCOL_VERSION:
             raise DeviceError(f"serial backend: device speaks protocol version {info.protocol_version}, this host "
                               f"{protocol.PROTOCOL_VERSION}; update the firmware or the bridge")
@@ -296,6 +300,7 @@ class SerialDevice(Device):
         self.device_info = info
 
     def _check_outputs(self, status: int) -> None:
+        assert self.device_info is not None   # set by the handshake of open()
         if status & StatusFlags.WATCHDOG_TRIPPED:
             self._enabled = False
             raise DeviceError(f"serial backend: device command watchdog tripped (no valid COMMAND for "

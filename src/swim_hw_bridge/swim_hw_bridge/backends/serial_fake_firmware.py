@@ -284,7 +284,7 @@ class PtyRig:
         self.counts = list(counts)
         self.firmware_options = firmware_options
         self.slave_fds: list[int] = []
-        self.firmware: FakeSerialFirmware | None = None
+        self.firmware: FakeSerialFirmware   # set by plug_in()
         self.plug_in()
 
     def plug_in(self) -> FakeSerialFirmware:

@@ -390,7 +390,7 @@ class State:
                                 self.status, self.rx_error_count)
 
 
-PAYLOAD_CLASSES = {
+PAYLOAD_CLASSES: dict[MessageType, type[Hello | HelloReply | Command | StateRequest | State]] = {
     MessageType.HELLO: Hello,
     MessageType.HELLO_REPLY: HelloReply,
     MessageType.COMMAND: Command,
