@@ -9,6 +9,15 @@ WORKSPACE = Path(__file__).resolve().parents[1]
 PACKAGES = ("swim_model", "swim_ros", "swim_planner", "swim_controller", "swim_sim", "swim_hw_bridge", "swim_bringup",
             "swim_interfaces")
 
+#: a node's process start and discovery: seconds on a loaded 2-core host (Python imports, DDS matching); 30 s margin
+STARTUP_TIMEOUT_S = 30.0
+#: a message or state change a running node makes within a second at most (a period or a few, a resend, a
+#: watchdog): 10 s covers a loaded host's stalls
+MESSAGE_TIMEOUT_S = 10.0
+#: a whole swim-demo process (bring-up, maneuver, recording, analysis, stop): about 10-20 s (bench_demo_walltime:
+#: 17 s at load ~5), more on a busier host; 300 s only stops a hung run (the demo's --timeout bounds the maneuver)
+DEMO_TIMEOUT_S = 300.0
+
 
 @pytest.fixture(scope="session")
 def ros_domain():
@@ -40,7 +49,7 @@ def running_node(package: str, executable: str, log_path: Path, *ros_args: str):
         node.kill()
 
 
-def run_demo(run_dir: Path, *arguments: str, timeout_s: float = 300.0, expected_returncode: int = 0) -> str:
+def run_demo(run_dir: Path, *arguments: str, timeout_s: float = DEMO_TIMEOUT_S, expected_returncode: int = 0) -> str:
     """`ros2 run swim_bringup swim-demo --run-dir run_dir arguments` in the workspace's environment; its stdout
     (the summary table) and stderr. Fails the test with the tail of its output if it does not exit with
     expected_returncode."""

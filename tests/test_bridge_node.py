@@ -8,17 +8,57 @@ import time
 
 import pytest
 
-from conftest import running_node
-from swim_ros.calls import ParameterCalls, RetryPolicy
+from conftest import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, running_node
+from swim_ros.calls import ParameterCalls, RetryPolicy, spin_until
 
 #: the bridge answers its services within a period or two; a try waits 10 s for a loaded host, a lost answer is
 #: asked again (lifecycle transitions only after reading the node's state)
-POLICY = RetryPolicy(attempt_timeout_s=10.0, attempts=3, discovery_timeout_s=30.0)
+POLICY = RetryPolicy(attempt_timeout_s=10.0, attempts=3, discovery_timeout_s=STARTUP_TIMEOUT_S)
 
 PERIOD_S = 0.008
 # a long watchdog (200 ms) keeps "the old command is still within the watchdog after a reset" observable
 WATCHDOG_PERIODS = 25
 WATCHDOG_S = WATCHDOG_PERIODS * PERIOD_S
+#: a PD hold (a command answering each state): 37 periods, so the watchdog reads OK and what is watched during it
+#: is seen; with the heave loop's 3 rad/s it also brings the foil most of the way back to rest
+HOLD_S = 0.3
+#: after the saturating command of test_diagnostics_report_the_loop: the foil brought back toward rest for the next
+#: test (about one and a half time constants of the 3 rad/s heave loop)
+RECOVER_HOLD_S = 0.5
+#: the PD's approach to a target (heave about 3 rad/s): within 0.03 rad in about a second; 10 s for a loaded host
+TARGET_TIMEOUT_S = 10.0
+#: how long the states are watched past the watchdog's expiry (the test holds for the watchdog period and this): the
+#: first zero torque is expected within 0.15 s of the expiry (asserted), and the states after it must all be zero
+PAST_WATCHDOG_S = 0.3
+#: states published before a transition may still be in flight when its service answers: 0.1 s, 12 periods, for
+#: them to arrive before the silence that should follow is watched
+IN_FLIGHT_S = 0.1
+#: a bridge that publishes would show states within this window (37 periods at 125 Hz, 12 at the serial test's
+#: 40 Hz): how long silence is watched
+SILENCE_WINDOW_S = 0.3
+#: the states counted after activate: 62 periods at 125 Hz (at least 40 asserted); ends at the 40th state
+RATE_WINDOW_S = 0.5
+#: a message that must change nothing (emergency_stop false) reaches the bridge within milliseconds here; 0.1 s
+#: before the check that it did not
+NO_EFFECT_WINDOW_S = 0.1
+#: the command sent just before the reset must reach the bridge first (a topic arrives within milliseconds here),
+#: and the reset must come well inside that command's 200 ms watchdog window: nothing to wait on, 10 ms
+COMMAND_BEFORE_RESET_S = 0.01
+#: after the reset, watched for torque: 10 periods, inside the old command's watchdog window, so torque here would
+#: be the old command's
+AFTER_RESET_WINDOW_S = 0.08
+#: between malformed commands: more than one 8 ms period, so a bad command the bridge used would show in a state of
+#: its own
+BAD_COMMAND_SPACING_S = 0.01
+#: the emulated serial board's own command and enable-toggle timeouts (its firmware watchdogs): generous for a
+#: loaded host
+FIRMWARE_TIMEOUT_MS = 300
+#: the serial backend's wait for the board's STATE reply (default 5 ms): 20 ms for the emulated firmware, a thread of
+#: this test process on a loaded host, still within the serial test's 25 ms loop
+SERIAL_READ_TIMEOUT_S = 0.02
+#: how long the serial backend's open keeps sending HELLO until the board answers (default 2 s): the emulated
+#: firmware answers in milliseconds; 5 s for a loaded host
+SERIAL_OPEN_TIMEOUT_S = 5.0
 
 
 class BridgeClient:
@@ -49,7 +89,7 @@ class BridgeClient:
         self.node.create_subscription(JointState, f"{prefix}joint_states",
                                       lambda m: self.states.append((time.monotonic(), m)), 50)
         self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diagnostics, 10)
-        assert self.change_state.wait_for_service(timeout_sec=30.0), "bridge_node did not come up"
+        assert self.change_state.wait_for_service(timeout_sec=STARTUP_TIMEOUT_S), "bridge_node did not come up"
 
     def _on_diagnostics(self, array):
         stamp_ns = array.header.stamp.sec * 1_000_000_000 + array.header.stamp.nanosec
@@ -60,9 +100,14 @@ class BridgeClient:
         self.node.destroy_node()
 
     def spin(self, seconds):
+        """Serve callbacks for seconds: a window in which something must (or must not) happen."""
         end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            self.executor.spin_once(timeout_sec=0.002)
+        while (remaining := end - time.monotonic()) > 0.0:
+            self.executor.spin_once(timeout_sec=remaining)
+
+    def wait_for(self, condition, timeout_s=MESSAGE_TIMEOUT_S):
+        """Serve callbacks until condition() holds (True) or timeout_s passes (False)."""
+        return spin_until(self.executor, condition, timeout_s)
 
     def call(self, client, request):
         """An idempotent service's answer (asked again if lost); fails the test with the bridge's log if none."""
@@ -97,27 +142,35 @@ class BridgeClient:
         message.header.stamp = self.node.get_clock().now().to_msg()
         self.commands.publish(message)
 
-    def hold(self, seconds, target=(0.0, 0.0)):
-        """PD on (phi, theta) to target from each joint_states, as a controller would, for seconds."""
+    def hold(self, seconds, target=(0.0, 0.0), until=None):
+        """PD on (phi, theta) to target from each joint_states, as a controller would, for seconds, or until
+        until() holds (then True)."""
         gains = ((1.0, 0.3), (0.1, 0.02))   # N m/rad, N m s/rad: heave, pitch (about 3 and 8 rad/s)
         end = time.monotonic() + seconds
         answered = len(self.states)
-        while time.monotonic() < end:
-            self.executor.spin_once(timeout_sec=0.002)
+        while (remaining := end - time.monotonic()) > 0.0:
+            if until is not None and until():
+                return True
+            self.executor.spin_once(timeout_sec=remaining)
             if len(self.states) > answered:
                 answered = len(self.states)
                 state = self.states[-1][1]
                 self.send([-kp * (state.position[j] - target[j - 2]) - kd * state.velocity[j]
                            for j, (kp, kd) in zip((2, 3), gains)])
+        return until is not None and until()
 
-    def latest_diagnostic(self, timeout_s=2.0):
+    def diagnosed_since(self, since_ns, condition):
+        """Whether a status of the bridge made at or after since_ns (wall clock, ns) has values satisfying
+        condition({key: value})."""
+        return any(stamp_ns >= since_ns and condition({kv.key: kv.value for kv in status.values})
+                   for stamp_ns, status in self.diagnostics)
+
+    def latest_diagnostic(self, timeout_s=MESSAGE_TIMEOUT_S):
         """The bridge's first status made after this call began (the bridge stamps /diagnostics with the wall
         clock when it reads its loop): one already in flight or queued would describe the loop before."""
         called_ns = time.time_ns()
         self.diagnostics.clear()
-        end = time.monotonic() + timeout_s
-        while not any(stamp_ns >= called_ns for stamp_ns, _ in self.diagnostics) and time.monotonic() < end:
-            self.executor.spin_once(timeout_sec=0.01)
+        self.wait_for(lambda: any(stamp_ns >= called_ns for stamp_ns, _ in self.diagnostics), timeout_s)
         fresh = [status for stamp_ns, status in self.diagnostics if stamp_ns >= called_ns]
         assert fresh, "no /diagnostics from the bridge"
         return fresh[0], {kv.key: kv.value for kv in fresh[0].values}
@@ -145,9 +198,9 @@ def bridge(bridge_log, rclpy_context):
     if client.state_label() == "inactive":
         assert client.transition(Transition.TRANSITION_ACTIVATE)
     assert client.trigger(client.reset).success
-    client.hold(0.3)
+    client.hold(HOLD_S)
     yield client
-    client.hold(0.3)
+    client.hold(HOLD_S)
     client.close()
 
 
@@ -161,13 +214,13 @@ def test_lifecycle_transitions_open_enable_and_release_the_device(ros_domain, rc
             assert not client.transition(Transition.TRANSITION_ACTIVATE)   # not from unconfigured
             assert client.transition(Transition.TRANSITION_CONFIGURE)
             assert client.state_label() == "inactive"
-            client.spin(0.2)
+            client.spin(SILENCE_WINDOW_S)
             assert not client.states   # inactive: the loop is not running, nothing published
             _, values = client.latest_diagnostic()
             assert values["lifecycle_state"] == "inactive"
 
             assert client.transition(Transition.TRANSITION_ACTIVATE)
-            client.spin(0.5)
+            client.wait_for(lambda: len(client.states) >= 40, RATE_WINDOW_S)
             assert client.state_label() == "active"
             assert len(client.states) >= 40   # about 62 at 125 Hz
             state = client.states[-1][1]
@@ -179,9 +232,9 @@ def test_lifecycle_transitions_open_enable_and_release_the_device(ros_domain, rc
             assert values["watchdog"] == "WAITING"
 
             assert client.transition(Transition.TRANSITION_DEACTIVATE)
-            client.spin(0.1)
+            client.spin(IN_FLIGHT_S)
             client.states.clear()
-            client.spin(0.3)
+            client.spin(SILENCE_WINDOW_S)
             assert not client.states
             _, values = client.latest_diagnostic()
             assert values["lifecycle_state"] == "inactive" and values["enable_toggling"] == "False"
@@ -190,7 +243,7 @@ def test_lifecycle_transitions_open_enable_and_release_the_device(ros_domain, rc
             assert client.state_label() == "unconfigured"
             assert client.transition(Transition.TRANSITION_CONFIGURE)   # and round again
             assert client.transition(Transition.TRANSITION_ACTIVATE)
-            client.spin(0.2)
+            client.wait_for(lambda: bool(client.states))
             assert client.states
             assert client.transition(Transition.TRANSITION_ACTIVE_SHUTDOWN)
             assert client.state_label() == "finalized"
@@ -212,16 +265,19 @@ def test_a_bad_configuration_fails_configure_and_the_node_carries_on(ros_domain,
 
 
 def test_commands_reach_the_motors_and_the_watchdog_zeroes_the_torque(bridge):
-    bridge.hold(1.0, target=(0.1, -0.1))
+    def on_target():
+        position = bridge.states[-1][1].position if bridge.states else None
+        return position is not None and abs(position[2] - 0.1) <= 0.03 and abs(position[3] + 0.1) <= 0.03
+    bridge.hold(TARGET_TIMEOUT_S, target=(0.1, -0.1), until=on_target)
     state = bridge.states[-1][1]
     assert state.position[2] == pytest.approx(0.1, abs=0.03) and state.position[3] == pytest.approx(-0.1, abs=0.03)
     bridge.send([0.05, -0.01])   # one last command, then silence
     last_sent = time.monotonic()
-    bridge.spin(0.1)
+    bridge.wait_for(lambda: (0.05, -0.01) in [pytest.approx(e) for e in efforts(bridge, last_sent)])
     assert (0.05, -0.01) in [pytest.approx(e) for e in efforts(bridge, last_sent)]
     status, values = bridge.latest_diagnostic()
     assert values["watchdog"] == "OK" and status.level == status.OK
-    bridge.spin(WATCHDOG_S + 0.3)
+    bridge.spin(WATCHDOG_S + PAST_WATCHDOG_S)
     zeroed = [t for t, m in bridge.states if t > last_sent and tuple(m.effort[2:]) == (0.0, 0.0)]
     assert zeroed, "the watchdog never zeroed the torque"
     assert WATCHDOG_S - 0.01 < zeroed[0] - last_sent < WATCHDOG_S + 0.15
@@ -233,34 +289,37 @@ def test_commands_reach_the_motors_and_the_watchdog_zeroes_the_torque(bridge):
 @pytest.mark.parametrize("how", ["service", "topic"])
 def test_emergency_stop_latches_until_reset_and_a_fresh_command(bridge, how):
     from std_msgs.msg import Bool
-    bridge.hold(0.2)
+    bridge.hold(HOLD_S)
+    asked_ns = time.time_ns()
     if how == "service":
         assert bridge.trigger(bridge.estop).success
     else:
         bridge.estop_topic.publish(Bool(data=True))
-    bridge.spin(0.05)
+    # the latch reported on /diagnostics: from then on every state must show zero torque
+    bridge.wait_for(lambda: bridge.diagnosed_since(asked_ns,
+                                                   lambda values: "EMERGENCY_STOP" in values.get("faults", "")))
     stopped = time.monotonic()
-    bridge.hold(0.3, target=(0.3, 0.3))   # commands keep coming: all refused while latched
+    bridge.hold(HOLD_S, target=(0.3, 0.3))   # commands keep coming: all refused while latched
     assert efforts(bridge, stopped) and all(e == (0.0, 0.0) for e in efforts(bridge, stopped))
     status, values = bridge.latest_diagnostic()
     assert status.level == status.ERROR and "EMERGENCY_STOP" in values["faults"]
     assert values["enable_toggling"] == "False"
     bridge.estop_topic.publish(Bool(data=False))   # false does not reset
     bridge.send([0.05, 0.0])
-    bridge.spin(0.1)
+    bridge.spin(NO_EFFECT_WINDOW_S)
     assert "EMERGENCY_STOP" in bridge.latest_diagnostic()[1]["faults"]
     # reset: the last command is still inside the watchdog window, but it predates the reset: no torque
     bridge.send([0.05, 0.0])
-    bridge.spin(0.01)
+    bridge.spin(COMMAND_BEFORE_RESET_S)
     assert bridge.trigger(bridge.reset).success
     reset_at = time.monotonic()
-    bridge.spin(0.08)
+    bridge.spin(AFTER_RESET_WINDOW_S)
     assert all(e == (0.0, 0.0) for e in efforts(bridge, reset_at))
     _, values = bridge.latest_diagnostic()
     assert values["faults"] == "NONE" and values["watchdog"] == "WAITING"
     bridge.send([0.05, 0.0])
     sent = time.monotonic()
-    bridge.spin(0.05)
+    bridge.wait_for(lambda: (0.05, 0.0) in [pytest.approx(e) for e in efforts(bridge, sent)])
     assert (0.05, 0.0) in [pytest.approx(e) for e in efforts(bridge, sent)]
 
 
@@ -273,8 +332,11 @@ def test_malformed_commands_are_counted_and_ignored(bridge):
            dict(efforts=[0.2, math.inf]), dict(efforts=[0.2, 0.2], names=("phi", "phi"))]
     for message in bad:
         bridge.send(**message)
-        bridge.spin(0.01)
-    bridge.spin(0.05)
+        bridge.spin(BAD_COMMAND_SPACING_S)
+    # every bad command counted, as /diagnostics reports
+    last_bad_ns = time.time_ns()
+    bridge.wait_for(lambda: bridge.diagnosed_since(
+        last_bad_ns, lambda values: int(values["malformed_commands"]) >= before + len(bad)))
     applied = efforts(bridge, sent)
     assert not [e for e in applied if 0.2 in (pytest.approx(abs(e[0])), pytest.approx(abs(e[1])))]   # never used
     assert applied[-1] == pytest.approx((0.01, 0.0))   # the good command still holds: none replaced it
@@ -284,7 +346,7 @@ def test_malformed_commands_are_counted_and_ignored(bridge):
 
 
 def test_diagnostics_report_the_loop(bridge):
-    bridge.hold(0.3)
+    bridge.hold(HOLD_S)
     status, values = bridge.latest_diagnostic()
     assert status.level == status.OK and status.hardware_id == "emulated"
     assert float(values["loop_rate_hz"]) == pytest.approx(1 / PERIOD_S, rel=0.1)
@@ -294,10 +356,11 @@ def test_diagnostics_report_the_loop(bridge):
     saturated = int(values["saturation_count"])
     bridge.send([50.0, 0.0])   # far past the 1.25 N m heave limit: clipped and counted
     sent = time.monotonic()
-    bridge.spin(0.05)
-    assert max(abs(e[0]) for e in efforts(bridge, sent)) == pytest.approx(177 * 0.00706155181422604, rel=1e-6)
+    limit_n_m = 177 * 0.00706155181422604
+    bridge.wait_for(lambda: any(abs(e[0]) >= limit_n_m * (1 - 1e-6) for e in efforts(bridge, sent)))
+    assert max(abs(e[0]) for e in efforts(bridge, sent)) == pytest.approx(limit_n_m, rel=1e-6)
     assert int(bridge.latest_diagnostic()[1]["saturation_count"]) > saturated
-    bridge.hold(0.5)
+    bridge.hold(RECOVER_HOLD_S)
 
 
 def test_parameters_are_validated(bridge):
@@ -307,16 +370,6 @@ def test_parameters_are_validated(bridge):
                         ("diagnostics_rate_hz", -1.0)]:
         result = parameters.set([Parameter(name, value=value)])[0]
         assert not result.successful and name in result.reason
-
-
-def wait_for(client, condition, timeout_s):
-    """Serve the client's callbacks until condition() holds (True) or timeout_s passes (False)."""
-    end = time.monotonic() + timeout_s
-    while not condition():
-        if time.monotonic() > end:
-            return False
-        client.executor.spin_once(timeout_sec=0.005)
-    return True
 
 
 def test_a_device_lost_while_active_takes_deactivate_into_error_processing(ros_domain, rclpy_context, tmp_path):
@@ -331,10 +384,10 @@ def test_a_device_lost_while_active_takes_deactivate_into_error_processing(ros_d
     from lifecycle_msgs.msg import Transition
     from swim_hw_bridge.backends.serial_fake_firmware import PtyRig
     from swim_hw_bridge.conversions import default_config_path
-    # firmware watchdogs of 300 ms (the board's own command and enable-toggle timeouts): generous for a loaded host
-    rig = PtyRig(tmp_path / "ttyRIG", command_timeout_ms=300, toggle_timeout_ms=300)
+    rig = PtyRig(tmp_path / "ttyRIG", command_timeout_ms=FIRMWARE_TIMEOUT_MS, toggle_timeout_ms=FIRMWARE_TIMEOUT_MS)
     config = yaml.safe_load(default_config_path().read_text())
-    config["backend_options"]["serial"].update(port=str(rig.link), read_timeout_s=0.02, open_timeout_s=5.0)
+    config["backend_options"]["serial"].update(port=str(rig.link), read_timeout_s=SERIAL_READ_TIMEOUT_S,
+                                               open_timeout_s=SERIAL_OPEN_TIMEOUT_S)
     config_path = tmp_path / "bridge.yaml"
     config_path.write_text(yaml.safe_dump(config))
     # a 25 ms loop with room for a 20 ms read; overruns are not what this test is about
@@ -347,15 +400,15 @@ def test_a_device_lost_while_active_takes_deactivate_into_error_processing(ros_d
             firmware = rig.firmware
             assert not firmware.enable_requested and firmware.commanded_currents_ua == (0, 0)
             assert client.transition(Transition.TRANSITION_ACTIVATE)
-            assert wait_for(client, lambda: firmware.outputs_enabled and client.states, 2.0)
+            assert client.wait_for(lambda: firmware.outputs_enabled and client.states)
             client.send([0.05, 0.0])
             sent = time.monotonic()
-            assert wait_for(client, lambda: (0.05, 0.0) in [pytest.approx(e) for e in efforts(client, sent)], 2.0)
+            assert client.wait_for(lambda: (0.05, 0.0) in [pytest.approx(e) for e in efforts(client, sent)])
             assert firmware.applied_currents_ua[0] > 0 and firmware.applied_currents_ua[1] == 0
 
             firmware.disconnect()   # the cable is pulled
             lost = time.monotonic()
-            assert wait_for(client, lambda: efforts(client, lost) and efforts(client, lost)[-1] == (0.0, 0.0), 2.0)
+            assert client.wait_for(lambda: efforts(client, lost) and efforts(client, lost)[-1] == (0.0, 0.0))
             status, values = client.latest_diagnostic()
             assert status.level == status.ERROR and "DEVICE_FAILED" in values["faults"]
 
@@ -363,27 +416,26 @@ def test_a_device_lost_while_active_takes_deactivate_into_error_processing(ros_d
             assert client.state_label() == "unconfigured"
             _, values = client.latest_diagnostic()
             assert values["lifecycle_state"] == "unconfigured" and "loop_running" not in values   # device released
-            client.spin(0.1)
+            client.spin(IN_FLIGHT_S)
             client.states.clear()
-            client.spin(0.3)
+            client.spin(SILENCE_WINDOW_S)
             assert not client.states   # nothing published once unconfigured
             # the lost board switched its amplifiers off by itself: its enable line stopped toggling
-            assert wait_for(client, lambda: not firmware.outputs_enabled, 2.0)
+            assert client.wait_for(lambda: not firmware.outputs_enabled)
             assert firmware.applied_currents_ua == (0, 0)
 
             firmware = rig.plug_in()   # the board is back under the same name: configure reconnects
             assert client.transition(Transition.TRANSITION_CONFIGURE)
             assert client.state_label() == "inactive"
             # zero current, not enabled (read by the firmware's thread when it next runs)
-            assert wait_for(client, lambda: firmware.commands and firmware.commands[-1][1:] == (0, 0, 0), 2.0)
+            assert client.wait_for(lambda: firmware.commands and firmware.commands[-1][1:] == (0, 0, 0))
             assert not firmware.outputs_enabled
             assert client.transition(Transition.TRANSITION_ACTIVATE)
-            assert wait_for(client, lambda: firmware.outputs_enabled, 2.0)
+            assert client.wait_for(lambda: firmware.outputs_enabled)
             assert client.transition(Transition.TRANSITION_DEACTIVATE)   # a device that answers: a plain deactivate
             assert client.state_label() == "inactive"
             # the board's firmware (a thread of this process) reads the bridge's last frames when it next runs
-            assert wait_for(client, lambda: not firmware.enable_requested and firmware.commanded_currents_ua == (0, 0),
-                            2.0)
+            assert client.wait_for(lambda: not firmware.enable_requested and firmware.commanded_currents_ua == (0, 0))
         finally:
             client.close()
             rig.close()

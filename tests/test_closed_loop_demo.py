@@ -9,12 +9,16 @@ import pytest
 from conftest import run_demo
 
 SHORT = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05"]   # 4 s + 5 s (the library's)
+#: the demo's --timeout (wall time of the maneuver's execution): 9 s simulated at 6-8x real time (README) take
+#: 1-2 s, several on a loaded host; 120 s fails a stalled loop long before the whole process's DEMO_TIMEOUT_S
+MANEUVER_TIMEOUT_S = 120
 
 
 @pytest.fixture(scope="module")
 def demo_run(ros_domain, tmp_path_factory):
     run_dir = tmp_path_factory.mktemp("demo") / "run"
-    return run_dir, run_demo(run_dir, "--primitives", *SHORT, "--repeats", "1", "1", "--timeout", "120")
+    return run_dir, run_demo(run_dir, "--primitives", *SHORT, "--repeats", "1", "1",
+                             "--timeout", str(MANEUVER_TIMEOUT_S))
 
 
 def test_report_is_within_bounds(demo_run):
@@ -78,8 +82,8 @@ def test_a_run_that_misses_its_goal_tolerance_fails(ros_domain, tmp_path):
     """The tracker checks the demo's tolerances: a goal tolerance no closed loop meets (1 urad of alpha at the
     end) turns the same kind of run into GOAL_TOLERANCE_VIOLATED, a failing exit and the reason printed."""
     run_dir = tmp_path / "run"
-    output = run_demo(run_dir, "--primitives", SHORT[0], "--goal-tolerance-alpha", "1e-6", "--timeout", "120",
-                      expected_returncode=1)
+    output = run_demo(run_dir, "--primitives", SHORT[0], "--goal-tolerance-alpha", "1e-6",
+                      "--timeout", str(MANEUVER_TIMEOUT_S), expected_returncode=1)
     assert (run_dir / "report.json").exists(), output[-3000:]   # it failed after the run, not before
     report = json.loads((run_dir / "report.json").read_text())
     assert report["result"]["error_code"] == -5   # swim_interfaces ExecutePlan GOAL_TOLERANCE_VIOLATED
@@ -97,7 +101,7 @@ def test_a_second_run_repeats_the_first_bit_for_bit(demo_run, tmp_path):
     from swim_bringup.bag import read_messages
     first_dir, _ = demo_run
     second_dir = tmp_path / "run"
-    run_demo(second_dir, "--primitives", *SHORT, "--repeats", "1", "1", "--timeout", "120")
+    run_demo(second_dir, "--primitives", *SHORT, "--repeats", "1", "1", "--timeout", str(MANEUVER_TIMEOUT_S))
     runs = [json.loads((d / "report.json").read_text()) for d in (first_dir, second_dir)]
     for measure in ("longitudinal_error_two_norm_m_s05", "final_alpha_error_rad", "peak_heave_torque_n_m",
                     "peak_pitch_torque_n_m", "energy_used_j", "saturated_fraction"):

@@ -1,11 +1,10 @@
 """swim_interfaces: documented field by field, built, carried over DDS, and readable by rosbags."""
 import re
-import time
 
 import numpy as np
 import pytest
 
-from conftest import WORKSPACE
+from conftest import MESSAGE_TIMEOUT_S, WORKSPACE
 
 INTERFACE_DIR = WORKSPACE / "src" / "swim_interfaces"
 FIELD = re.compile(r"^\s*([A-Za-z_][\w/]*(\[\d*\])?)\s+([a-z_][a-z0-9_]*)\s*(=.*)?$")
@@ -52,6 +51,7 @@ def test_plan_travels_over_dds(rclpy_context):
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import QoSDurabilityPolicy, QoSProfile
     from swim_interfaces.msg import PlannedTrajectory
+    from swim_ros.calls import spin_until
 
     qos = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
     sender = rclpy.create_node("plan_sender", context=rclpy_context)
@@ -61,13 +61,11 @@ def test_plan_travels_over_dds(rclpy_context):
     sender.create_publisher(PlannedTrajectory, "plan", qos).publish(sample_plan())
     executor = SingleThreadedExecutor(context=rclpy_context)
     executor.add_node(receiver)
-    deadline = time.monotonic() + 10.0
-    while not received and time.monotonic() < deadline:
-        executor.spin_once(timeout_sec=0.1)
+    spin_until(executor, lambda: bool(received), MESSAGE_TIMEOUT_S)
     executor.shutdown()
     sender.destroy_node()
     receiver.destroy_node()
-    assert received, "no plan arrived over DDS within 10 s"
+    assert received, f"no plan arrived over DDS within {MESSAGE_TIMEOUT_S:.0f} s"
     got, sent = received[0], sample_plan()
     assert got.segments[0].primitive_id == sent.segments[0].primitive_id
     assert got.segments[0].time_scale == 1.2

@@ -24,6 +24,8 @@ from swim_bringup.bag import RUN_TOPICS, read_messages
 from swim_bringup.run_client import RunClient
 from swim_bringup.system import System, closed_loop_specs, config_dir
 
+from conftest import MESSAGE_TIMEOUT_S
+
 PERIOD_S = 0.008
 KILL_AT_PLAN_TIME_S = 1.0
 CONSTRAINED_SHORT = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05"], [1, 1])   # 9 s
@@ -33,6 +35,18 @@ FREE_SHORT = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05"], [1, 1]
 # so the tracker waits 2 s
 STALE_AFTER_S = 2.0
 TRACKER_OVERRIDES = (f"stale_after_periods:={round(STALE_AFTER_S / PERIOD_S)}",)
+#: bring-up to the plan's first tracked second: nodes and discovery take seconds on a loaded host, the second itself
+#: 1 s on the bridge (real time), less in lock-step; 60 s margin
+FIRST_SECOND_TIMEOUT_S = 60.0
+#: the simulator killed, the goal ends STALE_AFTER_S after its last state; 10 s more for the result to arrive on a
+#: loaded host
+STATE_LOST_RESULT_TIMEOUT_S = STALE_AFTER_S + 10.0
+#: the planner killed, the tracker finishes the 9 s plan's last 8 s: 1-2 s at 6-8x real time in lock-step (README);
+#: 60 s for a loaded host
+PLAN_END_TIMEOUT_S = 60.0
+#: the tracker killed, states and diagnostics are looked at from this long after the kill: far beyond the bridge's
+#: 40 ms command watchdog (5 periods, config/bridge.yaml) on a loaded host
+WATCHDOG_SETTLE_S = 0.5
 
 
 @contextlib.contextmanager
@@ -43,7 +57,8 @@ def maneuver_under_way(tmp_path, plant, maneuver, topics=RUN_TOPICS, plant_overr
         client.wait_for_nodes()
         plan = client.request(*maneuver, 1.0)
         result = client.execute(plan).get_result_async()
-        client.spin_until(lambda: client.last_plan_time_s >= KILL_AT_PLAN_TIME_S, 60.0, "tracked second")
+        client.spin_until(lambda: client.last_plan_time_s >= KILL_AT_PLAN_TIME_S, FIRST_SECOND_TIMEOUT_S,
+                          "tracked second")
         yield system, client, plan, result
 
 
@@ -89,9 +104,10 @@ def test_killing_the_simulator_makes_the_tracker_zero_its_torque(ros_domain, tmp
     from swim_interfaces.action import ExecutePlan
     with maneuver_under_way(tmp_path, "sim", CONSTRAINED_SHORT) as (system, client, _, result):
         kill(system, "sim_node")
-        outcome = client.wait_for(result, STALE_AFTER_S + 10.0, "end of the goal").result
+        outcome = client.wait_for(result, STATE_LOST_RESULT_TIMEOUT_S, "end of the goal").result
         ended = client.bag.counts["joint_commands"]
-        client.spin_until(lambda: client.bag.counts["joint_commands"] >= ended + 20, 10.0, "commands after the end")
+        client.spin_until(lambda: client.bag.counts["joint_commands"] >= ended + 20, MESSAGE_TIMEOUT_S,
+                          "commands after the end")
         assert system.dead() == ["sim_node"]   # the tracker and the planner carry on
         client.close()
         topics = read_back(tmp_path / "bag", client.bag.counts)
@@ -113,15 +129,14 @@ def test_killing_the_simulator_makes_the_tracker_zero_its_torque(ros_domain, tmp
 
 
 def test_killing_the_tracker_makes_the_bridge_zero_the_torque(ros_domain, tmp_path):
-    settle_s = 0.5   # far beyond the 40 ms watchdog (5 periods, config/bridge.yaml) on a loaded host
     with maneuver_under_way(tmp_path, "bridge", FREE_SHORT, plant_overrides=("diagnostics_rate_hz:=20.0",)) \
             as (system, client, _, result):
         killed_ns = kill(system, "tracker_node")
-        settled_ns = killed_ns + settle_s * 1e9
+        settled_ns = killed_ns + WATCHDOG_SETTLE_S * 1e9
         sampled = sampled_stamps(client, "joint_states")
         diagnosed = sampled_stamps(client, "/diagnostics", DiagnosticArray)
         client.spin_until(lambda: sum(s > settled_ns for s in sampled) >= 20 and max(diagnosed) > settled_ns,
-                          10.0, "states and diagnostics after the watchdog")
+                          MESSAGE_TIMEOUT_S, "states and diagnostics after the watchdog")
         assert system.dead() == ["tracker_node"] and not result.done()
         client.close()
         topics = read_back(tmp_path / "bag", client.bag.counts)
@@ -145,7 +160,8 @@ def test_killing_the_tracker_leaves_the_lock_step_simulator_waiting(ros_domain, 
         kill(system, "tracker_node")
         sampled = sampled_stamps(client, "joint_states")
         # resend_after_s is 0.5 s (sim_node's default): the last state published is published again
-        client.spin_until(lambda: len(sampled) > 1 and sampled.count(max(sampled)) >= 2, 10.0, "a resent state")
+        client.spin_until(lambda: len(sampled) > 1 and sampled.count(max(sampled)) >= 2, MESSAGE_TIMEOUT_S,
+                          "a resent state")
         assert system.dead() == ["tracker_node"] and not result.done()
         client.close()
         topics = read_back(tmp_path / "bag", client.bag.counts)
@@ -163,7 +179,7 @@ def test_killing_the_planner_mid_execution_lets_the_tracker_finish(ros_domain, t
     from swim_interfaces.action import ExecutePlan
     with maneuver_under_way(tmp_path, "sim", CONSTRAINED_SHORT) as (system, client, plan, result):
         kill(system, "planner_node")
-        outcome = client.wait_for(result, 60.0, "end of the goal").result
+        outcome = client.wait_for(result, PLAN_END_TIMEOUT_S, "end of the goal").result
         client.drain(outcome.duration_s)
         assert system.dead() == ["planner_node"]
         client.close()

@@ -22,12 +22,19 @@ from typing import Callable
 
 import pytest
 import yaml
+from swim_ros.calls import RetryPolicy
 
 from conftest import PACKAGES, WORKSPACE
 
 INSTALL = WORKSPACE / "install"
 SOURCE_LAUNCH_DIR = WORKSPACE / "src" / "swim_bringup" / "launch"
 SUBSTITUTION = re.compile(r"\$\((\S+)\s+([^)]*)\)")
+#: a launched node's start, its parameter services up and discovered: several s for a node that builds its models
+#: at start on a loaded 2-core host, all of a launch file's nodes starting at once; 60 s margin
+NODE_START_TIMEOUT_S = 60.0
+#: the parameter services are idempotent, so a lost answer (one CI run lost sim_node's: "failed to send response
+#: (timeout)" in its log) is asked again; a node that is up answers in milliseconds, a try waits 10 s
+POLICY = RetryPolicy(attempt_timeout_s=10.0, attempts=3, discovery_timeout_s=NODE_START_TIMEOUT_S)
 
 
 class LaunchFileError(ValueError):
@@ -246,40 +253,26 @@ def installed_nodes() -> list[LaunchNode]:
 def node_parameters(context, node_name: str) -> dict[str, object]:
     """Every parameter the running node named node_name declares, with its value (rcl_interfaces services)."""
     import rclpy
-    from rcl_interfaces.srv import GetParameters, ListParameters
+    from rcl_interfaces.srv import ListParameters
     from rclpy.executors import SingleThreadedExecutor
-    from rclpy.parameter import parameter_value_to_python
+    from swim_ros.calls import ParameterCalls, call_service
     client_node = rclpy.create_node("launch_file_check", context=context)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(client_node)
     try:
         listing = client_node.create_client(ListParameters, f"/{node_name}/list_parameters")
-        getting = client_node.create_client(GetParameters, f"/{node_name}/get_parameters")
-        assert listing.wait_for_service(timeout_sec=60.0), f"{node_name} did not come up"
-        names = list(call(executor, listing, ListParameters.Request()).result.names)
-        values = call(executor, getting, GetParameters.Request(names=names)).values
+        assert listing.wait_for_service(timeout_sec=NODE_START_TIMEOUT_S), f"{node_name} did not come up"
+        names = list(call_service(executor, listing, ListParameters.Request(), POLICY).result.names)
+        values = ParameterCalls(client_node, executor, node_name, POLICY).get(names)
     finally:
         executor.shutdown()
         client_node.destroy_node()
-    return {name: plain(parameter_value_to_python(value)) for name, value in zip(names, values)}
+    return {name: plain(value) for name, value in zip(names, values)}
 
 
 def plain(value: object) -> object:
     """Array parameters (array.array, numpy) as lists, to compare with YAML's."""
     return value if isinstance(value, (bool, int, float, str)) else list(value)
-
-
-def call(executor, client, request, attempts: int = 3, timeout_s: float = 10.0):
-    """The service's answer. The parameter services are idempotent, so a request is sent again when its answer
-    is lost: a service that answers before discovery has matched the client's response reader drops the answer
-    (rmw_fastrtps logs "failed to send response (timeout)"; one CI run on a loaded host lost sim_node's)."""
-    for _ in range(attempts):
-        future = client.call_async(request)
-        executor.spin_until_future_complete(future, timeout_sec=timeout_s)
-        if future.done():
-            return future.result()
-        client.remove_pending_request(future)
-    raise AssertionError(f"no answer from {client.srv_name} to {attempts} requests of {timeout_s:.0f} s each")
 
 
 def parameter_argument(name: str, value: object) -> str:

@@ -16,6 +16,11 @@ from conftest import WORKSPACE
 SCRIPT = WORKSPACE / "scripts" / "repeat_tests.sh"
 # Generous against pytest's start-up (about 1 s per run here, more on a loaded host) times the runs of a call.
 SCRIPT_TIMEOUT_S = 120.0
+#: the sample's slow test: far longer than the poll below takes to see its start file and send the Ctrl-C, which
+#: ends it, so its length costs nothing
+SLOW_SAMPLE_TEST_S = 60
+#: how often the test looks for the slow test's start file: a file has no event to wait on; 50 ms costs nothing
+START_FILE_POLL_S = 0.05
 
 
 def script_env(tmp_path: Path) -> dict[str, str]:
@@ -90,7 +95,7 @@ def test_ctrl_c_stops_the_runs_and_the_load(tmp_path):
 
         def test_slow():
             Path({str(started)!r}).touch()
-            time.sleep(60)
+            time.sleep({SLOW_SAMPLE_TEST_S})
         """))
     # A terminal's Ctrl-C: SIGINT to the script's process group, SIGINT not ignored whatever this test inherited.
     process = subprocess.Popen([str(SCRIPT), "3", "--load", str(tmp_path / "test_slow.py")], cwd=tmp_path,
@@ -100,7 +105,7 @@ def test_ctrl_c_stops_the_runs_and_the_load(tmp_path):
     try:
         deadline = time.monotonic() + SCRIPT_TIMEOUT_S
         while not started.exists() and process.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.05)
+            time.sleep(START_FILE_POLL_S)
         assert started.exists(), "the slow test never started"
         os.killpg(process.pid, signal.SIGINT)
         stdout, stderr = process.communicate(timeout=SCRIPT_TIMEOUT_S)

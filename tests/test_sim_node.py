@@ -5,11 +5,16 @@ import time
 import numpy as np
 import pytest
 
-from conftest import running_node
-from swim_ros.calls import RetryPolicy
+from conftest import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, running_node
+from swim_ros.calls import RetryPolicy, spin_until
 
 #: sim_node answers reset and set_state at once; a try waits 10 s for a loaded host
-POLICY = RetryPolicy(attempt_timeout_s=10.0, attempts=3, discovery_timeout_s=30.0)
+POLICY = RetryPolicy(attempt_timeout_s=10.0, attempts=3, discovery_timeout_s=STARTUP_TIMEOUT_S)
+#: a state that must not come (no step taken): a step publishes its state within a period or two of the command;
+#: 0.5 s is over 60 periods
+NO_STEP_WINDOW_S = 0.5
+#: sim_node's resend of an unanswered state: far longer than NO_STEP_WINDOW_S, so a resend is never taken for a step
+RESEND_AFTER_S = 5.0
 
 SEED = 11
 
@@ -18,7 +23,7 @@ SEED = 11
 def sim(ros_domain, tmp_path_factory):
     log = tmp_path_factory.mktemp("sim_node") / "log.txt"
     with running_node("swim_sim", "sim_node", log, "-p", "constrained:=true", "-p", f"seed:={SEED}",
-                      "-p", "resend_after_s:=5.0") as process:
+                      "-p", f"resend_after_s:={RESEND_AFTER_S}") as process:
         yield process
 
 
@@ -44,11 +49,8 @@ class Driver:
         message.header.stamp = stamp
         self.publisher.publish(message)
 
-    def wait_for_states(self, count, timeout_s=10.0):
-        deadline = time.monotonic() + timeout_s
-        while len(self.states) < count and time.monotonic() < deadline:
-            self.executor.spin_once(timeout_sec=0.01)
-        return len(self.states) >= count
+    def wait_for_states(self, count, timeout_s=MESSAGE_TIMEOUT_S):
+        return spin_until(self.executor, lambda: len(self.states) >= count, timeout_s)
 
     def drive(self, torques):
         """One command per state, for the last state received; returns the states that followed."""
@@ -87,9 +89,8 @@ def test_lock_step_is_deterministic_after_reset_and_clock_follows(driver):
     first = driver.drive(torques)
     stamps = [s.header.stamp.sec + 1e-9 * s.header.stamp.nanosec for s in first]
     np.testing.assert_allclose(np.diff(stamps), 0.008, atol=1e-9)    # one period per command, simulated time
-    deadline = time.monotonic() + 2.0
-    while not (driver.clock and driver.clock[-1] == first[-1].header.stamp) and time.monotonic() < deadline:
-        driver.executor.spin_once(timeout_sec=0.01)
+    spin_until(driver.executor, lambda: bool(driver.clock) and driver.clock[-1] == first[-1].header.stamp,
+               MESSAGE_TIMEOUT_S)
     assert driver.clock[-1] == first[-1].header.stamp
     assert driver.call(Trigger, "reset", Trigger.Request()).success
     assert driver.wait_for_states(len(driver.states) + 1)
@@ -105,7 +106,7 @@ def test_malformed_commands_do_not_step_and_a_valid_one_does(driver):
     for names, effort in [(("phi", "R"), (0.1, 0.1)), (("phi", "theta"), (float("nan"), 0.0)),
                           (("phi", "theta"), (0.1,))]:
         driver.command(stamp, effort, names)
-    assert not driver.wait_for_states(count + 1, timeout_s=0.5)
+    assert not driver.wait_for_states(count + 1, timeout_s=NO_STEP_WINDOW_S)
     driver.command(stamp, (0.1, 0.0))
     assert driver.wait_for_states(count + 1)
     assert list(driver.states[-1].effort) == [0.0, 0.1, 0.0]
@@ -136,7 +137,7 @@ def test_blow_up_stops_publishing_until_reset(driver):
     count = len(driver.states)
     assert driver.wait_for_states(count)
     driver.command(driver.states[-1].header.stamp, (0.0, 0.0))
-    assert not driver.wait_for_states(count + 1, timeout_s=0.5)     # stopped: nothing published, no NaN
+    assert not driver.wait_for_states(count + 1, timeout_s=NO_STEP_WINDOW_S)     # stopped: nothing published, no NaN
     assert all(np.all(np.isfinite(s.position)) for s in driver.states)
     assert driver.call(Trigger, "reset", Trigger.Request()).success
     assert driver.wait_for_states(count + 1)
@@ -147,7 +148,8 @@ def held_sim(ros_domain, tmp_path_factory):
     """A second simulator with hold_until_torque, in a namespace of its own (beside the module's other one)."""
     log = tmp_path_factory.mktemp("held_sim_node") / "log.txt"
     with running_node("swim_sim", "sim_node", log, "-p", "constrained:=true", "-p", f"seed:={SEED}",
-                      "-p", "resend_after_s:=5.0", "-p", "hold_until_torque:=true", "-r", "__ns:=/held") as process:
+                      "-p", f"resend_after_s:={RESEND_AFTER_S}", "-p", "hold_until_torque:=true",
+                      "-r", "__ns:=/held") as process:
         yield process
 
 

@@ -1,23 +1,25 @@
 """sim_node with the vortex wake on (wake.enabled) over DDS: one wake_statistics message per period, equal bit for
 bit to the library's plant and wake driven by the same commands; reset clears the wake; bad wake parameters refuse
 to start with a message naming them."""
-import time
-
 import numpy as np
 import pytest
 
-from conftest import running_node
-from test_sim_node import Driver
+from conftest import MESSAGE_TIMEOUT_S, running_node
+from swim_ros.calls import spin_until
+from test_sim_node import RESEND_AFTER_S, Driver
 
 SEED = 11
 PERIODS = 120
+#: sim_node refusing bad parameters exits as soon as it has read them: seconds of Python imports on a loaded host;
+#: 60 s only stops a node that did not exit
+REFUSED_START_TIMEOUT_S = 60
 
 
 @pytest.fixture(scope="module")
 def wake_sim(ros_domain, tmp_path_factory):
     log = tmp_path_factory.mktemp("sim_node_wake") / "log.txt"
     with running_node("swim_sim", "sim_node", log, "-p", "constrained:=true", "-p", f"seed:={SEED}",
-                      "-p", "resend_after_s:=5.0", "-p", "wake.enabled:=true") as process:
+                      "-p", f"resend_after_s:={RESEND_AFTER_S}", "-p", "wake.enabled:=true") as process:
         yield process
 
 
@@ -35,10 +37,8 @@ def driver(wake_sim, rclpy_context):
     driver.node.destroy_node()
 
 
-def wait_for_wakes(driver, count, timeout_s=10.0):
-    deadline = time.monotonic() + timeout_s
-    while len(driver.wakes) < count and time.monotonic() < deadline:
-        driver.executor.spin_once(timeout_sec=0.01)
+def wait_for_wakes(driver, count, timeout_s=MESSAGE_TIMEOUT_S):
+    spin_until(driver.executor, lambda: len(driver.wakes) >= count, timeout_s)
 
 
 def library_run(torques):
@@ -97,7 +97,7 @@ def test_bad_wake_parameters_refuse_to_start_with_a_message(ros_domain, tmp_path
     log = tmp_path / "log.txt"
     with running_node("swim_sim", "sim_node", log, "-p", "wake.enabled:=true",
                       "-p", "wake.core_radius_m:=-1.0") as process:
-        assert process.wait(timeout=60) == 2
+        assert process.wait(timeout=REFUSED_START_TIMEOUT_S) == 2
     assert "core_radius_m" in log.read_text()
 
 

@@ -9,13 +9,29 @@ import time
 import numpy as np
 import pytest
 
-from conftest import running_node
+from conftest import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, running_node
+from swim_ros.calls import RetryPolicy, spin_until
 
 PERIOD_S = 0.008
 # 2 s, as in test_kill_node: the plant is this test process, which stops stepping during each parameter round
 # trip and can be starved for longer than 320 ms on a busy 2-core host (suspected when the mid-plan parameter test
 # saw no tracking_state after the switch in CI)
 STALE_AFTER_PERIODS = 250
+STALE_AFTER_S = STALE_AFTER_PERIODS * PERIOD_S
+#: tracker_node answers goals and parameter sets in milliseconds, but the plant (this process) does not step while
+#: it waits: a lost answer is asked again after 1 s, inside the 2 s stale limit (goals repeated with their goal id,
+#: parameter sets idempotent); 10 tries cover a loaded host
+POLICY = RetryPolicy(attempt_timeout_s=1.0, attempts=10, discovery_timeout_s=STARTUP_TIMEOUT_S)
+#: a goal's result once the period that ended it is answered (it ends in the callback that sends that command):
+#: milliseconds; half the stale limit, so a goal still running is reported so, not aborted by the watchdog
+RESULT_WAIT_S = 0.5 * STALE_AFTER_S
+#: the stale watchdog's abort: it fires STALE_AFTER_S after the last state (asserted below); 5 s leaves margin
+STALE_ABORT_TIMEOUT_S = 5.0
+#: no command for a malformed state: a state the node used is answered within a period; 25 ms is three periods
+REFUSAL_WINDOW_S = 0.025
+#: a tracking_state comes with each period's command, once this test's new reader is matched (discovery): up to
+#: 1 s of plan stepped for it beyond the periods a check runs
+TRACKING_WAIT_PERIODS = 125
 SHORT_PLAN = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05"]
 
 
@@ -67,23 +83,26 @@ class LockStepPlant:
         message.velocity = list(self.qdot)
         return message
 
-    def step(self, timeout_s=2.0):
+    def step(self, timeout_s=MESSAGE_TIMEOUT_S):
         """Publish the state, wait for its command, integrate one period; returns the torque applied."""
         stamp = self.state_message().header.stamp
         self.publisher.publish(self.state_message())
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            self.executor.spin_once(timeout_sec=0.01)
-            match = [c for c in self.commands if c.header.stamp == stamp]
-            if match:
-                self.commands.clear()
-                torque = np.asarray(match[-1].effort)
-                q, qdot = self.model.integrate_rk4(self.q, self.qdot, np.tile(torque, (8, 1)), PERIOD_S / 8)
-                self.q, self.qdot = q[-1], qdot[-1]
-                self.time_s += PERIOD_S
-                self.torques.append(torque)
-                return torque
-        raise AssertionError(f"no command for the state within the timeout after {len(self.torques)} steps")
+        if not spin_until(self.executor, lambda: any(c.header.stamp == stamp for c in self.commands), timeout_s):
+            raise AssertionError(f"no command for the state within the timeout after {len(self.torques)} steps")
+        match = [c for c in self.commands if c.header.stamp == stamp]
+        self.commands.clear()
+        torque = np.asarray(match[-1].effort)
+        q, qdot = self.model.integrate_rk4(self.q, self.qdot, np.tile(torque, (8, 1)), PERIOD_S / 8)
+        self.q, self.qdot = q[-1], qdot[-1]
+        self.time_s += PERIOD_S
+        self.torques.append(torque)
+        return torque
+
+    def spin_for(self, seconds):
+        """Serve callbacks for seconds, stepping nothing."""
+        end = time.monotonic() + seconds
+        while (remaining := end - time.monotonic()) > 0.0:
+            self.executor.spin_once(timeout_sec=remaining)
 
 
 @pytest.fixture()
@@ -92,24 +111,27 @@ def rig_loop(tracker, rclpy_context):
     from rclpy.action import ActionClient
     from rclpy.executors import SingleThreadedExecutor
     from swim_interfaces.action import ExecutePlan
+    from swim_ros.calls import GoalStatusWatch
     node = rclpy.create_node("tracker_test_plant", context=rclpy_context)
     executor = SingleThreadedExecutor(context=rclpy_context)
     executor.add_node(node)
     plant = LockStepPlant(node, executor)
     client = ActionClient(node, ExecutePlan, "execute_plan")
-    assert client.wait_for_server(timeout_sec=30.0), "tracker_node did not come up"
+    plant.goal_status = GoalStatusWatch(node, "execute_plan")   # what send_goal reads when a repeat is refused
+    assert client.wait_for_server(timeout_sec=STARTUP_TIMEOUT_S), "tracker_node did not come up"
     yield plant, client
     executor.shutdown()
     node.destroy_node()
 
 
 def send(plant, client, plan, feedback=None, **tolerances):
+    """The goal sent (again with its goal id if the answer is lost) and accepted; its handle and result future.
+
+    The result is asked once: its answer comes when the goal ends, long after discovery matched."""
     from swim_interfaces.action import ExecutePlan
-    future = client.send_goal_async(ExecutePlan.Goal(plan=plan, **tolerances), feedback_callback=feedback)
-    deadline = time.monotonic() + 10.0
-    while not future.done() and time.monotonic() < deadline:
-        plant.executor.spin_once(timeout_sec=0.01)
-    handle = future.result()
+    from swim_ros.calls import send_goal
+    handle = send_goal(plant.executor, client, ExecutePlan.Goal(plan=plan, **tolerances), plant.goal_status,
+                       feedback, POLICY)
     assert handle.accepted
     return handle, handle.get_result_async()
 
@@ -119,11 +141,17 @@ def run_until(plant, future, max_periods):
         if future.done():
             return future.result().result
         plant.step()
-    for _ in range(200):
-        plant.executor.spin_once(timeout_sec=0.01)
-        if future.done():
-            return future.result().result
+    if spin_until(plant.executor, future.done, RESULT_WAIT_S):
+        return future.result().result
     raise AssertionError("the goal did not finish")
+
+
+def step_until(plant, condition, max_periods):
+    """Step the plant until condition() holds, at most max_periods periods."""
+    for _ in range(max_periods):
+        if condition():
+            return
+        plant.step()
 
 
 def test_executes_a_plan_from_a_perturbed_start_within_tolerance(rig_loop, plan_message):
@@ -181,16 +209,15 @@ def test_stale_state_stops_the_motors_and_aborts(rig_loop, plan_message):
         plant.step()
     plant.commands.clear()
     started = time.monotonic()
-    while not future.done() and time.monotonic() - started < 5.0:   # no states: the node must notice
-        plant.executor.spin_once(timeout_sec=0.01)
+    spin_until(plant.executor, future.done, STALE_ABORT_TIMEOUT_S)   # no states: the node must notice
     elapsed = time.monotonic() - started
     result = future.result().result
     assert result.error_code == ExecutePlan.Result.STATE_LOST
     # the watchdog fires after its limit (counted from the last state), with scheduling slack, not seconds
     limit_s = STALE_AFTER_PERIODS * PERIOD_S
     assert 0.8 * limit_s < elapsed < limit_s + 0.3
-    for _ in range(20):   # while the state stays stale the node keeps commanding zero
-        plant.executor.spin_once(timeout_sec=0.01)
+    commanded = len(plant.commands)   # while the state stays stale the node keeps commanding zero: one more
+    spin_until(plant.executor, lambda: len(plant.commands) > commanded, MESSAGE_TIMEOUT_S)
     assert plant.commands and np.all(np.asarray(plant.commands[-1].effort) == 0.0)
 
 
@@ -206,8 +233,7 @@ def test_malformed_states_are_rejected_and_never_used(rig_loop, plan_message):
     for message in bad:   # each bad state between two good ones: refused, and the loop goes on
         plant.commands.clear()
         plant.publisher.publish(message)
-        for _ in range(5):
-            plant.executor.spin_once(timeout_sec=0.005)
+        plant.spin_for(REFUSAL_WINDOW_S)
         assert not [c for c in plant.commands if c.header.stamp == message.header.stamp]
         plant.step()
     result = run_until(plant, future, 2000)
@@ -216,24 +242,22 @@ def test_malformed_states_are_rejected_and_never_used(rig_loop, plan_message):
 
 def test_parameters_are_validated_and_switch_sliding_mode_mid_plan(rig_loop, plan_message, tracker):
     from rclpy.parameter import Parameter
-    from rclpy.parameter_client import AsyncParameterClient
     from swim_interfaces.action import ExecutePlan
     from swim_interfaces.msg import TrackingState
+    from swim_ros.calls import ParameterCalls
     plant, client = rig_loop
     plant.q, plant.qdot = np.zeros(3), np.zeros(3)
     tracking = []
     plant.node.create_subscription(TrackingState, "tracking_state", tracking.append, 10)
-    parameters = AsyncParameterClient(plant.node, "tracker_node")
-    assert parameters.wait_for_services(timeout_sec=10.0)
+    parameters = ParameterCalls(plant.node, plant.executor, "tracker_node", POLICY)
 
     round_trips_s = []
 
     def set_parameter(name, value):
         start = time.monotonic()
-        future = parameters.set_parameters([Parameter(name, value=value)])
-        plant.executor.spin_until_future_complete(future, timeout_sec=10.0)
+        result = parameters.set([Parameter(name, value=value)])[0]
         round_trips_s.append(time.monotonic() - start)
-        return future.result().results[0]
+        return result
 
     for name, value in [("sample_period_s", 0.5), ("stale_after_periods", 0), ("time_scale", float("nan")),
                         ("disturbance_bound_n_m", -1.0)]:
@@ -243,11 +267,13 @@ def test_parameters_are_validated_and_switch_sliding_mode_mid_plan(rig_loop, pla
     _, future = send(plant, client, plan_message)
     for _ in range(20):
         plant.step()
+    step_until(plant, lambda: tracking, TRACKING_WAIT_PERIODS)
     assert tracking and tracking[-1].sliding_mode_enabled, tracker.read_text()[-2000:]   # the default
     assert set_parameter("sliding_mode_enabled", False).successful
     tracking.clear()
     for _ in range(20):
         plant.step()
+    step_until(plant, lambda: tracking, TRACKING_WAIT_PERIODS)
     assert tracking and not any(t.sliding_mode_enabled for t in tracking), \
         f"parameter round trips {np.round(round_trips_s, 3)} s; tracker_node: {tracker.read_text()[-2000:]}"
     assert set_parameter("sliding_mode_enabled", True).successful
