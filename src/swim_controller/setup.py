@@ -15,7 +15,7 @@ setup(
     maintainer='swim maintainers',
     maintainer_email='swim@example.com',
     description=('The cascade tracker: time-varying LQR with time-scaled gains, input-output '
-                 'linearization and sliding mode (issue 4).'),
+                 'linearization and sliding mode.'),
     license='Apache-2.0',
     tests_require=['pytest'],
     entry_points={

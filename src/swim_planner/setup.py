@@ -16,7 +16,7 @@ setup(
     maintainer='swim maintainers',
     maintainer_email='swim@example.com',
     description=('Off-line optimal-control motion primitives, the primitive library, the '
-                 'lane/energy graph and the maneuver planner node (issue 3).'),
+                 'lane/energy graph and the maneuver planner node.'),
     license='Apache-2.0',
     tests_require=['pytest'],
     entry_points={

@@ -14,7 +14,7 @@ setup(
     zip_safe=True,
     maintainer='swim maintainers',
     maintainer_email='swim@example.com',
-    description='The dynamics simulator node with disturbances (issue 5).',
+    description='The dynamics simulator node with disturbances.',
     license='Apache-2.0',
     tests_require=['pytest'],
     entry_points={

@@ -14,6 +14,7 @@ import dataclasses
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -35,7 +36,8 @@ class Run:
 
 def load_run(bag_path: Path) -> Run:
     """The tracked periods of the last plan executed in the bag."""
-    rows, lane_radius_m = [], None
+    rows: list[Any] = []   # the tracking_state messages (the typestore's class)
+    lane_radius_m = None
     for topic, _, message in read_messages(bag_path, ("tracking_state", "plan")):
         if topic == "plan":
             lane_radius_m = message.lane_radius_m
@@ -96,7 +98,8 @@ def bridge_measures(bag_path: Path) -> dict:
     """From a bridge_node's /diagnostics in the bag ({} without any): the faults it latched during the run (a
     latched fault holds the motors at zero until reset: the vehicle did not swim as commanded from then on) and
     its count of overrun periods."""
-    faults, overruns = set(), None
+    faults: set[str] = set()
+    overruns = None
     for _, _, array in read_messages(bag_path, ("/diagnostics",)):
         for status in array.status:
             if status.name.endswith("bridge_node: I/O loop"):

@@ -7,7 +7,7 @@ decode them.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Iterator
+from typing import Any, Iterator
 
 from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
@@ -39,13 +39,14 @@ class BagWriter:
 
     def __init__(self, path: Path, topics: dict[str, str] = RUN_TOPICS) -> None:
         self.store = swim_typestore()
-        self._writer = Writer(path, version=9, storage_plugin=StoragePlugin.MCAP)
+        self._writer: Writer | None = Writer(path, version=9, storage_plugin=StoragePlugin.MCAP)
         self._writer.open()
         self._connections = {topic: self._writer.add_connection(topic, msgtype, typestore=self.store)
                              for topic, msgtype in topics.items()}
         self.counts = dict.fromkeys(topics, 0)
 
     def write(self, topic: str, timestamp_ns: int, cdr: bytes) -> None:
+        assert self._writer is not None, "BagWriter.write after close()"
         self._writer.write(self._connections[topic], timestamp_ns, cdr)
         self.counts[topic] += 1
 
@@ -56,8 +57,9 @@ class BagWriter:
             self._writer = None
 
 
-def read_messages(path: Path, topics: tuple[str, ...]) -> Iterator[tuple[str, int, object]]:
-    """(topic, log time ns, decoded message) for the topics asked, in log-time order."""
+def read_messages(path: Path, topics: tuple[str, ...]) -> Iterator[tuple[str, int, Any]]:
+    """(topic, log time ns, decoded message: the typestore's class of its type) for the topics asked, in log-time
+    order."""
     store = swim_typestore()
     with Reader(path) as reader:
         connections = [c for c in reader.connections if c.topic in topics]

@@ -1,4 +1,5 @@
-"""swim-experiments: the paper's experiments (Sec. 7; SPEC.md section 6) in closed loop over DDS, in simulation.
+"""swim-experiments: the paper's experiments in closed loop over DDS, in simulation
+(Sec. 7; docs/model_and_method.md section 6).
 
 Every experiment runs twice, with and without the sliding-mode term, each run in a fresh bring-up (sim_node in
 lock-step with the same seed and the default disturbances, planner_node, tracker_node), recorded and analysed
@@ -52,7 +53,7 @@ class Experiment:
 
 
 def paper_experiments() -> list[Experiment]:
-    """The experiments of Sec. 7 with the changes sliding mode brought there (SPEC.md section 6)."""
+    """The experiments of Sec. 7 with the changes sliding mode brought there (docs/model_and_method.md section 6)."""
     constrained = {1.0: {"longitudinal_error_two_norm_m_s05": -0.14},      # Sec. 7.1, nominal: ~14 % lower
                    1.2: {"longitudinal_error_two_norm_m_s05": -0.12}}      # lambda = 1.2: ~12 % lower
     keeping = {1.0: {"cartesian_error_two_norm_m_s05": -0.12, "longitudinal_error_two_norm_m_s05": -0.12,

@@ -11,12 +11,15 @@ import importlib
 import struct
 import time
 from pathlib import Path
-from typing import Callable, Optional
+from typing import TYPE_CHECKING, Callable, Optional
 
 from swim_bringup.bag import RUN_TOPICS, BagWriter
 from swim_controller.supervisor import Tolerances
 from swim_ros.calls import (CallFailed, GoalStatusWatch, RetryPolicy, call_service, goal_result, new_request_id,
                             send_goal, wait_for_server)
+
+if TYPE_CHECKING:
+    from rclpy.subscription import Subscription
 
 STARTUP_TIMEOUT_S = 60.0
 #: a maneuver request: a plan of primitives whose gains are new takes 0.1-0.3 s each, so 20 s a try is generous;
@@ -56,7 +59,7 @@ class RunClient:
             self.executor.add_node(self.node)
             self.bag = BagWriter(bag_path, topics)
             self.latest_cdr: dict[str, bytes] = {}   # topic -> the latest message recorded, as received
-            self.recordings = {}                       # topic -> the recorder's subscription
+            self.recordings: dict[str, Subscription] = {}   # topic -> the recorder's subscription
             # the idle loop's topics last: a publisher learns of a process's readers in the order they were made,
             # so a first message on them (wait_for_nodes) shows the others were matched too
             for topic in sorted(topics, key=lambda t: t in IDLE_LOOP_TOPICS):
@@ -70,6 +73,8 @@ class RunClient:
 
     def _record(self, topic: str, type_name: str) -> None:
         from rclpy.qos import QoSDurabilityPolicy, QoSProfile
+        bag = self.bag
+        assert bag is not None   # made before the subscriptions
 
         def record(cdr: bytes) -> None:
             # the executor hands over one message per subscription per wait, at ~0.2 ms of Python each: slower
@@ -78,7 +83,7 @@ class RunClient:
             subscription = self.recordings[topic]
             with subscription.handle:
                 for written in range(1, RECORD_DEPTH + 1):
-                    self.bag.write(topic, time.time_ns(), cdr)
+                    bag.write(topic, time.time_ns(), cdr)
                     self.latest_cdr[topic] = cdr
                     if written == RECORD_DEPTH:
                         break
@@ -206,7 +211,8 @@ class RunClient:
                                f"({self._recording_status(final_stamp_ns)})")
             self.executor.spin_once(timeout_sec=0.05)
             latest = self.latest_cdr.get("tracking_state")
-            if final_stamp_ns is None and latest is not checked:   # deserialize each tracking_state once
+            # deserialize each tracking_state once
+            if final_stamp_ns is None and latest is not None and latest is not checked:
                 checked = latest
                 if self.last_plan_time_s >= duration_s - 1e-6:
                     final_stamp_ns = header_stamp_ns(latest)

@@ -1,3 +1,3 @@
 """The cascade tracker: time-varying LQR with time-scaled gains, input-output linearization and
-sliding mode (issue 4).
+sliding mode.
 """

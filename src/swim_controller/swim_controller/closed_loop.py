@@ -10,35 +10,66 @@ import dataclasses
 from typing import Callable, Optional, Protocol
 
 import numpy as np
+import numpy.typing as npt
 
 from swim_controller.tracker import CascadeTracker, Reference
+from swim_model import VehicleModel
+
+Array = npt.NDArray[np.float64]
 
 
-def reference_of(plan) -> Reference:
+class SampledPlan(Protocol):
+    """What reference_of reads of a plan (swim_planner.maneuver.Plan is one)."""
+
+    @property
+    def time_s(self) -> Array: ...
+    @property
+    def q(self) -> Array: ...
+    @property
+    def qdot(self) -> Array: ...
+    @property
+    def foil_acceleration(self) -> Array: ...
+    @property
+    def torque(self) -> Array: ...
+    @property
+    def lqr_gain(self) -> Array: ...
+    @property
+    def sliding_gain(self) -> Array: ...
+
+
+def reference_of(plan: SampledPlan) -> Reference:
     """The tracker's Reference of a plan (swim_planner.maneuver.Plan: samples, torques and time-scaled gains)."""
     return Reference(plan.time_s, plan.q, plan.qdot, plan.foil_acceleration, plan.torque, plan.lqr_gain,
                      plan.sliding_gain)
 
 
+class SteppedState(Protocol):
+    """The state a Stepper reaches at a period's end (swim_sim.plant.PlantState is one)."""
+
+    @property
+    def q(self) -> Array: ...
+    @property
+    def qdot(self) -> Array: ...
+
+
 class Stepper(Protocol):
     """A plant stepped by control periods (swim_sim.plant.Plant is one)."""
 
-    def reset(self, q: np.ndarray, qdot: np.ndarray) -> None: ...
+    def reset(self, q: Array, qdot: Array) -> None: ...
 
-    def step(self, torque: np.ndarray):   # -> a state with .q and .qdot at the period's end
-        ...
+    def step(self, torque: Array) -> SteppedState: ...
 
 
 @dataclasses.dataclass
 class Run:
-    time_s: np.ndarray
-    q: np.ndarray
-    q_reference: np.ndarray
-    torque: np.ndarray
-    saturated: np.ndarray
+    time_s: Array
+    q: Array
+    q_reference: Array
+    torque: Array
+    saturated: npt.NDArray[np.bool_]
 
     @property
-    def error(self) -> np.ndarray:
+    def error(self) -> Array:
         return self.q - self.q_reference
 
     def two_norm(self, column: int, until_s: Optional[float] = None) -> float:
@@ -48,9 +79,9 @@ class Run:
         return float(np.sqrt(np.sum(error ** 2) * step))
 
 
-def simulate(model, tracker: CascadeTracker, reference: Reference, sample_period_s: float = 0.008,
-             substeps: int = 8, q0: Optional[np.ndarray] = None, qdot0: Optional[np.ndarray] = None,
-             disturbance: Callable[[float], np.ndarray] = lambda t: np.zeros(2), extra_time_s: float = 0.0,
+def simulate(model: VehicleModel, tracker: CascadeTracker, reference: Reference, sample_period_s: float = 0.008,
+             substeps: int = 8, q0: Optional[npt.ArrayLike] = None, qdot0: Optional[npt.ArrayLike] = None,
+             disturbance: Callable[[float], Array] = lambda t: np.zeros(2), extra_time_s: float = 0.0,
              plant: Optional[Stepper] = None) -> Run:
     tracker.start(reference)
     q = reference.q[0].copy() if q0 is None else np.array(q0, dtype=float)

@@ -1,4 +1,5 @@
-"""The time-varying LQ regulator about a planned trajectory (paper Sec. 6.1, eqs. 16-21; SPEC.md section 5).
+"""The time-varying LQ regulator about a planned trajectory (paper Sec. 6.1, eqs. 16-21;
+docs/model_and_method.md section 5.1).
 
 Error state (n = ny + 2 nq: 10 for the free vehicle, 7 for the laterally constrained one)::
 
@@ -19,9 +20,10 @@ du = -R^-1 G' P x with P from the backward Riccati equation (eq. 20)::
 
 Q = Z' Gg Z (Sec. 7) with z = Z x = (edot_a + 2 l_a e_a + l_a^2 int e_a, [same for R],
 edot_phi + l_phi e_phi, edot_theta + l_theta e_theta); Gg diagonal. S is the algebraic Riccati solution for
-the time-averaged F, G, scaled (Sec. 7). p_alpha is a first integral of the ideal model (SPEC.md P1), so its
-linearization is an uncontrollable mode with eigenvalue 0 and the averaged pair is not stabilizable; the
-algebraic equation is therefore solved for F_avg - mu I, a small stability margin mu (a named parameter).
+the time-averaged F, G, scaled (Sec. 7). p_alpha is a first integral of the ideal model
+(docs/model_and_method.md P1), so its linearization is an uncontrollable mode with eigenvalue 0 and the averaged
+pair is not stabilizable; the algebraic equation is therefore solved for F_avg - mu I, a small stability margin mu
+(a named parameter).
 
 P(t) is computed off-line, once per primitive: the Riccati equation is the linear-fractional image of the
 linear Hamiltonian system d/dt (X, Y) = [[F, -G R^-1 G'], [-Q, -F']] (X, Y), P = Y X^-1, whose transition over
@@ -32,7 +34,7 @@ its map applied cycle after cycle.
 from __future__ import annotations
 
 import dataclasses
-from typing import Optional
+from typing import Optional, cast
 
 import casadi as ca
 import numpy as np
@@ -50,16 +52,16 @@ class LqrWeights:
     """The tuning of the LQ stage (Sec. 7): rates l, coordination gains Gg, input weights R, terminal S.
 
     The paper publishes the structure, not its numbers; every default here is assumed, tuned in simulation
-    on the ideal model (swim_controller/test/test_closed_loop_ideal.py) for convergence within a few seconds without
+    on the ideal model (swim_planner/test/test_closed_loop_ideal.py) for convergence within a few seconds without
     saturating the motors.
     """
 
     alpha_rate_per_s: float = 1.5        # assumed: l_alpha, longitudinal error decays with ~0.7 s
     lateral_rate_per_s: float = 1.5      # assumed: l_R
-    # l_phi, l_theta 4 and Gg[alpha] 30 (were 8 and 100): the softer foil loops leave the slow alpha and R
-    # loops the torque they need; the lane change then ends 0.1 mm from its lane on the ideal model (was 7 mm
-    # to 15 mm) and saturates 0.7 % of its periods (was 6 %); stronger lateral terms saturated more (tuning runs
-    # of 2026-11-23, test_closed_loop_ideal.py)
+    # l_phi, l_theta 4 and Gg[alpha] 30: the softer foil loops leave the slow alpha and R loops the torque they
+    # need, so on the ideal model the lane change ends 0.1 mm from its lane with 0.7 % of its periods saturated;
+    # stiffer foil loops (l 8, Gg[alpha] 100: 7 to 15 mm off, 6 % saturated) and stronger lateral terms saturated
+    # the motors (swim_planner/test/test_closed_loop_ideal.py)
     heave_rate_per_s: float = 4.0        # assumed: l_phi
     pitch_rate_per_s: float = 4.0        # assumed: l_theta
     alpha_gain: float = 30.0             # assumed: Gg[alpha], 1/(rad/s)^2 (z_alpha is a rate)
@@ -75,7 +77,7 @@ class LqrWeights:
     # A cruise is tiled and repeated, so its gains should not fade toward S at each 1 s cycle's end: they are the
     # Riccati solution of the cruise continued for this long (0: its own horizon only). Assumed: the paper's
     # longest maneuver, 30 s. On the ideal model the free lane keeping at E = 0.05 then ends 6 mm from its lane
-    # and 2 mrad behind (was 24 mm and 69 mrad with each 1 s cycle's own horizon; runs of 2026-11-23).
+    # and 2 mrad behind (24 mm and 69 mrad with each 1 s cycle's own horizon).
     cruise_lookahead_s: float = 30.0
 
     def validate(self) -> None:
@@ -156,7 +158,7 @@ def terminal_weight(linearization: Linearization, state_weight: Array, input_wei
     input_avg = linearization.input_matrix.mean(axis=0)
     shifted = state_avg - weights.terminal_margin_per_s * np.eye(len(state_avg))
     try:
-        solution = scipy.linalg.solve_continuous_are(shifted, input_avg, state_weight, input_weight)
+        solution: Array = scipy.linalg.solve_continuous_are(shifted, input_avg, state_weight, input_weight)
     except (np.linalg.LinAlgError, ValueError) as err:
         raise GainComputationError(f"no algebraic Riccati solution for the averaged linearization: {err}") from err
     return weights.terminal_scale * 0.5 * (solution + solution.T)
@@ -207,7 +209,7 @@ def backward_transitions(time_s: Array, linearization: Linearization, state_weig
     weight = fraction[None, :, :, None, None]
     f_nodes = state_matrix[:-1, None, None] + weight * (state_matrix[1:] - state_matrix[:-1])[:, None, None]
     g_nodes = input_matrix[:-1, None, None] + weight * (input_matrix[1:] - input_matrix[:-1])[:, None, None]
-    h_nodes = _hamiltonian(f_nodes, g_nodes, state_weight, np.linalg.inv(input_weight))
+    h_nodes = _hamiltonian(f_nodes, g_nodes, state_weight, cast(Array, np.linalg.inv(input_weight)))
     step = (np.diff(time_s) / steps_per_interval)[:, None, None, None]
     a1 = step * h_nodes[:, :, 1]
     a2 = np.sqrt(15.0) / 3.0 * step * (h_nodes[:, :, 2] - h_nodes[:, :, 0])
@@ -215,7 +217,7 @@ def backward_transitions(time_s: Array, linearization: Linearization, state_weig
     c1 = _commutator(a1, a2)
     c2 = -_commutator(a1, 2.0 * a3 + c1) / 60.0
     omega = a1 + a3 / 12.0 + _commutator(-20.0 * a1 - a3 + c1, a2 + c2) / 240.0
-    steps = scipy.linalg.expm(-omega)         # (N - 1, steps_per_interval, 2n, 2n)
+    steps: Array = scipy.linalg.expm(-omega)       # (N - 1, steps_per_interval, 2n, 2n)
     transitions = steps[:, 0]
     for j in range(1, steps_per_interval):
         transitions = transitions @ steps[:, j]

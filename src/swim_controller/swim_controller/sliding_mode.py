@@ -1,4 +1,4 @@
-"""The sliding-mode outer loop (paper Sec. 6.3, eqs. 24-25; SPEC.md section 5).
+"""The sliding-mode outer loop (paper Sec. 6.3, eqs. 24-25; docs/model_and_method.md section 5.3).
 
 Derivation. Let the plant be Mm(q) qddot + Cm(q, qdot) qdot = [0; tau + d] with d an unknown torque
 disturbance on the foil's motors (the matched part of what the ideal model leaves out), ||d|| <= D. With

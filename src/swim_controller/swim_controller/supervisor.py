@@ -109,6 +109,7 @@ class Supervisor:
         if self.mode is Mode.IDLE:
             return Step(np.zeros(2), (False, False), None, None)
         if self.mode is Mode.HOLDING:
+            assert self._hold_target is not None   # set with HOLDING
             torque, saturated = self.tracker.hold(q, qdot, self._hold_target)
             return Step(torque, saturated, None, None)
         if self._start_time_s is None:
@@ -116,6 +117,7 @@ class Supervisor:
         plan_time_s = time_s - self._start_time_s
         output = self.tracker.step(plan_time_s, q, qdot)
         reference = self.tracker.reference
+        assert reference is not None   # TRACKING: begin() started the tracker on it
         lateral_error = float(q[1] - output.reference.q[1]) if reference.ny == 2 else 0.0
         errors = (float(q[0] - output.reference.q[0]), lateral_error)
         self.last_errors = errors

@@ -1,4 +1,4 @@
-"""Time scaling of the LQ tracker (paper Sec. 6.4, Theorem 1, eqs. 26-33; SPEC.md section 5).
+"""Time scaling of the LQ tracker (paper Sec. 6.4, Theorem 1, eqs. 26-33; docs/model_and_method.md section 5.4).
 
 A primitive run lambda times faster, q(t) -> q(lambda t), is linearized to F_l(t) = lambda Gamma^-1 F(lambda t)
 Gamma and G_l(t) = G(lambda t) (eq. 28), with Gamma(lambda) = diag(lambda^2 I_ny, lambda I_nq, I_nq) on

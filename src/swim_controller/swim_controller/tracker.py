@@ -11,14 +11,15 @@ concatenated by the planner, see time_scaling):
 
 After the plan ends the tracker holds the foil still at the plan's last heave and pitch: a PD law on psi
 through the same I/O linearization. The torque is held over the period h (zero-order hold), so the feed-forward
-u_des is taken at the period's midpoint (on the ideal model the gain was small: 0.043 to 0.041 rad worst pitch error).
+u_des is taken at the period's midpoint (on the ideal model: worst pitch error 0.041 rad, 0.043 with u_des at the
+period's start).
 The hold law: (u = -kp (psi - psi_end) - kd psidot), alpha and R left free.
 """
 from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Callable, Optional
+from typing import TYPE_CHECKING, Callable, Optional
 
 import numpy as np
 import numpy.typing as npt
@@ -27,6 +28,9 @@ from swim_controller.errors import PlanError
 from swim_controller.riccati import error_state_size
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.time_scaling import retime_feedback
+
+if TYPE_CHECKING:
+    from swim_model import VehicleModel
 
 Array = npt.NDArray[np.float64]
 #: (q, qdot) -> (Mio 2x2, Cio qdot 2): the I/O linearization of the vehicle model (eqs. 22-23)
@@ -79,7 +83,7 @@ class Reference:
 
     @property
     def nq(self) -> int:
-        return self.q.shape[1]
+        return int(self.q.shape[1])
 
     def segment_index(self, time_s: float) -> int:
         """Index of the segment running at time_s (0 without segment information)."""
@@ -208,7 +212,7 @@ class CascadeTracker:
         return saturate(torque, self.torque_limits_n_m)
 
 
-def model_io_linearization(model) -> IoLinearization:
+def model_io_linearization(model: VehicleModel) -> IoLinearization:
     """The I/O linearization of a swim_model VehicleModel, called on its compiled C entry point directly
     (VehicleModel.native_function: the same numbers; the checked numpy API costs ~15 us more per call and CasADi's
     own call ~45 us, too much at 1 kHz; the tracker validates states itself)."""

@@ -169,7 +169,10 @@ class TrackerNode(Node):
     # ----- the control period ----------------------------------------------------------------------
     def _on_state(self, message: JointState) -> None:
         supervisor = self._supervisor
-        names = supervisor.tracker.reference.joint_names if supervisor else None
+        names = None
+        if supervisor is not None:
+            assert supervisor.tracker.reference is not None   # a supervisor is kept only after begin()
+            names = supervisor.tracker.reference.joint_names
         try:
             time_s, q, qdot = state_from_message(message, names, self._velocity,
                                                  self.get_clock().now().nanoseconds * 1e-9)
@@ -236,11 +239,13 @@ class TrackerNode(Node):
 
     def _tracking_message(self, step: Step, stamp, q: np.ndarray, qdot: np.ndarray) -> TrackingState:
         output = step.output
-        reference = output.reference
         supervisor = self._supervisor
+        assert output is not None and supervisor is not None   # a tracked period's step
+        reference = output.reference
         message = self._tracking_message_reused
         message.header.stamp = stamp
         plan = supervisor.tracker.reference
+        assert plan is not None
         message.joint_names = list(plan.joint_names)
         for point, positions, velocities in ((message.reference, reference.q, reference.qdot),
                                              (message.feedback, q, qdot),
@@ -297,6 +302,7 @@ class TrackerNode(Node):
         if self._goal is goal:
             self._goal = None
         errors = goal.supervisor.last_errors
+        assert goal.outcome is not None   # set by finish() with done
         result = ExecutePlan.Result(error_code=RESULT_CODES[goal.outcome], error_string=goal.reason,
                                     final_alpha_error_rad=errors[0], final_r_error_m=errors[1],
                                     duration_s=min(goal.supervisor.elapsed_s, goal.duration_s))

@@ -1,4 +1,4 @@
-"""bridge_node: the lifecycle node that runs our controller's torques on the rig's motors (issue 5).
+"""bridge_node: the lifecycle node that runs our controller's torques on the rig's motors.
 
     joint_commands (sub, sensor_msgs/JointState)   names phi, theta (any order), effort N m: what tracker_node
                                                    publishes; anything else is refused and counted
@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import Any
+from typing import Any, Optional
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from lifecycle_msgs.srv import ChangeState
@@ -45,6 +45,7 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.duration import Duration
 from rclpy.lifecycle import Node as LifecycleNode
 from rclpy.lifecycle import State, TransitionCallbackReturn
+from rclpy.timer import Timer
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
 from std_srvs.srv import Trigger
@@ -124,7 +125,7 @@ class BridgeNode(LifecycleNode):
         self._state_label = "unconfigured"
         self._last_published_period = -1
         self._reported_faults = FaultCode.NONE
-        self._state_timer = None
+        self._state_timer: Optional[Timer] = None
         self._diagnostics_timer = self.create_timer(1.0 / self.settings.diagnostics_rate_hz,
                                                     self._publish_diagnostics)
 

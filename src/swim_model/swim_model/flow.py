@@ -61,6 +61,7 @@ import hashlib
 import json
 import math
 from functools import cached_property
+from typing import Any, Iterable, Union, overload
 
 import casadi as ca
 import numpy as np
@@ -148,7 +149,20 @@ class FlowParameters:
                                          sort_keys=True).encode()).hexdigest()
 
 
-def angle_of_attack(u_m_s, v_m_s):
+Symbolic = Union[ca.SX, ca.MX, ca.DM]
+
+
+@overload
+def angle_of_attack(u_m_s: float, v_m_s: float) -> float: ...
+@overload
+def angle_of_attack(u_m_s: Array, v_m_s: Array) -> Array: ...
+@overload
+def angle_of_attack(u_m_s: Symbolic, v_m_s: Symbolic | float) -> Symbolic: ...
+@overload
+def angle_of_attack(u_m_s: float, v_m_s: Symbolic) -> Symbolic: ...
+
+
+def angle_of_attack(u_m_s: Any, v_m_s: Any) -> Any:
     """atan2(-V, U), rad: the angle between the chord and the foil frame's motion (eq. 40's U, V in foil axes).
 
     Positive when the foil moves toward -y while moving forward (the flow meets it from below): the sign of the
@@ -309,7 +323,7 @@ class CirculatoryFlow:
             result[function.name_out(i)] = array[0] if single else array
         return result
 
-    def steady_lag(self, velocity: npt.ArrayLike) -> Array:
+    def steady_lag(self, velocity: Iterable[float]) -> Array:
         """The lag states of steady motion at this velocity (z_i = Q), m/s."""
         u, v, omega = (float(x) for x in velocity)
         normal = -(v + omega * self.three_quarter_chord_x_m)

@@ -36,15 +36,16 @@ def read_measurements(path: Path) -> dict[str, list[tuple[float, float]]]:
     return series
 
 
-def compute(strouhal: list[float], models: tuple[str, ...] = ("circulatory", "wake")) -> dict[str, dict[str, list]]:
+def compute(strouhal: list[float],
+            models: tuple[str, ...] = ("circulatory", "wake")) -> dict[str, dict[str, list[float]]]:
     """{model: {"strouhal", "thrust_coefficient", "efficiency", "peak_angle_of_attack_deg"}} for Anderson's case."""
     speed = REYNOLDS * KINEMATIC_VISCOSITY_WATER_M2_S / CHORD_M
     heave = HEAVE_OVER_CHORD * CHORD_M
     foil = JoukowskiFoil(CHORD_M, THICKNESS_RATIO * CHORD_M, SPAN_M)
     params = FlowParameters(profile_drag_coefficient=laminar_profile_drag_coefficient(REYNOLDS, THICKNESS_RATIO))
-    results: dict[str, dict[str, list]] = {}
+    results: dict[str, dict[str, list[float]]] = {}
     for model in models:
-        rows: dict[str, list] = {"strouhal": [], "thrust_coefficient": [], "efficiency": [],
+        rows: dict[str, list[float]] = {"strouhal": [], "thrust_coefficient": [], "efficiency": [],
                                  "peak_angle_of_attack_deg": []}
         for st in strouhal:
             run = oscillating_foil(foil, speed_m_s=speed, heave_amplitude_m=heave,
@@ -61,7 +62,7 @@ def compute(strouhal: list[float], models: tuple[str, ...] = ("circulatory", "wa
     return results
 
 
-def plot(results: dict[str, dict[str, list]], measured: dict[str, list[tuple[float, float]]] | None,
+def plot(results: dict[str, dict[str, list[float]]], measured: dict[str, list[tuple[float, float]]] | None,
          path: Path) -> None:
     import matplotlib
     matplotlib.use("Agg")

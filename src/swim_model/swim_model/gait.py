@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import cast
 
 import numpy as np
 import numpy.typing as npt
@@ -57,7 +58,7 @@ def zero_momentum_velocity(model: VehicleModel, q: Array, psi_dot: Array) -> Arr
     """ydot with Mm11 ydot + Mm12 psidot = 0: the unactuated momenta vanish."""
     ny = model.n_unactuated
     mass = model.mass_matrix(q)
-    return -np.linalg.solve(mass[:ny, :ny], mass[:ny, ny:] @ psi_dot)
+    return cast(Array, -np.linalg.solve(mass[:ny, :ny], mass[:ny, ny:] @ psi_dot))
 
 
 def simulate_gait(model: VehicleModel, gait: SinusoidalGait, duration_s: float, sample_period_s: float = 0.01,

@@ -118,7 +118,8 @@ class RigParameters:
 
     def replace(self, **changes: float) -> "RigParameters":
         """A copy with some values changed, validated like a loaded file."""
-        changed = dataclasses.replace(self, **changes)
+        fields: dict[str, Any] = changes   # dataclasses.replace checks the names when it runs
+        changed = dataclasses.replace(self, **fields)
         _check_consistency(changed)
         return changed
 

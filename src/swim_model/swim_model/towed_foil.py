@@ -236,7 +236,7 @@ def oscillating_foil(foil: JoukowskiFoil, speed_m_s: float, heave_amplitude_m: f
                                                    max_vortex_count=max(300, steps_per_cycle + 100),
                                                    protected_vortex_count=steps_per_cycle + 50)
         wake = Wake(foil, params)
-        steps = np.arange(1, total_steps + 1)
+        steps = np.arange(1, total_steps + 1, dtype=float)
         x, y, theta = kinematics.pose(steps * dt)
         nu_end = kinematics.velocity(steps * dt)
         vortical = np.zeros((total_steps, 3))
@@ -250,11 +250,11 @@ def oscillating_foil(foil: JoukowskiFoil, speed_m_s: float, heave_amplitude_m: f
         drag = np.asarray(flow.functions["profile_drag"].map(time.size)(velocity.T), dtype=float).T
         fluid = vortical[window] + drag
     else:
-        half_steps = np.arange(2 * total_steps + 1) * (0.5 * dt)
+        half_steps = np.arange(2 * total_steps + 1, dtype=float) * (0.5 * dt)
         velocities = kinematics.velocity(half_steps)
         lag = flow.integrate_lag(velocities, dt, flow.steady_lag(velocities[0]))
         window = slice(total_steps - averaged_steps, total_steps)
-        time = np.arange(total_steps + 1)[window] * dt
+        time = np.arange(total_steps + 1, dtype=float)[window] * dt
         velocity = velocities[0::2][window]
         fluid = flow.evaluate(velocity, lag[window])["f"]
     force = fluid + kirchhoff_force(flow.added_mass, velocity, kinematics.acceleration(time))

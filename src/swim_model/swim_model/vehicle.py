@@ -181,6 +181,8 @@ class VehicleModel:
             "rigid_mass_matrix": ca.Function("rigid_mass_matrix", [q], [rigid], ["q"], ["M"]),
         }
         if lag is not None:
+            # the circulatory flow sets these with lag
+            assert flow_force is not None and generalized_flow is not None and lag_rate is not None
             functions["flow_force"] = ca.Function("flow_force", [q, qdot, lag], [flow_force, generalized_flow],
                                                   ["q", "qdot", "lag"], ["f", "Q_flow"])
             functions["lag_rate"] = ca.Function("lag_rate", [q, qdot, lag], [lag_rate],
@@ -223,7 +225,8 @@ class VehicleModel:
         """One of ``numeric``'s functions (dense arguments only) called through its C entry point on buffers it
         owns (codegen.NativeFunction): the same numbers, ~1 us a call instead of CasADi's ~45 us, for loops
         that call it every period. One instance per name and model: copy what you keep of its outputs."""
-        loaded = self.__dict__.setdefault("_native", {})   # made on first use, like ``numeric``
+        # made on first use, like ``numeric``
+        loaded: dict[str, codegen.NativeFunction] = self.__dict__.setdefault("_native", {})
         if name not in loaded:
             loaded.update(codegen.native(self._numeric_functions(), self._codegen_tag(), names=[name]))
         return loaded[name]
@@ -390,7 +393,7 @@ class VehicleModel:
         return self._split(trajectory)
 
     def _rk4_accumulator(self, steps: int) -> ca.Function:
-        cache = self.__dict__.setdefault("_rk4_accumulators", {})
+        cache: dict[int, ca.Function] = self.__dict__.setdefault("_rk4_accumulators", {})
         if steps not in cache:
             cache[steps] = self.numeric["rk4_step"].mapaccum(steps)
         return cache[steps]

@@ -32,6 +32,7 @@ class VelocityEstimator:
         if self._last is None or time_s <= self._last[0]:
             self._last, self._rate = (time_s, q.copy()), np.zeros_like(q)
             return self._rate.copy()
+        assert self._rate is not None   # set with _last
         step = time_s - self._last[0]
         quotient = (q - self._last[1]) / step
         blend = math.exp(-2.0 * math.pi * self.cutoff_hz * step)

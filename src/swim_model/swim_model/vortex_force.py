@@ -113,14 +113,15 @@ class CirclePlane:
 
     def to_circle(self, z: Complex) -> Complex:
         """zeta = F^{-1}(z), the branch outside the circle (``|s| >= a``)."""
-        root = np.sqrt(z * z - 4.0 * self.a_m ** 2)
+        root: Complex = np.sqrt(z * z - 4.0 * self.a_m ** 2)
         s_plus, s_minus = 0.5 * (z + root), 0.5 * (z - root)
-        s = np.where(np.abs(s_plus) >= np.abs(s_minus), s_plus, s_minus)
+        s: Complex = np.where(np.abs(s_plus) >= np.abs(s_minus), s_plus, s_minus)
         return s - self.zeta_c_m
 
     def image(self, zeta: Complex) -> Complex:
         """zeta* = r^2 / conj(zeta) (circle theorem)."""
-        return self.r_m ** 2 / np.conj(zeta)
+        conjugate: Complex = np.conj(zeta)
+        return self.r_m ** 2 / conjugate
 
     # --- flow -----------------------------------------------------------------------------------------------
     def body_potential_derivative(self, zeta: Complex, velocity: tuple[float, float, float]) -> Complex:
@@ -129,13 +130,13 @@ class CirclePlane:
         omega = velocity[2]
         s = zeta + self.zeta_c_m
         inv_zeta2, inv_s2 = 1.0 / (zeta * zeta), 1.0 / (s * s)
-        return (u_b * self.r_m ** 2 * inv_zeta2 - np.conj(u_b) * self.a_m ** 2 * inv_s2
+        return (u_b * self.r_m ** 2 * inv_zeta2 - u_b.conjugate() * self.a_m ** 2 * inv_s2
                 + 1j * omega * (self.rotation_pole_origin_m3 * inv_zeta2 + self.rotation_pole_offset_m3 * inv_s2))
 
     def body_dipole(self, velocity: tuple[float, float, float]) -> complex:
         """A_1 of w_body at infinity: -u_b r^2 + conj(u_b) a^2 - i Omega (A + B), m^3/s."""
         u_b = complex(velocity[0], velocity[1])
-        return (-u_b * self.r_m ** 2 + np.conj(u_b) * self.a_m ** 2
+        return (-u_b * self.r_m ** 2 + u_b.conjugate() * self.a_m ** 2
                 - 1j * velocity[2] * (self.rotation_pole_origin_m3 + self.rotation_pole_offset_m3))
 
     def vortex_potential_derivative(self, zeta: Complex, zeta_k: Complex, gamma_k: npt.NDArray[np.float64]) -> Complex:
@@ -144,10 +145,11 @@ class CirclePlane:
         if zeta_k.size == 0:
             return np.zeros(zeta.shape, dtype=complex)
         images = self.image(zeta_k)
-        kernel = 1.0 / (zeta[:, None] - zeta_k[None, :]) - 1.0 / (zeta[:, None] - images[None, :])
+        kernel: Complex = 1.0 / (zeta[:, None] - zeta_k[None, :]) - 1.0 / (zeta[:, None] - images[None, :])
         # a sum, not kernel @ gamma_k: the complex-by-real product goes to multi-threaded BLAS, which on a loaded
         # machine spin-waits for its threads (measured 9 ms instead of 0.2 ms for 64 points and 300 vortices)
-        return (kernel * gamma_k[None, :]).sum(axis=1) / (2j * math.pi)
+        total: Complex = (kernel * gamma_k[None, :]).sum(axis=1)
+        return total / (2j * math.pi)
 
     def vortex_velocities(self, zeta_k: Complex, gamma_k: npt.NDArray[np.float64],
                           velocity: tuple[float, float, float], core_radius_m: float) -> Complex:
@@ -169,7 +171,7 @@ class CirclePlane:
         weight = gamma_k / (dx * dx + dy * dy)
         mutual -= (weight * dx).sum(axis=1) - 1j * (weight * dy).sum(axis=1)
         dw_dzeta = mutual / (2j * math.pi) + self.body_potential_derivative(zeta_k, velocity)
-        conj_u = dw_dzeta / d1 - gamma_k * d2 / (4j * math.pi * d1 * d1)
+        conj_u: Complex = dw_dzeta / d1 - gamma_k * d2 / (4j * math.pi * d1 * d1)
         return np.conj(conj_u)
 
     def kutta_strength(self, zeta_new: complex, zeta_k: Complex, gamma_k: npt.NDArray[np.float64],

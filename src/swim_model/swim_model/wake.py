@@ -1,4 +1,4 @@
-"""A free-vortex wake behind the Joukowski foil (issue 7): what the paper's ideal-flow model leaves out.
+"""A free-vortex wake behind the Joukowski foil: what the paper's ideal-flow model leaves out.
 
 2-D inviscid flow around the foil of ``joukowski.py`` with point vortices, after Streitlien & Triantafyllou
 (AIAA J. 1995) and the discrete-vortex methods of Katz & Plotkin, "Low-Speed Aerodynamics" (2nd ed. 2001),
@@ -143,7 +143,8 @@ class Wake:
         if self._pose is None:
             return np.zeros(0, dtype=complex)
         x, y, theta = self._pose
-        return (self.positions_m - complex(x, y)) * np.exp(-1j * theta)
+        unrotate: complex = np.exp(-1j * theta)
+        return (self.positions_m - complex(x, y)) * unrotate
 
     # --- the step ----------------------------------------------------------------------------------------------
     def step(self, dt_s: float, pose: Pose, velocity: Velocity) -> WakeForce:
@@ -159,8 +160,8 @@ class Wake:
         values = tuple(float(v) for v in (*pose, *velocity))
         if len(values) != 6 or not all(math.isfinite(v) for v in values):
             raise StateError(f"Wake.step: pose and velocity must be 3 finite numbers each, got {pose!r}, {velocity!r}")
-        new_pose: Pose = values[:3]  # type: ignore[assignment]
-        new_velocity: Velocity = values[3:]  # type: ignore[assignment]
+        new_pose: Pose = values[:3]
+        new_velocity: Velocity = values[3:]
         old_pose = new_pose if self._pose is None else self._pose
 
         self._convect(dt_s)
@@ -183,7 +184,7 @@ class Wake:
                          moment_n_m=moment * span, time_s=self.time_s - 0.5 * dt_s)
 
     # --- internals ---------------------------------------------------------------------------------------------
-    def _circle_plane_positions(self) -> tuple[npt.NDArray[np.complex128], npt.NDArray[np.complex128]]:
+    def _circle_plane_positions(self) -> tuple[npt.NDArray[np.complex128], complex]:
         """(zeta_k, rotation e^{i theta}) of the free vortices at the current pose."""
         if self._pose is None:
             return np.zeros(0, dtype=complex), 1.0 + 0j

@@ -1,4 +1,4 @@
-"""Self-propulsion in a perfect fluid: shape change alone moves the vehicle (SPEC.md P1)."""
+"""Self-propulsion in a perfect fluid: shape change alone moves the vehicle (docs/model_and_method.md P1)."""
 import math
 
 import numpy as np

@@ -2,9 +2,9 @@
 extended state, and the ideal model left exactly as it was.
 
 * Energy: with no torque, T changes at exactly the power of the flow's force, qdot' Q_flow = (U, V, Omega) . f
-  (SPEC.md P2 with the flow as the only external force), and p_alpha at its hub component Q_flow[0] (P1: nothing
-  depends on alpha). Checked on the vector field at random states and along 3 s trajectories integrated with the
-  work and the impulse as extra states.
+  (docs/model_and_method.md P2 with the flow as the only external force), and p_alpha at its hub component
+  Q_flow[0] (P1: nothing depends on alpha). Checked on the vector field at random states and along 3 s trajectories
+  integrated with the work and the impulse as extra states.
 * P3 (time scaling): the flow's forces are homogeneous of degree 2 in (qdot, lag) and its lag rates of degree 2,
   so with lag -> lambda lag the vector field scales as the ideal model's: f(q, lambda qdot, lambda z, lambda^2 tau)
   = (lambda qdot, lambda^2 qddot, lambda^2 zdot), to (eps/|u|)^2 (eps = 1e-7 m/s). RK4 commutes with that scaling,

@@ -1,4 +1,4 @@
-"""Properties of the vehicle model (SPEC.md section 2), on random states."""
+"""Properties of the vehicle model (docs/model_and_method.md section 2), on random states."""
 import math
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""The free-vortex wake (issue 7) against closed forms and classical unsteady aerofoil theory.
+"""The free-vortex wake against closed forms and classical unsteady aerofoil theory.
 
 * Kelvin: the flow's total circulation, measured from the velocity field on a contour around foil and wake,
   stays zero to round-off through an unsteady maneuver with merging and reflection active.

@@ -1,3 +1,3 @@
 """Off-line optimal-control motion primitives, the primitive library, the lane/energy graph and the
-maneuver planner node (issue 3).
+maneuver planner node.
 """

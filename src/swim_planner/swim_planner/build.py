@@ -9,7 +9,7 @@ changed is solved again, with every primitive that joins it.
 from __future__ import annotations
 
 import concurrent.futures
-from typing import Callable, Optional, Sequence
+from typing import Callable, Optional, Sequence, cast
 
 from swim_controller.riccati import LqrWeights
 from swim_model import RigParameters, VehicleModel
@@ -95,7 +95,7 @@ def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], exe
                 pending.remove(spec)
                 start = library.get(spec.start_from).end_state if spec.start_from else None
                 end = library.get(spec.end_at).start_state if spec.end_at else None
-                cruise = library.get(spec.start_from or spec.end_at) if deps else None
+                cruise = library.get(cast(str, spec.start_from or spec.end_at)) if deps else None
                 running[executor.submit(solve_job, library.rig, spec, limits, library.solver, start, end,
                                         cruise, library.lqr_weights)] = spec
         if not running:

@@ -1,7 +1,7 @@
 """The default primitive sets: the constrained graph of Fig. 9 and the free two-lane graph of Fig. 12.
 
 Ids name what a primitive joins, e.g. ``constrained/cruise/E0.05``, ``constrained/accelerate/E0.05``,
-``free/lane_change/R0.43-R0.48/E0.05``. Durations are the paper's (Sec. 7; SPEC.md section 3):
+``free/lane_change/R0.43-R0.48/E0.05``. Durations are the paper's (Sec. 7; docs/model_and_method.md section 3):
 constrained accelerate 4 s, cruise 5 s (5 cycles of 1 s), cruise-to-cruise 2 s, decelerate 4 s;
 free accelerate 3 s, cruise 1 s, lane change 2 s outward (3 s inward, assumed), decelerate 3 s
 (cruise-to-cruise 2 s, as constrained).
@@ -33,6 +33,7 @@ def lane_tag(radius_m: float) -> str:
 def cruise_id(constrained: bool, energy_j: float, lane_m: float | None = None) -> str:
     if constrained:
         return f"constrained/cruise/{energy_tag(energy_j)}"
+    assert lane_m is not None, "a free cruise's id names its lane"
     return f"free/cruise/{lane_tag(lane_m)}/{energy_tag(energy_j)}"
 
 

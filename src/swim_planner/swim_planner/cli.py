@@ -146,17 +146,18 @@ def command_compare(args, rig) -> int:
     report = {"primitive": args.primitive_id, "collocation": {
         "index_j": ours.index_j / spec.cycles, "solve_time_s": library.entry(args.primitive_id)["solve_time_s"]}}
     if spec.primitive_type is PrimitiveType.CRUISE:
-        paper = paper_method.solve_fourier_cruise(model, spec, max_evaluations=args.evaluations)
-        report["paper_method"] = {"parameterization": "Fourier series, 2 harmonics", "index_j": paper.index_j,
-                                  "energy_error_j": paper.energy_error_j, "wall_s": paper.wall_s}
+        cruise = paper_method.solve_fourier_cruise(model, spec, max_evaluations=args.evaluations)
+        report["paper_method"] = {"parameterization": "Fourier series, 2 harmonics", "index_j": cruise.index_j,
+                                  "energy_error_j": cruise.energy_error_j, "wall_s": cruise.wall_s}
         report["index_j_per"] = "cycle"
     else:
+        assert spec.end_at is not None   # an accelerate ends at its cruise
         end_state = library.get(spec.end_at).start_state
-        paper = paper_method.solve_polynomial_sine_accelerate(model, spec, end_state, segments=args.segments,
-                                                              max_evaluations=args.evaluations)
+        accelerate = paper_method.solve_polynomial_sine_accelerate(model, spec, end_state, segments=args.segments,
+                                                                   max_evaluations=args.evaluations)
         report["paper_method"] = {"parameterization": f"eq. 11 in {args.segments} segment(s)",
-                                  "index_j": paper.index_j, "boundary_error": paper.boundary_error,
-                                  "wall_s": paper.wall_s}
+                                  "index_j": accelerate.index_j, "boundary_error": accelerate.boundary_error,
+                                  "wall_s": accelerate.wall_s}
         report["index_j_per"] = "primitive"
     print(json.dumps(report, indent=2))
     return 0

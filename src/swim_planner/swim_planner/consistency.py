@@ -11,8 +11,8 @@ The torque-driven dynamics are open-loop unstable at cruise amplitudes (a deviat
 instability, not the primitive's consistency. The replay therefore restarts from the primitive's own state
 every ``window_s`` seconds (multiple shooting) and reports the largest deviation within a window.
 REPLAY_TOLERANCE is the deviation our default constrained primitives stay within over 0.5 s windows on their
-default grids (measured: 1 to 21 mrad, the E = 0.10 cruise the worst; with 40 intervals per cruise cycle it
-was 135 mrad, which is why cruises use 80; with the input-smoothness term, 0.2 to 22 mrad).
+default grids (measured: 0.2 to 22 mrad). Cruises use 80 intervals per cycle: with 40 the largest deviation is
+135 mrad (measured without the input-smoothness term).
 """
 from __future__ import annotations
 

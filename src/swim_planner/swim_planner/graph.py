@@ -16,6 +16,7 @@ import dataclasses
 import heapq
 import math
 from collections import defaultdict
+from typing import Optional
 
 from swim_planner.catalog import cruise_id, lane_tag
 from swim_planner.errors import ManeuverError
@@ -56,21 +57,29 @@ class StateGraph:
         return [e for e in self.edges if e.source == node]
 
 
-def _node_of_cruise(library: PrimitiveLibrary, cruise_id: str) -> str:
-    spec = library.spec(cruise_id)
+def _cruise_node_of(spec: PrimitiveSpec) -> str:
+    if spec.energy_j is None:
+        raise ManeuverError(f"cruise '{spec.primitive_id}' has no energy level")
     return cruise_node(spec.constrained, spec.energy_j, spec.lane_radius_m)
+
+
+def _node_of_cruise(library: PrimitiveLibrary, cruise_id: Optional[str], joined_by: PrimitiveSpec) -> str:
+    if cruise_id is None:
+        raise ManeuverError(f"'{joined_by.primitive_id}' names no cruise it joins")
+    return _cruise_node_of(library.spec(cruise_id))
 
 
 def _endpoints(library: PrimitiveLibrary, spec: PrimitiveSpec) -> tuple[str, str]:
     kind = spec.primitive_type
     if kind is PrimitiveType.CRUISE:
-        node = cruise_node(spec.constrained, spec.energy_j, spec.lane_radius_m)
+        node = _cruise_node_of(spec)
         return node, node
     if kind is PrimitiveType.ACCELERATE:
-        return rest_node(spec.constrained, spec.lane_radius_m), _node_of_cruise(library, spec.end_at)
+        return rest_node(spec.constrained, spec.lane_radius_m), _node_of_cruise(library, spec.end_at, spec)
     if kind is PrimitiveType.DECELERATE:
-        return _node_of_cruise(library, spec.start_from), rest_node(spec.constrained, spec.end_lane_radius_m)
-    return _node_of_cruise(library, spec.start_from), _node_of_cruise(library, spec.end_at)
+        return (_node_of_cruise(library, spec.start_from, spec),
+                rest_node(spec.constrained, spec.end_lane_radius_m))
+    return _node_of_cruise(library, spec.start_from, spec), _node_of_cruise(library, spec.end_at, spec)
 
 
 def build_graph(library: PrimitiveLibrary) -> StateGraph:

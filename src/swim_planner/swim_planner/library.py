@@ -151,7 +151,7 @@ class PrimitiveLibrary:
             raise LibraryError(f"{directory} was built with swim_model version {manifest.get('model_version')!r}, "
                                f"this is version {MODEL_VERSION}; rebuild it")
         try:
-            # manifests written before SolverSettings.derivatives existed were solved with CasADi's own AD
+            # a manifest without a derivatives setting (the shipped library's) was solved with CasADi's own AD
             solver = SolverSettings(**{"derivatives": "casadi", **manifest.get("solver", {})})
             library = cls(directory, rig, solver, LqrWeights(**manifest.get("lqr_weights", {})))
         except (TypeError, ValueError) as err:

@@ -1,4 +1,4 @@
-"""Maneuvers: primitives concatenated and time-scaled (paper Secs. 4.2-4.3; SPEC.md section 4).
+"""Maneuvers: primitives concatenated and time-scaled (paper Secs. 4.2-4.3; docs/model_and_method.md section 4).
 
 Concatenation: each primitive starts where the previous one ended; its alpha is translated by the
 previous end value (Prop. 1), and the junction is checked: the states (all but alpha) must agree within
@@ -21,17 +21,18 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Callable, Sequence
+from pathlib import Path
+from typing import Callable, Protocol, Sequence
 
 import numpy as np
 import numpy.typing as npt
 
+from swim_controller.riccati import LqrWeights
 from swim_controller.time_scaling import retime_feedback, scale_feedback
 from swim_model import RigParameters
 from swim_model.vehicle import JOINT_NAMES_CONSTRAINED, JOINT_NAMES_UNCONSTRAINED
 from swim_planner.errors import LibraryError, ManeuverError
-from swim_planner.library import PrimitiveLibrary
-from swim_planner.primitives import Primitive
+from swim_planner.primitives import Primitive, PrimitiveSpec
 
 Array = npt.NDArray[np.float64]
 
@@ -87,6 +88,23 @@ def junction_mismatch(previous: Primitive, following: Primitive) -> float:
     return float(max(np.abs(q_end[1:] - q_start[1:]).max(), np.abs(qdot_end - qdot_start).max()))
 
 
+class PlanLibrary(Protocol):
+    """What concatenation reads of a library: a PrimitiveLibrary, or a gains.RetunedLibrary view of one."""
+
+    path: Path
+    lqr_weights: LqrWeights
+
+    def __contains__(self, primitive_id: str) -> bool: ...
+
+    def spec(self, primitive_id: str) -> PrimitiveSpec: ...
+
+    def get(self, primitive_id: str) -> Primitive: ...
+
+    def sample_count(self, primitive_id: str) -> int: ...
+
+    def digest(self) -> str: ...
+
+
 @dataclasses.dataclass(frozen=True)
 class PlanBounds:
     """The largest plan a request may ask for. A request past a bound is refused by name before any work."""
@@ -110,7 +128,7 @@ class PlanBounds:
 DEFAULT_BOUNDS = PlanBounds()
 
 
-def check_plan_size(library: PrimitiveLibrary, primitive_ids: Sequence[str], repeat_counts: Sequence[int],
+def check_plan_size(library: PlanLibrary, primitive_ids: Sequence[str], repeat_counts: Sequence[int],
                     time_scale: float, bounds: PlanBounds = DEFAULT_BOUNDS) -> None:
     """Refuse (ManeuverError) a sequence whose plan would pass bounds, from the library's specs alone: nothing
     is expanded or built. Unknown ids and mismatched lengths are left to concatenate and expand_sequence."""
@@ -150,7 +168,7 @@ def expand_sequence(primitive_ids: Sequence[str], repeat_counts: Sequence[int]) 
     return [(pid, k) for pid, count in zip(primitive_ids, counts) for k in range(int(count))]
 
 
-def concatenate(library: PrimitiveLibrary, rig: RigParameters, sequence: Sequence[tuple[str, int]],
+def concatenate(library: PlanLibrary, rig: RigParameters, sequence: Sequence[tuple[str, int]],
                 time_scale: float = 1.0, start_alpha_rad: float = 0.0) -> Plan:
     """The plan that runs the primitives of ``sequence`` one after another at time scale lambda."""
     check_time_scale(time_scale)
@@ -187,6 +205,7 @@ def concatenate(library: PrimitiveLibrary, rig: RigParameters, sequence: Sequenc
     ny, nq = primitives[0].q.shape[1] - 2, primitives[0].q.shape[1]
     for index, ((pid, repeat), primitive) in enumerate(zip(sequence, primitives)):
         t, q, qdot, u, tau = scale_primitive(primitive, time_scale)
+        assert primitive.gains is not None   # checked above: ungained primitives are refused
         lqr_gain, sliding_gain = scale_feedback(primitive.gains.input_gain, input_weights, time_scale, ny, nq)
         q = q.copy()
         offset = alpha - q[0, 0]

@@ -1,4 +1,4 @@
-"""The paper's own primitive method, for reproduction and comparison (Sec. 5, SPEC.md section 3).
+"""The paper's own primitive method, for reproduction and comparison (Sec. 5, docs/model_and_method.md section 3).
 
 Accelerate (eq. 11): phi = A1(t) sin(A2(t)), theta = B1(t) sin(B2(t)) with A1, A2, B1, B2 polynomials
 in t, all 18 coefficients at once (the paper found this "did not converge" with MATLAB's fmin and split
@@ -21,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from typing import Optional
+from typing import Optional, cast
 
 import casadi as ca
 import numpy as np
@@ -99,6 +99,9 @@ def solve_fourier_cruise(model: VehicleModel, spec: PrimitiveSpec, limits: Plann
     """The paper's cruise: Fourier coefficients by Nelder-Mead from a 90-deg-lead stroke."""
     if spec.primitive_type is not PrimitiveType.CRUISE:
         raise ValueError("solve_fourier_cruise solves cruises")
+    energy_j = spec.energy_j
+    if energy_j is None:
+        raise ValueError(f"{spec.primitive_id}: a cruise needs energy_j")
     objective = _CruiseObjective(model, spec, samples)
     tau_max = limits.torque_fraction * model.torque_limits()
     ranges = np.array([limits.heave_range_rad, limits.pitch_range_rad])
@@ -111,7 +114,7 @@ def solve_fourier_cruise(model: VehicleModel, spec: PrimitiveSpec, limits: Plann
         psi, _, _ = fourier_shape(coefficients, objective.period, objective.times)
         excess = np.maximum(np.abs(tau) / tau_max[:, None] - 1.0, 0.0).sum()
         out_of_range = np.maximum(np.abs(psi) / ranges - 1.0, 0.0).sum()
-        return -index + PENALTY * ((energy - spec.energy_j) ** 2 + excess ** 2 + out_of_range ** 2)
+        return -index + PENALTY * ((energy - energy_j) ** 2 + excess ** 2 + out_of_range ** 2)
 
     started = time.perf_counter()
     result = optimize.minimize(cost, start.ravel(), method="Nelder-Mead",
@@ -119,7 +122,7 @@ def solve_fourier_cruise(model: VehicleModel, spec: PrimitiveSpec, limits: Plann
                                         "adaptive": True})
     coefficients = result.x.reshape(2, -1)
     index, energy, tau = objective.evaluate(coefficients)
-    return FourierCruise(coefficients=coefficients, index_j=index, energy_error_j=energy - spec.energy_j,
+    return FourierCruise(coefficients=coefficients, index_j=index, energy_error_j=energy - energy_j,
                          max_torque_fraction=float((np.abs(tau) / model.torque_limits()[:, None]).max()),
                          evaluations=int(result.nfev), wall_s=time.perf_counter() - started)
 
@@ -167,7 +170,7 @@ def polynomial_sine_shape(coefficients: Array, times: Array) -> tuple[Array, Arr
         sin_b, cos_b = np.sin(b), np.cos(b)
         out.append((a * sin_b, da * sin_b + a * db * cos_b,
                     dda * sin_b + 2 * da * db * cos_b + a * ddb * cos_b - a * db * db * sin_b))
-    return tuple(np.column_stack([out[0][i], out[1][i]]) for i in range(3))
+    return cast(tuple[Array, Array, Array], tuple(np.column_stack([out[0][i], out[1][i]]) for i in range(3)))
 
 
 #: which of the (4, 5) coefficients are free: amplitudes A1, B1 of degree 4, phases A2, B2 of degree 3,
@@ -258,6 +261,7 @@ def solve_polynomial_sine_accelerate(model: VehicleModel, spec: PrimitiveSpec, e
     target = (end_state[0][-2:], end_state[1][-2:])
     rest = (np.zeros(2), np.zeros(2))
     started = time.perf_counter()
+    solved: tuple[PolynomialSineSegment, ...]
     if segments == 1:
         solved = (_solve_segment(batch, samples, spec, tau_max, 0.0, spec.duration_s, free, rest, target,
                                  max_evaluations),)

@@ -20,6 +20,7 @@ two sparse products with constant matrices.
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -190,7 +191,7 @@ def solve(nlp: PointwiseNlp, z0: Array, lbg: Array, ubg: Array, ipopt_options: d
     symbolic = derivatives == "casadi"
     f_z, g_z = nlp.substitute(nlp.f, nlp.g, symbolic=symbolic)
     problem = {"x": nlp.z, "f": f_z, "g": g_z}
-    options = {"print_time": False, "ipopt": ipopt_options}
+    options: dict[str, Any] = {"print_time": False, "ipopt": ipopt_options}
     if derivatives == "pointwise":
         options.update(derivative_functions(nlp, structure.rows(keep)))
     elif derivatives == "casadi":

@@ -1,4 +1,4 @@
-"""Motion primitives by optimal control (paper Secs. 4-5; SPEC.md section 3).
+"""Motion primitives by optimal control (paper Secs. 4-5; docs/model_and_method.md section 3).
 
 Every primitive solves, for the free or the laterally constrained vehicle, with state x = (q, qdot) and
 the foil accelerations u = psiddot as input (the planning input of eq. 16):
@@ -11,7 +11,7 @@ the foil accelerations u = psiddot as input (the planning input of eq. 16):
                      alphadot(0) >= v_min (the cycle is cut where the vehicle moves forward, so that the
                      decelerate's alphadot >= v_min can hold from its first instant). u is not periodic: tiled
                      cycles may jump in u where they join. With u(0) = u(Tf) imposed the free R = 0.43 m,
-                     E = 0.10 decelerate became infeasible, with the cut at v_min and at v_min + 0.02 rad/s
+                     E = 0.10 decelerate is infeasible, with the cut at v_min and at v_min + 0.02 rad/s
                      alike (the cruise then ends at a pitch rate of -11 rad/s).
     accelerate       from rest (q = (0, R_lane, 0, 0), qdot = 0) to a cruise's start state
     decelerate       from a cruise's end state to rest, alphadot >= v_min                         (eq. 12)
@@ -36,7 +36,7 @@ import dataclasses
 import enum
 import math
 import time
-from typing import Optional
+from typing import Optional, TypeVar
 
 import casadi as ca
 import numpy as np
@@ -50,6 +50,7 @@ from swim_planner import pointwise
 from swim_planner.pointwise import PointwiseFunction, PointwiseNlp
 
 Array = npt.NDArray[np.float64]
+Symbol = TypeVar("Symbol", ca.MX, ca.DM)   # a decision-variable expression or a numeric constant
 
 
 class PrimitiveType(str, enum.Enum):
@@ -163,7 +164,7 @@ class SolverSettings:
 # Rows of the pointwise function phi(x, u; w_h, w_p) of every primitive's NLP (swim_planner.pointwise)
 EFFORT_ROW = 0       # w_h tau_h^2 + w_p tau_p^2, the integrand of eq. 10's effort
 ENERGY_ROW = 1       # kinetic energy T(q, qdot)
-MOMENTUM_ROW = 2     # p_alpha (SPEC.md P1)
+MOMENTUM_ROW = 2     # p_alpha (docs/model_and_method.md P1)
 TORQUE_ROWS = slice(3, 5)
 STATE_DERIVATIVE_ROWS = slice(5, None)
 
@@ -238,11 +239,11 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
     samples = 2 * spec.intervals + 1
     values = ca.Function("values", [nlp.z], nlp.substitute(problem.states, problem.inputs, problem.torques,
                                                             problem.effort))
-    state_values, input_values, torque_values, effort_value = values(result.z)
-    state_values = np.asarray(state_values).reshape(2 * model.nq, samples).T
-    input_values = np.asarray(input_values).reshape(2, samples).T
-    torque_values = np.asarray(torque_values).reshape(2, samples).T
-    effort_value = float(effort_value)
+    solved_states, solved_inputs, solved_torques, solved_effort = values(result.z)
+    state_values = np.asarray(solved_states).reshape(2 * model.nq, samples).T
+    input_values = np.asarray(solved_inputs).reshape(2, samples).T
+    torque_values = np.asarray(solved_torques).reshape(2, samples).T
+    effort_value = float(solved_effort)
     time_s = fine_grid_times(spec.solved_duration_s, spec.intervals)
     q, qdot = state_values[:, :model.nq], state_values[:, model.nq:]
     if spec.cycles > 1:
@@ -333,7 +334,7 @@ def _repeat_cycle(cycles: int, time_s: Array, q: Array, qdot: Array, u: Array, t
     return np.concatenate(times), np.concatenate(qs), tile(qdot), tile(u), tile(tau)
 
 
-def _without_alpha(x: ca.MX, nq: int) -> ca.MX:
+def _without_alpha(x: Symbol, nq: int) -> Symbol:
     return ca.vertcat(x[1:nq], x[nq:])
 
 

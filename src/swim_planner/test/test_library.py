@@ -37,8 +37,8 @@ def test_round_trip(library, rig, copy):
 
 
 def test_solver_settings_round_trip_and_older_manifests_say_casadi(library, rig, copy):
-    """A manifest records how its primitives were solved; one written before ``derivatives`` existed (the
-    shipped library's) was solved by CasADi's own AD, and loads saying so."""
+    """A manifest records how its primitives were solved; one without ``derivatives`` (the shipped library's)
+    was solved by CasADi's own AD, and loads saying so."""
     assert "derivatives" not in json.loads((library.path / MANIFEST).read_text())["solver"]
     assert library.solver.derivatives == "casadi"
     assert PrimitiveLibrary.load(copy, rig).solver.derivatives == "pointwise"

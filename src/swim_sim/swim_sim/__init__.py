@@ -1,1 +1,1 @@
-"""The dynamics simulator node with disturbances (issue 5)."""
+"""The dynamics simulator node with disturbances."""

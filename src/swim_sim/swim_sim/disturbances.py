@@ -36,8 +36,8 @@ class Disturbances:
     rail_static_n: float = 0.5                # assumed: breakaway force, above the Coulomb level
     # The ideal-flow model the plans are made with has only added-mass thrust, far less than a real foil's lift,
     # so the disturbances it can reject are small. The sizes below are the ones under which the paper's
-    # constrained maneuver still tracks to centimetres (the paper's rig did, Sec. 7.1); a flat plate's 1.2 or a
-    # 0.1 degree tilt each made the vehicle lose the plan (runs of 2026-11-23, swim-demo).
+    # constrained maneuver still tracks to centimetres (the paper's rig did, Sec. 7.1); with a flat plate's 1.2 or
+    # a 0.1 degree tilt the vehicle loses the plan (swim-demo).
     foil_normal_drag_coefficient: float = 0.05   # assumed, see above (a flat plate broadside: 1.2, Hoerner)
     foil_axial_drag_coefficient: float = 0.01  # assumed: skin friction of a thin section
     platform_drag_area_m2: float = 0.0005      # assumed: Cd A of the submerged peduncle and brackets

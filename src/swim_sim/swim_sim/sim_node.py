@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import Optional
+from typing import Optional, cast
 
 import numpy as np
 from builtin_interfaces.msg import Time
@@ -74,7 +74,7 @@ class SimNode(Node):
         declare("resend_after_s", 0.5)
         declare("hold_until_torque", False)
         for field in dataclasses.fields(Disturbances):
-            declare(f"disturbances.{field.name}", float(field.default))
+            declare(f"disturbances.{field.name}", float(cast(float, field.default)))   # every field has one
         for field in dataclasses.fields(SensorNoise):
             declare(f"sensors.{field.name}", field.default)
         for name, default in parameter_defaults().items():
@@ -195,7 +195,9 @@ class SimNode(Node):
 
     def _publish_wake(self, time_s: float) -> None:
         """The wake's statistics, stamped with the start of the period its force was held over."""
-        statistics = self.plant.wake.statistics()
+        wake, publisher = self.plant.wake, self.wake_publisher
+        assert wake is not None and publisher is not None   # called only with the wake on
+        statistics = wake.statistics()
         message = WakeStatistics(
             vortex_count=statistics.vortex_count, shed_circulation_m2_s=statistics.shed_circulation_m2_s,
             total_circulation_m2_s=statistics.total_circulation_m2_s, force_x_n=statistics.foil_force[0],
@@ -204,7 +206,7 @@ class SimNode(Node):
             clipped_count=statistics.clipped_count, merged_count=statistics.merged_count,
             reflected_count=statistics.reflected_count)
         message.header.stamp = stamp_of(time_s)
-        self.wake_publisher.publish(message)
+        publisher.publish(message)
 
     # ----- services ------------------------------------------------------------------------------
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:

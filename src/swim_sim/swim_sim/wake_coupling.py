@@ -1,4 +1,4 @@
-"""The free-vortex wake (swim_model.wake, issue 7) as a generalized force on the simulated vehicle. No ROS.
+"""The free-vortex wake (swim_model.wake) as a generalized force on the simulated vehicle. No ROS.
 
 What it adds. The plant's equations of motion already hold the ideal-flow (added-mass, Kirchhoff) force of the
 foil through Mm = M + Q2' M_A Q2. ``Wake.step`` returns only what that leaves out, the vortical force
@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import cast
 
 import casadi as ca
 import numpy as np
@@ -174,7 +175,8 @@ class WakeCoupling:
         return WakeStatistics(
             time_s=wake.time_s, vortex_count=wake.vortex_count(), shed_circulation_m2_s=wake.shed_circulation(),
             total_circulation_m2_s=wake.total_circulation(KELVIN_SAMPLES),
-            foil_force=tuple(float(f) for f in self.foil_force), thrust_n=self.thrust_n(),
+            foil_force=cast(tuple[float, float, float], tuple(float(f) for f in self.foil_force)),
+            thrust_n=self.thrust_n(),
             generalized_force=tuple(float(f) for f in self.generalized_force),
             clipped_count=self.clipped_count, merged_count=wake.merged_count, reflected_count=wake.reflected_count)
 

@@ -1,4 +1,4 @@
-"""The vortex wake in the simulator (issue 7) against statics, virtual work, balance laws and Garrick's theory.
+"""The vortex wake in the simulator against statics, virtual work, balance laws and Garrick's theory.
 
 * Frames: the generalized force Q2' (fx, fy, M_z) equals rigid-body statics computed independently from the rig's
   geometry (hub torque = F x f + M_z, rail force = e_r . f, heave torque = (E - P) x f, pitch torque =
