@@ -1,6 +1,6 @@
 """Model demo: the foil's added mass, then a shape-driven swimming gait, with a plot.
 
-Run as ``ros2 run swim_model swim-model-demo`` (or ``make demo`` in the workspace). Prints the
+Run as ``ros2 run swim_model swim-model-demo``. Prints the
 Joukowski map and the added-mass coefficients of the rig's foil, simulates the constrained and the
 free vehicle swimming with a sinusoidal heave/pitch gait (pitch leading heave by 90 deg) from zero
 momentum, prints the distance covered, the mean speed and the torques the gait needs against the
