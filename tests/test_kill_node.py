@@ -21,7 +21,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from rosbags.rosbag2 import Reader
 
 from swim_bringup.bag import RUN_TOPICS, read_messages
-from swim_bringup.run_client import RunClient
+from swim_bringup.run_client import RunClient, header_stamp_ns
 from swim_bringup.system import System, closed_loop_specs, config_dir
 
 from conftest import MESSAGE_TIMEOUT_S
@@ -135,8 +135,13 @@ def test_killing_the_tracker_makes_the_bridge_zero_the_torque(ros_domain, tmp_pa
         settled_ns = killed_ns + WATCHDOG_SETTLE_S * 1e9
         sampled = sampled_stamps(client, "joint_states")
         diagnosed = sampled_stamps(client, "/diagnostics", DiagnosticArray)
-        client.spin_until(lambda: sum(s > settled_ns for s in sampled) >= 20 and max(diagnosed) > settled_ns,
-                          MESSAGE_TIMEOUT_S, "states and diagnostics after the watchdog")
+        def settled_and_recorded() -> bool:
+            # the assertions read the bag: wait until the recorder, not only this sampler, has the 20th state
+            settled = sorted(s for s in sampled if s > settled_ns)
+            recorded = client.latest_cdr.get("joint_states")
+            return len(settled) >= 20 and max(diagnosed) > settled_ns and recorded is not None \
+                and header_stamp_ns(recorded) >= settled[19]
+        client.spin_until(settled_and_recorded, MESSAGE_TIMEOUT_S, "states and diagnostics after the watchdog")
         assert system.dead() == ["tracker_node"] and not result.done()
         client.close()
         topics = read_back(tmp_path / "bag", client.bag.counts)
