@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Callable, Optional
 from swim_bringup.bag import RUN_TOPICS, BagWriter
 from swim_controller.supervisor import Tolerances
 from swim_ros.calls import (CallFailed, GoalStatusWatch, RetryPolicy, call_service, goal_result, new_request_id,
-                            send_goal, wait_for_server)
+                            send_goal, spin_until, wait_for_server)
 
 if TYPE_CHECKING:
     from rclpy.subscription import Subscription
@@ -120,11 +120,8 @@ class RunClient:
     # --- waiting -------------------------------------------------------------------------------------------
     def spin_until(self, done: Callable[[], bool], timeout_s: float, what: str = "an answer") -> None:
         """Serve callbacks (recording included) until done() holds; RunError after timeout_s."""
-        deadline = time.monotonic() + timeout_s
-        while not done():
-            if time.monotonic() > deadline:
-                raise RunError(f"no {what} within {timeout_s:.0f} s")
-            self.executor.spin_once(timeout_sec=0.05)
+        if not spin_until(self.executor, done, timeout_s):
+            raise RunError(f"no {what} within {timeout_s:.0f} s")
 
     def wait_for(self, future, timeout_s: float, what: str = "an answer"):
         """The future's result, serving callbacks meanwhile."""
