@@ -1,7 +1,8 @@
 """Benchmark: planner service latency over DDS for a 20-primitive maneuver at lambda = 1.2 (target <= 50 ms).
 
 Starts planner_node in its own process (own ROS_DOMAIN_ID, discovery on localhost), sends 30 requests
-of {accelerate, cruise x18, decelerate} (constrained, E = 0.05) and prints one JSON line with the median
+of {accelerate, cruise x18, decelerate} (constrained, E = 0.05) through swim_ros.calls, each with its own
+request id, and prints one JSON line with the median
 and worst round-trip time.
 """
 import json
@@ -14,34 +15,40 @@ from pathlib import Path
 
 WORKSPACE = Path(__file__).resolve().parents[1]
 TARGET_MS = 50.0
+#: how long planner_node may take to load its library and serve, s (a loaded 2-core host)
+STARTUP_TIMEOUT_S = 60.0
 
 
 def main() -> None:
     from swim_ros.domains import run_domain
     run_domain()   # a domain of our own unless the user chose one: never another session's nodes
     import rclpy
+    from rclpy.executors import SingleThreadedExecutor
     from swim_interfaces.srv import RequestManeuver
+    from swim_ros.calls import call_service, new_request_id, wait_for_server
     node_process = subprocess.Popen(["bash", "-c", "source scripts/env.sh && exec ros2 run swim_planner planner_node"],
                                     cwd=WORKSPACE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                     start_new_session=True)
     try:
         rclpy.init()
         node = rclpy.create_node("planner_latency_bench")
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
         client = node.create_client(RequestManeuver, "request_maneuver")
-        if not client.wait_for_service(timeout_sec=30.0):
-            raise SystemExit("planner_node did not come up")
-        request = RequestManeuver.Request(
-            primitive_ids=["constrained/accelerate/E0.05", "constrained/cruise/E0.05", "constrained/decelerate/E0.05"],
-            repeat_counts=[1, 18, 1], time_scale=1.2)
+        wait_for_server(executor, client.service_is_ready, client.srv_name, STARTUP_TIMEOUT_S)
         latencies = []
         for _ in range(30):
+            request = RequestManeuver.Request(
+                primitive_ids=["constrained/accelerate/E0.05", "constrained/cruise/E0.05",
+                               "constrained/decelerate/E0.05"],
+                repeat_counts=[1, 18, 1], time_scale=1.2, request_id=new_request_id())
             start = time.perf_counter()
-            future = client.call_async(request)
-            rclpy.spin_until_future_complete(node, future, timeout_sec=10.0)
-            if not future.done() or not future.result().success:
-                raise SystemExit(f"request failed: {future.result().message if future.done() else 'timeout'}")
+            reply = call_service(executor, client, request)
+            if not reply.success:
+                raise SystemExit(f"request refused: {reply.message}")
             latencies.append(1000.0 * (time.perf_counter() - start))
-        segments = len(future.result().plan.segments)
+        segments = len(reply.plan.segments)
+        executor.shutdown()
         node.destroy_node()
         rclpy.shutdown()
     finally:

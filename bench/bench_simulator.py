@@ -64,6 +64,7 @@ class LoopClient:
         from std_srvs.srv import Trigger
         from swim_interfaces.action import ExecutePlan
         from swim_interfaces.srv import RequestManeuver
+        from swim_ros.calls import GoalStatusWatch
         self.context = rclpy.Context()
         rclpy.init(context=self.context)
         self.node = rclpy.create_node("bench_simulator", context=self.context)
@@ -72,28 +73,18 @@ class LoopClient:
         self.planner = self.node.create_client(RequestManeuver, "request_maneuver")
         self.reset = self.node.create_client(Trigger, "reset")
         self.tracker = ActionClient(self.node, ExecutePlan, "execute_plan")
+        self.tracker_status = GoalStatusWatch(self.node, "execute_plan")
 
     def close(self) -> None:
         import rclpy
         rclpy.try_shutdown(context=self.context)
 
-    def wait(self, future, timeout_s: float):
-        deadline = time.monotonic() + timeout_s
-        while not future.done():
-            if time.monotonic() > deadline:
-                raise TimeoutError(f"no answer within {timeout_s:.0f} s")
-            self.executor.spin_once(timeout_sec=0.05)
-        return future.result()
-
     def plan(self):
         from swim_interfaces.srv import RequestManeuver
-        for client in (self.planner, self.reset):
-            if not client.wait_for_service(timeout_sec=STARTUP_TIMEOUT_S):
-                raise TimeoutError(f"{client.srv_name} did not come up")
-        if not self.tracker.wait_for_server(timeout_sec=STARTUP_TIMEOUT_S):
-            raise TimeoutError("tracker_node did not come up")
-        reply = self.wait(self.planner.call_async(RequestManeuver.Request(
-            primitive_ids=MANEUVER[0], repeat_counts=MANEUVER[1], time_scale=1.0)), STARTUP_TIMEOUT_S)
+        from swim_ros.calls import RetryPolicy, call_service, new_request_id
+        reply = call_service(self.executor, self.planner, RequestManeuver.Request(
+            primitive_ids=MANEUVER[0], repeat_counts=MANEUVER[1], time_scale=1.0, request_id=new_request_id()),
+            RetryPolicy(discovery_timeout_s=STARTUP_TIMEOUT_S))
         if not reply.success:
             raise RuntimeError(f"the planner refused the maneuver: {reply.message}")
         return reply.plan
@@ -102,7 +93,8 @@ class LoopClient:
         """(steady-state, whole-goal) simulated over wall seconds of one execution of plan from the start."""
         from std_srvs.srv import Trigger
         from swim_interfaces.action import ExecutePlan
-        if not self.wait(self.reset.call_async(Trigger.Request()), 30.0).success:
+        from swim_ros.calls import RetryPolicy, call_service, goal_result, send_goal
+        if not call_service(self.executor, self.reset, Trigger.Request()).success:
             raise RuntimeError("sim_node refused the reset")
         feedback: list[tuple[float, float]] = []   # (wall s, simulated s)
 
@@ -110,11 +102,11 @@ class LoopClient:
             stamp = message.feedback.state.header.stamp
             feedback.append((time.monotonic(), stamp.sec + 1e-9 * stamp.nanosec))
         started = time.monotonic()
-        handle = self.wait(self.tracker.send_goal_async(ExecutePlan.Goal(plan=plan), feedback_callback=on_feedback),
-                           30.0)
+        handle = send_goal(self.executor, self.tracker, ExecutePlan.Goal(plan=plan), self.tracker_status,
+                           on_feedback, RetryPolicy(discovery_timeout_s=STARTUP_TIMEOUT_S))
         if not handle.accepted:
             raise RuntimeError("the tracker refused the goal")
-        result = self.wait(handle.get_result_async(), GOAL_TIMEOUT_S).result
+        result = goal_result(self.executor, handle, GOAL_TIMEOUT_S).result
         whole = result.duration_s / (time.monotonic() - started)
         if result.error_code != ExecutePlan.Result.SUCCESSFUL or len(feedback) < 2:
             raise RuntimeError(f"the maneuver failed: {result.error_string} ({len(feedback)} feedback messages)")

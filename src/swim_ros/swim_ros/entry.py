@@ -1,8 +1,9 @@
 """``run_node``: the one ``main()`` of every swim node.
 
-Follows ros2/demos: init, make the node, spin; Ctrl-C (SIGINT) and an external shutdown are a normal stop; the
-context is shut down however the process ends. A node whose construction raises one of ``fatal_errors`` (a bad
-parameter, a library that does not load) logs the reason as fatal and exits with status 2, without a traceback.
+Follows ros2/demos: init (with swim's Fast DDS profile, swim_ros.transport), make the node, spin; Ctrl-C
+(SIGINT) and an external shutdown are a normal stop; the context is shut down however the process ends. A node
+whose construction raises one of ``fatal_errors`` (a bad parameter, a library that does not load) logs the reason
+as fatal and exits with status 2, without a traceback.
 """
 from __future__ import annotations
 
@@ -11,6 +12,8 @@ from typing import Callable, Optional, TypeVar
 import rclpy
 from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+
+from swim_ros.transport import use_large_message_transport
 
 NodeT = TypeVar("NodeT", bound=Node)
 
@@ -34,6 +37,7 @@ def run_node(make_node: Callable[[], NodeT], args: Optional[list[str]] = None, *
         start: called once with the node before spinning (for example a lifecycle node's autostart).
         stop: called with the node however spinning ends, before shutdown (for example to release hardware).
     """
+    use_large_message_transport()
     rclpy.init(args=args)   # this rclpy's init() is not a context manager, hence try/finally
     node: Optional[NodeT] = None
     try:

@@ -1,0 +1,105 @@
+"""swim's Fast DDS profile: set for Fast DDS unless the user chose a profile or another RMW; a valid profile that
+keeps UDP (other hosts) and enlarges shared memory; a node run with it sends a plan-sized message intact."""
+import os
+import select
+import subprocess
+import sys
+import textwrap
+import xml.etree.ElementTree as ElementTree
+
+import numpy as np
+
+from swim_ros.transport import PROFILE_VARIABLES, large_message_profile, use_large_message_transport
+
+#: the size of a 20-primitive plan with per-sample gains (bench/bench_planner_latency.py's request), bytes
+PLAN_BYTES = 4_600_000
+#: how long the child may take to start rclpy and match the test's subscription, s (a loaded 2-core host)
+START_TIMEOUT_S = 30.0
+NAMESPACE = {"p": "http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles"}
+
+
+def _clear(monkeypatch):
+    for variable in PROFILE_VARIABLES:
+        monkeypatch.delenv(variable, raising=False)
+
+
+def test_fastdds_gets_the_profile(monkeypatch):
+    _clear(monkeypatch)
+    monkeypatch.setenv("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
+    assert use_large_message_transport() == large_message_profile()
+    assert os.environ[PROFILE_VARIABLES[0]] == str(large_message_profile())
+
+
+def test_a_users_profile_or_rmw_is_left_alone(monkeypatch, tmp_path):
+    for variable in PROFILE_VARIABLES:
+        _clear(monkeypatch)
+        monkeypatch.setenv(variable, str(tmp_path / "mine.xml"))
+        assert use_large_message_transport() is None
+        assert os.environ[variable] == str(tmp_path / "mine.xml")
+    _clear(monkeypatch)
+    monkeypatch.setenv("RMW_IMPLEMENTATION", "rmw_cyclonedds_cpp")
+    assert use_large_message_transport() is None
+    assert not any(os.environ.get(variable) for variable in PROFILE_VARIABLES)
+
+
+def test_profile_keeps_udp_and_holds_a_plan_in_shared_memory():
+    root = ElementTree.parse(large_message_profile()).getroot()
+    transports = {d.findtext("p:transport_id", namespaces=NAMESPACE): d
+                  for d in root.iterfind("p:transport_descriptors/p:transport_descriptor", NAMESPACE)}
+    kinds = {d.findtext("p:type", namespaces=NAMESPACE) for d in transports.values()}
+    assert kinds == {"UDPv4", "SHM"}
+    participant = root.find("p:participant", NAMESPACE)
+    assert participant.get("is_default_profile") == "true"
+    used = [t.text for t in participant.iterfind("p:rtps/p:userTransports/p:transport_id", NAMESPACE)]
+    assert sorted(used) == sorted(transports)
+    shm = next(d for d in transports.values() if d.findtext("p:type", namespaces=NAMESPACE) == "SHM")
+    assert int(shm.findtext("p:segment_size", namespaces=NAMESPACE)) >= 4 * PLAN_BYTES
+
+
+SENDER_SCRIPT = textwrap.dedent("""
+    import os
+    import numpy as np
+    from rclpy.node import Node
+    from sensor_msgs.msg import JointState
+    from swim_ros.codecs import float_array
+    from swim_ros.entry import run_node
+    from swim_ros.qos import LATCHED_QOS
+
+    class Sender(Node):
+        def __init__(self):
+            super().__init__("large_message_sender")
+            message = JointState(name=["ramp"])
+            message.position = float_array(np.arange({count}, dtype=float))
+            self.create_publisher(JointState, "large", LATCHED_QOS).publish(message)
+            print(os.environ["FASTRTPS_DEFAULT_PROFILES_FILE"], flush=True)
+
+    run_node(Sender, name="large_message_sender")
+""")
+
+
+def test_a_node_sends_a_plan_sized_message_with_the_profile(rclpy_context, monkeypatch):
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from sensor_msgs.msg import JointState
+    from swim_ros.calls import spin_until
+    from swim_ros.qos import LATCHED_QOS
+    _clear(monkeypatch)
+    count = PLAN_BYTES // 8
+    sender = subprocess.Popen([sys.executable, "-c", SENDER_SCRIPT.format(count=count)], stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True)
+    node = rclpy.create_node("large_message_receiver", context=rclpy_context)
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    executor.add_node(node)
+    received = []
+    node.create_subscription(JointState, "large", received.append, LATCHED_QOS)
+    try:
+        ready, _, _ = select.select([sender.stdout], [], [], START_TIMEOUT_S)
+        assert ready and sender.stdout.readline().strip() == str(large_message_profile())
+        assert spin_until(executor, lambda: bool(received), START_TIMEOUT_S)
+        np.testing.assert_array_equal(np.asarray(received[0].position), np.arange(count, dtype=float))
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        sender.terminate()
+        _, err = sender.communicate(timeout=START_TIMEOUT_S)
+    assert "XMLPARSER" not in err and "Error" not in err, err
