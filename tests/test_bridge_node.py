@@ -367,9 +367,11 @@ def test_parameters_are_validated(bridge):
     from rclpy.parameter import Parameter
     parameters = ParameterCalls(bridge.node, bridge.executor, "bridge_node", POLICY)
     for name, value in [("sample_period_s", 5.0), ("watchdog_periods", 0), ("backend", "ethercat"),
-                        ("diagnostics_rate_hz", -1.0)]:
+                        ("diagnostics_rate_hz", 5.0), ("autostart", True)]:   # the last two: read-only
         result = parameters.set([Parameter(name, value=value)])[0]
         assert not result.successful and name in result.reason
+    described = {d.name: d for d in parameters.describe(["sample_period_s", "autostart"])}
+    assert described["autostart"].read_only and described["sample_period_s"].floating_point_range
 
 
 def test_a_device_lost_while_active_takes_deactivate_into_error_processing(ros_domain, rclpy_context, tmp_path):

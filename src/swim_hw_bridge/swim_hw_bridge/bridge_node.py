@@ -18,9 +18,9 @@ make the outputs safe (the device refuses the zero or the disable: unplugged, hu
 returns ERROR: "inactive" would claim an open device at zero current. rclpy then runs error processing: on_error
 zeroes, disables and closes whatever still answers and the node ends unconfigured, where configure reopens
 (reconnects) the device. The amplifiers of a lost device are off by then anyway: its enable line stopped
-toggling (see below). Parameters (validated;
-they take effect at the next configure): backend (emulated | serial | mf624), config_path (bridge.yaml; empty:
-the shipped one), sample_period_s, watchdog_periods, overrun_limit, stale_read_limit, read_failure_limit,
+toggling (see below). Parameters: the table PARAMETERS (description and range of each; checked when set; they
+take effect at the next configure): backend (emulated | serial | mf624), config_path (bridge.yaml; empty: the
+shipped one), sample_period_s, watchdog_periods, overrun_limit, stale_read_limit, read_failure_limit; read-only:
 diagnostics_rate_hz, autostart (configure and activate at start-up, for runs without a lifecycle manager).
 
 Amplifier-enable wiring (the charge pump). A DAC holds its last value when the process dies, so a current
@@ -35,12 +35,13 @@ stuck. An e-stop or latched fault stops the toggling on purpose.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import time
-from typing import Any, Optional
+from typing import Optional
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from lifecycle_msgs.srv import ChangeState
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.duration import Duration
 from rclpy.lifecycle import Node as LifecycleNode
@@ -60,34 +61,26 @@ from swim_model import load_rig
 from swim_model.vehicle import JOINT_NAMES_UNCONSTRAINED
 from swim_ros.codecs import MessageError, torque_from_command
 from swim_ros.entry import run_node
+from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters
 from swim_ros.qos import RECORDABLE_QOS
 
 
-#: name -> (default, description); the checks are in validate_parameter
-PARAMETERS: dict[str, tuple[Any, str]] = {
-    "backend": ("emulated", f"device backend: {' | '.join(BACKENDS)}"),
-    "config_path": ("", "bridge parameter YAML (empty: the shipped config/bridge.yaml)"),
-    "sample_period_s": (0.008, "I/O loop period, s (the paper's 8 ms), 0.0005 to 0.1"),
-    "watchdog_periods": (5, "periods without a command before the torque is zeroed, >= 1"),
-    "overrun_limit": (3, "overruns in a row that latch the OVERRUN fault, >= 1"),
-    "stale_read_limit": (3, "repeated device samples in a row that latch STALE_READ, >= 1"),
-    "read_failure_limit": (3, "failed device reads in a row that latch READ_FAILED, >= 1"),
-    "diagnostics_rate_hz": (2.0, "/diagnostics publication rate, Hz, 0.1 to 100"),
-    "autostart": (False, "configure and activate at start-up"),
-}
-
-
-def validate_parameter(name: str, value: Any) -> str | None:
-    """None when value is acceptable for name, else the reason it is not."""
-    if name == "backend" and value not in BACKENDS:
-        return f"backend must be one of {', '.join(BACKENDS)}, got '{value}'"
-    if name == "sample_period_s" and not 0.0005 <= value <= 0.1:
-        return f"sample_period_s must lie in [0.0005, 0.1] s, got {value}"
-    if name in ("watchdog_periods", "overrun_limit", "stale_read_limit", "read_failure_limit") and value < 1:
-        return f"{name} must be at least 1, got {value}"
-    if name == "diagnostics_rate_hz" and not 0.1 <= value <= 100.0:
-        return f"diagnostics_rate_hz must lie in [0.1, 100] Hz, got {value}"
-    return None
+#: the bridge's parameters (swim_ros.parameters). The lifecycle node reads them when it is configured: a value set
+#: while configured or active takes effect at the next configure. What the node builds at start (the diagnostics
+#: timer, autostart) is read-only.
+PARAMETERS = (
+    ParameterSpec("backend", "emulated", f"device backend: {' | '.join(BACKENDS)}",
+                  check=lambda value: None if value in BACKENDS else f"must be one of {', '.join(BACKENDS)}"),
+    ParameterSpec("config_path", "", "bridge parameter YAML (empty: the shipped config/bridge.yaml)"),
+    ParameterSpec("sample_period_s", 0.008, "I/O loop period, s (the paper's 8 ms)", range=(0.0005, 0.1)),
+    ParameterSpec("watchdog_periods", 5, "periods without a command before the torque is zeroed", range=(1, 10000)),
+    ParameterSpec("overrun_limit", 3, "overruns in a row that latch the OVERRUN fault", range=(1, 10000)),
+    ParameterSpec("stale_read_limit", 3, "repeated device samples in a row that latch STALE_READ", range=(1, 10000)),
+    ParameterSpec("read_failure_limit", 3, "failed device reads in a row that latch READ_FAILED", range=(1, 10000)),
+    ParameterSpec("diagnostics_rate_hz", 2.0, "/diagnostics publication rate, Hz", range=(0.1, 100.0),
+                  read_only=True),
+    ParameterSpec("autostart", False, "configure and activate at start-up", read_only=True),
+)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -107,9 +100,8 @@ class BridgeNode(LifecycleNode):
     def __init__(self) -> None:
         super().__init__("bridge_node")
         self._guard_change_state_service()
-        for name, (default, description) in PARAMETERS.items():
-            self.declare_parameter(name, default, ParameterDescriptor(description=description))
-        self.add_on_set_parameters_callback(self._on_set_parameters)
+        declare_parameters(self, PARAMETERS)
+        self.add_on_set_parameters_callback(functools.partial(check_parameters, PARAMETERS))
         self.settings = self._read_settings()
         self.state_publisher = self.create_lifecycle_publisher(JointState, "joint_states", RECORDABLE_QOS)
         self.diagnostics_publisher = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
@@ -158,18 +150,11 @@ class BridgeNode(LifecycleNode):
         service.callback = change_state
 
     # --- parameters ---------------------------------------------------------------------------------------
-    def _on_set_parameters(self, parameters: list) -> SetParametersResult:
-        for parameter in parameters:
-            reason = validate_parameter(parameter.name, parameter.value)
-            if reason is not None:
-                return SetParametersResult(successful=False, reason=reason)
-        return SetParametersResult(successful=True)
-
     def _read_settings(self) -> BridgeSettings:
         """The parameters now, checked; raises ValueError with the first reason."""
-        values = {name: self.get_parameter(name).value for name in PARAMETERS}
-        for name, value in values.items():
-            reason = validate_parameter(name, value)
+        values = {spec.name: self.get_parameter(spec.name).value for spec in PARAMETERS}
+        for spec in PARAMETERS:
+            reason = spec.reason_invalid(values[spec.name])
             if reason is not None:
                 raise ValueError(reason)
         return BridgeSettings(**values)

@@ -7,13 +7,14 @@ gets success = false and a message saying why; nothing else changes. A request w
 the last ANSWERS_KEPT gets that request's reply again (a client repeats a request whose answer DDS lost): nothing
 is planned or published twice. Topic ``plan`` (PlannedTrajectory, transient local): the last plan made.
 
-Parameters: ``library_path`` (default: the shipped library), ``rig_path`` (default: the shipped rig),
-``default_time_scale`` (used when a request's time_scale is 0; default 1.0), ``lqr_weights_path`` (a YAML of
-swim_controller LqrWeights fields; empty: the gains stored in the library). Setting ``lqr_weights_path`` at run
-time retunes the plans made after it: each primitive's gains for the new weights are computed on its first use
-(0.1-0.3 s each) and kept, while other requests are answered; a file that does not load is refused and changes
-nothing. ``max_plan_duration_s`` and ``max_plan_samples`` (maneuver.PlanBounds) bound what a request may ask for:
-a longer plan, a non-finite start alpha or goal distance is refused by name before any work is done.
+Parameters: the table PARAMETERS (description and range of each, checked when set, applied after).
+``library_path`` and ``rig_path`` (default: the shipped ones) are read-only. ``default_time_scale`` is used when
+a request's time_scale is 0. Setting ``lqr_weights_path`` (a YAML of swim_controller LqrWeights fields; empty: the
+gains stored in the library) at run time retunes the plans made after it: each primitive's gains for the new
+weights are computed on its first use (0.1-0.3 s each) and kept, while other requests are answered; a file that
+does not load is refused and changes nothing. ``max_plan_duration_s`` and ``max_plan_samples``
+(maneuver.PlanBounds) bound what a request may ask for: a longer plan, a non-finite start alpha or goal distance
+is refused by name before any work is done.
 """
 from __future__ import annotations
 
@@ -38,6 +39,7 @@ from swim_planner.maneuver import (DEFAULT_BOUNDS, Plan, PlanBounds, check_plan_
 from swim_planner.paths import default_library_path
 from swim_ros.codecs import float_array
 from swim_ros.entry import run_node
+from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, positive
 from swim_ros.qos import LATCHED_QOS
 
 #: threads serving requests at once: a request whose primitives need new gains does not hold up the others
@@ -45,6 +47,36 @@ SERVICE_THREADS = 4
 #: replies kept by request id for repeated requests; assumed: a client repeats within seconds, and 64 replies
 #: cover every client of a rig many times over
 ANSWERS_KEPT = 64
+#: ceilings of the plan bounds a user may set: ten times the defaults (maneuver.PlanBounds), about 4 GB of plan at
+#: the sample ceiling; past them a value is a typo, not a longer maneuver
+MAX_PLAN_DURATION_CEILING_S = 10 * DEFAULT_BOUNDS.max_duration_s
+MAX_PLAN_SAMPLES_CEILING = 10 * DEFAULT_BOUNDS.max_samples
+
+
+def _weights_file_loads(path: str) -> str | None:
+    """A check: an LQ weights file that does not load is refused with the loader's reason."""
+    if not path:
+        return None
+    try:
+        load_lqr_weights(path)
+    except PlannerError as err:
+        return f"does not load: {err}"
+    return None
+
+
+#: the planner's parameters (swim_ros.parameters); the library and rig are read once, at start
+PARAMETERS = (
+    ParameterSpec("library_path", "", "primitive library folder (empty: the shipped library)", read_only=True),
+    ParameterSpec("rig_path", "", "rig YAML file (empty: the shipped rig)", read_only=True),
+    ParameterSpec("default_time_scale", 1.0, "lambda for requests whose time_scale is 0 (Theorem 1)",
+                  range=(0.1, 10.0)),
+    ParameterSpec("lqr_weights_path", "", "YAML of swim_controller LqrWeights fields (empty: the gains stored "
+                  "in the library); applies to the plans made after it is set", check=_weights_file_loads),
+    ParameterSpec("max_plan_duration_s", DEFAULT_BOUNDS.max_duration_s, "longest plan served, s",
+                  range=(0.0, MAX_PLAN_DURATION_CEILING_S), check=positive),
+    ParameterSpec("max_plan_samples", DEFAULT_BOUNDS.max_samples, "most samples in a plan served",
+                  range=(1, MAX_PLAN_SAMPLES_CEILING)),
+)
 
 
 class AnswerMemory:
@@ -100,12 +132,7 @@ def plan_to_message(plan: Plan, stamp) -> PlannedTrajectory:
 class PlannerNode(Node):
     def __init__(self) -> None:
         super().__init__("planner_node")
-        self.declare_parameter("library_path", "")
-        self.declare_parameter("rig_path", "")
-        self.declare_parameter("default_time_scale", 1.0)
-        self.declare_parameter("lqr_weights_path", "")
-        self.declare_parameter("max_plan_duration_s", DEFAULT_BOUNDS.max_duration_s)
-        self.declare_parameter("max_plan_samples", DEFAULT_BOUNDS.max_samples)
+        declare_parameters(self, PARAMETERS)
         self.bounds = self._bounds({})
         rig_path = self.get_parameter("rig_path").value or None
         library_path = self.get_parameter("library_path").value or default_library_path()
@@ -114,7 +141,8 @@ class PlannerNode(Node):
         self.graph = build_graph(self.library)
         self._plan_library = self._retuned(self.get_parameter("lqr_weights_path").value)
         self.answers = AnswerMemory()
-        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.add_on_set_parameters_callback(self._check_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
         for line in self.graph.mismatches:
             self.get_logger().warning(f"junction mismatch, primitive dropped from the graph: {line}")
         self.plan_publisher = self.create_publisher(PlannedTrajectory, "plan", LATCHED_QOS)
@@ -137,22 +165,29 @@ class PlannerNode(Node):
         bounds.validate()
         return bounds
 
-    def _on_set_parameters(self, parameters) -> SetParametersResult:
+    def _check_parameters(self, parameters) -> SetParametersResult:
+        """On-set: the table's ranges and checks, and the plan bounds together."""
+        result = check_parameters(PARAMETERS, parameters)
         changed = {p.name: p.value for p in parameters if p.name in ("max_plan_duration_s", "max_plan_samples")}
-        if changed:
+        if result.successful and changed:
             try:
-                self.bounds = self._bounds(changed)
+                self._bounds(changed)
             except ValueError as err:
                 return SetParametersResult(successful=False, reason=str(err))
-        for parameter in parameters:
-            if parameter.name == "lqr_weights_path":
-                try:
-                    retuned = self._retuned(parameter.value)
-                except PlannerError as err:
-                    return SetParametersResult(successful=False, reason=str(err))
-                self._plan_library = retuned
-                self.get_logger().info(f"LQ weights for new plans: {parameter.value or 'those stored'}")
-        return SetParametersResult(successful=True)
+        return result
+
+    def _apply_parameters(self, parameters) -> None:
+        """Post-set: new bounds and LQ weights serve the requests that come after."""
+        names = {p.name: p.value for p in parameters}
+        if "max_plan_duration_s" in names or "max_plan_samples" in names:
+            self.bounds = self._bounds({})
+        if "lqr_weights_path" in names:
+            try:
+                self._plan_library = self._retuned(names["lqr_weights_path"])
+            except PlannerError as err:   # the file changed between the check and now: keep the weights in use
+                self.get_logger().error(f"LQ weights not applied, those in use kept: {err}")
+                return
+            self.get_logger().info(f"LQ weights for new plans: {names['lqr_weights_path'] or 'those stored'}")
 
     def on_request(self, request: RequestManeuver.Request,
                    response: RequestManeuver.Response) -> RequestManeuver.Response:

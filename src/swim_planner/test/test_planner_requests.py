@@ -116,3 +116,21 @@ def test_plan_bounds_are_parameters_checked_on_set(planner):
     assert node.bounds.max_duration_s == 7200.0
     assert parameters.set([Parameter("max_plan_duration_s", value=10.0)])[0].successful
     assert node.bounds.max_duration_s == 10.0
+
+
+@pytest.mark.parametrize("name, value, reason", [
+    ("library_path", "/elsewhere", "read-only"), ("rig_path", "/elsewhere", "read-only"),
+    ("max_plan_samples", 0, "out of range"), ("default_time_scale", float("nan"), "out of range"),
+    ("max_plan_duration_s", 0.0, "above zero")])
+def test_parameters_follow_their_table(planner, name, value, reason):
+    from rclpy.parameter import Parameter
+    from swim_planner.planner_node import PARAMETERS
+    from swim_ros.calls import ParameterCalls
+    node, client, executor = planner
+    parameters = ParameterCalls(client, executor, "planner_node", QUICK)
+    before = parameters.get([name])[0]
+    result = parameters.set([Parameter(name, value=value)])[0]
+    assert not result.successful and reason in result.reason.lower().replace("read only", "read-only")
+    assert parameters.get([name])[0] == before
+    described = {d.name: d for d in parameters.describe([spec.name for spec in PARAMETERS])}
+    assert described["library_path"].read_only and described["max_plan_samples"].integer_range

@@ -113,15 +113,16 @@ def new_request_id() -> str:
 
 # ----- parameters ---------------------------------------------------------------------------------------------
 class ParameterCalls:
-    """get and set another node's parameters (both idempotent), as rcl_interfaces' services."""
+    """get, set and describe another node's parameters (all idempotent), as rcl_interfaces' services."""
 
     def __init__(self, node: Node, executor: Executor, target_node: str,
                  policy: RetryPolicy = DEFAULT_POLICY) -> None:
-        from rcl_interfaces.srv import GetParameters, SetParameters
+        from rcl_interfaces.srv import DescribeParameters, GetParameters, SetParameters
         prefix = target_node if target_node.startswith("/") else f"/{target_node}"
         self.executor, self.policy = executor, policy
         self._get = node.create_client(GetParameters, f"{prefix}/get_parameters")
         self._set = node.create_client(SetParameters, f"{prefix}/set_parameters")
+        self._describe = node.create_client(DescribeParameters, f"{prefix}/describe_parameters")
 
     def set(self, parameters: Sequence[Any]) -> list[Any]:
         """rclpy Parameters -> one rcl_interfaces/SetParametersResult per parameter, in order."""
@@ -135,6 +136,12 @@ class ParameterCalls:
         from rclpy.parameter import parameter_value_to_python
         response = call_service(self.executor, self._get, GetParameters.Request(names=list(names)), self.policy)
         return [parameter_value_to_python(value) for value in response.values]
+
+    def describe(self, names: Sequence[str]) -> list[Any]:
+        """Parameter names -> their rcl_interfaces/ParameterDescriptor (description, ranges, read_only)."""
+        from rcl_interfaces.srv import DescribeParameters
+        request = DescribeParameters.Request(names=list(names))
+        return list(call_service(self.executor, self._describe, request, self.policy).descriptors)
 
 
 # ----- lifecycle ----------------------------------------------------------------------------------------------
