@@ -384,7 +384,7 @@ def test_a_device_lost_while_active_takes_deactivate_into_error_processing(ros_d
     """
     import yaml
     from lifecycle_msgs.msg import Transition
-    from swim_hw_bridge.backends.serial_fake_firmware import PtyRig
+    from swim_hw_bridge.testing.fake_serial_firmware import PtyRig
     from swim_hw_bridge.conversions import default_config_path
     rig = PtyRig(tmp_path / "ttyRIG", command_timeout_ms=FIRMWARE_TIMEOUT_MS, toggle_timeout_ms=FIRMWARE_TIMEOUT_MS)
     config = yaml.safe_load(default_config_path().read_text())

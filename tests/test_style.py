@@ -13,3 +13,13 @@ def test_ruff_finds_nothing():
                              "src", "tests", "bench"], cwd=WORKSPACE, capture_output=True, text=True,
                             timeout=RUFF_TIMEOUT_S)
     assert result.returncode == 0, result.stdout + result.stderr
+
+
+def test_no_module_a_user_runs_imports_a_testing_subpackage():
+    """Test-only modules (stand-in hardware, replay checks) live in each package's ``testing`` subpackage, and
+    only tests, benchmarks and other testing modules import them."""
+    import re
+    pattern = re.compile(r"^\s*(from|import)\s+\w+\.testing\b|^\s*from\s+\.+testing\b", re.MULTILINE)
+    offenders = [str(path.relative_to(WORKSPACE)) for path in sorted((WORKSPACE / "src").glob("*/*/**/*.py"))
+                 if "testing" not in path.parts and "test" not in path.parts and pattern.search(path.read_text())]
+    assert offenders == []

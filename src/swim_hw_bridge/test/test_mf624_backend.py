@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from swim_hw_bridge.backends import mf624_registers as registers
 from swim_hw_bridge.backends.mf624 import Mf624Device
-from swim_hw_bridge.backends.mf624_emulation import EmulatedComedi, EmulatedCounterRegisters
+from swim_hw_bridge.testing.mf624_emulation import EmulatedComedi, EmulatedCounterRegisters
 from swim_hw_bridge.device import DeviceError
 
 GAIN_A_PER_V = 0.2

@@ -1,6 +1,6 @@
 """The serial backend end to end: SerialDevice over a pseudo-terminal pair against an emulated firmware thread.
 
-The firmware (backends/serial_fake_firmware.py, an emulation) is written from the protocol specification
+The firmware (testing/fake_serial_firmware.py, an emulation) is written from the protocol specification
 independently of serial_protocol.py, so these exchanges check both sides against the spec, not against each other.
 """
 from __future__ import annotations
@@ -11,10 +11,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swim_hw_bridge.backends import serial_fake_firmware as fake
+from swim_hw_bridge.testing import fake_serial_firmware as fake
 from swim_hw_bridge.backends import serial_protocol as protocol
 from swim_hw_bridge.backends.serial_backend import SerialDevice
-from swim_hw_bridge.backends.serial_fake_firmware import PtyRig
+from swim_hw_bridge.testing.fake_serial_firmware import PtyRig
 from swim_hw_bridge.device import DeviceError
 
 COUNTS = (1, 2**32 - 1, 123_456_789, 2**31)  # distinct per channel, both ends of the uint32 range

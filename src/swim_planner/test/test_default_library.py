@@ -7,7 +7,7 @@ import pytest
 
 from swim_model import VehicleModel
 from swim_planner.catalog import default_specs
-from swim_planner.consistency import REPLAY_TOLERANCE, replay_open_loop
+from swim_planner.testing.consistency import REPLAY_TOLERANCE, replay_open_loop
 from swim_planner.primitives import CONVERGED_STATUSES, PlanningLimits, PrimitiveType, rest_state
 
 LIMITS = PlanningLimits()

@@ -17,7 +17,7 @@ import os
 import struct
 from pathlib import Path
 
-from . import mf624_registers as registers
+from swim_hw_bridge.backends import mf624_registers as registers
 
 
 @dataclasses.dataclass
