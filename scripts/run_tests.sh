@@ -10,7 +10,9 @@ source scripts/env.sh
 export PYTHONDONTWRITEBYTECODE=1
 
 rm -rf build/*/pytest.xml build/*/test_results
-colcon --log-base log test --base-paths src --event-handlers console_direct+ \
+# one package at a time: several packages start nodes over DDS, and two such suites at once on this 2-core
+# machine make each other's deadlines (ROS domains are apart: swim_ros.domains)
+colcon --log-base log test --base-paths src --executor sequential --event-handlers console_direct+ \
   --pytest-args -p no:cacheprovider -q
 colcon_status=$?
 colcon_summary=$(colcon --log-base log test-result --test-result-base build --all 2>/dev/null | tail -n 1)
