@@ -2,7 +2,6 @@
 backend, autostart: swim_model's free vehicle in real time), planner_node and tracker_node, runs a short free
 lane-keeping maneuver, records and analyses it. The report is checked against bounds and against the bridge's own
 joint_states read back from the bag."""
-import json
 import shutil
 from pathlib import Path
 
@@ -50,22 +49,24 @@ def test_constrained_primitives_are_refused_on_the_bridge(tmp_path):
 
 
 def test_the_free_vehicle_keeps_its_lane_on_the_bridge(bridge_run):
+    from swim_bringup.reports import RunReport
     from swim_model import load_rig
     run_dir, stdout = bridge_run
-    report = json.loads((run_dir / "report.json").read_text())
-    assert report["result"]["error_code"] == 0
-    assert report["bridge_faults"] == "NONE"          # the motors were on throughout
-    assert report["duration_s"] == pytest.approx(4.0, abs=0.02)
+    report = RunReport.load(run_dir / "report.json")   # every key of report.json, the bridge's included
+    measures = report.measures
+    assert report.result.error_code == 0
+    assert report.bridge is not None and report.bridge.bridge_faults == "NONE"   # the motors were on throughout
+    assert measures.duration_s == pytest.approx(4.0, abs=0.02)
     # the free vehicle moves sideways (not constrained: a lateral error exists) but stays near its planned lane;
     # bounds loose enough for a real-time loop on a loaded host (periods missed), tight enough for a lost vehicle
-    assert 0.0 < report["lateral_error_two_norm_m_s05"] < 0.1     # RMS under 5 cm over 4 s
-    assert abs(report["final_lateral_offset_m"]) < 0.05
-    assert abs(report["final_alpha_error_rad"]) < 0.1             # 4 cm of hub travel at R = 0.43 m
-    assert report["longitudinal_error_two_norm_m_s05"] < 0.1
+    assert 0.0 < measures.lateral_error_two_norm_m_s05 < 0.1     # RMS under 5 cm over 4 s
+    assert abs(measures.final_lateral_offset_m) < 0.05
+    assert abs(measures.final_alpha_error_rad) < 0.1             # 4 cm of hub travel at R = 0.43 m
+    assert measures.longitudinal_error_two_norm_m_s05 < 0.1
     limits = load_rig().torque_limits_n_m
-    assert report["peak_heave_torque_n_m"] <= limits[0] + 1e-12
-    assert report["peak_pitch_torque_n_m"] <= limits[1] + 1e-12
-    assert report["saturated_fraction"] < 0.3
+    assert measures.peak_heave_torque_n_m <= limits[0] + 1e-12
+    assert measures.peak_pitch_torque_n_m <= limits[1] + 1e-12
+    assert measures.saturated_fraction < 0.3
     assert "lateral_error_two_norm_m_s05" in stdout and "bridge_faults" in stdout
 
 

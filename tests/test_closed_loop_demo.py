@@ -1,8 +1,6 @@
 """The closed loop end to end over DDS: swim-demo brings up sim_node (lock-step, default disturbances),
 planner_node and tracker_node, runs a short maneuver, records and analyses it. The report is checked against
 bounds and against the bag read back with rosbags."""
-import json
-
 import numpy as np
 import pytest
 
@@ -22,19 +20,21 @@ def demo_run(ros_domain, tmp_path_factory):
 
 
 def test_report_is_within_bounds(demo_run):
+    from swim_bringup.reports import RunReport
     from swim_model import load_rig
     run_dir, stdout = demo_run
-    report = json.loads((run_dir / "report.json").read_text())
-    assert report["result"]["error_code"] == 0
-    assert report["duration_s"] == pytest.approx(9.0, abs=0.02)
+    report = RunReport.load(run_dir / "report.json")   # every key of report.json, none other
+    measures = report.measures
+    assert report.result.error_code == 0 and report.bridge is None
+    assert measures.duration_s == pytest.approx(9.0, abs=0.02)
     # under the default disturbances the vehicle stays within a few cm of the plan (R = 0.43 m: 0.1 rad = 4 cm)
-    assert abs(report["final_alpha_error_rad"]) < 0.1
-    assert report["longitudinal_error_two_norm_m_s05"] < 0.1
-    assert report["lateral_error_two_norm_m_s05"] == 0.0      # the constrained vehicle
+    assert abs(measures.final_alpha_error_rad) < 0.1
+    assert measures.longitudinal_error_two_norm_m_s05 < 0.1
+    assert measures.lateral_error_two_norm_m_s05 == 0.0      # the constrained vehicle
     limits = load_rig().torque_limits_n_m
-    assert report["peak_heave_torque_n_m"] <= limits[0] + 1e-12
-    assert report["peak_pitch_torque_n_m"] <= limits[1] + 1e-12
-    assert report["saturated_fraction"] < 0.2
+    assert measures.peak_heave_torque_n_m <= limits[0] + 1e-12
+    assert measures.peak_pitch_torque_n_m <= limits[1] + 1e-12
+    assert measures.saturated_fraction < 0.2
     assert "longitudinal_error_two_norm_m_s05" in stdout      # the summary table was printed
     for figure in ("displacement.png", "heave_pitch.png", "cartesian_path.png"):
         assert (run_dir / figure).stat().st_size > 10_000
@@ -43,6 +43,7 @@ def test_report_is_within_bounds(demo_run):
 def test_bag_reads_back_and_agrees_with_the_report(demo_run):
     from rosbags.rosbag2 import Reader
     from swim_bringup.bag import read_messages
+    from swim_bringup.reports import RunReport
     run_dir, _ = demo_run
     with Reader(run_dir / "bag") as reader:
         counts = {c.topic: c.msgcount for c in reader.connections}
@@ -65,12 +66,12 @@ def test_bag_reads_back_and_agrees_with_the_report(demo_run):
     efforts = np.array([s.effort[-2:] for s in states[first + 1:first + 1 + len(tracking)]])
     rates = np.array([s.velocity[-2:] for s in states[first:first + len(efforts)]])
     energy = np.sum(np.abs(efforts * rates)) * 0.008
-    report = json.loads((run_dir / "report.json").read_text())
-    assert energy == pytest.approx(report["energy_used_j"], rel=0.05)
+    assert energy == pytest.approx(RunReport.load(run_dir / "report.json").measures.energy_used_j, rel=0.05)
 
 
 def test_tolerance_options_default_to_the_runs_and_refuse_nonsense():
-    from swim_bringup.demo import RUN_TOLERANCES, parse_arguments
+    from swim_bringup.demo import parse_arguments
+    from swim_bringup.recorded_run import RUN_TOLERANCES
     assert parse_arguments([]).tolerances == RUN_TOLERANCES
     assert parse_arguments(["--goal-tolerance-r", "0"]).tolerances.goal_r_m == 0.0   # 0: not checked
     for bad in ("-0.1", "nan", "inf"):
@@ -81,16 +82,17 @@ def test_tolerance_options_default_to_the_runs_and_refuse_nonsense():
 def test_a_run_that_misses_its_goal_tolerance_fails(ros_domain, tmp_path):
     """The tracker checks the demo's tolerances: a goal tolerance no closed loop meets (1 urad of alpha at the
     end) turns the same kind of run into GOAL_TOLERANCE_VIOLATED, a failing exit and the reason printed."""
+    from swim_bringup.reports import RunReport
     run_dir = tmp_path / "run"
     output = run_demo(run_dir, "--primitives", SHORT[0], "--goal-tolerance-alpha", "1e-6",
                       "--timeout", str(MANEUVER_TIMEOUT_S), expected_returncode=1)
     assert (run_dir / "report.json").exists(), output[-3000:]   # it failed after the run, not before
-    report = json.loads((run_dir / "report.json").read_text())
-    assert report["result"]["error_code"] == -5   # swim_interfaces ExecutePlan GOAL_TOLERANCE_VIOLATED
-    assert abs(report["result"]["final_alpha_error_rad"]) > 1e-6
+    report = RunReport.load(run_dir / "report.json")
+    assert report.result.error_code == -5   # swim_interfaces ExecutePlan GOAL_TOLERANCE_VIOLATED
+    assert abs(report.result.final_alpha_error_rad) > 1e-6
     # it ran to the plan's end: a goal check, not a path check
-    assert report["duration_s"] == pytest.approx(report["result"]["duration_s"], abs=1e-9)
-    assert report["duration_s"] == pytest.approx(4.0, abs=0.02)   # the library's accelerate (E = 0.05)
+    assert report.measures.duration_s == pytest.approx(report.result.duration_s, abs=1e-9)
+    assert report.measures.duration_s == pytest.approx(4.0, abs=0.02)   # the library's accelerate (E = 0.05)
     assert "the tracker ended with goal tolerance violated" in output
 
 
@@ -99,13 +101,12 @@ def test_a_second_run_repeats_the_first_bit_for_bit(demo_run, tmp_path):
     idled, the plan starts at the simulator's first step with the same disturbance sequence, so a second run of the
     same maneuver measures exactly what the first did (the experiments compare sliding mode on and off this way)."""
     from swim_bringup.bag import read_messages
+    from swim_bringup.reports import RunReport
     first_dir, _ = demo_run
     second_dir = tmp_path / "run"
     run_demo(second_dir, "--primitives", *SHORT, "--repeats", "1", "1", "--timeout", str(MANEUVER_TIMEOUT_S))
-    runs = [json.loads((d / "report.json").read_text()) for d in (first_dir, second_dir)]
-    for measure in ("longitudinal_error_two_norm_m_s05", "final_alpha_error_rad", "peak_heave_torque_n_m",
-                    "peak_pitch_torque_n_m", "energy_used_j", "saturated_fraction"):
-        assert runs[0][measure] == runs[1][measure], measure
+    runs = [RunReport.load(d / "report.json").measures for d in (first_dir, second_dir)]
+    assert runs[0] == runs[1]   # every measure, exactly
     tracked = [[m for _, _, m in read_messages(d / "bag", ("tracking_state",))] for d in (first_dir, second_dir)]
     for run in tracked:   # the plan began at the held initial state: simulated time start_time_s (1 s)
         assert (run[0].header.stamp.sec, run[0].header.stamp.nanosec) == (1, 0)

@@ -14,11 +14,13 @@ import dataclasses
 import json
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping, Optional
 
 import numpy as np
 
 from swim_bringup.bag import read_messages
+from swim_bringup.reports import BridgeMeasures, RunAnalysis, RunMeasures
+from swim_controller.measures import two_norm
 
 
 @dataclasses.dataclass
@@ -65,12 +67,7 @@ def _radius(run: Run, q: np.ndarray) -> np.ndarray:
     return q[:, run.joint_names.index("R")] if "R" in run.joint_names else np.full(len(q), run.lane_radius_m)
 
 
-def two_norm(time_s: np.ndarray, error: np.ndarray) -> float:
-    """sqrt(int e^2 dt) by the trapezoidal rule."""
-    return float(np.sqrt(np.trapezoid(error ** 2, time_s)))
-
-
-def measures(run: Run) -> dict:
+def measures(run: Run) -> RunMeasures:
     alpha = run.joint_names.index("alpha")
     radius, radius_reference = _radius(run, run.q), _radius(run, run.q_reference)
     alpha_error = run.q[:, alpha] - run.q_reference[:, alpha]
@@ -78,24 +75,24 @@ def measures(run: Run) -> dict:
     reference = radius_reference[:, None] * np.column_stack([np.cos(run.q_reference[:, alpha]),
                                                              np.sin(run.q_reference[:, alpha])])
     power = np.abs(run.torque * run.qdot[:, -2:]).sum(axis=1)
-    return {
-        "duration_s": float(run.time_s[-1] - run.time_s[0]),
-        "longitudinal_error_two_norm_m_s05": two_norm(run.time_s, radius_reference * alpha_error),
-        "lateral_error_two_norm_m_s05": two_norm(run.time_s, radius - radius_reference),
-        "cartesian_error_two_norm_m_s05": two_norm(run.time_s, np.linalg.norm(position - reference, axis=1)),
-        "final_alpha_error_rad": float(alpha_error[-1]),
-        "final_lateral_offset_m": float(radius[-1] - radius_reference[-1]),
-        "peak_heave_torque_n_m": float(np.abs(run.torque[:, 0]).max()),
-        "peak_pitch_torque_n_m": float(np.abs(run.torque[:, 1]).max()),
-        "saturated_fraction": float(run.saturated.any(axis=1).mean()),
-        "energy_used_j": float(np.trapezoid(power, run.time_s)),
-        "sliding_mode_enabled": run.sliding_mode_enabled,
-        "periods": int(len(run.time_s)),
-    }
+    return RunMeasures(
+        duration_s=float(run.time_s[-1] - run.time_s[0]),
+        longitudinal_error_two_norm_m_s05=two_norm(run.time_s, radius_reference * alpha_error),
+        lateral_error_two_norm_m_s05=two_norm(run.time_s, radius - radius_reference),
+        cartesian_error_two_norm_m_s05=two_norm(run.time_s, np.linalg.norm(position - reference, axis=1)),
+        final_alpha_error_rad=float(alpha_error[-1]),
+        final_lateral_offset_m=float(radius[-1] - radius_reference[-1]),
+        peak_heave_torque_n_m=float(np.abs(run.torque[:, 0]).max()),
+        peak_pitch_torque_n_m=float(np.abs(run.torque[:, 1]).max()),
+        saturated_fraction=float(run.saturated.any(axis=1).mean()),
+        energy_used_j=float(np.trapezoid(power, run.time_s)),
+        sliding_mode_enabled=run.sliding_mode_enabled,
+        periods=int(len(run.time_s)),
+    )
 
 
-def bridge_measures(bag_path: Path) -> dict:
-    """From a bridge_node's /diagnostics in the bag ({} without any): the faults it latched during the run (a
+def bridge_measures(bag_path: Path) -> Optional[BridgeMeasures]:
+    """From a bridge_node's /diagnostics in the bag (None without any): the faults it latched during the run (a
     latched fault holds the motors at zero until reset: the vehicle did not swim as commanded from then on) and
     its count of overrun periods."""
     faults: set[str] = set()
@@ -107,12 +104,13 @@ def bridge_measures(bag_path: Path) -> dict:
                 faults.update(name for name in values.get("faults", "NONE").split("|") if name != "NONE")
                 overruns = int(values.get("overruns", overruns or 0))
     if overruns is None:
-        return {}
-    return {"bridge_faults": "|".join(sorted(faults)) or "NONE", "bridge_overruns": overruns}
+        return None
+    return BridgeMeasures(bridge_faults="|".join(sorted(faults)) or "NONE", bridge_overruns=overruns)
 
 
-def analyze(bag_path: Path) -> dict:
-    return {**measures(load_run(bag_path)), **bridge_measures(bag_path)}
+def analyze(bag_path: Path) -> RunAnalysis:
+    """The measures of the last plan tracked in the bag, and the bridge's if a bridge ran."""
+    return RunAnalysis(measures(load_run(bag_path)), bridge_measures(bag_path))
 
 
 def write_figures(bag_path: Path, output_dir: Path) -> list[Path]:
@@ -161,13 +159,15 @@ def _save(figure, path: Path) -> Path:
     return path
 
 
-def summary_table(reports: dict[str, dict]) -> str:
-    """The measures of several runs side by side, one column per run."""
-    rows = [key for key in next(iter(reports.values())) if key not in ("result", "wall_time_s")]
+def summary_table(reports: Mapping[str, RunAnalysis]) -> str:
+    """The measures of several runs (a RunReport is one) side by side, one column per run; a measure that only
+    some runs have (the bridge's) is blank for the others."""
+    columns = [report.measure_values() for report in reports.values()]
+    rows = list(dict.fromkeys(key for values in columns for key in values))
     width = max(len(r) for r in rows)
     lines = [" " * width + "".join(f"  {name[-22:]:>22}" for name in reports)]
     for row in rows:
-        cells = "".join(f"  {_format(report.get(row)):>22}" for report in reports.values())
+        cells = "".join(f"  {_format(values.get(row, '')):>22}" for values in columns)
         lines.append(f"{row:<{width}}{cells}")
     return "\n".join(lines)
 
@@ -190,7 +190,7 @@ def main(argv: list[str] | None = None) -> int:
     print(summary_table(reports))
     if args.output is not None and len(args.bags) == 1:
         args.output.mkdir(parents=True, exist_ok=True)
-        (args.output / "report.json").write_text(json.dumps(next(iter(reports.values())), indent=2))
+        (args.output / "report.json").write_text(json.dumps(next(iter(reports.values())).to_json(), indent=2))
         write_figures(args.bags[0], args.output)
     return 0
 

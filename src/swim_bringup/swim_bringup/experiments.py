@@ -20,14 +20,15 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import datetime
-import json
 import sys
 import time
 from pathlib import Path
 from typing import Optional
 
-from swim_bringup.demo import (PAPER_CONSTRAINED, PAPER_LANE_KEEPING, RUN_TOLERANCES, parse_with_tolerances,
-                               run_failures, run_recorded)
+from swim_bringup.recorded_run import (PAPER_CONSTRAINED, PAPER_LANE_KEEPING, RUN_TOLERANCES,
+                                       parse_with_tolerances, run_failures, run_recorded)
+from swim_bringup.reports import (ExperimentRow, ExperimentsSummary, NormComparison, RunReport, SlidingModePair,
+                                  StoppedRun)
 from swim_bringup.system import closed_loop_specs, config_dir
 from swim_controller.supervisor import Tolerances
 
@@ -72,7 +73,7 @@ def paper_experiments() -> list[Experiment]:
 
 
 def run_one(experiment: Experiment, sliding_mode: bool, run_dir: Path, config: Path, timeout_s: float,
-            tolerances: Tolerances = RUN_TOLERANCES) -> dict:
+            tolerances: Tolerances = RUN_TOLERANCES) -> RunReport:
     """One closed-loop run in a fresh bring-up; its report (analysis measures, the action's result, wall time)."""
     run_dir.mkdir(parents=True, exist_ok=True)
     specs = closed_loop_specs(config, sim_overrides=(f"constrained:={str(experiment.constrained).lower()}",),
@@ -86,28 +87,29 @@ def relative_change(with_sliding: float, without_sliding: float) -> Optional[flo
     return None if without_sliding == 0.0 else (with_sliding - without_sliding) / without_sliding
 
 
-def compare(experiment: Experiment, on: dict, off: dict) -> dict:
-    """One experiment's row: ours beside the paper's."""
-    failures = {"sliding_on": run_failures(on), "sliding_off": run_failures(off)}
-    return {
-        "experiment": experiment.name,
-        "time_scale": experiment.time_scale,
-        "duration_s": on["duration_s"],
-        "paper_duration_s": experiment.expected_duration_s(),
-        "final_lateral_offset_m": {"sliding_on": on["final_lateral_offset_m"],
-                                   "sliding_off": off["final_lateral_offset_m"]},
-        "final_alpha_error_rad": {"sliding_on": on["final_alpha_error_rad"],
-                                  "sliding_off": off["final_alpha_error_rad"]},
-        "saturated_fraction": {"sliding_on": on["saturated_fraction"], "sliding_off": off["saturated_fraction"]},
-        "two_norms": {norm: {"sliding_on": on[norm], "sliding_off": off[norm],
-                             "change": relative_change(on[norm], off[norm]),
-                             "paper_change": experiment.paper_sliding_change.get(norm)} for norm in NORMS},
-        "succeeded": not failures["sliding_on"] and not failures["sliding_off"],
-        "outcome": {label: "; ".join(reasons) or "ok" for label, reasons in failures.items()},
-    }
+def compare(experiment: Experiment, on: RunReport, off: RunReport) -> ExperimentRow:
+    """One experiment's row: its runs with (on) and without (off) sliding mode beside the paper's."""
+    def norm(name: str) -> NormComparison:   # name: one of NORMS, a field of RunMeasures
+        with_sliding, without_sliding = getattr(on.measures, name), getattr(off.measures, name)
+        return NormComparison(with_sliding, without_sliding, relative_change(with_sliding, without_sliding),
+                              experiment.paper_sliding_change.get(name))
+    failures = SlidingModePair(run_failures(on), run_failures(off))
+    return ExperimentRow(
+        experiment=experiment.name,
+        time_scale=experiment.time_scale,
+        duration_s=on.measures.duration_s,
+        paper_duration_s=experiment.expected_duration_s(),
+        final_lateral_offset_m=SlidingModePair(on.measures.final_lateral_offset_m,
+                                               off.measures.final_lateral_offset_m),
+        final_alpha_error_rad=SlidingModePair(on.measures.final_alpha_error_rad, off.measures.final_alpha_error_rad),
+        saturated_fraction=SlidingModePair(on.measures.saturated_fraction, off.measures.saturated_fraction),
+        two_norms={name: norm(name) for name in NORMS},
+        succeeded=not failures.sliding_on and not failures.sliding_off,
+        outcome=SlidingModePair("; ".join(failures.sliding_on) or "ok", "; ".join(failures.sliding_off) or "ok"),
+    )
 
 
-def results_table(rows: list[dict]) -> str:
+def results_table(rows: list[ExperimentRow]) -> str:
     """A Markdown table of the rows (README's results section is this table)."""
     def percent(value: Optional[float]) -> str:
         return "" if value is None else f"{100 * value:+.0f} %"
@@ -118,14 +120,14 @@ def results_table(rows: list[dict]) -> str:
     for row in rows:
         norms = []
         for norm in NORMS:
-            entry = row["two_norms"][norm]
-            paper = f"; {percent(entry['paper_change'])}" if entry["paper_change"] is not None else ""
-            norms.append(f"{entry['sliding_on']:.4f}/{entry['sliding_off']:.4f}, {percent(entry['change'])}{paper}")
-        offset, alpha = row["final_lateral_offset_m"], row["final_alpha_error_rad"]
-        lines.append(f"| {row['experiment']} | {row['outcome']['sliding_on']}/{row['outcome']['sliding_off']} "
-                     f"| {row['duration_s']:.2f} ({row['paper_duration_s']:.2f}) "
-                     f"| {100 * offset['sliding_on']:+.2f}/{100 * offset['sliding_off']:+.2f} "
-                     f"| {1000 * alpha['sliding_on']:+.1f}/{1000 * alpha['sliding_off']:+.1f} | "
+            entry = row.two_norms[norm]
+            paper = f"; {percent(entry.paper_change)}" if entry.paper_change is not None else ""
+            norms.append(f"{entry.sliding_on:.4f}/{entry.sliding_off:.4f}, {percent(entry.change)}{paper}")
+        offset, alpha = row.final_lateral_offset_m, row.final_alpha_error_rad
+        lines.append(f"| {row.experiment} | {row.outcome.sliding_on}/{row.outcome.sliding_off} "
+                     f"| {row.duration_s:.2f} ({row.paper_duration_s:.2f}) "
+                     f"| {100 * offset.sliding_on:+.2f}/{100 * offset.sliding_off:+.2f} "
+                     f"| {1000 * alpha.sliding_on:+.1f}/{1000 * alpha.sliding_off:+.1f} | "
                      + " | ".join(norms) + " |")
     return "\n".join(lines)
 
@@ -150,10 +152,11 @@ def main(argv: Optional[list[str]] = None) -> int:
     run_domain()   # a domain of our own unless the user chose one: never another session's nodes
     from tqdm import tqdm
     experiments = [e for e in paper_experiments() if args.only is None or e.name in args.only]
-    rows, started, stopped = [], time.monotonic(), None
+    rows: list[ExperimentRow] = []
+    started, stopped = time.monotonic(), None
     with tqdm(total=2 * len(experiments), unit="run", file=sys.stderr) as bar:
         for experiment in experiments:
-            reports = {}
+            reports: dict[bool, RunReport] = {}
             for sliding_mode in (True, False):
                 label = f"{experiment.name}/sliding_{'on' if sliding_mode else 'off'}"
                 bar.set_description(label)
@@ -161,26 +164,24 @@ def main(argv: Optional[list[str]] = None) -> int:
                     reports[sliding_mode] = run_one(experiment, sliding_mode, run_dir / label,
                                                     args.config or config_dir(), args.timeout, args.tolerances)
                 except Exception as err:   # noqa: BLE001 - whatever stops a run is named, and what was done kept
-                    stopped = {"run": label, "reason": f"{type(err).__name__}: {err}"}
+                    stopped = StoppedRun(run=label, reason=f"{type(err).__name__}: {err}")
                     break
                 bar.update(1)
             if stopped is not None:
                 break
             rows.append(compare(experiment, reports[True], reports[False]))
-    summary = {"experiments": rows, "wall_time_s": time.monotonic() - started}
-    if stopped is not None:
-        summary["stopped"] = stopped
+    summary = ExperimentsSummary(rows, time.monotonic() - started, stopped)
     run_dir.mkdir(parents=True, exist_ok=True)
-    (run_dir / "experiments.json").write_text(json.dumps(summary, indent=2))
+    summary.write(run_dir / "experiments.json")
     if stopped is not None:
-        print(f"swim-experiments: stopped at {stopped['run']}: {stopped['reason']}; the {len(rows)} experiments "
+        print(f"swim-experiments: stopped at {stopped.run}: {stopped.reason}; the {len(rows)} experiments "
               f"done are in {run_dir / 'experiments.json'}", file=sys.stderr)
         return 1
     table = results_table(rows)
     (run_dir / "results.md").write_text(table + "\n")
     print(table)
-    print(f"swim-experiments: {len(rows)} experiments in {summary['wall_time_s']:.0f} s; results in {run_dir}")
-    return 0 if all(row["succeeded"] for row in rows) else 1
+    print(f"swim-experiments: {len(rows)} experiments in {summary.wall_time_s:.0f} s; results in {run_dir}")
+    return 0 if all(row.succeeded for row in rows) else 1
 
 
 if __name__ == "__main__":

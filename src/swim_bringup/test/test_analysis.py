@@ -3,8 +3,10 @@ import math
 
 import numpy as np
 import pytest
+from conftest import tracking_state_cdr
 
-from swim_bringup.analysis import Run, measures, summary_table, two_norm
+from swim_bringup.analysis import Run, measures, summary_table
+from swim_bringup.reports import RunAnalysis
 from swim_bringup.system import NodeSpec
 
 
@@ -23,30 +25,27 @@ def synthetic_run(alpha_offset_rad=0.0, radius_offset_m=0.0, constrained=False):
     return Run(time_s, measured, qdot, reference, torque, np.zeros((len(time_s), 2), bool), names, 0.43, True)
 
 
-def test_two_norm_of_a_constant_is_e_sqrt_t():
-    assert two_norm(np.linspace(0, 4, 101), np.full(101, 0.2)) == pytest.approx(0.2 * 2.0)
-
-
 def test_an_alpha_offset_is_a_chord_of_the_lane():
     report = measures(synthetic_run(alpha_offset_rad=0.1, constrained=True))
-    assert report["longitudinal_error_two_norm_m_s05"] == pytest.approx(0.43 * 0.1 * 2.0)
-    assert report["cartesian_error_two_norm_m_s05"] == pytest.approx(2 * 0.43 * math.sin(0.05) * 2.0)
-    assert report["lateral_error_two_norm_m_s05"] == 0.0 and report["final_alpha_error_rad"] == pytest.approx(0.1)
+    assert report.longitudinal_error_two_norm_m_s05 == pytest.approx(0.43 * 0.1 * 2.0)
+    assert report.cartesian_error_two_norm_m_s05 == pytest.approx(2 * 0.43 * math.sin(0.05) * 2.0)
+    assert report.lateral_error_two_norm_m_s05 == 0.0 and report.final_alpha_error_rad == pytest.approx(0.1)
 
 
 def test_a_lateral_offset_and_the_energy_used():
     report = measures(synthetic_run(radius_offset_m=0.01))
-    assert report["lateral_error_two_norm_m_s05"] == pytest.approx(0.01 * 2.0)
-    assert report["final_lateral_offset_m"] == pytest.approx(0.01)
+    assert report.lateral_error_two_norm_m_s05 == pytest.approx(0.01 * 2.0)
+    assert report.final_lateral_offset_m == pytest.approx(0.01)
     # int_0^4 |0.5 N m * d(sin t)/dt| dt = 0.5 int_0^4 |cos t| dt: |cos| integrates to 1 over [0, pi/2] and to
     # 1 - sin(4) over [pi/2, 4] (4 < 3 pi / 2)
     expected = 0.5 * (1.0 + (1.0 - math.sin(4.0)))
-    assert report["energy_used_j"] == pytest.approx(expected, rel=1e-3)
-    assert report["duration_s"] == 4.0 and report["peak_heave_torque_n_m"] == 0.5
+    assert report.energy_used_j == pytest.approx(expected, rel=1e-3)
+    assert report.duration_s == 4.0 and report.peak_heave_torque_n_m == 0.5
 
 
 def test_table_puts_runs_side_by_side():
-    table = summary_table({"with": measures(synthetic_run(0.1)), "without": measures(synthetic_run(0.2))})
+    table = summary_table({"with": RunAnalysis(measures(synthetic_run(0.1)), None),
+                           "without": RunAnalysis(measures(synthetic_run(0.2)), None)})
     header, *rows = table.splitlines()
     assert header.split() == ["with", "without"]
     row = next(r for r in rows if r.startswith("final_alpha_error_rad"))
@@ -64,22 +63,12 @@ def test_a_constrained_run_without_its_plan_is_refused_not_measured_at_radius_ze
     """The constrained vehicle's lane radius comes only with the plan: a bag that lacks it (a recorder stopped
     before the plan's fragments arrived) must not give two-norms of zero."""
     from swim_bringup.analysis import load_run
-    from swim_bringup.bag import BagWriter, swim_typestore
-    store = swim_typestore()
-    types = store.types
-    Time, Duration = types["builtin_interfaces/msg/Time"], types["builtin_interfaces/msg/Duration"]
-
-    def point(positions):
-        empty = np.zeros(0)
-        return types["trajectory_msgs/msg/JointTrajectoryPoint"](np.array(positions, float), np.zeros(3), empty,
-                                                                 empty, Duration(0, 0))
+    from swim_bringup.bag import BagWriter
     writer = BagWriter(tmp_path / "bag")
     for k in range(3):
-        message = types["swim_interfaces/msg/TrackingState"](
-            types["std_msgs/msg/Header"](Time(1, 8_000_000 * k), ""), ["alpha", "phi", "theta"],
-            point([0.0] * 3), point([0.01 * k, 0.0, 0.0]), point([-0.01 * k, 0.0, 0.0]), np.zeros(2), np.zeros(2),
-            np.zeros(2, bool), 0.008 * k, 1.0, 0, True)
-        writer.write("tracking_state", k + 1, bytes(store.serialize_cdr(message, message.__msgtype__)))
+        writer.write("tracking_state", k + 1,
+                     tracking_state_cdr(writer.store, ["alpha", "phi", "theta"], 1_000_000_000 + 8_000_000 * k,
+                                        0.008 * k, feedback=[0.01 * k, 0.0, 0.0], reference=[0.0] * 3))
     writer.close()
     with pytest.raises(ValueError, match="no plan message"):
         load_run(tmp_path / "bag")

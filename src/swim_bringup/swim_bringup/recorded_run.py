@@ -1,0 +1,111 @@
+"""One closed-loop run over DDS, recorded and analysed: what swim-demo and swim-experiments each do per run.
+
+run_recorded brings up the nodes (system.System), requests and executes the maneuver while the run's topics are
+recorded to a bag (run_client.RunClient), stops the nodes, and writes report.json (reports.RunReport) and the
+figures (analysis). run_failures says why a report is not a success. The tracker's tolerances of a run default to
+RUN_TOLERANCES; add_tolerance_arguments and parse_with_tolerances give a CLI the options for them.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import time
+from pathlib import Path
+from typing import Callable, Optional
+
+from swim_bringup.analysis import analyze, write_figures
+from swim_bringup.reports import RunReport, TrackerResult
+from swim_bringup.run_client import STARTUP_TIMEOUT_S, RunClient, RunError
+from swim_bringup.system import NodeSpec, System
+from swim_controller.supervisor import Tolerances
+
+#: the paper's constrained maneuver (Sec. 7.1): accelerate to E1, cruise x2, cruise-to-cruise, cruise x2, stop
+PAPER_CONSTRAINED = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05",
+                      "constrained/cruise_to_cruise/E0.05-E0.10", "constrained/cruise/E0.10",
+                      "constrained/decelerate/E0.10"], [1, 2, 1, 2, 1])
+#: the paper's free lane keeping (Sec. 7.2) at R = 0.43 m: accelerate, 14 cruises, decelerate (20 s); the default
+#: on the bridge, whose emulated rig is the free vehicle
+PAPER_LANE_KEEPING = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/decelerate/R0.43/E0.05"],
+                      [1, 14, 1])
+#: what the tracker checks on every run (0: not checked), so that a vehicle that lost its plan is not reported
+#: as a success. All assumed: a vehicle a radian behind or ahead of its plan (43 cm of hub travel at R = 0.43 m)
+#: is lost; at the end, within 0.25 rad (11 cm of travel; the slowed constrained maneuver at lambda = 0.8 ends
+#: 0.16 rad behind) and nearer its lane than the next one (lanes 5 cm apart, Fig. 12: 2.5 cm)
+RUN_TOLERANCES = Tolerances(path_alpha_rad=1.0, path_r_m=0.0, goal_alpha_rad=0.25, goal_r_m=0.025)
+
+Progress = Callable[[float], None]   # called with the fraction of the plan done, 0 to 1
+
+
+def run_maneuver(bag_path: Path, primitive_ids: list[str], repeat_counts: list[int], time_scale: float,
+                 timeout_s: float, progress: Optional[Progress] = None,
+                 tolerances: Tolerances = RUN_TOLERANCES) -> TrackerResult:
+    """Request the maneuver, execute it, record the run into the bag at bag_path; the tracker's result. RunError
+    if the run could not be done."""
+    with RunClient(bag_path) as client:
+        client.wait_for_nodes(STARTUP_TIMEOUT_S)
+        handle = client.execute(client.request(primitive_ids, repeat_counts, time_scale), progress, tolerances)
+        result = client.result(handle, timeout_s)
+        try:
+            client.drain(result.duration_s)
+        except RunError as err:   # name how the goal ended: a goal lost at its start leaves nothing to drain
+            raise RunError(f"{err}; the goal ended after {result.duration_s:.3f} s with code {result.error_code}: "
+                           f"{result.error_string}") from err
+        return TrackerResult(error_code=result.error_code, error_string=result.error_string,
+                             final_alpha_error_rad=result.final_alpha_error_rad, duration_s=result.duration_s)
+
+
+def run_recorded(specs: list[NodeSpec], run_dir: Path, primitive_ids: list[str], repeat_counts: list[int],
+                 time_scale: float, timeout_s: float, tolerances: Tolerances = RUN_TOLERANCES,
+                 progress: Optional[Progress] = None) -> RunReport:
+    """One closed-loop run: bring up the nodes of specs (logs in run_dir/logs), run the maneuver recorded into
+    run_dir/bag, stop the nodes; then analyse the bag and write report.json and the figures into run_dir.
+    Returns the report: the analysis measures, the tracker's result and the wall time. RunError if a node died
+    or the run could not be done."""
+    started = time.monotonic()
+    with System(specs, run_dir / "logs") as system:
+        def on_progress(fraction: float) -> None:
+            if progress is not None:
+                progress(fraction)
+            if system.dead():
+                raise RunError(f"{', '.join(system.dead())} died (see {run_dir / 'logs'})")
+        result = run_maneuver(run_dir / "bag", primitive_ids, repeat_counts, time_scale, timeout_s, on_progress,
+                              tolerances)
+    analysis = analyze(run_dir / "bag")
+    report = RunReport(analysis.measures, analysis.bridge, result, time.monotonic() - started)
+    report.write(run_dir / "report.json")
+    write_figures(run_dir / "bag", run_dir)
+    return report
+
+
+def run_failures(report: RunReport) -> list[str]:
+    """Why a run's report is not a success (empty if it is): the tracker's result, the bridge's latched faults."""
+    failures = []
+    if report.result.error_code != 0:
+        failures.append(f"the tracker ended with {report.result.error_string or report.result.error_code}")
+    if report.bridge is not None and report.bridge.bridge_faults != "NONE":
+        failures.append(f"the bridge latched {report.bridge.bridge_faults}: the motors were off from then on")
+    return failures
+
+
+def add_tolerance_arguments(parser: argparse.ArgumentParser) -> None:
+    """The tracker's tolerances as options (defaults: RUN_TOLERANCES; 0 switches one off)."""
+    for option, field, unit in (("--path-tolerance-alpha", "path_alpha_rad", "rad"),
+                                ("--path-tolerance-r", "path_r_m", "m"),
+                                ("--goal-tolerance-alpha", "goal_alpha_rad", "rad"),
+                                ("--goal-tolerance-r", "goal_r_m", "m")):
+        parser.add_argument(option, dest=field, type=float, default=getattr(RUN_TOLERANCES, field),
+                            help=f"tracker tolerance, {unit} (0: not checked; default %(default)s)")
+
+
+def parse_with_tolerances(parser: argparse.ArgumentParser, argv: Optional[list[str]]) -> argparse.Namespace:
+    """parser's arguments plus the tolerance options; args.tolerances is the Tolerances they name (a negative or
+    non-finite one is a usage error)."""
+    add_tolerance_arguments(parser)
+    args = parser.parse_args(argv)
+    try:
+        args.tolerances = Tolerances(**{field.name: getattr(args, field.name)
+                                        for field in dataclasses.fields(Tolerances)})
+        args.tolerances.validate()
+    except ValueError as err:
+        parser.error(str(err))
+    return args

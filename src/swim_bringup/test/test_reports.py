@@ -1,0 +1,108 @@
+"""The typed reports keep the JSON forms of report.json and experiments.json: every key, its nesting and order, for
+reports made by the real analysis of recorded bags (no ROS); and a JSON object that is not a report is refused."""
+import json
+import math
+
+import pytest
+from conftest import diagnostics_cdr, tracking_state_cdr
+
+from swim_bringup.analysis import analyze
+from swim_bringup.bag import BagWriter
+from swim_bringup.experiments import compare, paper_experiments
+from swim_bringup.recorded_run import run_failures
+from swim_bringup.reports import (ExperimentsSummary, ReportError, RunAnalysis, RunReport, StoppedRun,
+                                  TrackerResult)
+
+#: report.json's keys, in order, as swim-demo writes them (the file's readers and the docs rely on them)
+MEASURE_KEYS = ["duration_s", "longitudinal_error_two_norm_m_s05", "lateral_error_two_norm_m_s05",
+                "cartesian_error_two_norm_m_s05", "final_alpha_error_rad", "final_lateral_offset_m",
+                "peak_heave_torque_n_m", "peak_pitch_torque_n_m", "saturated_fraction", "energy_used_j",
+                "sliding_mode_enabled", "periods"]
+BRIDGE_KEYS = ["bridge_faults", "bridge_overruns"]
+RESULT_KEYS = ["error_code", "error_string", "final_alpha_error_rad", "duration_s"]
+#: experiments.json's keys: a row, its pairs of runs and its two-norm comparisons
+ROW_KEYS = ["experiment", "time_scale", "duration_s", "paper_duration_s", "final_lateral_offset_m",
+            "final_alpha_error_rad", "saturated_fraction", "two_norms", "succeeded", "outcome"]
+PAIR_KEYS = ["sliding_on", "sliding_off"]
+NORM_KEYS = ["sliding_on", "sliding_off", "change", "paper_change"]
+PERIOD_S, PERIODS = 0.008, 251                 # 2 s of tracking
+LANE_M, OFFSET_M = 0.43, 0.01
+
+
+def record_free_run(path, bridge_faults=None):
+    """A bag of the free vehicle held OFFSET_M outside its lane for 2 s, and bridge_node's /diagnostics if
+    bridge_faults is given."""
+    writer = BagWriter(path)
+    for k in range(PERIODS):
+        time_s = k * PERIOD_S
+        reference = [0.3 * time_s, LANE_M, math.sin(time_s), math.cos(time_s)]
+        feedback = [reference[0], LANE_M + OFFSET_M, *reference[2:]]
+        writer.write("tracking_state", k + 1,
+                     tracking_state_cdr(writer.store, ["alpha", "R", "phi", "theta"], 1_000_000_000 + 8_000_000 * k,
+                                        time_s, feedback, reference, output_torques=(0.5, 0.0)))
+    if bridge_faults is not None:
+        writer.write("/diagnostics", PERIODS + 1, diagnostics_cdr(writer.store, "bridge_node", bridge_faults, 2, 3))
+    writer.close()
+    return path
+
+
+def report_of(bag, error_code=0, error_string="succeeded"):
+    analysis = analyze(bag)
+    return RunReport(analysis.measures, analysis.bridge, TrackerResult(error_code, error_string, 0.0, 2.0), 9.5)
+
+
+def test_report_json_keeps_its_keys_and_reads_back(tmp_path):
+    report = report_of(record_free_run(tmp_path / "bag"))
+    # the analysis measured the bag: a constant lateral offset e over T has the two-norm e sqrt(T)
+    assert report.measures.lateral_error_two_norm_m_s05 == pytest.approx(OFFSET_M * math.sqrt(2.0))
+    assert report.measures.periods == PERIODS and report.bridge is None
+    data = json.loads(json.dumps(report.to_json()))
+    assert list(data) == MEASURE_KEYS + ["result", "wall_time_s"]
+    assert list(data["result"]) == RESULT_KEYS
+    report.write(tmp_path / "report.json")
+    assert RunReport.load(tmp_path / "report.json") == report
+    assert list(RunAnalysis(report.measures, report.bridge).to_json()) == MEASURE_KEYS   # swim-analyze --output
+
+
+def test_a_run_on_the_bridge_adds_the_bridges_keys(tmp_path):
+    report = report_of(record_free_run(tmp_path / "bag", bridge_faults="OVERRUN"))
+    data = report.to_json()
+    assert list(data) == MEASURE_KEYS + BRIDGE_KEYS + ["result", "wall_time_s"]
+    assert (data["bridge_faults"], data["bridge_overruns"]) == ("OVERRUN", 2)
+    assert RunReport.from_json(data) == report
+    assert run_failures(report) == ["the bridge latched OVERRUN: the motors were off from then on"]
+
+
+def test_an_object_that_is_not_a_report_is_refused(tmp_path):
+    data = report_of(record_free_run(tmp_path / "bag")).to_json()
+    missing = {key: value for key, value in data.items() if key != "periods"}
+    with pytest.raises(ReportError, match=r"missing \['periods'\], unexpected \[\]"):
+        RunReport.from_json(missing)
+    with pytest.raises(ReportError, match=r"unexpected \['speed'\]"):
+        RunReport.from_json({**data, "speed": 1.0})
+    with pytest.raises(ReportError, match="tracker result"):
+        RunReport.from_json({**data, "result": {"error_code": 0}})
+
+
+def test_experiments_json_keeps_its_keys_and_reads_back(tmp_path):
+    """compare() of two analysed runs, written as swim-experiments writes experiments.json."""
+    on = report_of(record_free_run(tmp_path / "on"))
+    off = report_of(record_free_run(tmp_path / "off", bridge_faults="NONE"), -4, "path tolerance violated")
+    row = compare(paper_experiments()[4], on, off)
+    summary = ExperimentsSummary([row], 20.0, StoppedRun("lane_keeping_lambda1.10/sliding_on", "RuntimeError: x"))
+    summary.write(tmp_path / "experiments.json")
+    data = json.loads((tmp_path / "experiments.json").read_text())
+    assert list(data) == ["experiments", "wall_time_s", "stopped"]
+    assert list(data["stopped"]) == ["run", "reason"]
+    (written,) = data["experiments"]
+    assert list(written) == ROW_KEYS
+    for key in ("final_lateral_offset_m", "final_alpha_error_rad", "saturated_fraction", "outcome"):
+        assert list(written[key]) == PAIR_KEYS, key
+    assert list(written["two_norms"]) == ["longitudinal_error_two_norm_m_s05", "lateral_error_two_norm_m_s05",
+                                          "cartesian_error_two_norm_m_s05"]
+    for comparison in written["two_norms"].values():
+        assert list(comparison) == NORM_KEYS
+    assert written["outcome"] == {"sliding_on": "ok", "sliding_off": "the tracker ended with path tolerance violated"}
+    assert written["two_norms"]["lateral_error_two_norm_m_s05"]["change"] == 0.0   # the same bag's offset
+    assert ExperimentsSummary.load(tmp_path / "experiments.json") == summary
+    assert list(ExperimentsSummary([row], 20.0).to_json()) == ["experiments", "wall_time_s"]   # none stopped
