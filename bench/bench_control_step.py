@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from swim_controller.tracker import CascadeTracker, Reference, model_io_linearization
+from swim_controller.tracker import CascadeTracker, model_io_linearization
 from swim_model import VehicleModel, load_rig
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.maneuver import concatenate, expand_sequence
@@ -23,17 +23,15 @@ PAPER = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05", "constrain
 
 def main() -> None:
     rig = load_rig()
-    plan = concatenate(PrimitiveLibrary.load(default_library_path(), rig), rig, expand_sequence(*PAPER), 1.2)
+    trajectory = concatenate(PrimitiveLibrary.load(default_library_path(), rig), rig, expand_sequence(*PAPER), 1.2)
     model = VehicleModel(rig, constrained=True)
-    reference = Reference(plan.time_s, plan.q, plan.qdot, plan.foil_acceleration, plan.torque, plan.lqr_gain,
-                          plan.sliding_gain)
     tracker = CascadeTracker(model_io_linearization(model), model.torque_limits(), sample_period_s=0.001)
-    tracker.start(reference)
+    tracker.start(trajectory)
     rng = np.random.default_rng(0)
     durations = []
     for k in range(20000):
-        t = (k * 0.001) % reference.duration_s
-        point = reference.sample(t)
+        t = (k * 0.001) % trajectory.duration_s
+        point = trajectory.sample(t)
         q = point.q + rng.normal(scale=0.01, size=3)
         qdot = point.qdot + rng.normal(scale=0.05, size=3)
         started = time.perf_counter()

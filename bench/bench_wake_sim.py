@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 from swim_bringup.demo import PAPER_CONSTRAINED
-from swim_controller.closed_loop import reference_of, simulate
+from swim_controller.closed_loop import simulate
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.tracker import CascadeTracker, model_io_linearization
 from swim_model import VehicleModel, load_rig
@@ -69,7 +69,7 @@ def closed_loop(model, reference, wake_on: bool, sliding: bool) -> tuple[dict, T
 def main() -> None:
     rig = load_rig()
     library = PrimitiveLibrary.load(default_library_path(), rig)
-    reference = reference_of(concatenate(library, rig, expand_sequence(*PAPER_CONSTRAINED), 1.0))
+    reference = concatenate(library, rig, expand_sequence(*PAPER_CONSTRAINED), 1.0)
     model = VehicleModel(rig, constrained=True, lane_radius_m=library.spec(PAPER_CONSTRAINED[0][0]).lane_radius_m)
     closed_loop(model, reference, False, True)   # compile and warm up
     wake_on, timed, loop_wall_s = closed_loop(model, reference, True, True)

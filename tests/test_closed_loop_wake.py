@@ -24,7 +24,7 @@ while the term rejects bounded torques on the motors (sliding_mode.py).
 import numpy as np
 import pytest
 
-from swim_controller.closed_loop import reference_of, simulate
+from swim_controller.closed_loop import simulate
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.tracker import CascadeTracker, model_io_linearization
 
@@ -77,7 +77,7 @@ def runs(library, model_for, rig):
     from swim_sim.disturbances import Disturbances
     from swim_sim.plant import Plant
     from swim_sim.wake_coupling import WakeCoupling
-    reference = reference_of(concatenate(library, rig, expand_sequence([ACCELERATE], []), 1.0))
+    reference = concatenate(library, rig, expand_sequence([ACCELERATE], []), 1.0)
     model = model_for(library.spec(ACCELERATE))
     results = {}
     for wake_on in (False, True):

@@ -4,6 +4,7 @@ The plant is swim_model's ideal constrained vehicle: it publishes joint_states s
 waits for the node's torque command for that state, integrates one 8 ms period (RK4, torque held) and
 repeats, so runs are deterministic and faster than real time.
 """
+import math
 import time
 
 import numpy as np
@@ -49,12 +50,12 @@ def plan_message():
     from swim_planner.library import PrimitiveLibrary
     from swim_planner.maneuver import concatenate, expand_sequence
     from swim_planner.paths import default_library_path
-    from swim_planner.planner_node import plan_to_message
+    from swim_controller.messages import trajectory_to_message
     from builtin_interfaces.msg import Time
     rig = load_rig()
     library = PrimitiveLibrary.load(default_library_path(), rig)
     plan = concatenate(library, rig, expand_sequence(SHORT_PLAN, [1, 1]))
-    return plan_to_message(plan, Time())
+    return trajectory_to_message(plan, Time())
 
 
 class LockStepPlant:
@@ -279,3 +280,35 @@ def test_parameters_are_validated_and_switch_sliding_mode_mid_plan(rig_loop, pla
     assert set_parameter("sliding_mode_enabled", True).successful
     result = run_until(plant, future, 2000)
     assert result.error_code == ExecutePlan.Result.SUCCESSFUL, result.error_string
+
+
+def test_a_time_scale_past_the_motor_limits_refuses_the_goal(rig_loop, plan_message):
+    """time_scale re-times each new goal's plan by the one time scaling (swim_controller.trajectory): past the motor
+    limits the goal is refused with the largest feasible time scale named; within them the plan runs re-timed."""
+    from rclpy.parameter import Parameter
+    from swim_interfaces.action import ExecutePlan
+    from swim_interfaces.msg import TrackingState
+    from swim_model import load_rig
+    from swim_ros.calls import ParameterCalls
+    plant, client = rig_loop
+    plant.q, plant.qdot = np.zeros(3), np.zeros(3)
+    parameters = ParameterCalls(plant.node, plant.executor, "tracker_node", POLICY)
+    torque = np.asarray(plan_message.feedforward_torques).reshape(-1, 2)
+    # lambda^2 tau reaches the limits at lambda = 1 / sqrt(max |tau| / limit)
+    largest = 1.0 / math.sqrt((np.abs(torque) / np.asarray(load_rig().torque_limits_n_m)).max())
+    tracking = []
+    plant.node.create_subscription(TrackingState, "tracking_state", tracking.append, 10)
+    try:
+        assert parameters.set([Parameter("time_scale", value=1.2 * largest)])[0].successful
+        _, future = send(plant, client, plan_message)
+        result = run_until(plant, future, 0)
+        assert result.error_code == ExecutePlan.Result.INVALID_PLAN
+        assert f"the largest feasible time scale for this plan is {largest:.3f}" in result.error_string
+        assert parameters.set([Parameter("time_scale", value=0.9 * largest)])[0].successful
+        handle, future = send(plant, client, plan_message)
+        step_until(plant, lambda: tracking, TRACKING_WAIT_PERIODS)
+        assert tracking and tracking[-1].time_scale == pytest.approx(0.9 * largest, rel=1e-12)
+        handle.cancel_goal_async()
+        assert run_until(plant, future, 100).error_code == ExecutePlan.Result.CANCELED
+    finally:
+        parameters.set([Parameter("time_scale", value=1.0)])

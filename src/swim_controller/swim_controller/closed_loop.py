@@ -12,35 +12,11 @@ from typing import Callable, Optional, Protocol
 import numpy as np
 import numpy.typing as npt
 
-from swim_controller.tracker import CascadeTracker, Reference
+from swim_controller.tracker import CascadeTracker
+from swim_controller.trajectory import Trajectory
 from swim_model import VehicleModel
 
 Array = npt.NDArray[np.float64]
-
-
-class SampledPlan(Protocol):
-    """What reference_of reads of a plan (swim_planner.maneuver.Plan is one)."""
-
-    @property
-    def time_s(self) -> Array: ...
-    @property
-    def q(self) -> Array: ...
-    @property
-    def qdot(self) -> Array: ...
-    @property
-    def foil_acceleration(self) -> Array: ...
-    @property
-    def torque(self) -> Array: ...
-    @property
-    def lqr_gain(self) -> Array: ...
-    @property
-    def sliding_gain(self) -> Array: ...
-
-
-def reference_of(plan: SampledPlan) -> Reference:
-    """The tracker's Reference of a plan (swim_planner.maneuver.Plan: samples, torques and time-scaled gains)."""
-    return Reference(plan.time_s, plan.q, plan.qdot, plan.foil_acceleration, plan.torque, plan.lqr_gain,
-                     plan.sliding_gain)
 
 
 class SteppedState(Protocol):
@@ -73,22 +49,23 @@ class Run:
         return self.q - self.q_reference
 
     def two_norm(self, column: int, until_s: Optional[float] = None) -> float:
-        """sqrt(int e^2 dt) of one coordinate's error (the paper's measure, Sec. 7), over the run or its start."""
-        step = self.time_s[1] - self.time_s[0]
-        error = self.error[:, column] if until_s is None else self.error[self.time_s < until_s, column]
-        return float(np.sqrt(np.sum(error ** 2) * step))
+        """sqrt(int e^2 dt) of one coordinate's error (the paper's measure, Sec. 7; measures.two_norm), over the
+        run or over its samples before until_s."""
+        from swim_controller.measures import two_norm   # here: this method is the module's only user
+        kept = slice(None) if until_s is None else self.time_s < until_s
+        return two_norm(self.time_s[kept], self.error[kept, column])
 
 
-def simulate(model: VehicleModel, tracker: CascadeTracker, reference: Reference, sample_period_s: float = 0.008,
+def simulate(model: VehicleModel, tracker: CascadeTracker, trajectory: Trajectory, sample_period_s: float = 0.008,
              substeps: int = 8, q0: Optional[npt.ArrayLike] = None, qdot0: Optional[npt.ArrayLike] = None,
              disturbance: Callable[[float], Array] = lambda t: np.zeros(2), extra_time_s: float = 0.0,
              plant: Optional[Stepper] = None) -> Run:
-    tracker.start(reference)
-    q = reference.q[0].copy() if q0 is None else np.array(q0, dtype=float)
-    qdot = reference.qdot[0].copy() if qdot0 is None else np.array(qdot0, dtype=float)
+    tracker.start(trajectory)
+    q = trajectory.q[0].copy() if q0 is None else np.array(q0, dtype=float)
+    qdot = trajectory.qdot[0].copy() if qdot0 is None else np.array(qdot0, dtype=float)
     if plant is not None:
         plant.reset(q, qdot)
-    periods = int(round((reference.duration_s + extra_time_s) / sample_period_s))
+    periods = int(round((trajectory.duration_s + extra_time_s) / sample_period_s))
     times, qs, refs, torques, saturations = [], [], [], [], []
     for k in range(periods):
         t = k * sample_period_s

@@ -1,30 +1,65 @@
-"""Between ROS messages and the tracker's types: checked, so a bad message is refused, never used."""
+"""Between ROS messages and the tracker's types: checked, so a bad message is refused, never used.
+
+PlannedTrajectory (swim_interfaces v2) <-> trajectory.Trajectory: ``trajectory_to_message`` (the planner's
+encoder) and ``trajectory_from_message`` (the tracker's decoder) side by side, so the layout is written once.
+"""
 from __future__ import annotations
 
+import dataclasses
 from typing import Optional, Sequence
 
 import numpy as np
 import numpy.typing as npt
+from swim_interfaces.msg import PlannedTrajectory, PrimitiveSegment
 
 from swim_controller.errors import PlanError, StateMessageError
 from swim_controller.riccati import error_state_size
-from swim_controller.tracker import Reference
+from swim_controller.trajectory import MAX_TRACKED_SAMPLES, Segment, Trajectory
 from swim_model.velocity_filter import VelocityEstimator
 from swim_model.vehicle import JOINT_NAMES_CONSTRAINED, JOINT_NAMES_UNCONSTRAINED
-from swim_ros.codecs import MessageError, joint_state_arrays, seconds_of
+from swim_ros.codecs import MessageError, float_array, joint_state_arrays, seconds_of
 
 Array = npt.NDArray[np.float64]
+#: the PlannedTrajectory layout this module writes and reads (swim_interfaces' INTERFACE_VERSION)
 SUPPORTED_INTERFACE_VERSION = 2
 
 
-def reference_from_message(plan, joint_names: Sequence[str]) -> Reference:
-    """A swim_interfaces/PlannedTrajectory as a Reference; raises PlanError naming what is wrong."""
+def trajectory_to_message(trajectory: Trajectory, stamp) -> PlannedTrajectory:
+    """A Trajectory as a swim_interfaces/PlannedTrajectory stamped ``stamp`` (builtin_interfaces/Time)."""
+    message = PlannedTrajectory()
+    message.header.stamp = stamp
+    message.interface_version = SUPPORTED_INTERFACE_VERSION
+    message.constrained = trajectory.constrained
+    message.lane_radius_m = float(trajectory.lane_radius_m)
+    message.joint_names = list(trajectory.joint_names)
+    message.time_from_start_s = float_array(trajectory.time_s)
+    message.positions = float_array(trajectory.q)
+    message.velocities = float_array(trajectory.qdot)
+    message.foil_accelerations = float_array(trajectory.foil_acceleration)
+    message.feedforward_torques = float_array(trajectory.torque)
+    message.lqr_gains = float_array(trajectory.lqr_gain)
+    message.sliding_gains = float_array(trajectory.riccati_input_gain)
+    message.segments = [PrimitiveSegment(**dataclasses.asdict(s)) for s in trajectory.segments]
+    message.library_digest = trajectory.library_digest
+    return message
+
+
+def trajectory_from_message(plan: PlannedTrajectory) -> Trajectory:
+    """A swim_interfaces/PlannedTrajectory as a Trajectory; raises PlanError naming what is wrong: another
+    interface version, more than MAX_TRACKED_SAMPLES samples, joints that are not the vehicle's, arrays of the
+    wrong length, non-finite values, times out of order, segments that do not tile the samples."""
     if plan.interface_version != SUPPORTED_INTERFACE_VERSION:
         raise PlanError(f"plan interface version {plan.interface_version}, this tracker reads "
                         f"{SUPPORTED_INTERFACE_VERSION}")
-    if tuple(plan.joint_names) != tuple(joint_names):
-        raise PlanError(f"plan joints {list(plan.joint_names)} do not match the vehicle's {list(joint_names)}")
-    samples, nq = len(plan.time_from_start_s), len(joint_names)
+    samples = len(plan.time_from_start_s)
+    if samples > MAX_TRACKED_SAMPLES:
+        raise PlanError(f"the plan has {samples} samples, more than the largest plan this tracker accepts "
+                        f"({MAX_TRACKED_SAMPLES}, swim_controller.trajectory.MAX_TRACKED_SAMPLES)")
+    joint_names = JOINT_NAMES_CONSTRAINED if plan.constrained else JOINT_NAMES_UNCONSTRAINED
+    if tuple(plan.joint_names) != joint_names:
+        vehicle = "constrained" if plan.constrained else "free"
+        raise PlanError(f"plan joints {list(plan.joint_names)} are not the {vehicle} vehicle's {list(joint_names)}")
+    nq = len(joint_names)
     n = error_state_size(nq, nq - 2)
 
     def array(name: str, shape: tuple[int, ...]) -> Array:
@@ -33,13 +68,14 @@ def reference_from_message(plan, joint_names: Sequence[str]) -> Reference:
             raise PlanError(f"plan {name} has {values.size} values, expected {int(np.prod(shape))} for "
                             f"{samples} samples")
         return values.reshape(shape)
-    return Reference(
+    fields = [field.name for field in dataclasses.fields(Segment)]   # PrimitiveSegment's, by name
+    segments = tuple(Segment(**{name: getattr(s, name) for name in fields}) for s in plan.segments)
+    return Trajectory(
         time_s=np.asarray(plan.time_from_start_s, dtype=float), q=array("positions", (samples, nq)),
         qdot=array("velocities", (samples, nq)), foil_acceleration=array("foil_accelerations", (samples, 2)),
         torque=array("feedforward_torques", (samples, 2)), lqr_gain=array("lqr_gains", (samples, 2, n)),
-        sliding_gain=array("sliding_gains", (samples, 2, n)), joint_names=tuple(joint_names),
-        segment_start_s=tuple(s.start_time_s for s in plan.segments),
-        time_scale=plan.segments[0].time_scale if plan.segments else 1.0)
+        riccati_input_gain=array("sliding_gains", (samples, 2, n)), segments=segments,
+        lane_radius_m=plan.lane_radius_m, library_digest=plan.library_digest)
 
 
 def state_from_message(message, joint_names: Optional[Sequence[str]], velocity: VelocityEstimator,

@@ -283,8 +283,8 @@ def continued_terminal(cycle_transitions: Array, cycle_duration_s: float, termin
 class TrackingGains:
     """What the tracker needs along one primitive, at its samples: P(t) and G(t)' P(t)."""
 
-    riccati: Array        # P, (N, n, n)
-    input_gain: Array     # G' P, (N, 2, n): du = -R^-1 G'P x and s = Mio^-1 G'P x (eq. 24)
+    riccati: Array              # P, (N, n, n)
+    riccati_input_gain: Array   # G' P, (N, 2, n): du = -R^-1 G'P x and s = Mio^-1 G'P x (eq. 24)
 
 
 def primitive_gains(model: VehicleModel, time_s: Array, q: Array, qdot: Array, foil_acceleration: Array,
@@ -306,5 +306,5 @@ def primitive_gains(model: VehicleModel, time_s: Array, q: Array, qdot: Array, f
         terminal = continued_terminal(transitions[:cycle_samples - 1], time_s[cycle_samples - 1] - time_s[0],
                                       terminal, weights.cruise_lookahead_s)
     riccati = sweep_backward(transitions, terminal)
-    input_gain = np.einsum("kni,knm->kim", linearization.input_matrix, riccati)
-    return TrackingGains(riccati=riccati, input_gain=input_gain)
+    riccati_input_gain = np.einsum("kni,knm->kim", linearization.input_matrix, riccati)
+    return TrackingGains(riccati=riccati, riccati_input_gain=riccati_input_gain)

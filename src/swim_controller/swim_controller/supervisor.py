@@ -15,7 +15,8 @@ from typing import Optional
 import numpy as np
 import numpy.typing as npt
 
-from swim_controller.tracker import CascadeTracker, ControlOutput, Reference
+from swim_controller.tracker import CascadeTracker, ControlOutput
+from swim_controller.trajectory import Trajectory
 
 Array = npt.NDArray[np.float64]
 
@@ -80,10 +81,10 @@ class Supervisor:
         self.last_errors: tuple[float, float] = (0.0, 0.0)   # alpha, R at the last tracked period
         self.elapsed_s = 0.0
 
-    def begin(self, reference: Reference, tolerances: Tolerances = Tolerances()) -> None:
-        """Start tracking reference at the next state (its stamp is plan time 0)."""
+    def begin(self, trajectory: Trajectory, tolerances: Tolerances = Tolerances()) -> None:
+        """Start tracking trajectory at the next state (its stamp is plan time 0)."""
         tolerances.validate()
-        self.tracker.start(reference)
+        self.tracker.start(trajectory)
         self.tolerances = tolerances
         self._start_time_s = None
         self.mode = Mode.TRACKING
@@ -116,9 +117,9 @@ class Supervisor:
             self._start_time_s = time_s
         plan_time_s = time_s - self._start_time_s
         output = self.tracker.step(plan_time_s, q, qdot)
-        reference = self.tracker.reference
-        assert reference is not None   # TRACKING: begin() started the tracker on it
-        lateral_error = float(q[1] - output.reference.q[1]) if reference.ny == 2 else 0.0
+        trajectory = self.tracker.trajectory
+        assert trajectory is not None   # TRACKING: begin() started the tracker on it
+        lateral_error = float(q[1] - output.reference.q[1]) if trajectory.ny == 2 else 0.0
         errors = (float(q[0] - output.reference.q[0]), lateral_error)
         self.last_errors = errors
         self.elapsed_s = plan_time_s
@@ -130,7 +131,7 @@ class Supervisor:
                            or _violates(errors[1], self.tolerances.goal_r_m))
             outcome = Outcome.GOAL_TOLERANCE_VIOLATED if goal_missed else Outcome.SUCCEEDED
         if outcome is not None:
-            self._hold_target = reference.q[-1, -2:].copy() if outcome is Outcome.SUCCEEDED else q[-2:].copy()
+            self._hold_target = trajectory.q[-1, -2:].copy() if outcome is Outcome.SUCCEEDED else q[-2:].copy()
             self.mode = Mode.HOLDING
             if outcome is not Outcome.SUCCEEDED:
                 torque, saturated = self.tracker.hold(q, qdot, self._hold_target)

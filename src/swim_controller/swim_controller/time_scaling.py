@@ -51,24 +51,21 @@ def scale_weights(state_weight: Array, input_weight: Array, terminal: Array, tim
     return time_scale * state_weight * outer, input_weight / time_scale, terminal * outer
 
 
-def scale_feedback(input_gain: Array, input_weight_diagonal: Array, time_scale: float | Array, ny: int,
-                   nq: int) -> tuple[Array, Array]:
-    """The gains of eq. 33 from the unscaled G'P (N, 2, n), at each sample's lambda (scalar or (N,)).
+def lqr_gain_from(riccati_input_gain: Array, input_weight_diagonal: Array) -> Array:
+    """K = R^-1 G'P (eq. 19; eq. 33 at lambda = 1), (N, 2, n), from G'P (N, 2, n) and R's diagonal (2,):
+    the gains of a plan at lambda = 1, which retime_feedback scales."""
+    return riccati_input_gain * (1.0 / np.asarray(input_weight_diagonal, dtype=float))[None, :, None]
+
+
+def retime_feedback(lqr_gain: Array, riccati_input_gain: Array, time_scale: float | Array, ny: int,
+                    nq: int) -> tuple[Array, Array]:
+    """The gains of eq. 33 of a plan made at lambda = 1, rescaled to lambda per sample (scalar or (N,)).
 
     Returns:
         lqr_gain: K = lambda R^-1 (G'P) Gamma, so that u = lambda^2 u_des - K x  (1/s^2 and 1/s units by block)
-        sliding_gain: (G'P) Gamma = G_l' P_l, so that s = Mio^-1 G_l' P_l x (eq. 24)
+        riccati_input_gain: (G'P) Gamma = G_l' P_l, so that s = Mio^-1 G_l' P_l x (eq. 24)
+    Scalings compose: rescaling by lambda2 gains already at lambda1 gives those at lambda1 lambda2.
     """
-    scale = np.broadcast_to(np.asarray(time_scale, dtype=float), input_gain.shape[:1])
-    gamma = scaling_diagonal(scale, ny, nq)                    # (N, n)
-    sliding_gain = input_gain * gamma[:, None, :]
-    lqr_gain = sliding_gain * (scale[:, None, None] / np.asarray(input_weight_diagonal)[None, :, None])
-    return lqr_gain, sliding_gain
-
-
-def retime_feedback(lqr_gain: Array, sliding_gain: Array, time_scale: float | Array, ny: int,
-                    nq: int) -> tuple[Array, Array]:
-    """The gains of a plan made at lambda = 1, rescaled to lambda per sample (scalar or (N,))."""
     scale = np.broadcast_to(np.asarray(time_scale, dtype=float), lqr_gain.shape[:1])
     gamma = scaling_diagonal(scale, ny, nq)[:, None, :]
-    return lqr_gain * gamma * scale[:, None, None], sliding_gain * gamma
+    return lqr_gain * gamma * scale[:, None, None], riccati_input_gain * gamma

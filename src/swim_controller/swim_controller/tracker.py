@@ -1,7 +1,7 @@
 """The cascade tracker (paper Sec. 6, Fig. 18): LQ feedback on u = psiddot, I/O linearization, sliding mode.
 
-At each control period, with the plan sampled at the current plan time t (gains already time-scaled and
-concatenated by the planner, see time_scaling):
+At each control period, with the plan (a trajectory.Trajectory) sampled at the current plan time t (gains
+already time-scaled and concatenated by the planner, see time_scaling):
 
     x     = (int (y - y_des) dt, q - q_des, qdot - qdot_des)            error state (riccati)
     u     = u_des(t + h/2) - K(t) x,    K = R_l^-1 G_l' P_l             LQ stage (eqs. 19, 33)
@@ -25,9 +25,8 @@ import numpy as np
 import numpy.typing as npt
 
 from swim_controller.errors import PlanError
-from swim_controller.riccati import error_state_size
 from swim_controller.sliding_mode import SlidingMode
-from swim_controller.time_scaling import retime_feedback
+from swim_controller.trajectory import Trajectory, TrajectoryPoint
 
 if TYPE_CHECKING:
     from swim_model import VehicleModel
@@ -41,104 +40,6 @@ HOLD_DAMPING_PER_S = 20.0       # assumed: kd = 2 sqrt(kp)
 
 
 @dataclasses.dataclass
-class Reference:
-    """A plan as the tracker uses it: samples of q, qdot, u, tau and the scaled gains, N samples."""
-
-    time_s: Array            # (N,) plan time, s, strictly increasing from 0
-    q: Array                 # (N, nq)
-    qdot: Array              # (N, nq)
-    foil_acceleration: Array  # (N, 2) u_des = psiddot, rad/s^2
-    torque: Array            # (N, 2) feed-forward torque of the plan, N m (reported, not used by the law)
-    lqr_gain: Array          # (N, 2, n) K
-    sliding_gain: Array      # (N, 2, n) G_l' P_l
-    joint_names: tuple[str, ...] = ()       # q's components, for messages
-    segment_start_s: tuple[float, ...] = ()  # plan times at which the plan's segments start
-    time_scale: float = 1.0                 # lambda the plan runs at (reported)
-
-    def __post_init__(self) -> None:
-        self.time_s = np.asarray(self.time_s, dtype=float)
-        samples = len(self.time_s)
-        if samples < 2 or self.time_s.ndim != 1:
-            raise PlanError("a plan needs at least two samples")
-        if not np.all(np.diff(self.time_s) > 0.0):
-            raise PlanError("plan sample times must be strictly increasing")
-        nq = np.shape(self.q)[-1] if np.ndim(self.q) == 2 else 0
-        if nq not in (3, 4):
-            raise PlanError(f"positions must be (N, 3) or (N, 4), got shape {np.shape(self.q)}")
-        n = error_state_size(nq, nq - 2)
-        shapes = {"q": (samples, nq), "qdot": (samples, nq), "foil_acceleration": (samples, 2),
-                  "torque": (samples, 2), "lqr_gain": (samples, 2, n), "sliding_gain": (samples, 2, n)}
-        for name, shape in shapes.items():
-            value = np.asarray(getattr(self, name), dtype=float)
-            if value.shape != shape:
-                raise PlanError(f"plan {name} must have shape {shape}, got {value.shape}")
-            if not np.all(np.isfinite(value)):
-                raise PlanError(f"plan {name} has non-finite values")
-            setattr(self, name, value)
-        # one row per sample, interpolated in one operation per control period
-        self._rows = np.concatenate([self.q, self.qdot, self.foil_acceleration, self.torque,
-                                     self.lqr_gain.reshape(samples, -1), self.sliding_gain.reshape(samples, -1)],
-                                    axis=1)
-        self._slopes = np.diff(self._rows, axis=0) / np.diff(self.time_s)[:, None]
-
-    @property
-    def nq(self) -> int:
-        return int(self.q.shape[1])
-
-    def segment_index(self, time_s: float) -> int:
-        """Index of the segment running at time_s (0 without segment information)."""
-        return max(int(np.searchsorted(self.segment_start_s, time_s, side="right")) - 1, 0)
-
-    def retimed(self, time_scale: float) -> "Reference":
-        """This plan run time_scale times faster (Theorem 1; scalings compose: lambda2 after lambda1)."""
-        if not (math.isfinite(time_scale) and time_scale > 0.0):
-            raise PlanError(f"time scale must be positive and finite, got {time_scale!r}")
-        lqr_gain, sliding_gain = retime_feedback(self.lqr_gain, self.sliding_gain, time_scale, self.ny, self.nq)
-        return Reference(self.time_s / time_scale, self.q, self.qdot * time_scale,
-                         self.foil_acceleration * time_scale ** 2, self.torque * time_scale ** 2, lqr_gain,
-                         sliding_gain, self.joint_names, tuple(t / time_scale for t in self.segment_start_s),
-                         self.time_scale * time_scale)
-
-    @property
-    def ny(self) -> int:
-        return self.nq - 2
-
-    @property
-    def duration_s(self) -> float:
-        return float(self.time_s[-1])
-
-    def sample(self, time_s: float) -> "ReferencePoint":
-        """The plan at time_s (clamped to [0, T]): linear in every row, cubic Hermite in q (uses qdot)."""
-        t = min(max(time_s, 0.0), self.duration_s)
-        k = min(int(np.searchsorted(self.time_s, t, side="right")) - 1, len(self.time_s) - 2)
-        offset = t - self.time_s[k]
-        row = self._rows[k] + offset * self._slopes[k]
-        nq, n = self.nq, self.lqr_gain.shape[2]
-        q = row[:nq]
-        # the Hermite correction to linear interpolation of q: h^2 w (1 - w) ((qdot0 - slope) (1 - w) - ...)
-        step = self.time_s[k + 1] - self.time_s[k]
-        w = offset / step
-        secant = self._slopes[k, :nq]
-        q = q + step * w * (1.0 - w) * ((self.qdot[k] - secant) * (1.0 - w) - (self.qdot[k + 1] - secant) * w)
-        gains = row[2 * nq + 4:]
-        return ReferencePoint(
-            time_s=t, q=q, qdot=row[nq:2 * nq], foil_acceleration=row[2 * nq:2 * nq + 2],
-            torque=row[2 * nq + 2:2 * nq + 4], lqr_gain=gains[:2 * n].reshape(2, n),
-            sliding_gain=gains[2 * n:].reshape(2, n))
-
-
-@dataclasses.dataclass
-class ReferencePoint:
-    time_s: float
-    q: Array
-    qdot: Array
-    foil_acceleration: Array
-    torque: Array
-    lqr_gain: Array
-    sliding_gain: Array
-
-
-@dataclasses.dataclass
 class ControlOutput:
     """One period's result: the command and what went into it."""
 
@@ -147,7 +48,7 @@ class ControlOutput:
     unsaturated_torque: Array   # tau1 + eps before saturation, N m
     sliding_torque: Array       # eps, N m (zero when the sliding mode is off)
     error_state: Array          # x
-    reference: ReferencePoint
+    reference: TrajectoryPoint   # the plan at this period
     holding: bool               # the plan has ended: the hold law is in charge
 
 
@@ -165,24 +66,24 @@ class CascadeTracker:
         sliding_mode.validate()
         self.sliding_mode = sliding_mode
         self.sliding_mode_enabled = sliding_mode_enabled
-        self.reference: Optional[Reference] = None
+        self.trajectory: Optional[Trajectory] = None
         self._integral = np.zeros(0)
         self._last_time_s: Optional[float] = None
 
-    def start(self, reference: Reference) -> None:
-        """Track ``reference`` from plan time 0; the integral error restarts at zero."""
-        self.reference = reference
-        self._integral = np.zeros(reference.ny)
+    def start(self, trajectory: Trajectory) -> None:
+        """Track ``trajectory`` from plan time 0; the integral error restarts at zero."""
+        self.trajectory = trajectory
+        self._integral = np.zeros(trajectory.ny)
         self._last_time_s = None
 
     def step(self, plan_time_s: float, q: Array, qdot: Array) -> ControlOutput:
         """The torque for the period starting at plan_time_s, from the measured q and qdot."""
-        reference = self.reference
-        if reference is None:
+        trajectory = self.trajectory
+        if trajectory is None:
             raise PlanError("no plan: call start() first")
-        ref = reference.sample(plan_time_s)
-        holding = plan_time_s > reference.duration_s
-        ny, nq = reference.ny, reference.nq
+        ref = trajectory.sample(plan_time_s)
+        holding = plan_time_s > trajectory.duration_s
+        ny, nq = trajectory.ny, trajectory.nq
         error_q = q - ref.q
         if self._last_time_s is not None and not holding:
             self._integral = self._integral + error_q[:ny] * max(plan_time_s - self._last_time_s, 0.0)
@@ -190,15 +91,15 @@ class CascadeTracker:
         error_state = np.concatenate([self._integral, error_q, qdot - ref.qdot])
         mio, cio_qdot = self._io(q, qdot)
         if holding:
-            u = hold_acceleration(q[nq - 2:], qdot[nq - 2:], reference.q[-1, nq - 2:])
+            u = hold_acceleration(q[nq - 2:], qdot[nq - 2:], trajectory.q[-1, nq - 2:])
         else:
             # the torque is held for one period: feed forward u_des at the period's midpoint
-            u_des = reference.sample(plan_time_s + 0.5 * self.sample_period_s).foil_acceleration
+            u_des = trajectory.sample(plan_time_s + 0.5 * self.sample_period_s).foil_acceleration
             u = u_des - ref.lqr_gain @ error_state
         torque = mio @ u + cio_qdot
         sliding = np.zeros(2)
         if self.sliding_mode_enabled and not holding:
-            sliding = self.sliding_mode.term(np.linalg.solve(mio, ref.sliding_gain @ error_state))
+            sliding = self.sliding_mode.term(np.linalg.solve(mio, ref.riccati_input_gain @ error_state))
             torque = torque + sliding
         command, saturated = saturate(torque, self.torque_limits_n_m)
         return ControlOutput(torque=command, saturated=saturated, unsaturated_torque=torque,

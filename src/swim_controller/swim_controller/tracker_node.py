@@ -13,9 +13,10 @@ STATE_LOST (a command a period, stamped with the last valid state's stamp, zero 
 run backwards, and a lock-step simulator never takes one as the answer to a newer state); a state with wrong
 names, lengths or a non-finite value is rejected, counted, never used.
 
-Parameters (validated on set, changeable at run time): sample_period_s (0.008, the paper's), stale_after_periods
-(5), sliding_mode_enabled (true), disturbance_bound_n_m, boundary_layer, time_scale (1.0: run plans as
-planned; else re-timed by Theorem 1 when a goal arrives), feedback_rate_hz (10), velocity_cutoff_hz, rig_path.
+Parameters: the table PARAMETERS (description, range, read-only for rig_path and sample_period_s; `ros2 param
+describe` shows them), checked when set, applied after: time_scale (1.0: run plans as planned; else re-timed by
+Theorem 1 when a goal arrives), the sliding mode's switch and bounds, the stale-state limit, feedback rate and
+velocity filter.
 
 Speed (in lock-step every period waits on this node): the rig's models are built at start, not by the first goal
 (about half a second of model setup and compilation); per period the command and tracking_state messages are
@@ -25,13 +26,13 @@ each a waitable that the executor adds to its wait set again on every spin, in P
 """
 from __future__ import annotations
 
+import functools
 import math
 import time
 from typing import Optional
 
 import numpy as np
 from builtin_interfaces.msg import Time
-from rcl_interfaces.msg import SetParametersResult
 from rclpy.action import ActionServer, CancelResponse
 from rclpy.node import Node
 from rclpy.task import Future
@@ -41,7 +42,7 @@ from swim_interfaces.msg import TrackingState
 from trajectory_msgs.msg import JointTrajectoryPoint
 
 from swim_controller.errors import PlanError, StateMessageError
-from swim_controller.messages import reference_from_message, state_from_message
+from swim_controller.messages import state_from_message, trajectory_from_message
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.supervisor import Mode, Outcome, StaleStateWatch, Step, Supervisor, Tolerances
 from swim_controller.tracker import CascadeTracker, model_io_linearization
@@ -49,6 +50,7 @@ from swim_model.velocity_filter import DEFAULT_CUTOFF_HZ, VelocityEstimator
 from swim_model import SwimModelError, VehicleModel, load_rig
 from swim_ros.codecs import ACTUATED_JOINTS, float_array
 from swim_ros.entry import run_node
+from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, positive
 from swim_ros.qos import per_period_publisher, per_period_subscription
 
 RESULT_CODES = {
@@ -60,16 +62,28 @@ RESULT_CODES = {
     Outcome.CANCELED: ExecutePlan.Result.CANCELED,
 }
 
-PARAMETER_RULES = {
-    "sample_period_s": (lambda v: isinstance(v, float) and 0.001 <= v <= 0.1, "a float in [0.001, 0.1] s"),
-    "stale_after_periods": (lambda v: isinstance(v, int) and 1 <= v <= 1000, "an integer in [1, 1000]"),
-    "sliding_mode_enabled": (lambda v: isinstance(v, bool), "a bool"),
-    "disturbance_bound_n_m": (lambda v: isinstance(v, float) and math.isfinite(v) and v >= 0.0, "a float >= 0"),
-    "boundary_layer": (lambda v: isinstance(v, float) and math.isfinite(v) and v > 0.0, "a float > 0"),
-    "time_scale": (lambda v: isinstance(v, float) and 0.1 <= v <= 10.0, "a float in [0.1, 10]"),
-    "feedback_rate_hz": (lambda v: isinstance(v, float) and 0.1 <= v <= 1000.0, "a float in [0.1, 1000] Hz"),
-    "velocity_cutoff_hz": (lambda v: isinstance(v, float) and math.isfinite(v) and v > 0.0, "a float > 0 Hz"),
-}
+_SLIDING_DEFAULTS = SlidingMode()
+#: the tracker's parameters (swim_ros.parameters): fixed at start where the node builds from them (the rig, the
+#: period its timer runs at), changeable at run time otherwise. The upper bounds are assumed, each far past any
+#: sensible value: they only keep a typo (an extra zero, a wrong unit) from reaching the law.
+PARAMETERS = (
+    ParameterSpec("rig_path", "", "rig YAML file (empty: the shipped rig)", read_only=True),
+    ParameterSpec("sample_period_s", 0.008, "control period h, s (the paper's 8 ms); the stale-state timer runs at it",
+                  range=(0.001, 0.1), read_only=True),
+    ParameterSpec("stale_after_periods", 5, "sample periods without a valid state before the torque is zeroed",
+                  range=(1, 1000)),
+    ParameterSpec("sliding_mode_enabled", True, "add the sliding-mode term to the I/O-linearized law (eqs. 24-25)"),
+    ParameterSpec("disturbance_bound_n_m", _SLIDING_DEFAULTS.disturbance_bound_n_m,
+                  "sliding-mode disturbance bound D, N m (eq. 25)", range=(0.0, 100.0)),
+    ParameterSpec("boundary_layer", _SLIDING_DEFAULTS.boundary_layer,
+                  "sliding-mode boundary layer phi (eq. 25), in the units of s", range=(0.0, 1e3), check=positive),
+    ParameterSpec("time_scale", 1.0, "lambda: run plans this many times faster (Theorem 1) when a goal arrives",
+                  range=(0.1, 10.0)),
+    ParameterSpec("feedback_rate_hz", 10.0, "action feedback rate, Hz", range=(0.1, 1000.0)),
+    ParameterSpec("velocity_cutoff_hz", DEFAULT_CUTOFF_HZ,
+                  "cut-off of the velocity filter used when states carry no velocities, Hz", range=(0.0, 1e4),
+                  check=positive),
+)
 
 
 class ActiveGoal:
@@ -93,19 +107,7 @@ class ActiveGoal:
 class TrackerNode(Node):
     def __init__(self) -> None:
         super().__init__("tracker_node")
-        defaults = SlidingMode()
-        self.declare_parameter("rig_path", "")
-        self.declare_parameter("sample_period_s", 0.008)
-        self.declare_parameter("stale_after_periods", 5)
-        self.declare_parameter("sliding_mode_enabled", True)
-        self.declare_parameter("disturbance_bound_n_m", defaults.disturbance_bound_n_m)
-        self.declare_parameter("boundary_layer", defaults.boundary_layer)
-        self.declare_parameter("time_scale", 1.0)
-        self.declare_parameter("feedback_rate_hz", 10.0)
-        self.declare_parameter("velocity_cutoff_hz", DEFAULT_CUTOFF_HZ)
-        for name, (valid, expected) in PARAMETER_RULES.items():
-            if not valid(self.get_parameter(name).value):
-                raise ValueError(f"parameter {name} must be {expected}, got {self.get_parameter(name).value!r}")
+        declare_parameters(self, PARAMETERS)
         self.rig = load_rig(self.get_parameter("rig_path").value or None)
         self._models: dict[tuple[bool, float], VehicleModel] = {}
         self._supervisor: Optional[Supervisor] = None
@@ -117,7 +119,8 @@ class TrackerNode(Node):
         self._velocity = VelocityEstimator(self.get_parameter("velocity_cutoff_hz").value)
         self.rejected_states = 0
         self.commands_sent = 0
-        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.add_on_set_parameters_callback(functools.partial(check_parameters, PARAMETERS))
+        self.add_post_set_parameters_callback(self._apply_parameters)
 
         self.command_publisher = per_period_publisher(self, JointState, "joint_commands")
         self.tracking_publisher = per_period_publisher(self, TrackingState, "tracking_state")
@@ -137,11 +140,8 @@ class TrackerNode(Node):
         self.get_logger().info("tracker ready: waiting for joint_states and execute_plan goals")
 
     # ----- parameters ------------------------------------------------------------------------------
-    def _on_set_parameters(self, parameters) -> SetParametersResult:
-        for parameter in parameters:
-            rule = PARAMETER_RULES.get(parameter.name)
-            if rule and not rule[0](parameter.value):
-                return SetParametersResult(successful=False, reason=f"{parameter.name} must be {rule[1]}")
+    def _apply_parameters(self, parameters) -> None:
+        """Post-set: accepted values take effect (the active goal's law included)."""
         values = {p.name: p.value for p in parameters}
         if self._supervisor is not None:
             tracker = self._supervisor.tracker
@@ -152,7 +152,6 @@ class TrackerNode(Node):
             tracker.sliding_mode = SlidingMode(bound, layer)
         if "velocity_cutoff_hz" in values:
             self._velocity = VelocityEstimator(values["velocity_cutoff_hz"])
-        return SetParametersResult(successful=True)
 
     def _model(self, constrained: bool, lane_radius_m: float) -> VehicleModel:
         key = (constrained, lane_radius_m)
@@ -171,8 +170,8 @@ class TrackerNode(Node):
         supervisor = self._supervisor
         names = None
         if supervisor is not None:
-            assert supervisor.tracker.reference is not None   # a supervisor is kept only after begin()
-            names = supervisor.tracker.reference.joint_names
+            assert supervisor.tracker.trajectory is not None   # a supervisor is kept only after begin()
+            names = supervisor.tracker.trajectory.joint_names
         try:
             time_s, q, qdot = state_from_message(message, names, self._velocity,
                                                  self.get_clock().now().nanoseconds * 1e-9)
@@ -244,7 +243,7 @@ class TrackerNode(Node):
         reference = output.reference
         message = self._tracking_message_reused
         message.header.stamp = stamp
-        plan = supervisor.tracker.reference
+        plan = supervisor.tracker.trajectory
         assert plan is not None
         message.joint_names = list(plan.joint_names)
         for point, positions, velocities in ((message.reference, reference.q, reference.qdot),
@@ -255,7 +254,7 @@ class TrackerNode(Node):
         message.feedforward_torques = float_array(reference.torque)
         message.torque_saturated = list(output.saturated)
         message.plan_time_s = float(reference.time_s)
-        message.time_scale = float(plan.time_scale)
+        message.time_scale = float(plan.time_scale_at(reference.time_s))
         message.segment_index = plan.segment_index(reference.time_s)
         message.sliding_mode_enabled = bool(supervisor.tracker.sliding_mode_enabled)
         return message
@@ -277,24 +276,23 @@ class TrackerNode(Node):
             tolerances = Tolerances(request.path_tolerance_alpha_rad, request.path_tolerance_r_m,
                                     request.goal_tolerance_alpha_rad, request.goal_tolerance_r_m)
             tolerances.validate()
-            plan = request.plan
-            model = self._model(plan.constrained, plan.lane_radius_m)
-            reference = reference_from_message(plan, model.joint_names)
+            trajectory = trajectory_from_message(request.plan)
+            model = self._model(trajectory.constrained, trajectory.lane_radius_m)
             time_scale = self.get_parameter("time_scale").value
-            if time_scale != 1.0:
-                reference = reference.retimed(time_scale)
+            if time_scale != 1.0:   # refused past the motor limits, with the largest feasible time scale named
+                trajectory = trajectory.time_scaled(time_scale, model.torque_limits())
         except (PlanError, ValueError, SwimModelError) as err:
             handle.abort()
             self.get_logger().warning(f"plan refused: {err}")
             return ExecutePlan.Result(error_code=ExecutePlan.Result.INVALID_PLAN, error_string=str(err))
         if self._goal is not None:
             self._goal.finish(Outcome.PREEMPTED, "preempted by a new goal")
-        goal = ActiveGoal(handle, Supervisor(self._make_tracker(model)), reference.duration_s)
-        goal.supervisor.begin(reference, tolerances)
+        goal = ActiveGoal(handle, Supervisor(self._make_tracker(model)), trajectory.duration_s)
+        goal.supervisor.begin(trajectory, tolerances)
         self._goal, self._supervisor, self._last_tracking = goal, goal.supervisor, None
         # a new goal's first state is due within stale_after_periods from now, not from the last one seen
         self._stale_watch.state_arrived(time.monotonic())
-        self.get_logger().info(f"executing a {reference.duration_s:.2f} s plan ({len(plan.segments)} segments)")
+        self.get_logger().info(f"executing a {trajectory.duration_s:.2f} s plan ({len(trajectory.segments)} segments)")
         await goal.done
         return self._finish(goal)
 

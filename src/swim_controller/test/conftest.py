@@ -6,7 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from swim_controller.riccati import LqrWeights, TrackingGains, primitive_gains
+from swim_controller.riccati import LqrWeights, TrackingGains, error_state_size, primitive_gains
+from swim_controller.trajectory import Segment, Trajectory
 from swim_model import VehicleModel, load_rig
 
 
@@ -71,3 +72,24 @@ def strokes(model_for):
     """{"constrained" | "free": Stroke} (two 1 s cycles, 40 intervals each), with P and G'P."""
     specs = [StrokeSpec("constrained", True, 0.43, 40), StrokeSpec("free", False, 0.43, 40)]
     return {spec.primitive_id: make_stroke(model_for(spec), spec) for spec in specs}
+
+
+def one_segment_trajectory(time_s, q, qdot, foil_acceleration=None, torque=None, gain=0.0, lqr_gain=None,
+                           riccati_input_gain=None, time_scale=1.0) -> Trajectory:
+    """A Trajectory of the samples given as one segment at time_scale: u and tau zero unless given, every gain
+    entry equal to gain unless the gains are given."""
+    samples, nq = np.shape(q)
+    n = error_state_size(nq, nq - 2)
+    zero = np.zeros((samples, 2))
+    segment = Segment("test/segment", "cruise", 0, 0.0, float(time_s[-1]), time_scale, 0.0, 0, samples)
+    return Trajectory(time_s, q, qdot, zero if foil_acceleration is None else foil_acceleration,
+                      zero if torque is None else torque,
+                      np.full((samples, 2, n), gain) if lqr_gain is None else lqr_gain,
+                      np.full((samples, 2, n), gain) if riccati_input_gain is None else riccati_input_gain,
+                      (segment,), lane_radius_m=0.43)
+
+
+@pytest.fixture(scope="session")
+def make_trajectory():
+    """one_segment_trajectory, for the tests (a conftest is not imported by name)."""
+    return one_segment_trajectory

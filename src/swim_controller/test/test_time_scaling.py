@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from swim_controller.riccati import LqrWeights, linearize, solve_riccati, terminal_weight
-from swim_controller.time_scaling import retime_feedback, scale_feedback, scale_riccati, scale_weights, \
+from swim_controller.time_scaling import lqr_gain_from, retime_feedback, scale_riccati, scale_weights, \
     scaling_diagonal, scaling_matrix
 
 PRIMITIVES = ["constrained", "free"]
@@ -46,7 +46,8 @@ def test_theorem_1_needs_the_lambda_factor_on_q(strokes, model_for):
 
 
 def test_eq_33_gains_from_the_scaled_riccati():
-    """K = R_l^-1 G_l' P_l and G_l' P_l from scale_feedback against the matrices built explicitly."""
+    """K = R_l^-1 G_l' P_l and G_l' P_l: the lambda = 1 gains (lqr_gain_from) re-timed to lambda (retime_feedback)
+    against the matrices built explicitly."""
     rng = np.random.default_rng(0)
     ny, nq, lam = 2, 4, 1.3
     n = ny + 2 * nq
@@ -56,14 +57,16 @@ def test_eq_33_gains_from_the_scaled_riccati():
     g[:, ny + nq:, :] = rng.normal(size=(3, nq, 2))
     r = np.array([0.3, 0.05])
     gamma = scaling_matrix(lam, ny, nq)
-    lqr, sliding = scale_feedback(np.einsum("kni,knm->kim", g, p), r, lam, ny, nq)
+    riccati_input_gain = np.einsum("kni,knm->kim", g, p)
+    unscaled = lqr_gain_from(riccati_input_gain, r)
+    lqr, scaled_input_gain = retime_feedback(unscaled, riccati_input_gain, lam, ny, nq)
     for k in range(3):
+        np.testing.assert_allclose(unscaled[k], np.linalg.inv(np.diag(r)) @ g[k].T @ p[k], rtol=1e-12)
         p_l = gamma @ p[k] @ gamma
-        np.testing.assert_allclose(sliding[k], g[k].T @ p_l, rtol=1e-12)
+        np.testing.assert_allclose(scaled_input_gain[k], g[k].T @ p_l, rtol=1e-12)
         np.testing.assert_allclose(lqr[k], np.linalg.inv(np.diag(r) / lam) @ g[k].T @ p_l, rtol=1e-12)
-    # re-timing a lambda = 1 plan to lambda gives the same gains
-    lqr_1, sliding_1 = scale_feedback(np.einsum("kni,knm->kim", g, p), r, 1.0, ny, nq)
-    lqr_r, sliding_r = retime_feedback(lqr_1, sliding_1, np.full(3, lam), ny, nq)
-    np.testing.assert_allclose(lqr_r, lqr, rtol=1e-12)
-    np.testing.assert_allclose(sliding_r, sliding, rtol=1e-12)
+    # lambda per sample gives the same gains as the scalar
+    lqr_r, scaled_r = retime_feedback(unscaled, riccati_input_gain, np.full(3, lam), ny, nq)
+    np.testing.assert_array_equal(lqr_r, lqr)
+    np.testing.assert_array_equal(scaled_r, scaled_input_gain)
     np.testing.assert_array_equal(scaling_diagonal(lam, ny, nq), np.diag(gamma))

@@ -1,47 +1,13 @@
-"""The cascade law's parts: plan sampling, saturation, the sliding-mode term, velocity estimates, modes."""
+"""The cascade law's parts: saturation, the sliding-mode term, velocity estimates, modes."""
 import math
 
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from swim_controller.errors import PlanError
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.supervisor import Mode, Outcome, Supervisor, Tolerances
-from swim_controller.tracker import CascadeTracker, Reference, saturate
-
-
-def _reference(time_s, q, qdot, u=None, gain=0.0):
-    samples, nq = q.shape
-    n = (nq - 2) + 2 * nq
-    u = np.zeros((samples, 2)) if u is None else u
-    return Reference(time_s, q, qdot, u, np.zeros((samples, 2)), np.full((samples, 2, n), gain),
-                     np.full((samples, 2, n), gain))
-
-
-def test_reference_interpolates_a_cubic_exactly_and_clamps():
-    t = np.linspace(0.0, 1.0, 5)
-    f = lambda s: 2 * s ** 3 - s ** 2 + 0.5 * s   # noqa: E731
-    df = lambda s: 6 * s ** 2 - 2 * s + 0.5         # noqa: E731
-    ref = _reference(t, np.column_stack([f(t)] * 3), np.column_stack([df(t)] * 3))
-    for s in (0.1, 0.37, 0.9):
-        assert ref.sample(s).q[0] == pytest.approx(f(s), abs=1e-12)
-    assert ref.sample(-1.0).q[0] == pytest.approx(f(0.0))
-    assert ref.sample(5.0).q[0] == pytest.approx(f(1.0))
-
-
-@pytest.mark.parametrize("bad", ["nan", "order", "shape"])
-def test_malformed_plans_are_refused(bad):
-    t = np.linspace(0.0, 1.0, 4)
-    q = np.zeros((4, 3))
-    if bad == "nan":
-        q[2, 1] = np.nan
-    if bad == "order":
-        t = np.array([0.0, 0.5, 0.5, 1.0])
-    if bad == "shape":
-        q = np.zeros((4, 5))
-    with pytest.raises(PlanError):
-        _reference(t, q, np.zeros((4, q.shape[1])))
+from swim_controller.tracker import CascadeTracker, saturate
 
 
 @settings(max_examples=200, deadline=None)
@@ -74,7 +40,7 @@ def _static_io(q, qdot):
     return np.diag([2.0, 0.5]), np.zeros(2)
 
 
-def test_supervisor_reports_tolerances_and_holds_after_the_plan():
+def test_supervisor_reports_tolerances_and_holds_after_the_plan(make_trajectory):
     t = np.linspace(0.0, 1.0, 11)
     q = np.zeros((11, 3))
     q[:, 0] = t                           # alpha from 0 to 1 rad
@@ -82,15 +48,15 @@ def test_supervisor_reports_tolerances_and_holds_after_the_plan():
     qdot[:, 0] = 1.0
     limits = np.array([100.0, 100.0])
     supervisor = Supervisor(CascadeTracker(_static_io, limits, sliding_mode_enabled=False))
-    supervisor.begin(_reference(t, q, qdot), Tolerances(path_alpha_rad=0.1))
+    supervisor.begin(make_trajectory(t, q, qdot), Tolerances(path_alpha_rad=0.1))
     assert supervisor.on_state(100.0, np.zeros(3), np.zeros(3)).outcome is None
     step = supervisor.on_state(100.5, np.zeros(3), np.zeros(3))   # 0.5 rad behind
     assert step.outcome is Outcome.PATH_TOLERANCE_VIOLATED and supervisor.mode is Mode.HOLDING
-    supervisor.begin(_reference(t, q, qdot), Tolerances(goal_alpha_rad=0.05))
+    supervisor.begin(make_trajectory(t, q, qdot), Tolerances(goal_alpha_rad=0.05))
     supervisor.on_state(0.0, np.zeros(3), np.zeros(3))
     assert supervisor.on_state(1.2, np.array([0.9, 0.0, 0.0]), np.zeros(3)).outcome is \
         Outcome.GOAL_TOLERANCE_VIOLATED
-    supervisor.begin(_reference(t, q, qdot), Tolerances(goal_alpha_rad=0.05))
+    supervisor.begin(make_trajectory(t, q, qdot), Tolerances(goal_alpha_rad=0.05))
     supervisor.on_state(0.0, np.zeros(3), np.zeros(3))
     assert supervisor.on_state(1.2, np.array([0.98, 0.0, 0.0]), np.zeros(3)).outcome is Outcome.SUCCEEDED
     # holding: a foil displaced from the plan's last psi is pushed back (u = -kp e through Mio)

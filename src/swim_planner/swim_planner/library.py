@@ -57,7 +57,7 @@ def _encode_arrays(primitive: Primitive) -> bytes:
     buffer = io.BytesIO()
     arrays = {name: getattr(primitive, name) for name in ARRAYS}
     if primitive.gains is not None:
-        arrays.update(riccati=primitive.gains.riccati, riccati_input_gain=primitive.gains.input_gain)
+        arrays.update(riccati=primitive.gains.riccati, riccati_input_gain=primitive.gains.riccati_input_gain)
     np.savez(buffer, **arrays)
     return buffer.getvalue()
 
@@ -204,7 +204,7 @@ class PrimitiveLibrary:
                 gains = None
                 if not self.needs_gains(primitive_id):
                     gains = TrackingGains(riccati=np.array(arrays["riccati"]),
-                                          input_gain=np.array(arrays["riccati_input_gain"]))
+                                          riccati_input_gain=np.array(arrays["riccati_input_gain"]))
         except (OSError, ValueError, KeyError) as err:
             raise LibraryError(f"{file}: not a valid primitive array file: {err}") from err
         return Primitive(spec=self.spec(primitive_id), index_j=record["index_j"], effort=record["effort"],

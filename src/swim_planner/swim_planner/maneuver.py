@@ -6,11 +6,11 @@ JUNCTION_TOLERANCE, else the request is refused with the mismatch named, never s
 primitives are solved with equal junction states including qdot, so the plan's qdot is continuous there;
 only u = psiddot may jump.
 
-Time scaling by lambda > 0 (P3): t -> t / lambda, q(t) -> q(lambda t), qdot -> lambda qdot,
-u -> lambda^2 u, tau -> lambda^2 tau. A lambda whose torques exceed the motor limits is refused.
-
-Tracking gains go along (Theorem 1; swim_controller.time_scaling): each sample carries K = lambda R^-1 (G'P)
-Gamma(lambda) and G_l'P_l = (G'P) Gamma(lambda) of its primitive, so the tracker's law is u = u_des - K x.
+The plan is a swim_controller.trajectory.Trajectory: made at lambda = 1 (each sample carries K = R^-1 G'P and
+the Riccati input gain G'P of its primitive), then time-scaled by ``Trajectory.time_scaled`` (P3 and Theorem 1:
+t -> t / lambda, q(t) -> q(lambda t), qdot -> lambda qdot, u -> lambda^2 u, tau -> lambda^2 tau, K -> lambda
+R^-1 (G'P) Gamma(lambda), G'P -> (G'P) Gamma(lambda)), which refuses a lambda whose torques exceed the motor
+limits. The tracker's law is then u = u_des - K x.
 
 A slowly varying lambda (Sec. 4.3): with s the nominal (lambda = 1) plan time and lambda(s) given,
 the plan runs t(s) = int_0^s ds' / lambda(s'), q(t) = q_nom(s), qdot = lambda qdot_nom(s),
@@ -27,10 +27,11 @@ from typing import Callable, Protocol, Sequence
 import numpy as np
 import numpy.typing as npt
 
+from swim_controller.errors import PlanError
 from swim_controller.riccati import LqrWeights
-from swim_controller.time_scaling import retime_feedback, scale_feedback
+from swim_controller.time_scaling import lqr_gain_from, retime_feedback
+from swim_controller.trajectory import MAX_TRACKED_SAMPLES, Segment, Trajectory, motor_limit_fraction
 from swim_model import RigParameters
-from swim_model.vehicle import JOINT_NAMES_CONSTRAINED, JOINT_NAMES_UNCONSTRAINED
 from swim_planner.errors import LibraryError, ManeuverError
 from swim_planner.primitives import Primitive, PrimitiveSpec
 
@@ -38,47 +39,6 @@ Array = npt.NDArray[np.float64]
 
 #: largest junction mismatch accepted: rad, m, rad/s, m/s
 JUNCTION_TOLERANCE = 1e-5
-
-
-@dataclasses.dataclass(frozen=True)
-class Segment:
-    primitive_id: str
-    primitive_type: str
-    repeat_index: int
-    start_time_s: float
-    duration_s: float
-    time_scale: float
-    alpha_offset_rad: float
-    first_sample: int
-    sample_count: int
-
-
-@dataclasses.dataclass
-class Plan:
-    """A concatenated, time-scaled plan on its sample grid."""
-
-    constrained: bool
-    lane_radius_m: float
-    joint_names: tuple[str, ...]
-    time_s: Array
-    q: Array
-    qdot: Array
-    foil_acceleration: Array
-    torque: Array
-    lqr_gain: Array       # (N, 2, n) K of eq. 33, time-scaled
-    sliding_gain: Array   # (N, 2, n) G_l' P_l (eq. 24), time-scaled
-    segments: list[Segment]
-    library_digest: str
-
-    @property
-    def duration_s(self) -> float:
-        return float(self.time_s[-1])
-
-
-def scale_primitive(primitive: Primitive, time_scale: float) -> tuple[Array, Array, Array, Array, Array]:
-    """(t, q, qdot, u, tau) of a primitive run lambda times faster (P3)."""
-    return (primitive.time_s / time_scale, primitive.q, primitive.qdot * time_scale,
-            primitive.foil_acceleration * time_scale ** 2, primitive.torque * time_scale ** 2)
 
 
 def junction_mismatch(previous: Primitive, following: Primitive) -> float:
@@ -111,9 +71,8 @@ class PlanBounds:
 
     max_duration_s: float = 7200.0
     # assumed: two hours of swimming, longer than any run on the rig; a 1000-cruise plan (5008 s) fits
-    max_samples: int = 1_000_000
-    # assumed from memory: a free-vehicle sample is 52 float64 (416 B), so 1e6 samples hold ~0.4 GB in the plan
-    # and as much again in its message
+    max_samples: int = MAX_TRACKED_SAMPLES
+    # the largest plan the tracker accepts (its reason is there)
     max_abs_start_alpha_rad: float = 1.0e6
     # assumed: float64 keeps alpha to 1e-10 rad up to here (and swimming 1e6 rad would take weeks)
 
@@ -169,7 +128,7 @@ def expand_sequence(primitive_ids: Sequence[str], repeat_counts: Sequence[int]) 
 
 
 def concatenate(library: PlanLibrary, rig: RigParameters, sequence: Sequence[tuple[str, int]],
-                time_scale: float = 1.0, start_alpha_rad: float = 0.0) -> Plan:
+                time_scale: float = 1.0, start_alpha_rad: float = 0.0) -> Trajectory:
     """The plan that runs the primitives of ``sequence`` one after another at time scale lambda."""
     check_time_scale(time_scale)
     check_start_alpha(start_alpha_rad)
@@ -192,43 +151,41 @@ def concatenate(library: PlanLibrary, rig: RigParameters, sequence: Sequence[tup
         if mismatch > JUNCTION_TOLERANCE:
             raise ManeuverError(f"'{pid_a}' does not end where '{pid_b}' starts (states differ by {mismatch:.3g}; "
                                 f"tolerance {JUNCTION_TOLERANCE:g})")
-    limits = np.array(rig.torque_limits_n_m)
-    peak = max(float((np.abs(p.torque) / limits).max()) for p in primitives) * time_scale ** 2
-    if peak > 1.0:
-        raise ManeuverError(f"time scale {time_scale:g} needs {peak:.0%} of the motor torque limits; "
-                            f"the largest feasible time scale for this sequence is {time_scale / math.sqrt(peak):.3f}")
     pieces: list[tuple[Array, ...]] = []
     segments: list[Segment] = []
     clock, alpha, sample = 0.0, float(start_alpha_rad), 0
     weights = library.lqr_weights
     input_weights = np.array([weights.heave_input_weight, weights.pitch_input_weight])
-    ny, nq = primitives[0].q.shape[1] - 2, primitives[0].q.shape[1]
     for index, ((pid, repeat), primitive) in enumerate(zip(sequence, primitives)):
-        t, q, qdot, u, tau = scale_primitive(primitive, time_scale)
         assert primitive.gains is not None   # checked above: ungained primitives are refused
-        lqr_gain, sliding_gain = scale_feedback(primitive.gains.input_gain, input_weights, time_scale, ny, nq)
-        q = q.copy()
+        riccati_input_gain = primitive.gains.riccati_input_gain
+        t = primitive.time_s
+        q = primitive.q.copy()
         offset = alpha - q[0, 0]
         q[:, 0] += offset
         skip = 0 if index == 0 else 1  # the junction sample is the previous segment's last
-        pieces.append((t[skip:] + clock, q[skip:], qdot[skip:], u[skip:], tau[skip:], lqr_gain[skip:],
-                       sliding_gain[skip:]))
+        pieces.append((t[skip:] + clock, q[skip:], primitive.qdot[skip:], primitive.foil_acceleration[skip:],
+                       primitive.torque[skip:], lqr_gain_from(riccati_input_gain[skip:], input_weights),
+                       riccati_input_gain[skip:]))
         count = len(t) - skip
-        segments.append(Segment(pid, primitive.spec.primitive_type.value, repeat, clock, float(t[-1]), time_scale,
+        segments.append(Segment(pid, primitive.spec.primitive_type.value, repeat, clock, float(t[-1]), 1.0,
                                 offset, sample, count))
         clock += float(t[-1])
         alpha = float(q[-1, 0])
         sample += count
-    time_s, q, qdot, u, tau, lqr_gain, sliding_gain = (np.concatenate(parts) for parts in zip(*pieces))
-    first = primitives[0]
-    names = JOINT_NAMES_CONSTRAINED if first.spec.constrained else JOINT_NAMES_UNCONSTRAINED
-    return Plan(constrained=first.spec.constrained, lane_radius_m=first.spec.lane_radius_m, joint_names=names,
-                time_s=time_s, q=q, qdot=qdot, foil_acceleration=u, torque=tau, lqr_gain=lqr_gain,
-                sliding_gain=sliding_gain, segments=segments, library_digest=library.digest())
+    time_s, q, qdot, u, tau, lqr_gain, riccati_input_gain = (np.concatenate(parts) for parts in zip(*pieces))
+    nominal = Trajectory(time_s=time_s, q=q, qdot=qdot, foil_acceleration=u, torque=tau, lqr_gain=lqr_gain,
+                         riccati_input_gain=riccati_input_gain, segments=tuple(segments),
+                         lane_radius_m=primitives[0].spec.lane_radius_m, library_digest=library.digest())
+    try:
+        return nominal.time_scaled(time_scale, rig.torque_limits_n_m)
+    except PlanError as err:
+        raise ManeuverError(str(err)) from err
 
 
-def vary_time_scale(nominal: Plan, time_scale_of: Callable[[float], float], rig: RigParameters) -> Plan:
-    """Re-time a plan made at lambda = 1 by a slowly varying lambda(s) of the nominal time s."""
+def vary_time_scale(nominal: Trajectory, time_scale_of: Callable[[float], float], rig: RigParameters) -> Trajectory:
+    """Re-time a plan made at lambda = 1 by a slowly varying lambda(s) of the nominal time s (a constant lambda:
+    Trajectory.time_scaled)."""
     for segment in nominal.segments:
         if segment.time_scale != 1.0:
             raise ManeuverError("vary_time_scale re-times a plan made at time scale 1")
@@ -236,8 +193,12 @@ def vary_time_scale(nominal: Plan, time_scale_of: Callable[[float], float], rig:
     scale = np.array([float(time_scale_of(s)) for s in nominal_time])
     if not np.all(np.isfinite(scale)) or scale.min() <= 0.0:
         raise ManeuverError("lambda(s) must be positive and finite over the whole plan")
-    limits = np.array(rig.torque_limits_n_m)
-    peak = float((np.abs(nominal.torque) * scale[:, None] ** 2 / limits).max())
+    if np.all(scale == scale[0]):
+        try:
+            return nominal.time_scaled(float(scale[0]), rig.torque_limits_n_m)
+        except PlanError as err:
+            raise ManeuverError(str(err)) from err
+    peak = motor_limit_fraction(nominal.torque * scale[:, None] ** 2, rig.torque_limits_n_m)
     if peak > 1.0:
         raise ManeuverError(f"lambda(s) needs {peak:.0%} of the motor torque limits")
     inverse = 1.0 / scale
@@ -252,9 +213,9 @@ def vary_time_scale(nominal: Plan, time_scale_of: Callable[[float], float], rig:
         segments.append(dataclasses.replace(
             segment, start_time_s=start, duration_s=float(time_s[last] - start),
             time_scale=float(scale[max(first - 1, 0):last + 1].mean())))
-    nq = nominal.q.shape[1]
-    lqr_gain, sliding_gain = retime_feedback(nominal.lqr_gain, nominal.sliding_gain, scale, nq - 2, nq)
+    lqr_gain, riccati_input_gain = retime_feedback(nominal.lqr_gain, nominal.riccati_input_gain, scale,
+                                                   nominal.ny, nominal.nq)
     return dataclasses.replace(nominal, time_s=time_s, qdot=nominal.qdot * scale[:, None],
                                foil_acceleration=foil_acceleration,
                                torque=nominal.torque * scale[:, None] ** 2, lqr_gain=lqr_gain,
-                               sliding_gain=sliding_gain, segments=segments)
+                               riccati_input_gain=riccati_input_gain, segments=tuple(segments))

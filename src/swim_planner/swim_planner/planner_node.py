@@ -26,18 +26,19 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
-from swim_interfaces.msg import PlannedTrajectory, PrimitiveSegment
+from swim_interfaces.msg import PlannedTrajectory
 from swim_interfaces.srv import RequestManeuver
 
+from swim_controller.messages import trajectory_to_message
+from swim_controller.trajectory import Trajectory
 from swim_model import SwimModelError, load_rig
 from swim_planner.errors import PlannerError
 from swim_planner.gains import RetunedLibrary, load_lqr_weights
 from swim_planner.graph import build_graph, plan_to_goal, rest_node
 from swim_planner.library import PrimitiveLibrary
-from swim_planner.maneuver import (DEFAULT_BOUNDS, Plan, PlanBounds, check_plan_size, check_start_alpha,
-                                   concatenate, expand_sequence)
+from swim_planner.maneuver import (DEFAULT_BOUNDS, PlanBounds, check_plan_size, check_start_alpha, concatenate,
+                                   expand_sequence)
 from swim_planner.paths import default_library_path
-from swim_ros.codecs import float_array
 from swim_ros.entry import run_node
 from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, positive
 from swim_ros.qos import LATCHED_QOS
@@ -104,29 +105,6 @@ class AnswerMemory:
     def answer(done: threading.Event, box: list, response) -> None:
         box.append(response)
         done.set()
-
-
-def plan_to_message(plan: Plan, stamp) -> PlannedTrajectory:
-    message = PlannedTrajectory()
-    message.header.stamp = stamp
-    message.interface_version = PlannedTrajectory.INTERFACE_VERSION
-    message.constrained = plan.constrained
-    message.lane_radius_m = float(plan.lane_radius_m)
-    message.joint_names = list(plan.joint_names)
-    message.time_from_start_s = float_array(plan.time_s)
-    message.positions = float_array(plan.q)
-    message.velocities = float_array(plan.qdot)
-    message.foil_accelerations = float_array(plan.foil_acceleration)
-    message.feedforward_torques = float_array(plan.torque)
-    message.lqr_gains = float_array(plan.lqr_gain)
-    message.sliding_gains = float_array(plan.sliding_gain)
-    message.segments = [PrimitiveSegment(
-        primitive_id=s.primitive_id, primitive_type=s.primitive_type, repeat_index=s.repeat_index,
-        start_time_s=s.start_time_s, duration_s=s.duration_s, time_scale=s.time_scale,
-        alpha_offset_rad=s.alpha_offset_rad, first_sample=s.first_sample, sample_count=s.sample_count)
-        for s in plan.segments]
-    message.library_digest = plan.library_digest
-    return message
 
 
 class PlannerNode(Node):
@@ -214,11 +192,11 @@ class PlannerNode(Node):
             return response
         response.success = True
         response.message = f"planned {len(plan.segments)} segments, {plan.duration_s:.3f} s"
-        response.plan = plan_to_message(plan, self.get_clock().now().to_msg())
+        response.plan = trajectory_to_message(plan, self.get_clock().now().to_msg())
         self.plan_publisher.publish(response.plan)
         return response
 
-    def plan(self, request: RequestManeuver.Request) -> Plan:
+    def plan(self, request: RequestManeuver.Request) -> Trajectory:
         time_scale = request.time_scale or self.get_parameter("default_time_scale").value
         bounds, library = self.bounds, self._plan_library
         check_start_alpha(request.start_alpha_rad, bounds)

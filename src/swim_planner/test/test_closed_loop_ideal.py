@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from swim_controller.closed_loop import reference_of, simulate
+from swim_controller.closed_loop import simulate
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.tracker import CascadeTracker, model_io_linearization
 
@@ -24,7 +24,7 @@ LANE_CHANGE_ALPHA_BOUND_RAD = FINAL_ALPHA_ERROR_BOUND_RAD
 
 def _plan(library, rig, ids, time_scale=1.0, repeats=()):
     from swim_planner.maneuver import concatenate, expand_sequence
-    return reference_of(concatenate(library, rig, expand_sequence(ids, list(repeats)), time_scale))
+    return concatenate(library, rig, expand_sequence(ids, list(repeats)), time_scale)
 
 
 def _tracker(model, sliding: bool, bound=SlidingMode().disturbance_bound_n_m, sample_period_s=0.008):

@@ -19,7 +19,7 @@ def test_same_weights_reproduce_the_stored_gains(library):
     retuned = RetunedLibrary(library, library.lqr_weights)
     for primitive_id in library.ids():
         stored, recomputed = library.get(primitive_id).gains, retuned.get(primitive_id).gains
-        for name in ("riccati", "input_gain"):
+        for name in ("riccati", "riccati_input_gain"):
             expected, actual = getattr(stored, name), getattr(recomputed, name)
             relative = np.abs(actual - expected).max() / np.abs(expected).max()
             assert relative < 1e-5, f"{primitive_id} {name}: {relative:.1e}"
@@ -104,11 +104,12 @@ def test_one_primitives_gains_being_computed_holds_up_only_those_asking_for_it(l
     assert results["first"] is results["second"] and jobs.count(PRIMITIVE) == 1
 
 
-def test_stored_input_gain_is_g_transpose_p(library, rig):
+def test_stored_riccati_input_gain_is_g_transpose_p(library, rig):
     from swim_controller.riccati import linearize
     from swim_model import VehicleModel
     primitive = library.get("free/cruise_to_cruise/R0.43/E0.05-E0.10")
     model = VehicleModel(rig, constrained=False, lane_radius_m=primitive.spec.lane_radius_m)
     lin = linearize(model, primitive.q, primitive.qdot, primitive.foil_acceleration)
     expected = np.einsum("kni,knm->kim", lin.input_matrix, primitive.gains.riccati)
-    np.testing.assert_allclose(primitive.gains.input_gain, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+    np.testing.assert_allclose(primitive.gains.riccati_input_gain, expected, rtol=1e-12,
+                               atol=1e-12 * np.abs(expected).max())

@@ -30,7 +30,7 @@ def test_round_trip(library, rig, copy):
         np.testing.assert_array_equal(read.torque, original.torque)
         assert read.spec == original.spec and read.index_j == original.index_j
         np.testing.assert_array_equal(read.gains.riccati, original.gains.riccati)
-        np.testing.assert_array_equal(read.gains.input_gain, original.gains.input_gain)
+        np.testing.assert_array_equal(read.gains.riccati_input_gain, original.gains.riccati_input_gain)
     manifest = json.loads((copy / MANIFEST).read_text())
     assert manifest["rig_digest"] == rig.digest() and manifest["format_version"] == FORMAT_VERSION
     assert manifest["lqr_weights"] == dataclasses.asdict(library.lqr_weights)

@@ -8,6 +8,7 @@ from swim_planner.maneuver import concatenate, expand_sequence, vary_time_scale
 PAPER_CONSTRAINED = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05",
                       "constrained/cruise_to_cruise/E0.05-E0.10", "constrained/cruise/E0.10",
                       "constrained/decelerate/E0.10"], [1, 2, 1, 2, 1])
+TRAJECTORY_ARRAYS = ("time_s", "q", "qdot", "foil_acceleration", "torque", "lqr_gain", "riccati_input_gain")
 
 
 def paper_plan(library, rig, time_scale=1.0, start_alpha=0.0):
@@ -60,12 +61,25 @@ def test_impossible_requests_say_why(library, rig, ids, counts, scale, message):
 
 
 def test_constant_varying_scale_equals_constant_scaling(library, rig):
+    """A constant lambda(s) is the one time scaling (Trajectory.time_scaled), as concatenate's: bit for bit."""
     fixed = paper_plan(library, rig, 1.2)
     varied = vary_time_scale(paper_plan(library, rig), lambda s: 1.2, rig)
-    np.testing.assert_allclose(varied.time_s, fixed.time_s, rtol=1e-12, atol=1e-12)
-    np.testing.assert_allclose(varied.torque, fixed.torque, rtol=1e-12)
-    np.testing.assert_allclose(varied.qdot, fixed.qdot, rtol=1e-12)
-    np.testing.assert_allclose(varied.foil_acceleration, fixed.foil_acceleration, rtol=1e-9, atol=1e-9)
+    for name in TRAJECTORY_ARRAYS:
+        np.testing.assert_array_equal(getattr(varied, name), getattr(fixed, name), err_msg=name)
+    assert varied.segments == fixed.segments
+
+
+def test_a_plan_travels_through_its_message_bit_for_bit(library, rig):
+    """planner_node's encoder and tracker_node's decoder (swim_controller.messages) on a concatenated plan."""
+    from builtin_interfaces.msg import Time
+    from swim_controller.messages import trajectory_from_message, trajectory_to_message
+    for plan in (paper_plan(library, rig, 1.2, start_alpha=0.3),
+                 concatenate(library, rig, expand_sequence(["free/accelerate/R0.43/E0.05"], []), 0.9)):
+        decoded = trajectory_from_message(trajectory_to_message(plan, Time()))
+        for name in TRAJECTORY_ARRAYS:
+            np.testing.assert_array_equal(getattr(decoded, name), getattr(plan, name), err_msg=name)
+        assert decoded.segments == plan.segments and decoded.joint_names == plan.joint_names
+        assert (decoded.lane_radius_m, decoded.library_digest) == (plan.lane_radius_m, plan.library_digest)
 
 
 def test_ramped_scale_lasts_the_closed_form_time(library, rig):

@@ -1,0 +1,220 @@
+"""A planned trajectory and its tracking gains: what the planner concatenates and the tracker executes.
+
+A trajectory is N samples of q, qdot, u = psiddot and the feed-forward torque tau, with the tracking gains of
+eq. 33 at each sample: K = lambda R^-1 (G'P) Gamma(lambda) and the Riccati input gain G_l'P_l = (G'P) Gamma(lambda)
+(eq. 24), already time-scaled (swim_controller.time_scaling). Its segments say which primitive each run of samples
+came from (paper Sec. 4.2); a trajectory is checked when it is made, so one that exists is well formed.
+
+Time scaling by lambda > 0 (paper P3, Sec. 4.3; Theorem 1, Sec. 6.4) is ``Trajectory.time_scaled``, the one place
+it is done: t -> t / lambda, q(t) -> q(lambda t), qdot -> lambda qdot, u -> lambda^2 u, tau -> lambda^2 tau, the
+gains by Theorem 1. Scalings compose (lambda2 after lambda1 is lambda1 lambda2), and a lambda whose torques exceed
+the motor limits is refused with the largest feasible one named.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+from swim_controller.errors import PlanError
+from swim_controller.riccati import error_state_size
+from swim_controller.time_scaling import retime_feedback
+from swim_model.vehicle import JOINT_NAMES_CONSTRAINED, JOINT_NAMES_UNCONSTRAINED
+
+Array = npt.NDArray[np.float64]
+
+#: the largest trajectory the tracker accepts, in samples. Assumed from memory: a free-vehicle sample is 53 float64
+#: (t, q, qdot, u, tau and two 2 x 10 gains: 424 B), so 1e6 samples are ~0.4 GB, held about three times over by
+#: the tracker (the message's arrays, the interpolation rows and their slopes); a 1000-cruise plan (0.8 M samples)
+#: fits. The planner serves no larger plan by default (swim_planner.maneuver.PlanBounds.max_samples).
+MAX_TRACKED_SAMPLES = 1_000_000
+
+
+@dataclasses.dataclass(frozen=True)
+class Segment:
+    """One primitive as it was placed in a trajectory (swim_interfaces/PrimitiveSegment)."""
+
+    primitive_id: str
+    primitive_type: str
+    repeat_index: int
+    start_time_s: float       # trajectory time at which the segment starts, s
+    duration_s: float         # after time scaling, s
+    time_scale: float         # lambda, > 0; > 1 runs faster than stored
+    alpha_offset_rad: float   # added to the stored alpha, rad
+    first_sample: int         # index of the segment's first sample in the trajectory's arrays
+    sample_count: int         # samples that belong to the segment
+
+    def validate(self) -> None:
+        """PlanError unless the times and lambda are finite (lambda and the duration positive)."""
+        if not (math.isfinite(self.time_scale) and self.time_scale > 0.0):
+            raise PlanError(f"segment '{self.primitive_id}': time scale must be positive and finite, "
+                            f"got {self.time_scale!r}")
+        if not (math.isfinite(self.start_time_s) and math.isfinite(self.duration_s) and self.duration_s >= 0.0
+                and math.isfinite(self.alpha_offset_rad)):
+            raise PlanError(f"segment '{self.primitive_id}': start, duration and alpha offset must be finite "
+                            f"(duration >= 0)")
+
+
+@dataclasses.dataclass
+class TrajectoryPoint:
+    """A trajectory sampled at one time: the reference of one control period."""
+
+    time_s: float
+    q: Array                   # (nq,)
+    qdot: Array                # (nq,)
+    foil_acceleration: Array   # (2,) u_des, rad/s^2
+    torque: Array              # (2,) feed-forward torque, N m
+    lqr_gain: Array            # (2, n) K
+    riccati_input_gain: Array  # (2, n) G_l' P_l
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Trajectory:
+    """A concatenated, time-scaled trajectory on its sample grid, N samples, nq = 3 (constrained) or 4 (free)."""
+
+    time_s: Array              # (N,) trajectory time, s, strictly increasing
+    q: Array                   # (N, nq) rad, m
+    qdot: Array                # (N, nq) rad/s, m/s
+    foil_acceleration: Array   # (N, 2) u_des = psiddot, rad/s^2
+    torque: Array              # (N, 2) feed-forward torque, N m (reported, not used by the law)
+    lqr_gain: Array            # (N, 2, n) K of eq. 33, time-scaled
+    riccati_input_gain: Array  # (N, 2, n) G_l' P_l of eq. 24, time-scaled
+    segments: tuple[Segment, ...]   # in order, tiling the samples (a junction sample belongs to the earlier one)
+    lane_radius_m: float       # R of the locked rails (constrained), or the starting lane (free), m
+    library_digest: str = ""   # the primitive library the trajectory came from
+    _segment_start_s: Array = dataclasses.field(init=False, repr=False)   # (segments,) their start times, s
+    _rows: Array = dataclasses.field(init=False, repr=False)     # (N, m) every sampled quantity, one row a sample
+    _slopes: Array = dataclasses.field(init=False, repr=False)   # (N - 1, m) the rows' slopes between samples
+
+    def __post_init__(self) -> None:
+        set_field = object.__setattr__   # frozen: fields are set here once, checked
+        set_field(self, "time_s", np.asarray(self.time_s, dtype=float))
+        samples = len(self.time_s)
+        if samples < 2 or self.time_s.ndim != 1:
+            raise PlanError("a plan needs at least two samples")
+        if not np.all(np.diff(self.time_s) > 0.0):
+            raise PlanError("plan sample times must be strictly increasing")
+        nq = np.shape(self.q)[-1] if np.ndim(self.q) == 2 else 0
+        if nq not in (3, 4):
+            raise PlanError(f"positions must be (N, 3) or (N, 4), got shape {np.shape(self.q)}")
+        n = error_state_size(nq, nq - 2)
+        shapes = {"q": (samples, nq), "qdot": (samples, nq), "foil_acceleration": (samples, 2),
+                  "torque": (samples, 2), "lqr_gain": (samples, 2, n), "riccati_input_gain": (samples, 2, n)}
+        for name, shape in shapes.items():
+            value = np.asarray(getattr(self, name), dtype=float)
+            if value.shape != shape:
+                raise PlanError(f"plan {name} must have shape {shape}, got {value.shape}")
+            if not np.all(np.isfinite(value)):
+                raise PlanError(f"plan {name} has non-finite values")
+            set_field(self, name, value)
+        if not (isinstance(self.lane_radius_m, (int, float)) and math.isfinite(self.lane_radius_m)
+                and self.lane_radius_m > 0.0):
+            raise PlanError(f"plan lane radius must be positive and finite, got {self.lane_radius_m!r} m")
+        set_field(self, "lane_radius_m", float(self.lane_radius_m))
+        set_field(self, "segments", tuple(self.segments))
+        self._check_segments(samples)
+        set_field(self, "_segment_start_s", np.array([s.start_time_s for s in self.segments]))
+        # one row per sample, interpolated in one operation per control period
+        rows = np.concatenate([self.q, self.qdot, self.foil_acceleration, self.torque,
+                               self.lqr_gain.reshape(samples, -1), self.riccati_input_gain.reshape(samples, -1)],
+                              axis=1)
+        set_field(self, "_rows", rows)
+        set_field(self, "_slopes", np.diff(rows, axis=0) / np.diff(self.time_s)[:, None])
+
+    def _check_segments(self, samples: int) -> None:
+        if not self.segments:
+            raise PlanError("a plan needs at least one segment")
+        first = 0
+        for segment in self.segments:
+            segment.validate()
+            if segment.first_sample != first or segment.sample_count < 1:
+                raise PlanError(f"segment '{segment.primitive_id}' covers samples from {segment.first_sample} "
+                                f"({segment.sample_count} samples); the segments must tile the samples in order, "
+                                f"this one from {first}")
+            first += segment.sample_count
+        if first != samples:
+            raise PlanError(f"the segments cover {first} samples, the plan has {samples}")
+        if np.any(np.diff([s.start_time_s for s in self.segments]) < 0.0):
+            raise PlanError("segment start times must not decrease")
+
+    @property
+    def nq(self) -> int:
+        return int(self.q.shape[1])
+
+    @property
+    def ny(self) -> int:
+        return self.nq - 2
+
+    @property
+    def constrained(self) -> bool:
+        """The laterally constrained vehicle (q = alpha, phi, theta), else the free one (alpha, R, phi, theta)."""
+        return self.nq == len(JOINT_NAMES_CONSTRAINED)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return JOINT_NAMES_CONSTRAINED if self.constrained else JOINT_NAMES_UNCONSTRAINED
+
+    @property
+    def duration_s(self) -> float:
+        return float(self.time_s[-1])
+
+    def segment_index(self, time_s: float) -> int:
+        """Index of the segment running at time_s."""
+        return max(int(np.searchsorted(self._segment_start_s, time_s, side="right")) - 1, 0)
+
+    def time_scale_at(self, time_s: float) -> float:
+        """lambda of the segment running at time_s."""
+        return self.segments[self.segment_index(time_s)].time_scale
+
+    def sample(self, time_s: float) -> TrajectoryPoint:
+        """The trajectory at time_s (clamped to [0, T]): linear in every row, cubic Hermite in q (uses qdot)."""
+        rows, slopes = self._rows, self._slopes
+        t = min(max(time_s, 0.0), self.duration_s)
+        k = min(int(np.searchsorted(self.time_s, t, side="right")) - 1, len(self.time_s) - 2)
+        offset = t - self.time_s[k]
+        row = rows[k] + offset * slopes[k]
+        nq, n = self.nq, self.lqr_gain.shape[2]
+        q = row[:nq]
+        # the Hermite correction to linear interpolation of q: h^2 w (1 - w) ((qdot0 - slope) (1 - w) - ...)
+        step = self.time_s[k + 1] - self.time_s[k]
+        w = offset / step
+        secant = slopes[k, :nq]
+        q = q + step * w * (1.0 - w) * ((self.qdot[k] - secant) * (1.0 - w) - (self.qdot[k + 1] - secant) * w)
+        gains = row[2 * nq + 4:]
+        return TrajectoryPoint(
+            time_s=t, q=q, qdot=row[nq:2 * nq], foil_acceleration=row[2 * nq:2 * nq + 2],
+            torque=row[2 * nq + 2:2 * nq + 4], lqr_gain=gains[:2 * n].reshape(2, n),
+            riccati_input_gain=gains[2 * n:].reshape(2, n))
+
+    def time_scaled(self, time_scale: float, torque_limits_n_m: npt.ArrayLike) -> Trajectory:
+        """This trajectory run time_scale (lambda) times faster: P3 and Theorem 1 (module docstring).
+
+        torque_limits_n_m: the (heave, pitch) motor limits, N m (the rig's). Raises PlanError for a lambda that is
+        not positive and finite, or whose torques lambda^2 tau exceed the limits (naming the largest feasible)."""
+        if not (isinstance(time_scale, (int, float)) and math.isfinite(time_scale) and time_scale > 0.0):
+            raise PlanError(f"time scale must be a positive finite number, got {time_scale!r}")
+        peak = motor_limit_fraction(self.torque, torque_limits_n_m) * time_scale ** 2
+        if peak > 1.0:
+            raise PlanError(f"time scale {time_scale:g} needs {peak:.0%} of the motor torque limits; the largest "
+                            f"feasible time scale for this plan is {time_scale / math.sqrt(peak):.3f}")
+        lqr_gain, riccati_input_gain = retime_feedback(self.lqr_gain, self.riccati_input_gain, time_scale,
+                                                       self.ny, self.nq)
+        segments = tuple(dataclasses.replace(s, start_time_s=s.start_time_s / time_scale,
+                                             duration_s=s.duration_s / time_scale,
+                                             time_scale=s.time_scale * time_scale) for s in self.segments)
+        return dataclasses.replace(self, time_s=self.time_s / time_scale, qdot=self.qdot * time_scale,
+                                   foil_acceleration=self.foil_acceleration * time_scale ** 2,
+                                   torque=self.torque * time_scale ** 2, lqr_gain=lqr_gain,
+                                   riccati_input_gain=riccati_input_gain, segments=segments)
+
+
+def motor_limit_fraction(torque_n_m: Array, torque_limits_n_m: npt.ArrayLike) -> float:
+    """max over samples and motors of |tau| / limit, for torques (N, 2) against (heave, pitch) limits (N m):
+    1.0 is at the limits."""
+    limits = np.asarray(torque_limits_n_m, dtype=float)
+    if limits.shape != (2,) or not np.all(np.isfinite(limits)) or np.any(limits <= 0.0):
+        raise PlanError(f"torque limits must be two positive finite numbers (heave, pitch), got {limits!r}")
+    return float((np.abs(torque_n_m) / limits).max())
+
