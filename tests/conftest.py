@@ -7,7 +7,7 @@ import pytest
 
 WORKSPACE = Path(__file__).resolve().parents[1]
 PACKAGES = ("swim_model", "swim_ros", "swim_planner", "swim_controller", "swim_sim", "swim_hw_bridge", "swim_bringup",
-            "swim_interfaces")
+            "swim_viz", "swim_interfaces")
 
 #: a node's process start and discovery: seconds on a loaded 2-core host (Python imports, DDS matching); 30 s margin
 STARTUP_TIMEOUT_S = 30.0

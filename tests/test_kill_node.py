@@ -81,7 +81,7 @@ def read_back(bag_path, written):
     for topic, rows in topics.items():
         assert len(rows) == written[topic]
         assert np.all(np.diff([log_ns for log_ns, _ in rows]) >= 0), topic
-        if topic != "plan":
+        if rows and hasattr(rows[0][1], "header") and topic != "plan":   # the per-period topics
             stamps = [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for _, m in rows]
             assert np.all(np.diff(stamps) >= 0), f"{topic}: header stamps run backwards"
     return topics

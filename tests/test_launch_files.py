@@ -325,7 +325,8 @@ def test_every_launch_file_is_installed_as_written():
 def test_the_launch_files_start_the_closed_loop_on_either_plant():
     started = {path.name: {(n.package, n.executable) for n in read_launch_file(path)}
                for path in launch_files(installed_share("swim_bringup"))}
-    loop = {("swim_planner", "planner_node"), ("swim_controller", "tracker_node")}
+    loop = {("swim_planner", "planner_node"), ("swim_controller", "tracker_node"),
+            ("swim_viz", "rig_state_publisher"), ("swim_viz", "marker_node")}
     assert started == {"bridge.launch.xml": loop | {("swim_hw_bridge", "bridge_node")},
                        "sim.launch.yaml": loop | {("swim_sim", "sim_node")}}
 

@@ -26,6 +26,7 @@ setup(
             'swim-demo = swim_bringup.demo:main',
             'swim-analyze = swim_bringup.analysis:main',
             'swim-experiments = swim_bringup.experiments:main',
+            'swim-record = swim_bringup.record:main',
         ],
     },
 )

@@ -7,13 +7,13 @@ of receipt. swim-demo uses it for a whole maneuver; the kill-a-node tests use it
 """
 from __future__ import annotations
 
-import importlib
 import struct
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable, Optional
 
-from swim_bringup.bag import RUN_TOPICS, BagWriter
+from swim_bringup.bag import LATCHED_TOPICS, RUN_TOPICS, BagWriter
+from swim_bringup.recorder import RECORD_DEPTH, TopicRecorder
 from swim_controller.supervisor import Tolerances
 from swim_ros.calls import (CallFailed, GoalStatusWatch, RetryPolicy, call_service, goal_result, new_request_id,
                             send_goal, spin_until, wait_for_server)
@@ -26,19 +26,12 @@ STARTUP_TIMEOUT_S = 60.0
 #: a repeat carries the same request id, so the planner never plans twice
 PLANNER_POLICY = RetryPolicy(attempt_timeout_s=20.0, attempts=3, discovery_timeout_s=STARTUP_TIMEOUT_S)
 DRAIN_TIMEOUT_S = 60.0
-RECORD_DEPTH = 10000   # the recorder may fall behind a lock-step loop; it must not drop periods
 LOOP_TOPICS = ("joint_states", "joint_commands", "tracking_state")   # published every period by the nodes of a run
 IDLE_LOOP_TOPICS = ("joint_states", "joint_commands")   # ... these also before a plan (plant and idle tracker)
 
 
 class RunError(RuntimeError):
     """The run could not be done (a node did not start or died, the planner refused, ...)."""
-
-
-def message_class(type_name: str) -> type:
-    """The Python class of a ROS type name such as 'sensor_msgs/msg/JointState'."""
-    package, kind, name = type_name.split("/")
-    return getattr(importlib.import_module(f"{package}.{kind}"), name)
 
 
 class RunClient:
@@ -58,8 +51,9 @@ class RunClient:
             self.executor = SingleThreadedExecutor(context=self.context)
             self.executor.add_node(self.node)
             self.bag = BagWriter(bag_path, topics)
-            self.latest_cdr: dict[str, bytes] = {}   # topic -> the latest message recorded, as received
-            self.recordings: dict[str, Subscription] = {}   # topic -> the recorder's subscription
+            self.recorder = TopicRecorder(self.node, self.bag)
+            self.latest_cdr: dict[str, bytes] = self.recorder.latest_cdr   # topic -> the latest message recorded
+            self.recordings: dict[str, Subscription] = self.recorder.subscriptions   # topic -> its subscription
             # the idle loop's topics last: a publisher learns of a process's readers in the order they were made,
             # so a first message on them (wait_for_nodes) shows the others were matched too
             for topic in sorted(topics, key=lambda t: t in IDLE_LOOP_TOPICS):
@@ -73,28 +67,10 @@ class RunClient:
 
     def _record(self, topic: str, type_name: str) -> None:
         from rclpy.qos import QoSDurabilityPolicy, QoSProfile
-        bag = self.bag
-        assert bag is not None   # made before the subscriptions
-
-        def record(cdr: bytes) -> None:
-            # the executor hands over one message per subscription per wait, at ~0.2 ms of Python each: slower
-            # than a lock-step loop on 2 busy cores. So take every message queued now, in one callback.
-            # At most a queue's depth per callback: the rest stays queued, and the other topics get their turn.
-            subscription = self.recordings[topic]
-            with subscription.handle:
-                for written in range(1, RECORD_DEPTH + 1):
-                    bag.write(topic, time.time_ns(), cdr)
-                    self.latest_cdr[topic] = cdr
-                    if written == RECORD_DEPTH:
-                        break
-                    taken = subscription.handle.take_message(subscription.msg_type, True)
-                    if taken is None:
-                        break
-                    cdr = taken[0]
-        # the plan is latched (transient local): a late subscriber still gets it
-        qos = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL) if topic == "plan" \
+        # a latched topic (transient local) reaches a late subscriber too
+        qos = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL) if topic in LATCHED_TOPICS \
             else RECORD_DEPTH
-        self.recordings[topic] = self.node.create_subscription(message_class(type_name), topic, record, qos, raw=True)
+        self.recorder.record(topic, type_name, qos)
 
     @property
     def last_plan_time_s(self) -> float:

@@ -134,11 +134,18 @@ def sim_mode(params_file: Path, overrides: tuple[str, ...]) -> str:
     return str(parameters.get("mode", "lockstep"))
 
 
+#: what draws a run in RViz or Foxglove (swim_viz): the rig's URDF and /tf, and the markers of its paths. They
+#: only read joint_states (best effort) and the plan, so the loop runs the same with or without them.
+VISUALIZATION_SPECS = (NodeSpec("swim_viz", "rig_state_publisher"), NodeSpec("swim_viz", "marker_node"))
+
+
 def closed_loop_specs(config: Path, sim_overrides: tuple[str, ...] = (),
-                      tracker_overrides: tuple[str, ...] = (), plant: str = "sim") -> list[NodeSpec]:
-    """The plant (sim_node or bridge_node, see PLANTS), planner and tracker with the parameter files in config;
-    sim_overrides go to the plant node, whichever it is. With the simulator in lock-step (unless overridden to
-    real time) the tracker's stale limit is LOCKSTEP_STALE_OVERRIDE unless tracker_overrides set one."""
+                      tracker_overrides: tuple[str, ...] = (), plant: str = "sim",
+                      visualization: bool = True) -> list[NodeSpec]:
+    """The plant (sim_node or bridge_node, see PLANTS), planner and tracker with the parameter files in config,
+    then VISUALIZATION_SPECS if visualization; sim_overrides go to the plant node, whichever it is. With the
+    simulator in lock-step (unless overridden to real time) the tracker's stale limit is LOCKSTEP_STALE_OVERRIDE
+    unless tracker_overrides set one."""
     if plant not in PLANTS:
         raise ValueError(f"plant must be one of {', '.join(PLANTS)}, got {plant!r}")
     if plant == "sim" and sim_mode(config / PLANTS["sim"][2], sim_overrides) == "lockstep" \
@@ -147,4 +154,5 @@ def closed_loop_specs(config: Path, sim_overrides: tuple[str, ...] = (),
     package, executable, params_file = PLANTS[plant]
     return [NodeSpec(package, executable, config / params_file, sim_overrides),
             NodeSpec("swim_planner", "planner_node", config / "planner.yaml"),
-            NodeSpec("swim_controller", "tracker_node", config / "tracker.yaml", tracker_overrides)]
+            NodeSpec("swim_controller", "tracker_node", config / "tracker.yaml", tracker_overrides),
+            *(VISUALIZATION_SPECS if visualization else ())]

@@ -1,0 +1,97 @@
+"""Topics into a bag, from inside a node: one raw subscription per topic, each message written as the CDR bytes
+received, stamped with the wall time of receipt. RunClient (swim-demo, the tests) and swim-record share it.
+
+The QoS a recording subscription needs is the publishers': a latched topic (transient local) is recorded with a
+transient-local subscription, which gets the last message even when it subscribes late; offered_qos_for picks it
+from the publishers a node has discovered, as rosbag2's recorder does.
+"""
+from __future__ import annotations
+
+import importlib
+import time
+from typing import TYPE_CHECKING, Any, Callable, Sequence
+
+from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+
+from swim_bringup.bag import BagWriter
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
+    from rclpy.qos import QoSProfile
+    from rclpy.subscription import Subscription
+
+RECORD_DEPTH = 10000   # the recorder may fall behind a lock-step loop; it must not drop periods
+
+
+def message_class(type_name: str) -> type:
+    """The Python class of a ROS type name such as 'sensor_msgs/msg/JointState'."""
+    package, kind, name = type_name.split("/")
+    return getattr(importlib.import_module(f"{package}.{kind}"), name)
+
+
+class TopicRecorder:
+    """Raw subscriptions of node writing into bag; subscriptions and latest_cdr are by topic."""
+
+    def __init__(self, node: "Node", bag: BagWriter, clock_ns: Callable[[], int] = time.time_ns) -> None:
+        self.node, self.bag, self.clock_ns = node, bag, clock_ns
+        self.subscriptions: dict[str, Subscription] = {}
+        self.latest_cdr: dict[str, bytes] = {}   # topic -> the latest message recorded, as received
+
+    def record(self, topic: str, type_name: str, qos: "QoSProfile | int") -> None:
+        """Subscribe to topic (a type bag already has a connection for) and write what comes into the bag."""
+        bag = self.bag
+
+        def write(cdr: bytes) -> None:
+            # the executor hands over one message per subscription per wait, at ~0.2 ms of Python each: slower
+            # than a lock-step loop on 2 busy cores. So take every message queued now, in one callback.
+            # At most a queue's depth per callback: the rest stays queued, and the other topics get their turn.
+            subscription = self.subscriptions[topic]
+            with subscription.handle:
+                for written in range(1, RECORD_DEPTH + 1):
+                    bag.write(topic, self.clock_ns(), cdr)
+                    self.latest_cdr[topic] = cdr
+                    if written == RECORD_DEPTH:
+                        break
+                    taken = subscription.handle.take_message(subscription.msg_type, True)
+                    if taken is None:
+                        break
+                    cdr = taken[0]
+        self.subscriptions[topic] = self.node.create_subscription(message_class(type_name), topic, write, qos,
+                                                                  raw=True)
+
+
+def recording_qos(publishers: Sequence[Any]) -> "QoSProfile":
+    """The subscription that receives what every publisher (rclpy TopicEndpointInfo) sends: reliable if all of
+    them are, else best effort; transient local if all of them are (a latched topic), else volatile; a queue of
+    RECORD_DEPTH (depth 1 for a transient-local topic: its publishers keep their last message for late readers)."""
+    from rclpy.qos import QoSDurabilityPolicy, QoSProfile, QoSReliabilityPolicy
+    reliable = all(p.qos_profile.reliability == QoSReliabilityPolicy.RELIABLE for p in publishers)
+    latched = bool(publishers) and all(p.qos_profile.durability == QoSDurabilityPolicy.TRANSIENT_LOCAL
+                                       for p in publishers)
+    return QoSProfile(depth=1 if latched else RECORD_DEPTH,
+                      reliability=QoSReliabilityPolicy.RELIABLE if reliable else QoSReliabilityPolicy.BEST_EFFORT,
+                      durability=QoSDurabilityPolicy.TRANSIENT_LOCAL if latched else QoSDurabilityPolicy.VOLATILE)
+
+
+def _qos_time(duration: Any) -> QosTime:
+    nanoseconds = int(duration.nanoseconds)
+    return QosTime(sec=nanoseconds // 1_000_000_000, nsec=nanoseconds % 1_000_000_000)
+
+
+def offered_qos(publishers: Sequence[Any]) -> list[Qos]:
+    """The publishers' QoS profiles as rosbag2's metadata.yaml lists them (rosbags' Qos). A history the graph does
+    not report (a remote publisher's) is written as system_default: rosbag2's readers accept no 'unknown'."""
+    profiles = []
+    for publisher in publishers:
+        profile = publisher.qos_profile
+        history = QosHistory[profile.history.name]
+        if history == QosHistory.UNKNOWN:
+            history = QosHistory.SYSTEM_DEFAULT
+        profiles.append(Qos(history=history, depth=int(profile.depth),
+                            reliability=QosReliability[profile.reliability.name],
+                            durability=QosDurability[profile.durability.name],
+                            deadline=_qos_time(profile.deadline), lifespan=_qos_time(profile.lifespan),
+                            liveliness=QosLiveliness[profile.liveliness.name],
+                            liveliness_lease_duration=_qos_time(profile.liveliness_lease_duration),
+                            avoid_ros_namespace_conventions=bool(profile.avoid_ros_namespace_conventions)))
+    return profiles

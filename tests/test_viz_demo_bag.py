@@ -1,0 +1,85 @@
+"""A swim-demo run draws the rig: its bag holds robot_description, /tf_static, /tf and markers from swim_viz's
+nodes, they decode with the MCAP reader Foxglove maintains (mcap-ros2-support), and the recorded transforms put
+the foil where eq. 40 puts it for the joint_states they were made from."""
+import math
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+
+from conftest import run_demo
+
+SHORT = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05"]
+MANEUVER_TIMEOUT_S = 120
+VIZ_TOPICS = ("robot_description", "/tf_static", "/tf", "markers")
+
+
+@pytest.fixture(scope="module")
+def foxglove_messages(ros_domain, tmp_path_factory):
+    """{topic: [decoded message]} of the demo bag's topics, read with mcap-ros2-support."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+    run_dir = tmp_path_factory.mktemp("viz_demo") / "run"
+    run_demo(run_dir, "--primitives", *SHORT, "--repeats", "1", "1", "--timeout", str(MANEUVER_TIMEOUT_S))
+    messages = {}
+    with open(next((run_dir / "bag").glob("*.mcap")), "rb") as stream:
+        reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+        for _, channel, _, decoded in reader.iter_decoded_messages():
+            messages.setdefault(channel.topic, []).append(decoded)
+    return messages
+
+
+def quaternion_matrix(q):
+    x, y, z, w = q.x, q.y, q.z, q.w
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def pose_in(transforms, frame, root="tank"):
+    """The 4x4 pose of frame in root, composing the TransformStamped's from child to parent."""
+    by_child = {t.child_frame_id: t for t in transforms}
+    pose = np.eye(4)
+    while frame != root:
+        t = by_child[frame]
+        local = np.eye(4)
+        local[:3, :3] = quaternion_matrix(t.transform.rotation)
+        local[:3, 3] = (t.transform.translation.x, t.transform.translation.y, t.transform.translation.z)
+        pose = local @ pose
+        frame = t.header.frame_id
+    return pose
+
+
+def test_the_visualization_topics_decode_with_foxgloves_reader(foxglove_messages):
+    for topic in VIZ_TOPICS:
+        assert foxglove_messages.get(topic), f"no {topic} in the bag"
+    urdf = ET.fromstring(foxglove_messages["robot_description"][-1].data)
+    assert {link.get("name") for link in urdf.findall("link")} >= {"tank", "hub_arm", "platform", "foil"}
+    assert foxglove_messages["/tf_static"][-1].transforms[0].child_frame_id == "foil"
+    namespaces = {m.ns for array in foxglove_messages["markers"] for m in array.markers}
+    assert {"planned_platform", "planned_foil", "travelled_platform", "travelled_foil"} <= namespaces
+
+
+def test_recorded_transforms_put_the_foil_where_eq40_does(foxglove_messages):
+    from swim_model import load_rig
+    rig = load_rig()
+    ld, lh, lf = rig.heave_pivot_inset_m, rig.heave_link_length_m, rig.pitch_axis_to_foil_reference_m
+    radius = rig.constrained_lane_radius_m   # the demo's constrained vehicle: its joint_states have no R
+    states = {}
+    for state in foxglove_messages["joint_states"]:
+        states[(state.header.stamp.sec, state.header.stamp.nanosec)] = dict(zip(state.name, state.position))
+    static = foxglove_messages["/tf_static"][-1].transforms
+    checked = 0
+    for message in foxglove_messages["/tf"]:
+        stamp = message.transforms[0].header.stamp
+        q = states[(stamp.sec, stamp.nanosec)]   # each /tf is made from a recorded joint_states
+        alpha, phi, theta = q["alpha"], q["phi"], q["theta"]
+        # eq. 40: F = (R - Ld) e_r(alpha) + Lh dir(alpha + phi) + Lf dir(alpha + theta), dir(b) = (-sin b, cos b)
+        foil_x = (radius - ld) * math.cos(alpha) - lh * math.sin(alpha + phi) - lf * math.sin(alpha + theta)
+        foil_y = (radius - ld) * math.sin(alpha) + lh * math.cos(alpha + phi) + lf * math.cos(alpha + theta)
+        pose = pose_in(list(message.transforms) + list(static), "foil")
+        np.testing.assert_allclose(pose[:3, 3], (foil_x, foil_y, 0.0), rtol=0, atol=1e-9)
+        # the foil frame's x along the chord, toward the leading edge: dir(alpha + theta)
+        np.testing.assert_allclose(pose[:3, 0], (-math.sin(alpha + theta), math.cos(alpha + theta), 0.0), atol=1e-9)
+        checked += 1
+    assert checked >= 10
