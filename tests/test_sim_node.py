@@ -1,5 +1,5 @@
-"""sim_node over DDS: lock-step determinism, /clock, set_state, reset, malformed commands, blow-up stop, the hold
-until the first torque."""
+"""sim_node over DDS: lock-step determinism, /clock, set_state and its bounds, reset, malformed commands, blow-up
+stop, the hold until the first torque, parameters (read-only seed, checked and applied values)."""
 import time
 
 import numpy as np
@@ -128,19 +128,79 @@ def test_set_state_puts_the_vehicle_there(driver):
     assert not reply.success and "alpha" in reply.message
 
 
-def test_blow_up_stops_publishing_until_reset(driver):
+@pytest.mark.parametrize("position, velocity, said", [
+    ((0.0, 0.0, 1.5), (), "theta = 1.5 is outside .* hard stops .*pitch_upper_hard_limit"),   # past 80 degrees
+    ((0.0, -1.1, 0.0), (), "phi = -1.1 is outside .* hard stops .*heave_lower_hard_limit"),   # past -60 degrees
+    ((2.0e6, 0.0, 0.0), (), "alpha = 2e\\+06 is outside .*max_abs_start_alpha_rad"),
+    ((0.0, 0.0, float("nan")), (), "non-finite position"),
+    ((0.0, 0.0, 0.0), (0.0, 0.0, 50.0), "theta velocity 50 is faster than 45, .*pitch_max_speed"),
+    ((0.0, 0.0, 0.0), (float("inf"), 0.0, 0.0), "non-finite velocity"),
+])
+def test_set_state_out_of_bounds_is_refused_with_its_bound_and_changes_nothing(driver, position, velocity, said):
+    import re
+    from sensor_msgs.msg import JointState
+    from swim_interfaces.srv import SetVehicleState
+    count = len(driver.states)
+    request = SetVehicleState.Request(state=JointState(name=["alpha", "phi", "theta"], position=list(position),
+                                                       velocity=list(velocity)))
+    reply = driver.call(SetVehicleState, "set_state", request)
+    assert not reply.success and re.search(said, reply.message), reply.message
+    assert not driver.wait_for_states(count + 1, timeout_s=NO_STEP_WINDOW_S)   # not restarted: nothing published
+    before = driver.states[-1]
+    after = driver.drive([(0.0, 0.0)])[0]   # and it steps on from where it was
+    assert np.abs(np.array(after.position) - before.position).max() < 0.01
+
+
+def test_seed_is_read_only_and_changeable_parameters_are_checked_and_applied(driver):
+    from rclpy.parameter import Parameter
+    from swim_ros.calls import ParameterCalls
+    parameters = ParameterCalls(driver.node, driver.executor, "sim_node", POLICY)
+    reply = parameters.set([Parameter("seed", value=12)])[0]
+    assert not reply.successful and "read-only" in reply.reason
+    assert parameters.get(["seed"]) == [SEED]
+    descriptor = parameters.describe(["seed"])[0]
+    assert descriptor.read_only and descriptor.description
+    for name, value in [("sensors.position_noise_counts", float("nan")), ("sensors.quadrature_factor", 0.0),
+                        ("velocity_source", "guessed"), ("resend_after_s", -1.0)]:
+        reply = parameters.set([Parameter(name, value=value)])[0]
+        assert not reply.successful and name.split(".")[-1] in reply.reason, reply.reason
+    assert driver.states[-1].velocity   # velocities published ...
+    assert parameters.set([Parameter("velocity_source", value="none")])[0].successful
+    assert not driver.drive([(0.0, 0.0)])[0].velocity   # ... until velocity_source none takes effect
+    assert parameters.set([Parameter("velocity_source", value="model")])[0].successful
+    assert driver.drive([(0.0, 0.0)])[0].velocity
+
+
+@pytest.fixture(scope="module")
+def stiff_sim(ros_domain, tmp_path_factory):
+    """A simulator set up to blow up (in a namespace of its own): a 50 ms period in one RK4 step under a drag 2000
+    times the default makes the explicit integration unstable for a pitch rate of 40 rad/s (measured: the
+    first period blows up)."""
+    log = tmp_path_factory.mktemp("stiff_sim_node") / "log.txt"
+    with running_node("swim_sim", "sim_node", log, "-p", "constrained:=true", "-p", "sample_period_s:=0.05",
+                      "-p", "substeps:=1", "-p", "disturbances.foil_normal_drag_coefficient:=100.0",
+                      "-p", f"resend_after_s:={RESEND_AFTER_S}", "-r", "__ns:=/stiff") as process:
+        yield process
+
+
+def test_blow_up_stops_publishing_until_reset(stiff_sim, rclpy_context):
     from sensor_msgs.msg import JointState
     from std_srvs.srv import Trigger
     from swim_interfaces.srv import SetVehicleState
-    absurd = JointState(name=["alpha", "phi", "theta"], position=[0.0, 0.0, 0.0], velocity=[0.0, 0.0, 5.0e4])
-    assert driver.call(SetVehicleState, "set_state", SetVehicleState.Request(state=absurd)).success
-    count = len(driver.states)
-    assert driver.wait_for_states(count)
-    driver.command(driver.states[-1].header.stamp, (0.0, 0.0))
-    assert not driver.wait_for_states(count + 1, timeout_s=NO_STEP_WINDOW_S)     # stopped: nothing published, no NaN
-    assert all(np.all(np.isfinite(s.position)) for s in driver.states)
-    assert driver.call(Trigger, "reset", Trigger.Request()).success
-    assert driver.wait_for_states(count + 1)
+    driver = Driver(rclpy_context, namespace="/stiff")
+    try:
+        fast = JointState(name=["alpha", "phi", "theta"], position=[0.0, 0.0, 0.0], velocity=[0.0, 0.0, 40.0])
+        assert driver.call(SetVehicleState, "set_state", SetVehicleState.Request(state=fast)).success
+        assert driver.wait_for_states(1)
+        count = len(driver.states)
+        driver.command(driver.states[-1].header.stamp, (0.0, 0.0))
+        assert not driver.wait_for_states(count + 1, timeout_s=NO_STEP_WINDOW_S)   # stopped: nothing published
+        assert all(np.all(np.isfinite(s.position)) for s in driver.states)
+        assert driver.call(Trigger, "reset", Trigger.Request()).success
+        assert driver.wait_for_states(count + 1)
+    finally:
+        driver.executor.shutdown()
+        driver.node.destroy_node()
 
 
 @pytest.fixture(scope="module")

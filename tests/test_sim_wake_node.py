@@ -42,14 +42,18 @@ def wait_for_wakes(driver, count, timeout_s=MESSAGE_TIMEOUT_S):
 
 
 def library_run(torques):
-    """The same run in this process: sim_node's defaults (disturbances, sensors drawing on the plant's generator)."""
+    """The same run in this process: sim_node's defaults (disturbances, sensors drawing on the plant's generator,
+    the hard stops of the shipped bridge file)."""
+    from swim_hw_bridge.conversions import load_bridge_config
     from swim_model import VehicleModel
     from swim_sim.disturbances import Disturbances
     from swim_sim.plant import Plant
     from swim_sim.sensors import Sensors
+    from swim_sim.sim_node import hard_limits_rad
     from swim_sim.wake_coupling import WakeCoupling
     model = VehicleModel(constrained=True)
-    plant = Plant(model, Disturbances(), seed=SEED, wake=WakeCoupling(model))
+    plant = Plant(model, Disturbances(), seed=SEED, wake=WakeCoupling(model),
+                  hard_limits_rad=hard_limits_rad(load_bridge_config()))
     sensors = Sensors(model, sample_period_s=plant.sample_period_s)
     plant.reset(plant.rest_positions(), np.zeros(model.nq))
     sensors.measure(plant.q, plant.qdot, plant.rng)       # the state published after the reset

@@ -12,6 +12,14 @@ F = -(W^-1 a0) (a0 its acceleration without that force, W the stuck block of Mm^
 the static limit; beyond it the coordinate breaks away with Coulomb friction opposing its motion.
 A period with no stopped coordinate and no velocity sign change runs as one compiled call (the fast path).
 
+Hard stops (hard_limits_rad: the rig's (lower, upper) heave and pitch limits, as swim_hw_bridge's bridge file and
+its safety layer name them): a joint reaching its stop meets an inelastic stop. Its position is held at the limit
+and its velocity into the stop removed by the same plastic impulse that stops a dry-friction coordinate (the
+Mm-orthogonal projection onto qdot_j = 0, which only removes kinetic energy); then it is locked at the stop while
+the force holding it pushes it back from the limit (a stop pushes, never pulls), and released into its range as
+soon as that force would have to pull. A period in which a joint reaches a stop, or starts at one, runs substep
+by substep; a run that never reaches a stop is integrated exactly as without stops.
+
 Speed. Each compiled function is called through its C entry point on preallocated buffers (swim_model.codegen's
 NativeFunction): CasADi's own Python call costs ~45 us whatever the function does, while the arithmetic of a
 whole 8-substep period is 6 us (constrained) to 12 us (free). A period is then three native calls: the wave
@@ -29,7 +37,7 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
-from swim_model import VehicleModel, codegen
+from swim_model import StateError, VehicleModel, codegen
 from swim_sim.disturbances import GRAVITY_M_S2, Disturbances
 from swim_sim.wake_coupling import WakeCoupling
 
@@ -130,24 +138,40 @@ def _dynamics(model: VehicleModel, substeps: int) -> list[ca.Function]:
 
 
 def _period(step: ca.Function, name: str, nq: int, substeps: int) -> ca.Function:
-    """substeps steps with the inputs held: (x, tau, held, p, [lock,] h) -> (x at the end, crossing), where
-    crossing[i] is the smallest qdot_i(t_k) sign(qdot_i(t_0)) over the substeps: <= 0 where a velocity reached
-    or crossed zero inside the period (the plant then redoes it substep by substep)."""
+    """substeps steps with the inputs held: (x, tau, held, p, [lock,] h) -> (x at the end, crossing, highest,
+    lowest), where crossing[i] is the smallest qdot_i(t_k) sign(qdot_i(t_0)) over the substeps: <= 0 where a
+    velocity reached or crossed zero inside the period, and highest[i], lowest[i] are the largest and smallest
+    q_i(t_k) over the substeps (past a hard stop: the plant then redoes the period substep by substep)."""
     x0 = ca.MX.sym("x", 2 * nq)
     held_inputs = [ca.MX.sym(n, *step.size_in(i)) for i, n in enumerate(step.name_in()) if i > 0]
     states = step.mapaccum(substeps)(x0, *(ca.repmat(v, 1, substeps) for v in held_inputs))
     start_sign = ca.copysign(1.0, x0[nq:])
     crossing = ca.vertcat(*(ca.mmin(states[nq + i, :] * start_sign[i]) for i in range(nq)))
-    return ca.Function(name, [x0, *held_inputs], [states[:, -1], crossing])
+    highest = ca.vertcat(*(ca.mmax(states[i, :]) for i in range(nq)))
+    lowest = ca.vertcat(*(ca.mmin(states[i, :]) for i in range(nq)))
+    return ca.Function(name, [x0, *held_inputs], [states[:, -1], crossing, highest, lowest])
+
+
+#: (lower, upper) limits of (heave, pitch), rad
+HardLimits = tuple[tuple[float, float], tuple[float, float]]
 
 
 class Plant:
-    """The vehicle and its disturbances, stepped by control periods. Deterministic for a seed."""
+    """The vehicle and its disturbances, stepped by control periods. Deterministic for a seed.
+
+    hard_limits_rad: the joints' hard stops ((heave lower, upper), (pitch lower, upper)), rad; None: no stops."""
 
     def __init__(self, model: VehicleModel, disturbances: Disturbances = Disturbances(),
                  sample_period_s: Optional[float] = None, substeps: int = 8, seed: int = 0,
-                 wake: Optional[WakeCoupling] = None) -> None:
+                 wake: Optional[WakeCoupling] = None, hard_limits_rad: Optional[HardLimits] = None) -> None:
         disturbances.validate()
+        # joint index -> (lower, upper) of each hard stop
+        self._stops: dict[int, tuple[float, float]] = {}
+        if hard_limits_rad is not None:
+            for index, (lower, upper) in zip((model.nq - 2, model.nq - 1), hard_limits_rad):
+                if not (math.isfinite(lower) and math.isfinite(upper) and lower < upper):
+                    raise ValueError(f"a hard stop needs finite limits lower < upper, got ({lower}, {upper})")
+                self._stops[index] = (float(lower), float(upper))
         self.wake = wake   # the vortex wake's force, held over each period (wake_coupling.py); None: off
         self.model, self.disturbances = model, disturbances
         self.sample_period_s = float(sample_period_s or model.rig.sample_period_s)
@@ -155,7 +179,7 @@ class Plant:
             raise ValueError("the sample period must be > 0 and substeps >= 1")
         self.substeps = int(substeps)
         self._parameters = _parameter_vector(model, disturbances)
-        tag = f"sim_{model._codegen_tag()}_{hashlib.sha256(b'sim-dynamics-2').hexdigest()[:8]}"
+        tag = f"sim_{model._codegen_tag()}_{hashlib.sha256(b'sim-dynamics-3').hexdigest()[:8]}"
         native = codegen.native(_dynamics(model, self.substeps), tag=tag)
         (self._step, self._forward, self._potential, self._wave, self._period_locked, self._period_unlocked,
          self._mass) = (native[n] for n in ("sim_rk4_step", "sim_forward", "sim_potential", "sim_wave_force",
@@ -181,13 +205,25 @@ class Plant:
         return q
 
     # ----- state ---------------------------------------------------------------------------------
+    @property
+    def hard_limits_rad(self) -> dict[str, tuple[float, float]]:
+        """Joint name -> (lower, upper) of its hard stop, rad (empty: no stops)."""
+        return {self.model.joint_names[i]: limits for i, limits in self._stops.items()}
+
     def reset(self, q: npt.ArrayLike, qdot: npt.ArrayLike, time_s: float = 0.0) -> None:
-        """Put the vehicle at (q, qdot); restarts the noise from the seed, so runs repeat bit for bit."""
+        """Put the vehicle at (q, qdot); restarts the noise from the seed, so runs repeat bit for bit.
+        StateError for a non-finite entry, a wrong size or a joint past its hard stop."""
         q, qdot = (self.model._vector(v, self.model.nq, n) for v, n in ((q, "q"), (qdot, "qdot")))
+        for i, (lower, upper) in self._stops.items():
+            if not lower <= q[i] <= upper:
+                raise StateError(f"{self.model.joint_names[i]} = {q[i]:g} rad is past its hard stop "
+                                 f"[{lower:g}, {upper:g}] rad")
         self.time_s = float(time_s)
         self.q, self.qdot = q.copy(), qdot.copy()
         self.torque, self.saturated = np.zeros(2), (False, False)
         self.stuck = {i: qdot[i] == 0.0 for i, _, _ in self._dry}
+        # joint index -> +1 held at its upper stop, -1 at its lower one, 0 free
+        self.at_stop = {i: 0 for i in self._stops}
         self.rng = np.random.default_rng(self.seed)
         self._wave_state = 0.0
         if self.wake is not None:
@@ -216,9 +252,9 @@ class Plant:
         if self.wake is not None:
             wave = wave + self.wake.step(self.q, self.qdot, self.sample_period_s)
         x = np.concatenate([self.q, self.qdot])
-        x_next = self._fast_period(x, applied, wave)
+        x_next = None if any(self.at_stop.values()) else self._fast_period(x, applied, wave)
         if x_next is None:
-            x_next = self._stick_slip_period(x, applied, wave)
+            x_next = self._substep_period(x, applied, wave)
         nq = self.model.nq
         if not np.isfinite(x_next).all() or np.abs(x_next[nq:]).max() > BLOW_UP_SPEED:
             raise SimulationError(f"the integration blew up at t = {self.time_s:.3f} s (state {x_next}); "
@@ -242,7 +278,7 @@ class Plant:
 
     def _fast_period(self, x: Array, torque: Array, wave: Array) -> Optional[Array]:
         """The whole period in one compiled call, unless a moving dry-friction coordinate's velocity reaches zero
-        in it (None: redo the period substep by substep)."""
+        in it or a joint passes a hard stop (None: redo the period substep by substep)."""
         held, lock = self._friction(x, torque, wave)
         if lock.any():
             period = self._period_locked
@@ -251,20 +287,29 @@ class Plant:
             period = self._period_unlocked
         period.inputs[0][:], period.inputs[1][:], period.inputs[2][:] = x, torque, held
         period()
-        crossing = period.outputs[1]
+        crossing, highest, lowest = period.outputs[1], period.outputs[2], period.outputs[3]
         for i, _, _ in self._dry:
             if not self.stuck[i] and crossing[i] <= 0.0:
+                return None
+        for i, (lower, upper) in self._stops.items():
+            if highest[i] > upper or lowest[i] < lower:
                 return None
         return self._pin_stopped(x, period.outputs[0].copy())
 
     def _pin_stopped(self, x: Array, x_next: Array) -> Array:
-        """Stopped coordinates exactly where they stopped (the constraint leaves round-off, ~1e-20)."""
+        """Stopped coordinates (stuck by friction, held at a stop) exactly where they stopped (the constraint
+        leaves round-off, ~1e-20)."""
         for i, _, _ in self._dry:
             if self.stuck[i]:
                 x_next[i], x_next[self.model.nq + i] = x[i], 0.0
+        for i, side in self.at_stop.items():
+            if side:
+                x_next[i], x_next[self.model.nq + i] = x[i], 0.0
         return x_next
 
-    def _stick_slip_period(self, x: Array, torque: Array, wave: Array) -> Array:
+    def _substep_period(self, x: Array, torque: Array, wave: Array) -> Array:
+        """The period substep by substep: dry-friction coordinates stop where their velocity reaches zero, joints
+        stop where they reach a hard stop."""
         nq = self.model.nq
         step = self._step
         for _ in range(self.substeps):
@@ -275,29 +320,48 @@ class Plant:
             x_next = self._pin_stopped(x, x_next)
             for i, _, _ in self._dry:
                 if not self.stuck[i] and x_next[nq + i] * x[nq + i] <= 0.0:
-                    self._stop(x_next, i)    # the velocity reached zero: stopped; stiction decides next substep
+                    # the velocity reached zero: stopped; stiction decides next substep. Joints at a stop stay
+                    self._stop(x_next, [i, *(j for j, side in self.at_stop.items() if side)])
+                    self.stuck[i] = True
+            for i, (lower, upper) in self._stops.items():
+                if not self.at_stop[i] and not lower <= x_next[i] <= upper and math.isfinite(x_next[i]):
+                    self.at_stop[i] = 1 if x_next[i] > upper else -1
+                    x_next[i] = upper if x_next[i] > upper else lower   # the stop: at the limit, not past it
+                    at_stops = [j for j, side in self.at_stop.items() if side and j != i]
+                    self._stop(x_next, [i, *at_stops, *(j for j, _, _ in self._dry if self.stuck[j])])
             x = x_next
         return x
 
-    def _stop(self, x: Array, index: int) -> None:
-        """Stop coordinate index by a plastic impulse: qdot -= Mm^-1 e_i v_i / (Mm^-1)_ii, the Mm-orthogonal
-        projection onto v_i = 0, which never adds kinetic energy (it removes v_i^2 / (2 (Mm^-1)_ii))."""
+    def _stop(self, x: Array, indices: list[int]) -> None:
+        """Stop coordinate indices[0] by a plastic impulse, the others (already stopped) staying stopped: for one
+        coordinate i, qdot -= Mm^-1 e_i v_i / (Mm^-1)_ii; for a set S, qdot -= Mm^-1 E (E' Mm^-1 E)^-1 E' qdot
+        (E the columns of I in S). The Mm-orthogonal projection onto v_S = 0, which never adds kinetic energy
+        (for one coordinate it removes v_i^2 / (2 (Mm^-1)_ii))."""
         nq = self.model.nq
         self._mass.inputs[0][:] = x[:nq]
         self._mass()
         inverse_mass = np.linalg.inv(self._mass.outputs[0].reshape((nq, nq), order="F"))
-        x[nq:] -= inverse_mass[:, index] * (x[nq + index] / inverse_mass[index, index])
-        x[nq + index] = 0.0
-        self.stuck[index] = True
+        if len(indices) == 1:
+            index = indices[0]
+            x[nq:] -= inverse_mass[:, index] * (x[nq + index] / inverse_mass[index, index])
+        else:
+            selected = np.array(indices)
+            velocities = x[nq + selected]
+            x[nq:] -= inverse_mass[:, selected] @ np.linalg.solve(inverse_mass[np.ix_(selected, selected)], velocities)
+        x[nq + np.array(indices)] = 0.0
 
     def _friction(self, x: Array, torque: Array, wave: Array) -> tuple[Array, Array]:
         """(held force, lock mask) for the next step: stopped coordinates stay locked while the force holding
         them is within their static limit, else break away (against Coulomb friction); moving ones feel
-        -Coulomb sign(v). Mutates x only to give a breaking-away coordinate its direction of motion."""
+        -Coulomb sign(v). A joint at a hard stop stays locked while the force holding it pushes back from the
+        limit, and is released when it would have to pull. Mutates x only to give a breaking-away coordinate its
+        direction of motion."""
         nq = self.model.nq
         held, lock = wave.copy(), np.zeros(nq)
         for i, _, _ in self._dry:
             lock[i] = 1.0 if self.stuck[i] else 0.0
+        for i, side in self.at_stop.items():
+            lock[i] = 1.0 if side else 0.0
         if lock.any():
             forward = self._forward
             forward.inputs[0][:], forward.inputs[1][:], forward.inputs[2][:], forward.inputs[4][:] = (
@@ -308,6 +372,9 @@ class Plant:
                 if self.stuck[i] and abs(hold_force[i]) > static:
                     self.stuck[i], lock[i] = False, 0.0
                     x[nq + i] = 1e-12 * math.copysign(1.0, hold_force[i] * -1.0)   # where the net force pushes
+            for i, side in self.at_stop.items():
+                if side and hold_force[i] * side > 0.0:   # the stop would have to pull the joint onto it
+                    self.at_stop[i], lock[i] = 0, 0.0
         for i, coulomb, _ in self._dry:
             if not self.stuck[i]:
                 held[i] -= coulomb * math.copysign(1.0, x[nq + i])

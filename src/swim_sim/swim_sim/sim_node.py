@@ -8,7 +8,12 @@ Topics:
     wake_statistics (pub, swim_interfaces/WakeStatistics)  with wake.enabled: the vortex wake after each period
                                                   (vortex count, circulations, the vortical force and its Q)
 Services: ``reset`` (std_srvs/Trigger: back to the initial state, noise restarted from the seed; time runs on),
-``set_state`` (swim_interfaces/SetVehicleState).
+``set_state`` (swim_interfaces/SetVehicleState: a state within the bounds of StateBounds, else refused with the
+bound it passes and nothing changed).
+
+Hard stops: heave and pitch meet an inelastic stop at the rig's hard limits (swim_sim.plant), read with the
+physically possible joint speeds from the hardware bridge's file (swim_hw_bridge config/bridge.yaml, or
+``bridge_config_path``): a simulated run cannot take a joint where the rig's cannot go.
 
 Modes: ``lockstep`` (default): each state is published, the step waits for the command stamped with that
 state's stamp, then integrates one period and publishes the next: deterministic for a seed and as fast as the
@@ -23,10 +28,9 @@ A state with a non-finite or absurd value is never published: the simulator stop
 set_state restarts it). Malformed commands are rejected and counted.
 
 Simulated time starts at ``start_time_s`` (1 s by default: a zero stamp means "not stamped" to consumers).
-Parameters: rig_path, constrained, lane_radius_m, sample_period_s, substeps, mode, seed, start_time_s,
-initial_positions, velocity_source, resend_after_s, hold_until_torque, disturbances.<field>
-(swim_sim.disturbances.Disturbances), sensors.<field> (swim_sim.sensors.SensorNoise), wake.enabled (false: the
-ideal-flow model alone) and wake.<field> (swim_sim.wake_coupling.parameter_defaults); read at start.
+Parameters: the table PARAMETERS (swim_ros.parameters: each with its description and range; read-only where the
+node is built from it at start, such as ``seed``; ``velocity_source``, ``resend_after_s`` and ``sensors.*`` take
+effect at once when set).
 
 Speed (lock-step: each period waits for a round trip through the controller). The per-period path reuses its
 messages and fills their arrays with array('d') (rosidl's setters check a list element by element), and the
@@ -36,11 +40,13 @@ per-period topics have no QoS event handlers: rclpy gives every publisher and su
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
-from typing import Optional, cast
+from typing import Any, Optional, Sequence, cast
 
 import numpy as np
 from builtin_interfaces.msg import Time
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
@@ -48,53 +54,138 @@ from std_srvs.srv import Trigger
 from swim_interfaces.msg import WakeStatistics
 from swim_interfaces.srv import SetVehicleState
 
+from swim_hw_bridge.conversions import BridgeConfig, BridgeConfigError, load_bridge_config
 from swim_model import StateError, SwimModelError, VehicleModel, load_rig
+from swim_planner.maneuver import DEFAULT_BOUNDS
 from swim_ros.codecs import MessageError, float_array, joint_state_arrays, stamp_of, torque_from_command
 from swim_ros.entry import run_node
+from swim_ros.parameters import ParameterSpec, ParameterValue, check_parameters, declare_parameters, finite
 from swim_ros.qos import per_period_publisher, per_period_subscription
 from swim_sim.disturbances import Disturbances
-from swim_sim.plant import Plant, SimulationError
+from swim_sim.plant import HardLimits, Plant, SimulationError
 from swim_sim.sensors import SensorNoise, Sensors
 from swim_sim.wake_coupling import WakeCoupling, parameter_defaults, parameters_from_values
+
+
+def one_of(*choices: str) -> Any:
+    """A parameter check: the value must be one of choices."""
+    def check(value: Any) -> Optional[str]:
+        return None if value in choices else f"must be one of {', '.join(repr(c) for c in choices)}"
+    return check
+
+
+def finite_entries(value: Any) -> Optional[str]:
+    """A parameter check: every entry of an array must be a finite number."""
+    return None if all(math.isfinite(v) for v in value) else "must have finite entries"
+
+
+#: sim_node's parameters (swim_ros.parameters). Everything the plant, its model, its wake, its clock or its noise
+#: sequence is built from at start is read-only (setting seed at run time could not restart the noise it seeded);
+#: the velocities' source, the resend delay and the sensors' noise take effect when set. Upper bounds are assumed,
+#: each far past any sensible value: they keep a typo (an extra zero, a wrong unit) out.
+#: the largest value of a sensors.* parameter (counts of noise, a noise fraction, counts per line). Assumed: a
+#: million counts of noise is far past any encoder, and keeps the noise and its quantization finite
+SENSOR_PARAMETER_BOUND = 1.0e6
+PARAMETERS: tuple[ParameterSpec, ...] = (
+    ParameterSpec("rig_path", "", "rig YAML file (empty: swim_model's shipped rig)", read_only=True),
+    ParameterSpec("bridge_config_path", "", "hardware bridge YAML file the hard stops and the physically possible "
+                  "joint speeds are read from (empty: swim_hw_bridge's shipped bridge.yaml)", read_only=True),
+    ParameterSpec("constrained", False, "simulate the laterally constrained vehicle (no R)", read_only=True),
+    ParameterSpec("lane_radius_m", 0.0, "the constrained vehicle's lane radius, m (0: the rig's)",
+                  range=(0.0, 10.0), read_only=True),
+    ParameterSpec("sample_period_s", 0.008, "control period, s (the paper's 8 ms)", range=(1e-4, 1.0),
+                  read_only=True),
+    ParameterSpec("substeps", 8, "RK4 steps per period", range=(1, 10_000), read_only=True),
+    ParameterSpec("mode", "lockstep", "'lockstep': a period per command; 'realtime': a period per timer tick",
+                  check=one_of("lockstep", "realtime"), read_only=True),
+    ParameterSpec("seed", 0, "seed of the disturbances' and the sensors' noise", range=(0, 2 ** 63 - 1),
+                  read_only=True),
+    ParameterSpec("start_time_s", 1.0, "simulated time at start, s (a zero stamp means 'not stamped')",
+                  range=(0.0, 1.0e9), read_only=True),
+    ParameterSpec("initial_positions", [0.0], "initial q, one entry per coordinate (alpha, [R,] phi, theta), rad "
+                  "and m; any other length: at rest", check=finite_entries, read_only=True),
+    ParameterSpec("velocity_source", "model", "'model': the model's velocities with noise; 'none': positions only",
+                  check=one_of("model", "none")),
+    ParameterSpec("resend_after_s", 0.5, "lock-step: an unanswered state is published again after this long, s",
+                  range=(1e-3, 3600.0)),
+    ParameterSpec("hold_until_torque", False, "lock-step: hold the initial state until the first nonzero torque",
+                  read_only=True),
+    *(ParameterSpec(f"disturbances.{f.name}", float(cast(float, f.default)),
+                    f"swim_sim.disturbances.Disturbances.{f.name}", check=finite, read_only=True)
+      for f in dataclasses.fields(Disturbances)),
+    *(ParameterSpec(f"sensors.{f.name}", cast(ParameterValue, f.default), f"swim_sim.sensors.SensorNoise.{f.name}",
+                    range=None if isinstance(f.default, bool) else (0.0, SENSOR_PARAMETER_BOUND))
+      for f in dataclasses.fields(SensorNoise)),
+    *(ParameterSpec(f"wake.{name}", default, f"the vortex wake's {name} (swim_sim.wake_coupling)",
+                    check=None if isinstance(default, bool) else finite, read_only=True)
+      for name, default in parameter_defaults().items()),
+)
+
+
+def hard_limits_rad(config: BridgeConfig) -> HardLimits:
+    """((heave lower, upper), (pitch lower, upper)) hard limits of the bridge file, rad."""
+    return ((config.heave_lower_hard_limit_rad, config.heave_upper_hard_limit_rad),
+            (config.pitch_lower_hard_limit_rad, config.pitch_upper_hard_limit_rad))
+
+
+@dataclasses.dataclass(frozen=True)
+class StateBounds:
+    """What set_state accepts, per coordinate name: (lower, upper) positions and the largest speed, each with
+    where the bound comes from (said in a refusal, with how to change it)."""
+
+    positions: dict[str, tuple[float, float, str]]
+    speeds: dict[str, tuple[float, str]]
+
+    @classmethod
+    def of(cls, plant: Plant, config: BridgeConfig) -> "StateBounds":
+        """alpha within swim_planner's start-alpha bound (float64 keeps alpha to 1e-10 rad up to there), R inside
+        the tank, heave and pitch within their hard stops; speeds within the bridge file's physically possible
+        joint speeds."""
+        rig, where = plant.model.rig, f"the bridge file {config.source_path}"
+        alpha = DEFAULT_BOUNDS.max_abs_start_alpha_rad
+        positions = {"alpha": (-alpha, alpha, "swim_planner's PlanBounds.max_abs_start_alpha_rad"),
+                     "R": (0.0, 0.5 * rig.tank_diameter_m, f"the tank's radius (tank_diameter in {rig.source_path})")}
+        for (name, (lower, upper)), joint in zip(plant.hard_limits_rad.items(), ("heave", "pitch")):
+            positions[name] = (lower, upper, f"the hard stops ({joint}_lower_hard_limit, {joint}_upper_hard_limit "
+                                             f"in {where}; parameter bridge_config_path)")
+        speeds = {name: (speed, f"the physically possible speed ({key}_max_speed in {where}; parameter "
+                                f"bridge_config_path)")
+                  for name, key, speed in zip(("alpha", "R", "phi", "theta"), ("hub", "rail", "heave", "pitch"),
+                                              config.max_speeds)}
+        return cls(positions, speeds)
+
+    def check(self, names: Sequence[str], q: np.ndarray, qdot: np.ndarray) -> None:
+        """ValueError naming the first coordinate past its bound, the bound and where it comes from."""
+        for name, position, speed in zip(names, q, qdot):
+            lower, upper, position_source = self.positions[name]
+            if not lower <= position <= upper:
+                raise ValueError(f"{name} = {position:g} is outside [{lower:g}, {upper:g}], {position_source}")
+            largest, speed_source = self.speeds[name]
+            if abs(speed) > largest:
+                raise ValueError(f"{name} velocity {speed:g} is faster than {largest:g}, {speed_source}")
+
 
 class SimNode(Node):
     def __init__(self) -> None:
         super().__init__("sim_node")
-        declare = self.declare_parameter
-        declare("rig_path", "")
-        declare("constrained", False)
-        declare("lane_radius_m", 0.0)
-        declare("sample_period_s", 0.008)
-        declare("substeps", 8)
-        declare("mode", "lockstep")
-        declare("seed", 0)
-        declare("start_time_s", 1.0)
-        declare("initial_positions", [0.0])
-        declare("velocity_source", "model")
-        declare("resend_after_s", 0.5)
-        declare("hold_until_torque", False)
-        for field in dataclasses.fields(Disturbances):
-            declare(f"disturbances.{field.name}", float(cast(float, field.default)))   # every field has one
-        for field in dataclasses.fields(SensorNoise):
-            declare(f"sensors.{field.name}", field.default)
-        for name, default in parameter_defaults().items():
-            declare(f"wake.{name}", default)
+        declare_parameters(self, PARAMETERS)
         value = lambda name: self.get_parameter(name).value  # noqa: E731
         self.mode = value("mode")
-        if self.mode not in ("lockstep", "realtime"):
-            raise ValueError(f"parameter mode must be 'lockstep' or 'realtime', got {self.mode!r}")
-        if value("velocity_source") not in ("model", "none"):
-            raise ValueError(f"parameter velocity_source must be 'model' or 'none', got {value('velocity_source')!r}")
         rig = load_rig(value("rig_path") or None)
+        try:
+            bridge_config = load_bridge_config(value("bridge_config_path") or None)
+        except BridgeConfigError as err:
+            raise ValueError(f"parameter bridge_config_path: {err}") from err
         model = VehicleModel(rig, constrained=value("constrained"), lane_radius_m=value("lane_radius_m") or None)
         fields = dataclasses.fields
         disturbances = Disturbances(**{f.name: value(f"disturbances.{f.name}") for f in fields(Disturbances)})
-        noise = SensorNoise(**{f.name: value(f"sensors.{f.name}") for f in fields(SensorNoise)})
         wake = None
         if value("wake.enabled"):
             wake = WakeCoupling(model, parameters_from_values({n: value(f"wake.{n}") for n in parameter_defaults()}))
-        self.plant = Plant(model, disturbances, value("sample_period_s"), value("substeps"), value("seed"), wake)
-        self.sensors = Sensors(model, noise, self.plant.sample_period_s)
+        self.plant = Plant(model, disturbances, value("sample_period_s"), value("substeps"), value("seed"), wake,
+                           hard_limits_rad(bridge_config))
+        self.state_bounds = StateBounds.of(self.plant, bridge_config)
+        self.sensors = Sensors(model, self._sensor_noise({}), self.plant.sample_period_s)
         self.start_time_s = float(value("start_time_s"))
         initial = value("initial_positions")   # nq entries, or at rest
         self.initial_q = np.asarray(initial, dtype=float) if len(initial) == model.nq else self.plant.rest_positions()
@@ -104,6 +195,8 @@ class SimNode(Node):
         self._latest_torque = np.zeros(2)
         self._published_stamp: Optional[Time] = None
         self._velocity_source = value("velocity_source")
+        self.add_on_set_parameters_callback(self._check_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
         self._state_message = JointState(name=list(model.joint_names))   # reused every period
         self._clock_message = Clock()
         self._efforts = np.zeros(model.nq)   # the unactuated coordinates' entries stay zero
@@ -128,6 +221,32 @@ class SimNode(Node):
         self._publish_state()
         self.get_logger().info(f"simulating the {'constrained' if model.constrained else 'free'} vehicle, "
                                f"{self.mode}, period {self.plant.sample_period_s * 1e3:g} ms")
+
+    # ----- parameters ------------------------------------------------------------------------------
+    def _sensor_noise(self, changes: dict[str, Any]) -> SensorNoise:
+        """The sensors' noise from the current parameters with changes (name -> new value) applied."""
+        return SensorNoise(**{f.name: changes.get(f"sensors.{f.name}", self.get_parameter(f"sensors.{f.name}").value)
+                              for f in dataclasses.fields(SensorNoise)})
+
+    def _check_parameters(self, parameters: list[Any]) -> SetParametersResult:
+        """On-set: the table's ranges and checks, then the sensors' noise as a whole (it validates itself)."""
+        result = check_parameters(PARAMETERS, parameters)
+        changes = {p.name: p.value for p in parameters}
+        if result.successful and any(name.startswith("sensors.") for name in changes):
+            try:
+                self._sensor_noise(changes).validate()
+            except ValueError as err:
+                return SetParametersResult(successful=False, reason=str(err))
+        return result
+
+    def _apply_parameters(self, parameters: list[Any]) -> None:
+        """Post-set: accepted values take effect (resend_after_s is read where it is used)."""
+        changes = {p.name: p.value for p in parameters}
+        if "velocity_source" in changes:
+            self._velocity_source = changes["velocity_source"]
+            self._state_message.velocity = float_array(())   # the reused message's velocities: filled or left out
+        if any(name.startswith("sensors.") for name in changes):
+            self.sensors = Sensors(self.plant.model, self._sensor_noise({}), self.plant.sample_period_s)
 
     # ----- stepping ------------------------------------------------------------------------------
     def _on_command(self, message: JointState) -> None:
@@ -226,9 +345,12 @@ class SimNode(Node):
         return response
 
     def _state_from_request(self, state: JointState) -> tuple[np.ndarray, np.ndarray]:
-        """(q, qdot) of a set_state request (no velocities: at rest); MessageError (a ValueError) if unusable."""
-        q, qdot = joint_state_arrays(state.name, state.position, state.velocity, self.plant.model.joint_names)
-        return q, qdot if qdot is not None else np.zeros_like(q)
+        """(q, qdot) of a set_state request (no velocities: at rest); ValueError if unusable or past a bound."""
+        joint_names = self.plant.model.joint_names
+        q, qdot = joint_state_arrays(state.name, state.position, state.velocity, joint_names)
+        qdot = qdot if qdot is not None else np.zeros_like(q)
+        self.state_bounds.check(joint_names, q, qdot)
+        return q, qdot
 
     def _restart(self, q: np.ndarray, qdot: np.ndarray) -> None:
         """Put the vehicle at (q, qdot) at the current simulated time (time never runs backwards)."""
