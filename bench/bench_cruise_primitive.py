@@ -15,7 +15,7 @@ import time
 from swim_model import VehicleModel, load_rig
 from swim_planner.catalog import constrained_specs
 from swim_planner.paper_method import solve_fourier_cruise
-from swim_planner.primitives import pointwise_function, solve_primitive
+from swim_planner.primitive_solver import pointwise_function, solve_primitive
 
 TARGET_S = 10.0
 TARGET_SPEEDUP = 10.0

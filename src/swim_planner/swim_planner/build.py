@@ -16,7 +16,8 @@ from swim_model import RigParameters, VehicleModel
 from swim_planner.errors import PrimitiveSolveError
 from swim_planner.gains import gains_job
 from swim_planner.library import PrimitiveLibrary
-from swim_planner.primitives import PlanningLimits, Primitive, PrimitiveSpec, SolverSettings, solve_primitive
+from swim_planner.primitive_solver import solve_primitive
+from swim_planner.primitives import PlanningLimits, Primitive, PrimitiveSpec, SolverSettings
 
 Progress = Callable[[str, str], None]
 

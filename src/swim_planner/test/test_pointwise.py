@@ -10,7 +10,8 @@ from swim_model import VehicleModel
 from swim_planner import pointwise
 from swim_planner.catalog import constrained_specs
 from swim_planner.pointwise import PointwiseFunction, PointwiseNlp, Structure
-from swim_planner.primitives import SolverSettings, primitive_nlp, solve_primitive
+from swim_planner.primitive_solver import primitive_nlp, solve_primitive
+from swim_planner.primitives import SolverSettings
 
 
 @pytest.fixture(scope="module")
