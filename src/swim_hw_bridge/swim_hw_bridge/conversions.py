@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-from swim_model.units import UNITS
+from swim_model.units import POSITIVE, SIGNED, UNITS, EntryError, entry_to_si
 
 FORMAT_VERSION = 1
 
@@ -43,7 +43,7 @@ _SUFFIX = {"ratio": "", "lines_per_rev": "per_rev", "lines_per_length": "per_m",
            "torque_constant": "n_m_per_a", "current": "a", "voltage": "v", "transconductance": "a_per_v",
            "angle": "rad", "length": "m", "angular_speed": "rad_s", "speed": "m_s", "frequency": "hz"}
 
-_POSITIVE, _ANY = "positive", "any"
+_POSITIVE, _ANY = POSITIVE, SIGNED
 #: parameter key -> (dimension, sign rule)
 _SCHEMA: dict[str, tuple[str, str]] = {
     "quadrature_counts_per_line": ("ratio", _POSITIVE),
@@ -217,22 +217,10 @@ def config_from_mapping(document: Any, origin: str = "<mapping>") -> BridgeConfi
 
 def _entry_to_si(key: str, entry: Any, origin: str) -> float:
     dimension, sign_rule = _SCHEMA[key]
-    where = f"{origin}: parameter '{key}'"
-    if not isinstance(entry, Mapping) or "value" not in entry or "unit" not in entry:
-        raise BridgeConfigError(f"{where} must be a mapping with 'value' and 'unit'")
-    if ("source" in entry) == ("assumed" in entry):
-        raise BridgeConfigError(f"{where} must say exactly one of 'source' (paper) or 'assumed' (why)")
-    unit = str(entry["unit"])
-    if unit not in BRIDGE_UNITS[dimension]:
-        raise BridgeConfigError(f"{where} has unit '{unit}', not a {dimension.replace('_', ' ')} unit; use one of "
-                                f"{', '.join(BRIDGE_UNITS[dimension])}")
-    value = entry["value"]
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise BridgeConfigError(f"{where} has value {value!r}; expected a finite number")
-    si_value = float(value) * BRIDGE_UNITS[dimension][unit]
-    if sign_rule == _POSITIVE and not si_value > 0.0:
-        raise BridgeConfigError(f"{where} is {value} {unit}; it must be positive")
-    return si_value
+    try:
+        return entry_to_si(entry, dimension, sign_rule, f"{origin}: parameter '{key}'", BRIDGE_UNITS)
+    except EntryError as err:
+        raise BridgeConfigError(str(err)) from err
 
 
 def _check_consistency(config: BridgeConfig) -> None:

@@ -19,12 +19,12 @@ from typing import Any, Mapping
 import yaml
 
 from swim_model.errors import RigConfigError
-from swim_model.units import SI_UNIT, UNITS, to_si
+from swim_model.units import NON_NEGATIVE, POSITIVE, SIGNED, EntryError, entry_to_si
 
 RIG_FORMAT_VERSION = 1
 
 # key in the file -> (dimension, sign rule); the record's field is the key plus an SI suffix.
-_POSITIVE, _NONNEGATIVE, _SIGNED = "positive", "non-negative", "signed"
+_POSITIVE, _NONNEGATIVE, _SIGNED = POSITIVE, NON_NEGATIVE, SIGNED
 _SCHEMA: dict[str, tuple[str, str]] = {
     "foil_chord": ("length", _POSITIVE),
     "foil_max_thickness": ("length", _POSITIVE),
@@ -180,25 +180,10 @@ def rig_from_mapping(document: Any, origin: str = "<mapping>") -> RigParameters:
 
 def _entry_to_si(key: str, entry: Any, origin: str) -> float:
     dimension, sign_rule = _SCHEMA[key]
-    where = f"{origin}: parameter '{key}'"
-    if not isinstance(entry, Mapping) or "value" not in entry or "unit" not in entry:
-        raise RigConfigError(f"{where} must be a mapping with 'value' and 'unit'")
-    if ("source" in entry) == ("assumed" in entry):
-        raise RigConfigError(f"{where} must say exactly one of 'source' (paper) or 'assumed' (why)")
-    unit = str(entry["unit"])
-    if unit not in UNITS[dimension]:
-        raise RigConfigError(
-            f"{where} has unit '{unit}', which is not a {dimension.replace('_', ' ')}; "
-            f"use one of {', '.join(UNITS[dimension])} (SI: {SI_UNIT[dimension]})")
-    value = entry["value"]
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise RigConfigError(f"{where} has value {value!r}; expected a finite number")
-    si_value = to_si(value, unit, dimension)
-    if sign_rule == _POSITIVE and not si_value > 0.0:
-        raise RigConfigError(f"{where} is {value} {unit}; it must be positive")
-    if sign_rule == _NONNEGATIVE and si_value < 0.0:
-        raise RigConfigError(f"{where} is {value} {unit}; it must not be negative")
-    return si_value
+    try:
+        return entry_to_si(entry, dimension, sign_rule, f"{origin}: parameter '{key}'")
+    except EntryError as err:
+        raise RigConfigError(str(err)) from err
 
 
 def _check_consistency(rig: RigParameters) -> None:

@@ -1,4 +1,4 @@
-"""Units accepted in rig files, and their conversion to SI.
+"""Units accepted in parameter files (rig.yaml, the bridge's bridge.yaml), and their conversion to SI.
 
 Each rig parameter has a dimension; its value in the file may be given in any unit of that
 dimension listed here and is converted to the SI unit on load. A unit of another dimension is an
@@ -7,6 +7,8 @@ error (a length written in kg is a mistake, not something to convert).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 OUNCE_FORCE_INCH_N_M = 0.00706155181422604  # 1 ozf*in = 0.0283495231 kg * 9.80665 m/s^2 * 0.0254 m
 
@@ -24,12 +26,36 @@ UNITS: dict[str, dict[str, float]] = {
     "lines_per_length": {"lines/m": 1.0, "lines/in": 1.0 / 0.0254},
 }
 
-SI_UNIT: dict[str, str] = {dim: next(iter(table)) for dim, table in UNITS.items()}
+#: sign rules of a parameter file's entries
+POSITIVE, NON_NEGATIVE, SIGNED = "positive", "non-negative", "signed"
 
 
-def to_si(value: float, unit: str, dimension: str) -> float:
-    """Convert ``value`` given in ``unit`` to the SI unit of ``dimension``.
+class EntryError(ValueError):
+    """A parameter file's entry that cannot be used; the message says where and why."""
 
-    Raises KeyError when ``unit`` is not a unit of ``dimension``.
-    """
-    return float(value) * UNITS[dimension][unit]
+
+def entry_to_si(entry: Any, dimension: str, sign_rule: str, where: str,
+                units: Mapping[str, Mapping[str, float]] = UNITS) -> float:
+    """One entry of a parameter file (rig.yaml, bridge.yaml) in the SI unit of its dimension.
+
+    An entry is a mapping with ``value``, ``unit`` and exactly one of ``source`` (where the number comes from) or
+    ``assumed`` (why it was chosen). ``where`` names the entry in messages (file and key); ``units`` maps each
+    dimension to its accepted units and their factors to SI (the first listed is the SI unit). Raises EntryError
+    for a missing field, a unit of another dimension, a non-finite value or a sign the rule forbids."""
+    if not isinstance(entry, Mapping) or "value" not in entry or "unit" not in entry:
+        raise EntryError(f"{where} must be a mapping with 'value' and 'unit'")
+    if ("source" in entry) == ("assumed" in entry):
+        raise EntryError(f"{where} must say exactly one of 'source' (paper) or 'assumed' (why)")
+    unit, table = str(entry["unit"]), units[dimension]
+    if unit not in table:
+        raise EntryError(f"{where} has unit '{unit}', which is not a {dimension.replace('_', ' ')} unit; "
+                         f"use one of {', '.join(table)} (SI: {next(iter(table))})")
+    value = entry["value"]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise EntryError(f"{where} has value {value!r}; expected a finite number")
+    si_value = float(value) * table[unit]
+    if sign_rule == POSITIVE and not si_value > 0.0:
+        raise EntryError(f"{where} is {value} {unit}; it must be positive")
+    if sign_rule == NON_NEGATIVE and si_value < 0.0:
+        raise EntryError(f"{where} is {value} {unit}; it must not be negative")
+    return si_value
