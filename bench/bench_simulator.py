@@ -9,8 +9,9 @@
    simulated time over the wall time between the first and the last action feedback the tracker sends (5 Hz;
    each carries the tracking state's stamp, the simulated time). Whole goal: the plan's duration over the wall
    time from acceptance to result. No recorder: swim-demo's bag recorder is a fourth process that takes three
-   messages a period (bench_demo_walltime.py times the demo), and no visualization nodes (swim_viz). Target >= 10x, steady state. Best and median of
-   LOOP_REPEATS goals, the vehicle put back at its start (sim_node's reset service) before each.
+   messages a period (bench_demo_walltime.py times the demo), and no visualization nodes (swim_viz). Target >=
+   10x, steady state. Best and median of LOOP_REPEATS goals, the vehicle put back at its start (sim_node's reset
+   service) before each.
 
 Both share the host: the JSON line carries the load average before and after.
 Prints one JSON line.
@@ -120,7 +121,8 @@ def loop_realtime_factors() -> tuple[list[float], list[float]]:
     from swim_ros.domains import run_domain
     run_domain()   # a domain of our own unless the user chose one: never another session's nodes
     steady, whole = [], []
-    with tempfile.TemporaryDirectory() as logs, System(closed_loop_specs(config_dir(), visualization=False), Path(logs)):
+    specs = closed_loop_specs(config_dir(), visualization=False)
+    with tempfile.TemporaryDirectory() as logs, System(specs, Path(logs)):
         client = LoopClient()
         try:
             plan = client.plan()

@@ -25,6 +25,26 @@ matched up to a translation of alpha (the symmetry of Prop. 1), which concatenat
 primitives of the free vehicle keep R(0) = R(Tf) = R_lane. Transcription: Hermite-Simpson collocation,
 solved by IPOPT with exact derivatives from CasADi.
 
+Flow models. With ``VehicleModel(..., flow="circulatory")`` the state is x = (q, qdot, z), z the flow's two lag
+states (swim_model.flow), collocated with their own dynamics zdot = g(Q2 qdot, z). Then:
+
+    - a cruise is periodic in (psi, qdot, z), and p_alpha(0) is free: the fluid's force changes p_alpha, so rest
+      reaches a cruise whatever its p_alpha (with the ideal flow p_alpha is conserved and must be 0);
+    - start and end states are (q, qdot, z); rest has the lag states of still water (z = 0);
+    - at every collocation point (knots and midpoints) |angle of attack| <= PlanningLimits.angle_of_attack_limit_rad,
+      the angle atan2(-V, U) of the foil frame's velocity in foil axes (eq. 40, swim_model.flow.angle_of_attack),
+      written smoothly as U tan(a) + c -+ V >= 0 (for c = 0 the same set for a < 90 deg; atan2 itself has no
+      derivative at rest). c = PlanningLimits.angle_of_attack_speed_floor_m_s frees the angle while the foil crawls:
+      from rest the foil's first velocities are linear in the two foil accelerations, and V = 0 with Q = 0 (below)
+      leaves only u = 0, so with c = 0 an accelerate from rest is infeasible (IPOPT: Infeasible_Problem_Detected).
+      Points held at rest by a boundary condition are left out: the angle is undefined there.
+    - the same bound on the incidence at the three-quarter chord, U tan(a) + c -+ Q >= 0 with Q = -(V + Omega x_34)
+      (swim_model.flow's normal velocity, whose lagged value sets the circulation and the stall transition).
+      The bound at F alone admits U = V = 0, where the angle at F has no value: the optimizer then held F still
+      and turned the foil about it (Omega 4 rad/s, the three-quarter chord broadside), paddling with the separated
+      flat plate's drag (measured on the constrained E = 0.05 accelerate). With both bounds, F at rest means the
+      foil at rest (to c).
+
 Energy level of a cruise: the paper fixes E = T(q(Tf), qdot(Tf)), the kinetic energy at the cycle's end.
 Over a periodic cycle the kinetic energy oscillates, so that end-point value only selects where the cycle is
 cut, not how fast the vehicle swims (we found E = 0.05 and E = 0.1 cruises of equal speed with it). We fix
@@ -36,12 +56,14 @@ have period T with Tf a multiple of T).
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from typing import Optional, TypeVar
 
 import casadi as ca
 import numpy as np
 import numpy.typing as npt
+from scipy.integrate import solve_ivp
 
 from swim_model import SinusoidalGait, VehicleModel, simulate_gait
 from swim_planner.collocation import collocation_grid, fine_grid_times, hermite_simpson, simpson_integral
@@ -49,7 +71,7 @@ from swim_planner.errors import PrimitiveSolveError
 from swim_planner import pointwise
 from swim_planner.pointwise import PointwiseFunction, PointwiseNlp
 from swim_planner.primitives import (CONVERGED_STATUSES, PlanningLimits, Primitive, PrimitiveSpec, PrimitiveType,
-                                     SolverSettings, rest_state)
+                                     SolverSettings, rest_boundary_state, rest_state)
 
 Array = npt.NDArray[np.float64]
 Symbol = TypeVar("Symbol", ca.MX, ca.DM)   # a decision-variable expression or a numeric constant
@@ -60,16 +82,32 @@ EFFORT_ROW = 0       # w_h tau_h^2 + w_p tau_p^2, the integrand of eq. 10's effo
 ENERGY_ROW = 1       # kinetic energy T(q, qdot)
 MOMENTUM_ROW = 2     # p_alpha (docs/model_and_method.md P1)
 TORQUE_ROWS = slice(3, 5)
-STATE_DERIVATIVE_ROWS = slice(5, None)
+STATE_DERIVATIVE_ROWS = slice(5, None)   # the ideal flow's; state_derivative_rows(model) for any model
+
+
+def state_derivative_rows(model: VehicleModel) -> slice:
+    """The rows of xdot = (qdot, qddot[, zdot]) in the model's pointwise function."""
+    return slice(5, 5 + model.nx)
+
+
+def foil_velocity_rows(model: VehicleModel) -> slice:
+    """Circulatory flow: the rows of (U, V, Omega), the foil frame's velocity in foil axes (eq. 40), m/s, m/s,
+    rad/s."""
+    return slice(5 + model.nx, 8 + model.nx)
+
 
 GUESS_TOLERANCE = 1e-6   # relative tolerance of the simulated gait that is a cruise's initial guess
+GUESS_START_CYCLES = 3   # circulatory flow: cycles the guess's gait swims from rest before the one it keeps
 
 #: the compiled pointwise functions of the models used in this process, by (rig digest, constrained, lane)
 _POINTWISE: dict[tuple, PointwiseFunction] = {}
 
 
 def pointwise_function(model: VehicleModel) -> PointwiseFunction:
-    """phi(y, theta) with y = (q, qdot, u), theta = (w_h, w_p): the rows above, compiled once per model."""
+    """phi(y, theta) with y = (q, qdot, u), theta = (w_h, w_p): the rows above, compiled once per model.
+    With the circulatory flow y = (q, qdot, z, u) and phi gains zdot and the foil velocity (U, V, Omega)."""
+    if model.circulatory_flow is not None:
+        return _circulatory_pointwise_function(model)
     key = (model.rig.digest(), model.constrained, model.lane_radius_m)
     if key not in _POINTWISE:
         s = model.symbolic
@@ -79,6 +117,23 @@ def pointwise_function(model: VehicleModel) -> PointwiseFunction:
         phi = ca.vertcat(ca.dot(theta, tau ** 2), s.functions["kinetic_energy"](q, qdot),
                          s.functions["momentum"](q, qdot)[0], tau, qdot, qddot)
         _POINTWISE[key] = PointwiseFunction.compiled(phi, y, theta, tag="primitive_pointwise")
+    return _POINTWISE[key]
+
+
+def _circulatory_pointwise_function(model: VehicleModel) -> PointwiseFunction:
+    assert model.circulatory_flow is not None
+    key = (model.rig.digest(), model.constrained, model.lane_radius_m, model.circulatory_flow.params.digest())
+    if key not in _POINTWISE:
+        s = model.symbolic
+        nq, nx = model.nq, model.nx
+        y, theta = ca.SX.sym("y", nx + 2), ca.SX.sym("theta", 2)
+        q, qdot, lag, u = y[:nq], y[nq:2 * nq], y[2 * nq:nx], y[nx:]
+        qddot, tau = s.functions["shape_dynamics"](q, qdot, u, lag)
+        lag_rate = s.functions["lag_rate"](q, qdot, lag)
+        foil_velocity = s.functions["foil_velocity_map"](q) @ qdot
+        phi = ca.vertcat(ca.dot(theta, tau ** 2), s.functions["kinetic_energy"](q, qdot),
+                         s.functions["momentum"](q, qdot)[0], tau, qdot, qddot, lag_rate, foil_velocity)
+        _POINTWISE[key] = PointwiseFunction.compiled(phi, y, theta, tag="primitive_pointwise_circulatory")
     return _POINTWISE[key]
 
 
@@ -98,14 +153,16 @@ class PrimitiveNlp:
 
 
 def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits = PlanningLimits(),
-                    start: Optional[tuple[Array, Array]] = None, end: Optional[tuple[Array, Array]] = None,
+                    start: Optional[tuple[Array, ...]] = None, end: Optional[tuple[Array, ...]] = None,
                     guess: Optional[Primitive] = None, settings: SolverSettings = SolverSettings()) -> Primitive:
     """Solve one primitive.
 
     Args:
         start: (q, qdot) the primitive starts from (required for decelerate, cruise-to-cruise, lane change;
-            alpha is ignored: it starts at 0).
-        end: (q, qdot) it must reach (required for accelerate, cruise-to-cruise, lane change; alpha free).
+            alpha is ignored: it starts at 0); (q, qdot, lag) with the circulatory flow
+            (Primitive.end_boundary_state).
+        end: (q, qdot) it must reach (required for accelerate, cruise-to-cruise, lane change; alpha free);
+            (q, qdot, lag) with the circulatory flow (Primitive.start_boundary_state).
         guess: a primitive of the same grid size to warm-start from (else a built-in guess).
     Raises:
         PrimitiveSolveError: IPOPT did not converge; the message gives its status.
@@ -127,37 +184,43 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
     values = ca.Function("values", [nlp.z], nlp.substitute(problem.states, problem.inputs, problem.torques,
                                                             problem.effort))
     solved_states, solved_inputs, solved_torques, solved_effort = values(result.z)
-    state_values = np.asarray(solved_states).reshape(2 * model.nq, samples).T
+    state_values = np.asarray(solved_states).reshape(model.nx, samples).T
     input_values = np.asarray(solved_inputs).reshape(2, samples).T
     torque_values = np.asarray(solved_torques).reshape(2, samples).T
     effort_value = float(solved_effort)
     time_s = fine_grid_times(spec.solved_duration_s, spec.intervals)
-    q, qdot = state_values[:, :model.nq], state_values[:, model.nq:]
+    q, qdot = state_values[:, :model.nq], state_values[:, model.nq:2 * model.nq]
+    lag = state_values[:, 2 * model.nq:] if model.n_lag else None
     if spec.cycles > 1:
         time_s, q, qdot, input_values, torque_values = _repeat_cycle(
             spec.cycles, time_s, q, qdot, input_values, torque_values)
+        if lag is not None:
+            lag = np.concatenate([lag] + [lag[1:]] * (spec.cycles - 1))
         effort_value *= spec.cycles
     return Primitive(spec=spec, time_s=time_s, q=q, qdot=qdot, foil_acceleration=input_values,
                      torque=torque_values, index_j=float(spec.index_sign() * q[-1, 0] - effort_value),
                      effort=effort_value, solver_status=result.status, solve_time_s=elapsed,
-                     iterations=result.iterations)
+                     iterations=result.iterations, lag=lag)
 
 
 def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits = PlanningLimits(),
-                  start: Optional[tuple[Array, Array]] = None, end: Optional[tuple[Array, Array]] = None,
+                  start: Optional[tuple[Array, ...]] = None, end: Optional[tuple[Array, ...]] = None,
                   guess: Optional[Primitive] = None) -> PrimitiveNlp:
     """The NLP of one primitive (arguments as for ``solve_primitive``).
 
     Raises:
-        ValueError: a start or end state that is not (q, qdot) of finite numbers of the model's size.
+        ValueError: a start or end state that is not (q, qdot) of finite numbers of the model's size
+            ((q, qdot, lag) with the circulatory flow).
     """
-    for name, state in (("start", start), ("end", end)):
+    if model.n_lag:
+        _check_circulatory_states(model, spec, start, end)
+    for name, state in (("start", start), ("end", end)) if model.n_lag == 0 else ():
         if state is not None and not (len(state) == 2 and all(np.shape(part) == (model.nq,) for part in state)
                                       and np.all(np.isfinite(state))):
             raise ValueError(f"{spec.primitive_id}: the {name} state must be (q, qdot), {model.nq} finite numbers "
                              f"each; got {state!r}")
     nq = model.nq
-    nx = 2 * nq
+    nx = model.nx
     phi_function = pointwise_function(model)
     opti = ca.Opti()
     grid = collocation_grid(opti, nx, 2, spec.intervals, spec.solved_duration_s)
@@ -165,7 +228,7 @@ def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimi
     # Phi, the pointwise function's values over grid.points(): a placeholder the NLP is written in (an Opti
     # variable, as Opti takes no constraint without one; the NLP solved has the grid's variables only)
     phi = opti.variable(phi_function.value.size1_out(0), samples)
-    hermite_simpson(grid, phi[STATE_DERIVATIVE_ROWS, :])
+    hermite_simpson(grid, phi[STATE_DERIVATIVE_ROWS if model.n_lag == 0 else state_derivative_rows(model), :])
     states, inputs = grid.all_states(), grid.all_inputs()
     torques = grid.fine(phi[TORQUE_ROWS, :])
     effort = simpson_integral(grid, phi[EFFORT_ROW, :])
@@ -193,9 +256,13 @@ def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimi
 
     # an accelerate starts at rest and a decelerate ends there, whatever the caller passed
     if spec.primitive_type is PrimitiveType.ACCELERATE:
-        start = rest_state(model, spec.lane_radius_m)
+        start = rest_state(model, spec.lane_radius_m) if model.n_lag == 0 else rest_boundary_state(
+            model, spec.lane_radius_m)
     if spec.primitive_type is PrimitiveType.DECELERATE:
-        end = rest_state(model, spec.end_lane_radius_m)
+        end = rest_state(model, spec.end_lane_radius_m) if model.n_lag == 0 else rest_boundary_state(
+            model, spec.end_lane_radius_m)
+    if model.n_lag:
+        _angle_of_attack_bound(opti, model, spec, limits, grid, phi)
     _boundary_conditions(opti, model, spec, limits, grid, phi, start, end)
     _initial_guess(opti, model, spec, grid, start, end, guess)
 
@@ -205,6 +272,40 @@ def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimi
                         lbg=np.asarray(ca.evalf(opti.lbg), dtype=float).ravel(),
                         ubg=np.asarray(ca.evalf(opti.ubg), dtype=float).ravel(),
                         states=states, inputs=inputs, torques=torques, effort=effort)
+
+
+def _check_circulatory_states(model: VehicleModel, spec: PrimitiveSpec, start, end) -> None:
+    sizes = (model.nq, model.nq, model.n_lag)
+    for name, state in (("start", start), ("end", end)):
+        if state is not None and not (len(state) == 3 and all(np.shape(part) == (size,) for part, size
+                                                              in zip(state, sizes))
+                                      and all(np.all(np.isfinite(part)) for part in state)):
+            raise ValueError(f"{spec.primitive_id}: with the circulatory flow the {name} state must be "
+                             f"(q, qdot, lag), {model.nq}, {model.nq} and {model.n_lag} finite numbers; got {state!r}")
+
+
+def _angle_of_attack_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits,
+                           grid, phi: ca.MX) -> None:
+    """|atan2(-V, U)| <= a at every collocation point, as U tan(a) + c -+ V >= 0, and the same at the
+    three-quarter chord (module docstring)."""
+    if not 0.0 < limits.angle_of_attack_limit_rad < math.pi / 2:
+        raise ValueError(f"{spec.primitive_id}: angle_of_attack_limit_rad must be in (0, pi/2), got "
+                         f"{limits.angle_of_attack_limit_rad!r}")
+    if not (math.isfinite(limits.angle_of_attack_speed_floor_m_s) and limits.angle_of_attack_speed_floor_m_s >= 0.0):
+        raise ValueError(f"{spec.primitive_id}: angle_of_attack_speed_floor_m_s must be finite and >= 0, got "
+                         f"{limits.angle_of_attack_speed_floor_m_s!r}")
+    velocity = grid.fine(phi[foil_velocity_rows(model), :])
+    if spec.primitive_type is PrimitiveType.ACCELERATE:
+        velocity = velocity[:, 1:]
+    if spec.primitive_type is PrimitiveType.DECELERATE:
+        velocity = velocity[:, :-1]
+    assert model.circulatory_flow is not None
+    normal_34 = -(velocity[1, :] + model.circulatory_flow.three_quarter_chord_x_m * velocity[2, :])
+    slope = math.tan(limits.angle_of_attack_limit_rad)
+    floor = limits.angle_of_attack_speed_floor_m_s
+    for across in (velocity[1, :], normal_34):
+        opti.subject_to(slope * velocity[0, :] - across >= -floor)
+        opti.subject_to(slope * velocity[0, :] + across >= -floor)
 
 
 def _repeat_cycle(cycles: int, time_s: Array, q: Array, qdot: Array, u: Array, tau: Array):
@@ -235,8 +336,9 @@ def _boundary_conditions(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec
         if spec.energy_j is None:
             raise ValueError(f"{spec.primitive_id}: a cruise needs energy_j")
         opti.subject_to(x0[nq - 2:nq] == x_end[nq - 2:nq])          # psi periodic
-        opti.subject_to(x0[nq:] == x_end[nq:])                      # qdot periodic
-        opti.subject_to(grid.knots(phi)[MOMENTUM_ROW, 0] == 0.0)    # reachable from rest: p_alpha = 0
+        opti.subject_to(x0[nq:] == x_end[nq:])                      # qdot (and the lag states z) periodic
+        if model.n_lag == 0:
+            opti.subject_to(grid.knots(phi)[MOMENTUM_ROW, 0] == 0.0)    # reachable from rest: p_alpha = 0
         # cut the cycle where the vehicle moves forward: a decelerate from here can keep alphadot >= v_min
         opti.subject_to(x0[nq] >= limits.min_alpha_rate_rad_s)
         # energy level: the cycle's mean kinetic energy (see the module docstring)
@@ -261,7 +363,9 @@ def _initial_guess(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, grid
                    guess: Optional[Primitive]) -> None:
     times = fine_grid_times(spec.solved_duration_s, spec.intervals)
     if guess is not None and guess.spec.primitive_id == spec.primitive_id and len(guess.time_s) == len(times):
-        x_guess, u_guess = np.column_stack([guess.q, guess.qdot]), guess.foil_acceleration
+        x_guess, u_guess = np.column_stack([guess.q, guess.qdot, *_lag_columns(model, guess)]), guess.foil_acceleration
+    elif spec.primitive_type is PrimitiveType.CRUISE and model.n_lag:
+        x_guess, u_guess = _circulatory_gait_guess(model, spec, times)
     elif spec.primitive_type is PrimitiveType.CRUISE:
         x_guess, u_guess = _gait_guess(model, spec, times)
     else:
@@ -279,6 +383,42 @@ def _gait_guess(model: VehicleModel, spec: PrimitiveSpec, times: Array) -> tuple
     run = simulate_gait(model, gait, times[-1], sample_period_s=times[1] - times[0],
                         initial_y=None if model.constrained else [0.0, spec.lane_radius_m], rtol=GUESS_TOLERANCE)
     return np.column_stack([run.q, run.qdot]), np.array([gait.shape(t)[2] for t in times])
+
+
+def _lag_columns(model: VehicleModel, primitive: Primitive) -> list[Array]:
+    """A guess's lag states for this model: its own, zeros if it has none, nothing with the ideal flow."""
+    if model.n_lag == 0:
+        return []
+    return [primitive.lag if primitive.lag is not None else np.zeros((len(primitive.time_s), model.n_lag))]
+
+
+def _circulatory_gait_guess(model: VehicleModel, spec: PrimitiveSpec, times: Array) -> tuple[Array, Array]:
+    """_gait_guess's gait with the circulatory flow: swum from rest for GUESS_START_CYCLES cycles (the unactuated
+    coordinates and the lag states integrated under the prescribed foil motion), its last cycle with alpha from 0:
+    close to periodic, at the speed the gait makes."""
+    gait = SinusoidalGait(0.35, 0.6, 1.0 / spec.solved_duration_s)
+    nq, ny = model.nq, model.n_unactuated
+    y0 = np.zeros(ny) if model.constrained else np.array([0.0, spec.lane_radius_m])
+    start_s = GUESS_START_CYCLES * spec.solved_duration_s
+
+    def state(time_s: float, x: Array) -> tuple[Array, Array, Array, Array]:
+        psi, psidot, psiddot = gait.shape(time_s)
+        return (np.concatenate([x[:ny], psi]), np.concatenate([x[ny:2 * ny], psidot]), x[2 * ny:], psiddot)
+
+    def rhs(time_s: float, x: Array) -> Array:
+        q, qdot, lag, psiddot = state(time_s, x)
+        qddot, _ = model.shape_dynamics(q, qdot, psiddot, lag)
+        return np.concatenate([x[ny:2 * ny], qddot[:ny], model.lag_rate(q, qdot, lag)])
+
+    x0 = np.concatenate([y0, np.zeros(ny + model.n_lag)])
+    solution = solve_ivp(rhs, (0.0, start_s + times[-1]), x0, method="DOP853", t_eval=start_s + times,
+                         rtol=GUESS_TOLERANCE, atol=GUESS_TOLERANCE * 1e-2)
+    rows = [state(t, x) for t, x in zip(solution.t, solution.y.T)]
+    q = np.array([r[0] for r in rows])
+    q[:, 0] -= q[0, 0]
+    x_guess = np.column_stack([q, np.array([r[1] for r in rows]), np.array([r[2] for r in rows])])
+    assert x_guess.shape[1] == 2 * nq + model.n_lag
+    return x_guess, np.array([r[3] for r in rows])
 
 
 def _blend_guess(model: VehicleModel, spec: PrimitiveSpec, times: Array, start, end,
@@ -303,7 +443,11 @@ def _blend_guess(model: VehicleModel, spec: PrimitiveSpec, times: Array, start, 
     envelope = {PrimitiveType.ACCELERATE: weight, PrimitiveType.DECELERATE: 1.0 - weight}.get(
         spec.primitive_type, np.ones_like(weight))  # between cruises: keep stroking
     x_guess[:, nq - 2:nq] = envelope * stroke[:, nq - 2:]
-    x_guess[:, 2 * nq - 2:] = envelope * rates[:, nq - 2:]
+    x_guess[:, 2 * nq - 2:2 * nq] = envelope * rates[:, nq - 2:]
+    if model.n_lag:
+        lags = _lag_columns(model, cruise)[0]
+        x_guess[:, 2 * nq:] = envelope * np.column_stack([np.interp(phase, cruise.time_s[one], lags[one, j])
+                                                          for j in range(model.n_lag)])
     mean_rate = (cruise.q[-1, 0] - cruise.q[0, 0]) / cruise.time_s[-1]
     x_guess[:, nq] = envelope[:, 0] * mean_rate
     x_guess[:, 0] = np.concatenate([[0.0], np.cumsum(0.5 * (x_guess[1:, nq] + x_guess[:-1, nq]) * np.diff(times))])

@@ -40,6 +40,17 @@ class PlanningLimits:
     foil_acceleration_limit_rad_s2: float = 300.0  # assumed: bounds u to keep the NLP well scaled
     lane_band_m: float = 0.03                      # assumed: Rb, the lateral band around the lanes
     min_alpha_rate_rad_s: float = 0.0              # v_min of eq. 12 (assumed: never swim backwards)
+    angle_of_attack_limit_rad: float = math.radians(20.0)
+    # assumed, circulatory flow only: |angle of attack| of the foil frame (swim_model.flow.angle_of_attack, eq. 40)
+    # at every collocation point. A NACA 0012-like section stalls statically near 12-15 deg; oscillating, its
+    # lift peaks later, at 20-25 deg (McCroskey, AGARD-CP-227, 1981). 20 deg keeps the plans at the attached end
+    # of swim_model.flow's stall transition (stall_angle_rad 25 deg, width 2.5 deg: attached weight 0.997 at
+    # 20 deg), where the reduced model is the validated thin-aerofoil theory and not its flat-plate fallback
+    angle_of_attack_speed_floor_m_s: float = 0.01
+    # assumed, circulatory flow only: c of the bound U tan(a) + c >= |V| (swim_planner.primitive_solver), which frees
+    # the angle while the foil frame crawls: below 1 cm/s (chord Reynolds number 600) the flow's forces are under
+    # (0.01 / 0.1)^2 = 1 % of those at 0.1 m/s, and from rest no foil motion starts inside a bound with c = 0
+    # (with c = 5 mm/s IPOPT found the constrained E = 0.05 accelerate infeasible from both of its guesses)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -91,6 +102,7 @@ class Primitive:
     solve_time_s: float
     iterations: int
     gains: Optional[TrackingGains] = None   # P(t) and G'P for the tracker (swim_controller.riccati)
+    lag: Optional[Array] = None             # the flow's lag states z, m/s, (samples, 2): circulatory flow only
 
     @property
     def start_state(self) -> tuple[Array, Array]:
@@ -99,6 +111,17 @@ class Primitive:
     @property
     def end_state(self) -> tuple[Array, Array]:
         return self.q[-1].copy(), self.qdot[-1].copy()
+
+    @property
+    def start_boundary_state(self) -> tuple[Array, ...]:
+        """The state a primitive joining this one's start must reach: (q, qdot), or (q, qdot, lag) with the
+        circulatory flow."""
+        return self.start_state + (() if self.lag is None else (self.lag[0].copy(),))
+
+    @property
+    def end_boundary_state(self) -> tuple[Array, ...]:
+        """The state a primitive joining this one's end starts from: (q, qdot), or (q, qdot, lag)."""
+        return self.end_state + (() if self.lag is None else (self.lag[-1].copy(),))
 
 
 #: IPOPT statuses that count as converged: its full tolerance, or its "acceptable" one (acceptable_tol,
@@ -133,3 +156,29 @@ def rest_state(model: VehicleModel, lane_radius_m: float) -> tuple[Array, Array]
     if not model.constrained:
         q[1] = lane_radius_m
     return q, np.zeros(model.nq)
+
+
+def rest_boundary_state(model: VehicleModel, lane_radius_m: float) -> tuple[Array, ...]:
+    """Rest as a boundary state: (q, qdot), and with the circulatory flow the lag states of still water (the
+    steady lag of zero velocity: zero)."""
+    q, qdot = rest_state(model, lane_radius_m)
+    if model.circulatory_flow is None:
+        return q, qdot
+    return q, qdot, model.circulatory_flow.steady_lag(np.zeros(3))
+
+
+def cruise_mean_speed_m_s(primitive: Primitive) -> float:
+    """A cruise's mean speed along its lane, m/s: its mean alpha rate times the lane radius."""
+    duration_s = float(primitive.time_s[-1] - primitive.time_s[0])
+    return float((primitive.q[-1, 0] - primitive.q[0, 0]) / duration_s * primitive.spec.lane_radius_m)
+
+
+def cruise_strouhal_number(primitive: Primitive, heave_link_length_m: float) -> float:
+    """2 A f / U of a cruise: A the heave amplitude of the pitch axis (half its peak-to-peak excursion across the
+    lane, Lh sin(phi), plus R for the free vehicle; swim_model.kinematics), f one stroke per solved cycle, U the
+    mean speed (``cruise_mean_speed_m_s``)."""
+    spec = primitive.spec
+    heave = primitive.q[:, 1] if spec.constrained else primitive.q[:, 2]
+    lateral_m = heave_link_length_m * np.sin(heave) - (0.0 if spec.constrained else primitive.q[:, 1])
+    amplitude_m = 0.5 * float(lateral_m.max() - lateral_m.min())
+    return 2.0 * amplitude_m / spec.solved_duration_s / cruise_mean_speed_m_s(primitive)

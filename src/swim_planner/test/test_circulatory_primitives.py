@@ -1,0 +1,195 @@
+"""Primitives solved with the circulatory flow (swim_planner.primitive_solver with VehicleModel(...,
+flow="circulatory")): the constrained E = 0.05 cruise of the library's spec and its accelerate from rest.
+
+Checked independently of the solver: collocation defects recomputed from the model's numeric functions at the
+stored samples, periodicity, the energy level, the angle-of-attack bound at the stored samples and between them,
+an open-loop replay of the torques through the circulatory model, the accelerate's boundary states. The paper's
+bands (Figs. 3-4) and the Strouhal band are tested as stated; the ones this model and rig miss are strict xfails
+with the measured value and its reason (docs/circulatory_primitives.md).
+"""
+import dataclasses
+
+import numpy as np
+import pytest
+from scipy.interpolate import CubicHermiteSpline
+
+from swim_model import VehicleModel
+from swim_model.flow import angle_of_attack
+from swim_planner.catalog import constrained_specs
+from swim_planner.primitive_solver import solve_primitive
+from swim_planner.primitives import (PlanningLimits, Primitive, cruise_mean_speed_m_s, cruise_strouhal_number,
+                                     rest_boundary_state)
+from swim_planner.testing.consistency import REPLAY_TOLERANCE, replay_open_loop
+
+LIMITS = PlanningLimits()
+PAPER_CRUISE_SPEED_M_S = (0.12, 0.18)      # paper Fig. 3, the E = 0.05 cruise
+PAPER_HEAVE_RAD = (-0.45, 0.75)            # paper Fig. 4 (with margin, as the issue states it)
+PAPER_PITCH_RAD = 0.6                      # paper Fig. 4: |theta| within about 0.6 rad
+STROUHAL_BAND = (0.1, 0.8)                 # efficient swimmers and foils: 0.2-0.4; the band asked for
+
+
+def _spec(rig, primitive_id):
+    return next(s for s in constrained_specs(rig) if s.primitive_id == primitive_id)
+
+
+@pytest.fixture(scope="module")
+def circulatory(rig):
+    cruise_spec = _spec(rig, "constrained/cruise/E0.05")
+    model = VehicleModel(rig, constrained=True, lane_radius_m=cruise_spec.lane_radius_m, flow="circulatory")
+    cruise = solve_primitive(model, cruise_spec, LIMITS)
+    accelerate = solve_primitive(model, _spec(rig, "constrained/accelerate/E0.05"), LIMITS,
+                                 end=cruise.start_boundary_state, guess=cruise)
+    return model, cruise, accelerate
+
+
+def _one_cycle(primitive: Primitive) -> slice:
+    return slice(0, 2 * primitive.spec.intervals + 1)
+
+
+def _state_derivative(model: VehicleModel, primitive: Primitive, k: int) -> np.ndarray:
+    q, qdot, z = primitive.q[k], primitive.qdot[k], primitive.lag[k]
+    qddot, _ = model.shape_dynamics(q, qdot, primitive.foil_acceleration[k], z)
+    return np.concatenate([qdot, qddot, model.lag_rate(q, qdot, z)])
+
+
+def _collocation_defects(model: VehicleModel, primitive: Primitive) -> float:
+    """Largest Hermite-Simpson defect (swim_planner.collocation) over the first solved horizon's intervals."""
+    x = np.column_stack([primitive.q, primitive.qdot, primitive.lag])
+    step = primitive.time_s[2] - primitive.time_s[0]
+    worst = 0.0
+    for k in range(primitive.spec.intervals):
+        f0, fm, f1 = (_state_derivative(model, primitive, 2 * k + i) for i in range(3))
+        x0, xm, x1 = x[2 * k], x[2 * k + 1], x[2 * k + 2]
+        simpson = x1 - x0 - step / 6.0 * (f0 + 4.0 * fm + f1)
+        hermite = xm - 0.5 * (x0 + x1) - step / 8.0 * (f0 - f1)
+        worst = max(worst, float(np.abs(simpson).max()), float(np.abs(hermite).max()))
+    return worst
+
+
+def _angles_of_attack(model: VehicleModel, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+    velocity = np.array([model.foil_velocity_map(a) @ b for a, b in zip(q, qdot)])
+    return angle_of_attack(velocity[:, 0], velocity[:, 1])
+
+
+def test_cruise_satisfies_its_collocation_and_is_periodic_in_shape_rates_and_lag(circulatory):
+    model, cruise, _ = circulatory
+    assert cruise.lag is not None and cruise.lag.shape == (len(cruise.time_s), model.n_lag)
+    assert _collocation_defects(model, cruise) < 1e-7
+    cycle = _one_cycle(cruise)
+    end = cycle.stop - 1
+    np.testing.assert_allclose(cruise.q[end, 1:], cruise.q[0, 1:], atol=1e-8)
+    np.testing.assert_allclose(cruise.qdot[end], cruise.qdot[0], atol=1e-8)
+    np.testing.assert_allclose(cruise.lag[end], cruise.lag[0], atol=1e-8)
+    # the energy level: the cycle's mean kinetic energy by Simpson's rule on the solved grid
+    energy = np.array([model.kinetic_energy(a, b) for a, b in zip(cruise.q[cycle], cruise.qdot[cycle])])
+    step = cruise.time_s[2] - cruise.time_s[0]
+    mean_energy = step / 6.0 * (energy[0:-1:2] + 4.0 * energy[1::2] + energy[2::2]).sum() / cruise.time_s[end]
+    assert abs(mean_energy - cruise.spec.energy_j) < 1e-7
+    assert cruise.qdot[0, 0] >= LIMITS.min_alpha_rate_rad_s - 1e-9
+
+
+def test_cruise_p_alpha_is_free_and_changes_by_the_flows_hub_torque(circulatory):
+    """p_alpha is not held at 0; over the cycle it changes by the integral of Q_flow[0] (and returns)."""
+    model, cruise, _ = circulatory
+    cycle = _one_cycle(cruise)
+    momentum = np.array([model.momentum(a, b)[0] for a, b in zip(cruise.q[cycle], cruise.qdot[cycle])])
+    hub_torque = np.array([model.flow_force(a, b, z)[1][0] for a, b, z in
+                           zip(cruise.q[cycle], cruise.qdot[cycle], cruise.lag[cycle])])
+    step = cruise.time_s[2] - cruise.time_s[0]
+    change = step / 6.0 * np.cumsum(hub_torque[0:-1:2] + 4.0 * hub_torque[1::2] + hub_torque[2::2])
+    np.testing.assert_allclose(momentum[2::2] - momentum[0], change, atol=1e-6 * np.abs(momentum).max())
+    assert abs(momentum[0]) > 100 * 1e-6 * np.abs(momentum).max()
+
+
+def test_cruise_angle_of_attack_bound_holds_at_the_samples_and_between_them(circulatory):
+    model, cruise, _ = circulatory
+    assert np.abs(_angles_of_attack(model, cruise.q, cruise.qdot)).max() <= LIMITS.angle_of_attack_limit_rad
+    # between the samples: the cubic Hermite interpolant of the collocated trajectory at the quarter points
+    cycle = _one_cycle(cruise)
+    qddot = np.array([_state_derivative(model, cruise, k)[model.nq:2 * model.nq] for k in range(cycle.stop)])
+    times = cruise.time_s[cycle]
+    quarter = 0.5 * (times[1:] + times[:-1])
+    q = CubicHermiteSpline(times, cruise.q[cycle], cruise.qdot[cycle])(quarter)
+    qdot = CubicHermiteSpline(times, cruise.qdot[cycle], qddot)(quarter)
+    assert np.abs(_angles_of_attack(model, q, qdot)).max() <= LIMITS.angle_of_attack_limit_rad + 1e-3
+
+
+def test_open_loop_replay_of_the_cruise_and_the_accelerate_stays_close(circulatory):
+    model, cruise, accelerate = circulatory
+    cycle = _one_cycle(cruise)
+    for primitive, part in ((cruise, cycle), (accelerate, slice(None))):
+        result = replay_open_loop(model, primitive.time_s[part], primitive.q[part], primitive.qdot[part],
+                                  primitive.foil_acceleration[part], lag=primitive.lag[part])
+        assert result.max_position_error < REPLAY_TOLERANCE, primitive.spec.primitive_id
+
+
+def test_replay_refuses_a_circulatory_model_without_lag_states(circulatory):
+    model, cruise, _ = circulatory
+    with pytest.raises(ValueError, match="lag states"):
+        replay_open_loop(model, cruise.time_s, cruise.q, cruise.qdot, cruise.foil_acceleration)
+
+
+def test_accelerate_starts_at_rest_in_still_water_and_ends_on_the_cruise(circulatory):
+    model, cruise, accelerate = circulatory
+    q_rest, qdot_rest, lag_rest = rest_boundary_state(model, accelerate.spec.lane_radius_m)
+    assert model.circulatory_flow is not None
+    np.testing.assert_array_equal(lag_rest, model.circulatory_flow.steady_lag(np.zeros(3)))
+    np.testing.assert_allclose(accelerate.q[0], q_rest, atol=1e-10)
+    np.testing.assert_allclose(accelerate.qdot[0], qdot_rest, atol=1e-10)
+    np.testing.assert_allclose(accelerate.lag[0], lag_rest, atol=1e-10)
+    q_end, qdot_end, lag_end = cruise.start_boundary_state
+    np.testing.assert_allclose(accelerate.q[-1, 1:], q_end[1:], atol=1e-8)
+    np.testing.assert_allclose(accelerate.qdot[-1], qdot_end, atol=1e-8)
+    np.testing.assert_allclose(accelerate.lag[-1], lag_end, atol=1e-8)
+    assert accelerate.q[-1, 0] > 0.0
+    assert _collocation_defects(model, accelerate) < 1e-7
+
+
+def test_a_circulatory_boundary_state_without_lag_states_is_refused(rig, circulatory):
+    model, cruise, _ = circulatory
+    spec = dataclasses.replace(_spec(rig, "constrained/accelerate/E0.05"), intervals=8)
+    with pytest.raises(ValueError, match=r"\(q, qdot, lag\)"):
+        solve_primitive(model, spec, end=cruise.start_state)
+
+
+def test_cruise_pitch_is_within_the_papers_range(circulatory):
+    _, cruise, _ = circulatory
+    assert np.abs(cruise.q[:, 2]).max() <= PAPER_PITCH_RAD
+
+
+@pytest.mark.xfail(strict=True, reason="measured 0.21 m/s: at a fixed mean kinetic energy of 0.05 J the index "
+                   "(distance minus effort) puts nearly all of it into forward motion, and the only drag is the "
+                   "foil's profile drag, which a small stroke overcomes")
+def test_cruise_mean_speed_is_the_papers(circulatory):
+    _, cruise, _ = circulatory
+    low, high = PAPER_CRUISE_SPEED_M_S
+    assert low <= cruise_mean_speed_m_s(cruise) <= high
+
+
+@pytest.mark.xfail(strict=True, reason="measured heave 0.84-0.87 rad, at the planning limit of 50 deg: the heave "
+                   "link folded inward lowers the hub's inertia, so more of the fixed energy becomes speed")
+def test_cruise_heave_is_within_the_papers_range(circulatory):
+    _, cruise, _ = circulatory
+    low, high = PAPER_HEAVE_RAD
+    assert low <= cruise.q[:, 1].min() and cruise.q[:, 1].max() <= high
+
+
+@pytest.mark.xfail(strict=True, reason="measured St = 0.013: the stroke is a 2 mm heave of the pitch axis (the "
+                   "optimum needs only enough thrust for the foil's profile drag at 0.21 m/s)")
+def test_cruise_strouhal_number_is_a_swimmers(rig, circulatory):
+    _, cruise, _ = circulatory
+    low, high = STROUHAL_BAND
+    assert low <= cruise_strouhal_number(cruise, rig.heave_link_length_m) <= high
+
+
+def test_strouhal_number_and_mean_speed_follow_their_definitions(rig, circulatory):
+    """Against hand-built samples: a stroke of heave phi = 0.2 sin(2 pi t) over 1 s at alpha rate 0.5 rad/s."""
+    _, cruise, _ = circulatory
+    times = np.linspace(0.0, 1.0, 161)
+    q = np.column_stack([0.5 * times, 0.2 * np.sin(2 * np.pi * times), np.zeros_like(times)])
+    spec = dataclasses.replace(cruise.spec, cycles=1, duration_s=1.0)
+    made = dataclasses.replace(cruise, spec=spec, time_s=times, q=q)
+    speed = 0.5 * spec.lane_radius_m
+    assert cruise_mean_speed_m_s(made) == pytest.approx(speed, rel=1e-12)
+    amplitude = rig.heave_link_length_m * np.sin(0.2)
+    assert cruise_strouhal_number(made, rig.heave_link_length_m) == pytest.approx(2 * amplitude / speed, rel=1e-12)
