@@ -13,7 +13,7 @@ usage: scripts/repeat_tests.sh N [--load] [PYTEST ARGS ...]
   Runs `python -m pytest PYTEST ARGS` N times, each in a fresh process, from the repository root (relative
   paths are taken from there), and reports the tests that failed at least once.
   --load  keep one CPU core busy from before the first run until after the last
-  example: scripts/repeat_tests.sh 5 --load tests/test_planner_node.py -k lqr
+  example: scripts/repeat_tests.sh 5 --load src/swim_planner/test/test_planner_node.py -k lqr
 EOF
 }
 usage_error() {

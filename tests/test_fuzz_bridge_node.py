@@ -1,4 +1,4 @@
-"""bridge_node's joint_commands fuzzed over DDS (tests/fuzz_strategies.py), on the emulated rig.
+"""bridge_node's joint_commands fuzzed over DDS (swim_ros.testing.fuzz), on the emulated rig.
 
 One active bridge for the module. Commands of every kind (well formed within and far past the motor limits, held
 long enough to drive a link to its stops; malformed) are sent a little over a period apart; every state the
@@ -15,7 +15,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from conftest import running_node
-from fuzz_strategies import fuzz_settings, joint_states, to_joint_state, torques
+from swim_ros.testing.fuzz import fuzz_settings, joint_states, to_joint_state, torques
 from test_bridge_node import BAD_COMMAND_SPACING_S, HOLD_S, BridgeClient, efforts
 
 ACTUATED = ("phi", "theta")

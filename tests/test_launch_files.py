@@ -285,7 +285,8 @@ def live_parameters(ros_domain, tmp_path_factory):
     """{LaunchNode key: {name: value}} of every node of every installed launch file, each started as its launch
     file says (one launch file at a time: both start a tracker_node)."""
     import rclpy
-    from swim_bringup.system import NodeSpec, System
+    from swim_bringup.system import System
+    from swim_ros.processes import NodeSpec
     logs = tmp_path_factory.mktemp("launch_nodes")
     context = rclpy.Context()
     rclpy.init(context=context)

@@ -16,8 +16,9 @@ from typing import Callable, Optional
 from swim_bringup.analysis import analyze, write_figures
 from swim_bringup.reports import RunReport, TrackerResult
 from swim_bringup.run_client import STARTUP_TIMEOUT_S, RunClient, RunError
-from swim_bringup.system import NodeSpec, System
+from swim_bringup.system import System
 from swim_controller.supervisor import Tolerances
+from swim_ros.processes import NodeSpec
 
 #: the paper's constrained maneuver (Sec. 7.1): accelerate to E1, cruise x2, cruise-to-cruise, cruise x2, stop
 PAPER_CONSTRAINED = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05",

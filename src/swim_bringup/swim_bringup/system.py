@@ -1,79 +1,22 @@
-"""Bring the closed loop up as separate processes talking over DDS, and down again cleanly.
-
-Each node runs as `ros2 run <package> <executable> --ros-args --params-file <yaml>` (on a full ROS install the
-same command a user types; here `ros2 run` is our stand-in, scripts/bin/ros2) in its own process group, its
-output in a log file. Stopping sends SIGINT (a user's Ctrl-C: rclpy shuts down and leaves DDS cleanly), waits,
-and kills only what is still there after the grace period: no orphans.
+"""Bring the closed loop up as separate processes talking over DDS, and down again cleanly: each node a
+swim_ros.processes.NodeProcess (`ros2 run` in its own process group, stopped by SIGINT, then SIGKILL after the
+grace period: no orphans).
 """
 from __future__ import annotations
 
-import dataclasses
-import os
-import signal
-import subprocess
 import time
 from pathlib import Path
-from typing import Optional, Sequence
+from typing import Sequence
 
 import yaml
 
-STOP_GRACE_S = 10.0
+from swim_ros.processes import STOP_GRACE_S, NodeProcess, NodeSpec
 
 
 def config_dir() -> Path:
     """The installed swim_bringup/config folder (parameter files of the demo and the experiments)."""
     from ament_index_python.packages import get_package_share_directory
     return Path(get_package_share_directory("swim_bringup")) / "config"
-
-
-@dataclasses.dataclass(frozen=True)
-class NodeSpec:
-    package: str
-    executable: str
-    params_file: Optional[Path] = None
-    parameters: tuple[str, ...] = ()    # extra `name:=value` overrides
-    ros_arguments: tuple[str, ...] = ()  # any other --ros-args arguments, as given (e.g. "-r", "__ns:=/test")
-
-    def command(self) -> list[str]:
-        arguments: list[str] = []
-        if self.params_file is not None:
-            arguments += ["--params-file", str(self.params_file)]
-        for parameter in self.parameters:
-            arguments += ["-p", parameter]
-        arguments += list(self.ros_arguments)
-        return ["ros2", "run", self.package, self.executable] + (["--ros-args"] + arguments if arguments else [])
-
-
-class NodeProcess:
-    """One node in its own process group, output to log_path."""
-
-    def __init__(self, spec: NodeSpec, log_path: Path) -> None:
-        self.spec, self.log_path = spec, log_path
-        self._log = open(log_path, "w")
-        self.process = subprocess.Popen(spec.command(), stdout=self._log, stderr=subprocess.STDOUT,
-                                        start_new_session=True, env=dict(os.environ))
-
-    def alive(self) -> bool:
-        return self.process.poll() is None
-
-    def interrupt(self) -> None:
-        if self.alive():
-            os.killpg(self.process.pid, signal.SIGINT)
-
-    def wait(self, timeout_s: float) -> bool:
-        try:
-            self.process.wait(timeout=timeout_s)
-            return True
-        except subprocess.TimeoutExpired:
-            return False
-
-    def kill(self) -> None:
-        try:
-            os.killpg(self.process.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-        self.process.wait()
-        self._log.close()
 
 
 class System:

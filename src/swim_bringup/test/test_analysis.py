@@ -7,7 +7,7 @@ from conftest import tracking_state_cdr
 
 from swim_bringup.analysis import Run, measures, summary_table
 from swim_bringup.reports import RunAnalysis
-from swim_bringup.system import NodeSpec
+from swim_ros.processes import NodeSpec
 
 
 def synthetic_run(alpha_offset_rad=0.0, radius_offset_m=0.0, constrained=False):

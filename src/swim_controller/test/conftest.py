@@ -1,5 +1,6 @@
 """Fixtures: the rig, its vehicle models, and smooth strokes to linearize about (made here, not planned: the LQ
-stage and Theorem 1 hold about any trajectory, so these tests need no planner)."""
+stage and Theorem 1 hold about any trajectory, so these tests need no planner), and the DDS fixtures every
+package's tests share (swim_ros.testing.fixtures)."""
 import dataclasses
 import math
 
@@ -9,6 +10,7 @@ import pytest
 from swim_controller.riccati import LqrWeights, TrackingGains, error_state_size, primitive_gains
 from swim_controller.trajectory import Segment, Trajectory
 from swim_model import VehicleModel, load_rig
+from swim_ros.testing.fixtures import rclpy_context, ros_domain  # noqa: F401
 
 
 @pytest.fixture(scope="session")

@@ -1,8 +1,11 @@
+"""Fixtures of the planner's tests: the rig, the shipped primitive library, vehicle models, and the DDS fixtures
+every package's tests share (swim_ros.testing.fixtures)."""
 import pytest
 
 from swim_model import load_rig
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.paths import default_library_path
+from swim_ros.testing.fixtures import rclpy_context, ros_domain  # noqa: F401
 
 
 @pytest.fixture(scope="session")

@@ -7,4 +7,8 @@
 - ``domains``: ``claim_ros_domain``, a ROS_DOMAIN_ID no other live test or run on this host holds.
 - ``calls``: service calls that survive a lost answer (Fast DDS can drop a response sent before the server
   matched the client's response reader).
+- ``processes``: ``NodeSpec`` and ``NodeProcess``, how every process we start runs (``ros2 run`` in its own process
+  group, stopped by SIGINT, then SIGKILL after a grace period).
+- ``testing``: for tests only (never imported by a node): the DDS fixtures and fuzz strategies every package's
+  tests share.
 """

@@ -1,17 +1,2 @@
-import pytest
-
-from swim_ros.domains import claim_ros_domain
-
-
-@pytest.fixture(scope="session")
-def ros_domain():
-    return claim_ros_domain()
-
-
-@pytest.fixture()
-def rclpy_context(ros_domain):
-    import rclpy
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    yield context
-    rclpy.shutdown(context=context)
+"""Fixtures of swim_ros's tests: the DDS fixtures every package's tests share (swim_ros.testing.fixtures)."""
+from swim_ros.testing.fixtures import rclpy_context, ros_domain  # noqa: F401

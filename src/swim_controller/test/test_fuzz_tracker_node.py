@@ -1,4 +1,4 @@
-"""tracker_node's joint_states input fuzzed over DDS (tests/fuzz_strategies.py).
+"""tracker_node's joint_states input fuzzed over DDS (swim_ros.testing.fuzz).
 
 One idle node for the module (no goal). A well-formed state is answered by a command stamped like it, within its
 deadline; a malformed one never is (the well-formed state sent after it is answered, and no command carries the
@@ -13,8 +13,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import running_node
-from fuzz_strategies import EDGE_FLOATS, any_float, fuzz_settings, joint_states, to_joint_state
+from swim_ros.testing.fixtures import STARTUP_TIMEOUT_S, running_node
+from swim_ros.testing.fuzz import EDGE_FLOATS, any_float, fuzz_settings, joint_states, to_joint_state
 
 JOINTS = ("alpha", "phi", "theta")
 #: a state's command: within a period here; 5 s for a loaded 2-core host (and for discovery on the first one)
@@ -64,7 +64,6 @@ def valid_state(stamp):
 @pytest.fixture(scope="module")
 def source(tracker, ros_domain):
     import rclpy
-    from conftest import STARTUP_TIMEOUT_S
     context = rclpy.Context()
     rclpy.init(context=context)
     source = StateSource(context)

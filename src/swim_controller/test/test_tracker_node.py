@@ -2,16 +2,20 @@
 
 The plant is swim_model's ideal constrained vehicle: it publishes joint_states stamped with simulated time,
 waits for the node's torque command for that state, integrates one 8 ms period (RK4, torque held) and
-repeats, so runs are deterministic and faster than real time.
+repeats, so runs are deterministic and faster than real time. The plan is made here, not by the planner (a
+package above this one): swim_model's sinusoidal gait faded in from rest, the unactuated alpha integrated under it
+(swim_model.simulate_gait: a motion the vehicle can make, with the torques that make it) and the LQ gains along it
+(swim_controller.riccati), as a planner's accelerate-then-cruise plan has them.
 """
+import dataclasses
 import math
 import time
 
 import numpy as np
 import pytest
 
-from conftest import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, running_node
 from swim_ros.calls import RetryPolicy, spin_until
+from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, running_node
 
 PERIOD_S = 0.008
 # 2 s, as in test_kill_node: the plant is this test process, which stops stepping during each parameter round
@@ -33,7 +37,11 @@ REFUSAL_WINDOW_S = 0.025
 #: a tracking_state comes with each period's command, once this test's new reader is matched (discovery): up to
 #: 1 s of plan stepped for it beyond the periods a check runs
 TRACKING_WAIT_PERIODS = 125
-SHORT_PLAN = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05"]
+#: the plan: the gait fades in over its first second (the accelerate of a planner's plan) and runs 3 s more, long
+#: enough for the tests that step a few hundred periods into it; 10 ms samples (the shipped primitives': 6-25 ms)
+PLAN_RAMP_S, PLAN_DURATION_S, PLAN_SAMPLE_PERIOD_S = 1.0, 4.0, 0.01
+#: the gait: the rig's size of stroke at 1 Hz, well within the motor limits (about half the heave limit at most)
+PLAN_HEAVE_AMPLITUDE_RAD, PLAN_PITCH_AMPLITUDE_RAD = 0.3, 0.4
 
 
 @pytest.fixture(scope="module")
@@ -44,17 +52,44 @@ def tracker(ros_domain, tmp_path_factory):
         yield log   # the node's output, for failure messages
 
 
+@dataclasses.dataclass(frozen=True)
+class RampedGait:
+    """A gait faded in from rest: psi = s(t) psi_gait(t), s the quintic smoothstep from 0 to 1 over ramp_s (s, s'
+    and s'' zero at the start), so the plan starts at rest at psi = 0, where the plant starts."""
+
+    gait: object   # a swim_model.SinusoidalGait
+    ramp_s: float
+
+    def shape(self, time_s):
+        """(psi, psidot, psiddot) at time_s: rad, rad/s, rad/s^2 (as SinusoidalGait.shape)."""
+        psi, psidot, psiddot = self.gait.shape(time_s)
+        x = min(time_s / self.ramp_s, 1.0)
+        s = x ** 3 * (10.0 - 15.0 * x + 6.0 * x * x)
+        ds = 30.0 * x * x * (1.0 - x) ** 2 / self.ramp_s
+        dds = 60.0 * x * (1.0 - x) * (1.0 - 2.0 * x) / self.ramp_s ** 2
+        return s * psi, ds * psi + s * psidot, dds * psi + 2.0 * ds * psidot + s * psiddot
+
+
 @pytest.fixture(scope="module")
 def plan_message():
-    from swim_model import load_rig
-    from swim_planner.library import PrimitiveLibrary
-    from swim_planner.maneuver import concatenate, expand_sequence
-    from swim_planner.paths import default_library_path
-    from swim_controller.messages import trajectory_to_message
     from builtin_interfaces.msg import Time
-    rig = load_rig()
-    library = PrimitiveLibrary.load(default_library_path(), rig)
-    plan = concatenate(library, rig, expand_sequence(SHORT_PLAN, [1, 1]))
+    from swim_controller.messages import trajectory_to_message
+    from swim_controller.riccati import LqrWeights, primitive_gains
+    from swim_controller.time_scaling import lqr_gain_from
+    from swim_controller.trajectory import Segment, Trajectory
+    from swim_model import SinusoidalGait, VehicleModel, load_rig, simulate_gait
+    model = VehicleModel(load_rig(), constrained=True)
+    gait = RampedGait(SinusoidalGait(heave_amplitude_rad=PLAN_HEAVE_AMPLITUDE_RAD,
+                                     pitch_amplitude_rad=PLAN_PITCH_AMPLITUDE_RAD), PLAN_RAMP_S)
+    run = simulate_gait(model, gait, PLAN_DURATION_S, PLAN_SAMPLE_PERIOD_S)
+    foil_acceleration = np.array([gait.shape(t)[2] for t in run.time_s])
+    weights = LqrWeights()
+    gains = primitive_gains(model, run.time_s, run.q, run.qdot, foil_acceleration, weights)
+    samples = len(run.time_s)
+    segment = Segment("test/ramped_gait", "accelerate", 0, 0.0, float(run.time_s[-1]), 1.0, 0.0, 0, samples)
+    plan = Trajectory(run.time_s, run.q, run.qdot, foil_acceleration, run.tau,
+                      lqr_gain_from(gains.riccati_input_gain, np.diag(weights.input_weight_matrix())),
+                      gains.riccati_input_gain, (segment,), lane_radius_m=model.lane_radius_m)
     return trajectory_to_message(plan, Time())
 
 

@@ -4,8 +4,8 @@ to start with a message naming them."""
 import numpy as np
 import pytest
 
-from conftest import MESSAGE_TIMEOUT_S, running_node
 from swim_ros.calls import spin_until
+from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, running_node
 from test_sim_node import RESEND_AFTER_S, Driver
 
 SEED = 11
@@ -104,16 +104,3 @@ def test_bad_wake_parameters_refuse_to_start_with_a_message(ros_domain, tmp_path
         assert process.wait(timeout=REFUSED_START_TIMEOUT_S) == 2
     assert "core_radius_m" in log.read_text()
 
-
-def test_rosbags_reads_wake_statistics():
-    """The bag's type store (swim_bringup.bag, from the installed .msg files) decodes what rclpy serializes."""
-    from rclpy.serialization import serialize_message
-    from swim_interfaces.msg import WakeStatistics
-
-    from swim_bringup.bag import RUN_TOPICS, swim_typestore
-    sent = WakeStatistics(vortex_count=300, total_circulation_m2_s=1e-17, thrust_n=-0.25,
-                          joint_names=["alpha", "phi", "theta"], generalized_force=[0.1, -0.2, 0.003], clipped_count=2)
-    decoded = swim_typestore().deserialize_cdr(serialize_message(sent), RUN_TOPICS["wake_statistics"])
-    assert decoded.vortex_count == 300 and decoded.thrust_n == -0.25 and decoded.clipped_count == 2
-    assert list(decoded.joint_names) == ["alpha", "phi", "theta"]
-    np.testing.assert_array_equal(decoded.generalized_force, [0.1, -0.2, 0.003])

@@ -1,4 +1,4 @@
-"""sim_node fuzzed over DDS (tests/fuzz_strategies.py): joint_commands, set_state and reset, parameter sets.
+"""sim_node fuzzed over DDS (swim_ros.testing.fuzz): joint_commands, set_state and reset, parameter sets.
 
 One node for the module (lock-step, constrained). For every example: an answer within its deadline, a malformed
 or out-of-bounds one refused with a reason and changing nothing, nothing published non-finite, torque within the
@@ -13,8 +13,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import running_node
-from fuzz_strategies import (EDGE_FLOATS, NON_FINITE, any_float, fuzz_settings, in_order, is_non_finite_number,
+from swim_ros.testing.fixtures import running_node
+from swim_ros.testing.fuzz import (EDGE_FLOATS, NON_FINITE, any_float, fuzz_settings, in_order, is_non_finite_number,
                              joint_states, parameter_sets, to_joint_state, torques)
 from test_sim_node import POLICY, RESEND_AFTER_S, Driver
 

@@ -1,4 +1,4 @@
-"""planner_node fuzzed over DDS (tests/fuzz_strategies.py): request_maneuver and parameter sets.
+"""planner_node fuzzed over DDS (swim_ros.testing.fuzz): request_maneuver and parameter sets.
 
 One node for the module. For every request: an answer within its deadline; a refusal with a reason and no plan;
 a plan only with finite values; afterwards the node is alive and plans the paper's maneuver.
@@ -11,8 +11,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import running_node
-from fuzz_strategies import any_float, fuzz_settings, is_non_finite_number, parameter_sets, unicode_name
+from swim_ros.testing.fixtures import running_node
+from swim_ros.testing.fuzz import any_float, fuzz_settings, is_non_finite_number, parameter_sets, unicode_name
 from test_planner_node import PAPER, POLICY
 
 #: the longest answer: a plan at the node's own bounds (7200 s of plan, about 7 s to build on a quiet host, and

@@ -1,10 +1,10 @@
-"""Hypothesis strategies and settings for the DDS fuzz tests (tests/test_fuzz_*.py): messages built field by field,
-valid, borderline and malformed, each example labelled with what the node must do with it.
+"""Hypothesis strategies and settings for the DDS fuzz tests (each node's test/test_fuzz_*.py): messages built field
+by field, valid, borderline and malformed, each example labelled with what the node must do with it.
 
 Sizes: seeded (derandomize) and sized for CI by default; SWIM_FUZZ_PROFILE=long multiplies every surface's count
 by LONG_RUN_FACTOR (the CI total, 500 examples, becomes 8,000):
 
-    SWIM_FUZZ_PROFILE=long python -m pytest -q tests/test_fuzz_sim_node.py tests/test_fuzz_planner_node.py ...
+    SWIM_FUZZ_PROFILE=long python -m pytest -q src/swim_sim/test/test_fuzz_sim_node.py
 """
 from __future__ import annotations
 
@@ -48,7 +48,7 @@ def any_float() -> st.SearchStrategy[float]:
 def unicode_name() -> st.SearchStrategy[str]:
     """A name no node knows: random unicode, empty included; no surrogates (rosidl strings are UTF-8) and no NUL (a
     C string ends there, so "alpha\\0" would arrive as a known name)."""
-    return st.text(st.characters(exclude_categories=("Cs",), exclude_characters="\x00"), max_size=12)
+    return st.text(st.characters(exclude_categories=["Cs"], exclude_characters="\x00"), max_size=12)
 
 
 # ----- joint states ------------------------------------------------------------------------------------------

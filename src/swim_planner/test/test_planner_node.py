@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from conftest import running_node
 from swim_ros.calls import ParameterCalls, RetryPolicy, call_service, spin_until
+from swim_ros.testing.fixtures import running_node
 
 #: a try's wait: planning takes milliseconds, new gains 0.1-0.3 s a primitive; a lost answer is asked again
 POLICY = RetryPolicy(attempt_timeout_s=10.0, attempts=3, discovery_timeout_s=30.0)

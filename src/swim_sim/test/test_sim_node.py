@@ -5,8 +5,8 @@ import time
 import numpy as np
 import pytest
 
-from conftest import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, running_node
 from swim_ros.calls import RetryPolicy, spin_until
+from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, running_node
 
 #: sim_node answers reset and set_state at once; a try waits 10 s for a loaded host
 POLICY = RetryPolicy(attempt_timeout_s=10.0, attempts=3, discovery_timeout_s=STARTUP_TIMEOUT_S)

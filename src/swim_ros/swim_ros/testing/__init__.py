@@ -1,0 +1,8 @@
+"""What the tests of every swim package share, and nothing a node or a user's script imports.
+
+- ``fixtures``: the pytest fixtures of a test that talks over DDS (``ros_domain``, ``rclpy_context``), the
+  ``running_node`` context manager that starts the node under test as a user would, and the timeouts they wait by.
+  A package's ``test/conftest.py`` imports the fixtures by name (``from swim_ros.testing.fixtures import
+  ros_domain, rclpy_context  # noqa: F401``).
+- ``fuzz``: the hypothesis strategies and settings of the DDS fuzz tests (``test_fuzz_*.py``).
+"""
