@@ -1,11 +1,14 @@
-"""The deceleration each motor can surely give its link, from the rig's model: what the braking bound of the
-safety layer (safety.py, rule 6) counts on.
+"""What each motor can do to its link and what the rig's own motion does to it, from the rig's model: what the
+braking rule of the safety layer (safety.py, rule 6) counts on.
 
-For a joint j driven by torque tau, the link's acceleration from tau alone is tau (M^-1)_jj, and for a symmetric
-positive definite M, (M^-1)_jj >= 1 / M_jj. So the largest diagonal entry of the free vehicle's joint-space
-inertia over the joint's range (both joints' ranges and both lanes gridded) gives a deceleration the motor can
-always produce: a = BRAKING_TORQUE_FRACTION tau_max / max M_jj. The most it can accelerate the link is the
-largest tau_max (M^-1)_jj over the same grid.
+For a joint j driven by torque tau_j, the link's acceleration from tau_j alone is tau_j (M^-1)_jj, and for a
+symmetric positive definite M, (M^-1)_jj >= 1 / M_jj. So the largest diagonal entry of the free vehicle's
+joint-space inertia over the joints' ranges (both joints' ranges and both lanes gridded) gives a deceleration the
+motor can always produce: a = BRAKING_TORQUE_FRACTION tau_max / max M_jj; the most it can accelerate the link is
+the largest tau_max (M^-1)_jj over the same grid. The rest of
+    qddot = M^-1 (B tau - Cm(q, qdot) qdot)
+is the other motor's torque through the off-diagonal inertia (within the quarter of the torque the fraction
+leaves) and the velocity terms -(M^-1 Cm qdot)_j, evaluated at each period's state (VelocityTerms).
 """
 from __future__ import annotations
 
@@ -14,17 +17,33 @@ import itertools
 import numpy as np
 from swim_model import RigParameters, VehicleModel
 
-from swim_hw_bridge.safety import BRAKING_TORQUE_FRACTION
+from swim_hw_bridge.safety import BRAKING_TORQUE_FRACTION, JointDynamicsBounds
 
 #: grid points per joint range when searching the largest inertia (M varies smoothly with the joint angles)
 GRID_POINTS = 13
 
 
-def joint_accelerations(rig: RigParameters, hard_limits_rad: tuple[tuple[float, float], tuple[float, float]],
-                        torque_limits_n_m: tuple[float, float], fraction: float = BRAKING_TORQUE_FRACTION
-                        ) -> tuple[tuple[float, float], tuple[float, float]]:
-    """((heave, pitch) decelerations the motors surely give, (heave, pitch) accelerations they give at most), in
-    rad/s^2, over the hard limits' ranges."""
+class VelocityTerms:
+    """The (heave, pitch) accelerations of the velocity terms, -(M^-1 Cm(q, qdot) qdot)_j, rad/s^2: the free
+    vehicle's forward dynamics at zero torque, through its native entry point (microseconds a call, so the I/O
+    loop can ask every period; its buffers are its own: one calling thread)."""
+
+    def __init__(self, model: VehicleModel) -> None:
+        self._forward = model.native_function("forward_dynamics")
+
+    def __call__(self, positions: tuple[float, float, float, float],
+                 rates: tuple[float, float, float, float]) -> tuple[float, float]:
+        forward = self._forward
+        forward.inputs[0][:], forward.inputs[1][:], forward.inputs[2][:] = positions, rates, 0.0
+        forward()
+        return float(forward.outputs[0][2]), float(forward.outputs[0][3])
+
+
+def joint_dynamics_bounds(rig: RigParameters, hard_limits_rad: tuple[tuple[float, float], tuple[float, float]],
+                          torque_limits_n_m: tuple[float, float], fraction: float = BRAKING_TORQUE_FRACTION
+                          ) -> JointDynamicsBounds:
+    """The (heave, pitch) decelerations the motors surely give and the accelerations they give at most over the
+    hard limits' ranges, rad/s^2, and the velocity terms (see the module docstring)."""
     model = VehicleModel(rig, constrained=False)
     heave = np.linspace(*hard_limits_rad[0], GRID_POINTS)
     pitch = np.linspace(*hard_limits_rad[1], GRID_POINTS)
@@ -36,4 +55,6 @@ def joint_accelerations(rig: RigParameters, hard_limits_rad: tuple[tuple[float, 
     torque = np.asarray(torque_limits_n_m, dtype=float)
     decelerations = fraction * torque / largest_inertia
     accelerations = torque * largest_mobility
-    return (float(decelerations[0]), float(decelerations[1])), (float(accelerations[0]), float(accelerations[1]))
+    return JointDynamicsBounds(decelerations_rad_s2=(float(decelerations[0]), float(decelerations[1])),
+                               drive_accelerations_rad_s2=(float(accelerations[0]), float(accelerations[1])),
+                               velocity_terms=VelocityTerms(model))

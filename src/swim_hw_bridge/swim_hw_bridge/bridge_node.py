@@ -52,7 +52,7 @@ from std_msgs.msg import Bool
 from std_srvs.srv import Trigger
 
 from swim_hw_bridge.backends import BACKENDS, UnknownBackend, make_device
-from swim_hw_bridge.braking import joint_accelerations
+from swim_hw_bridge.braking import joint_dynamics_bounds
 from swim_hw_bridge.conversions import BridgeConfigError, Conversions, load_bridge_config
 from swim_hw_bridge.device import Device, DeviceError
 from swim_hw_bridge.io_loop import IoLoop, Snapshot
@@ -173,10 +173,9 @@ class BridgeNode(LifecycleNode):
             device.write_currents(0.0, 0.0)
             hard_limits = ((config.heave_lower_hard_limit_rad, config.heave_upper_hard_limit_rad),
                            (config.pitch_lower_hard_limit_rad, config.pitch_upper_hard_limit_rad))
-            decelerations, accelerations = joint_accelerations(load_rig(), hard_limits, config.torque_limits_n_m)
             limits = SafetyLimits.from_config(config, self.settings.sample_period_s, self.settings.watchdog_periods,
                                               self.settings.stale_read_limit, self.settings.read_failure_limit,
-                                              decelerations, accelerations)
+                                              joint_dynamics_bounds(load_rig(), hard_limits, config.torque_limits_n_m))
             self.loop = IoLoop(device, Conversions(config), SafetyLayer(limits), self.settings.sample_period_s,
                                self.settings.overrun_limit)
         except DeviceError as err:

@@ -1,10 +1,11 @@
 """The I/O loop: one thread, absolute deadlines t_k = t_0 + k h (h = sample_period_s, time.monotonic()).
 
 Each period: read the counters, unwrap and convert them (unwrap.py, conversions.py), estimate velocities by
-filtered differences (swim_model.velocity_filter), apply the safety rules (safety.py) to the latest
-command, write the currents, toggle the amplifier-enable line (while enabled and no fault is latched), publish
-a snapshot. Then sleep until the next deadline. Nothing in the period logs, blocks on ROS or builds more than
-a few small tuples.
+filtered differences (swim_model.velocity_filter, published), apply the safety rules (safety.py) to the latest
+command with the positions and the mean rates over the last sample interval (the plain difference quotient, no
+filter lag: what the braking rule reads), write the currents, toggle the amplifier-enable line (while enabled
+and no fault is latched), publish a snapshot. Then sleep until the next deadline. Nothing in the period logs,
+blocks on ROS or builds more than a few small tuples.
 
 A period whose work ends after the next deadline is an overrun: counted, the missed deadlines are skipped (the
 grid t_0 + k h is kept), and overrun_limit overruns in a row latch FaultCode.OVERRUN.
@@ -27,7 +28,7 @@ from swim_model.velocity_filter import VelocityEstimator
 
 from swim_hw_bridge.conversions import Conversions
 from swim_hw_bridge.device import Device, DeviceError
-from swim_hw_bridge.safety import Command, FaultCode, SafetyLayer, WatchdogState
+from swim_hw_bridge.safety import Command, FaultCode, Motion, SafetyLayer, WatchdogState
 from swim_hw_bridge.unwrap import CounterUnwrapper
 
 _RATE_SMOOTHING = 0.05   # weight of the newest interval in the loop-rate average (about 20 periods)
@@ -90,6 +91,9 @@ class IoLoop:
         self._last_start_s = math.nan
         self._positions = conversions.home_positions
         self._velocities = (0.0, 0.0, 0.0, 0.0)
+        self._mean_rates = (0.0, 0.0, 0.0, 0.0)   # (q_k - q_(k-1)) / (t_k - t_(k-1)) of the last two samples
+        self._sample_interval_s = 0.0             # t_k - t_(k-1); 0 until two samples are in
+        self._sample_time_s = math.nan
         self._sequence = -1
         self._jumps = 0
 
@@ -189,8 +193,8 @@ class IoLoop:
             self._take_sample(sample.counts, sample.monotonic_s, sample.sequence)
             phi, theta = self._positions[2], self._positions[3]
             safety.check_positions(phi, theta)
-            heave_a, pitch_a, heave_n_m, pitch_n_m = safety.output(now_s, command, phi, theta,
-                                                                   self._velocities[2], self._velocities[3])
+            motion = Motion(self._positions, self._mean_rates, self._sample_interval_s)
+            heave_a, pitch_a, heave_n_m, pitch_n_m = safety.output(now_s, command, phi, theta, motion)
             currents, torques = (heave_a, pitch_a), (heave_n_m, pitch_n_m)
         toggling = self.enable_toggling and not safety.faults
         try:
@@ -218,7 +222,13 @@ class IoLoop:
         self._jumps = self.unwrapper.update(counts, time_s)
         if self._jumps:
             self.safety.latch(FaultCode.ENCODER_JUMP)
-        self._positions = self.conversions.counts_to_positions(self.unwrapper.unwrapped)
+        previous, self._positions = self._positions, self.conversions.counts_to_positions(self.unwrapper.unwrapped)
+        interval_s, self._sample_time_s = time_s - self._sample_time_s, time_s
+        if interval_s > 0.0:   # false for the first sample (nan)
+            p, q = self._positions, previous
+            self._mean_rates = ((p[0] - q[0]) / interval_s, (p[1] - q[1]) / interval_s,
+                                (p[2] - q[2]) / interval_s, (p[3] - q[3]) / interval_s)
+            self._sample_interval_s = interval_s
         rates = self.velocity.update(time_s, np.array(self._positions))
         self._velocities = (float(rates[0]), float(rates[1]), float(rates[2]), float(rates[3]))
 

@@ -1,19 +1,27 @@
 """The bridge's safety rules, pure and ROS-free: what current may reach the motors this period.
 
 Per period, in this order (SafetyLayer.output):
-1. any latched fault (FaultCode, including the e-stop): zero current;
-2. no command newer than the last reset or activation (WatchdogState.WAITING): zero;
+1. any latched fault (FaultCode, including the e-stop): zero current, whatever the rules below say;
+2. no command newer than the last reset or activation (WatchdogState.WAITING): zero torque asked;
 3. command watchdog on the monotonic clock: the latest command older than watchdog_timeout_s
-   (N sample periods): zero (WatchdogState.EXPIRED); a newer command resumes;
+   (N sample periods): zero torque asked (WatchdogState.EXPIRED); a newer command resumes;
 4. a non-finite torque: zero and the NONFINITE_OUTPUT fault;
 5. torque saturation |tau| <= tau_max (Sec. 2 limits), counted;
 6. braking: a joint moving toward a hard limit faster than it can still stop by it gets the full braking torque
-   instead of its command. The speed bound at distance d from the limit, one period T of latency included, is
-   braking_speed_limit: within the latency L (one period) the link may still be driven
-   at up to A, the most its motor can accelerate it, and then brakes at a, the deceleration the motor can surely
-   give: BRAKING_TORQUE_FRACTION of its torque limit over the largest diagonal entry of the joint-space inertia
-   over the joint's range (braking.py, from the model), a lower bound on tau (M^-1)_jj. Once braking, a joint
-   brakes until it stops. As ros2_control's soft joint limits bound velocity by position;
+   instead of what is asked, zero included (braking protects the rig whether or not a command is in: a link the
+   watchdog left at zero torque would coast through its limit). Its speed toward the limit at the sample is the
+   mean rate over the last sample interval h_s (Motion: the encoders' difference quotient, the speed at the
+   interval's middle, with no filter lag) plus the most it can have gained over the half after,
+   (A_last + D) h_s / 2. The bound at distance d from the limit is braking_speed_limit: within the latency L (one
+   period: a loop that keeps missing its deadlines latches OVERRUN) the link may still be driven at up to A + D,
+   then brakes at a - D. Here (JointDynamicsBounds, braking.py, from the model) a = BRAKING_TORQUE_FRACTION
+   tau_max / max M_jj over the joints' ranges is what its own motor surely gives (a lower bound on tau (M^-1)_jj,
+   with room left for the other motor's torque through the off-diagonal inertia), A = max tau_max (M^-1)_jj the
+   most it gives, A_last what the last period's torque toward the limit gave at most, and D the velocity terms'
+   acceleration toward the limit at the present state, -(M^-1 Cm qdot)_j when it points there (else 0): the
+   heave's swing throws the light foil, at 5 rad/s of heave up to 160 rad/s^2 of pitch acceleration, half of what
+   the pitch motor gives. Once braking, a joint brakes until stopped. As ros2_control's soft joint limits bound
+   velocity by position;
 7. soft limits: with p the joint position, [lo, hi] its hard limits and m the margin, torque pushing outward
    is scaled by s = clamp((hi - p) / m, 0, 1) near the upper limit (tau > 0) and by
    s = clamp((p - lo) / m, 0, 1) near the lower one (tau < 0); torque back inward is never scaled;
@@ -35,6 +43,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 import math
+from typing import Callable
 
 from swim_hw_bridge.conversions import BridgeConfig
 
@@ -90,12 +99,16 @@ def soft_limit_scale(position: float, torque: float, lower: float, upper: float,
 
 
 #: the share of a motor's torque limit the braking bound counts on. Assumed: three quarters, leaving a quarter for
-#: the friction and coupling forces the inertia bound leaves out; with half, the shipped plans' pitch rates would
-#: reach the bound (1.5 times it at worst) and the limiter would brake planned motion
+#: friction and for the other motor's full torque through the off-diagonal inertia (which that quarter covers over
+#: the whole range: test_braking checks it); the velocity terms are counted on their own (rule 6). With half, the
+#: shipped plans' pitch rates would reach the bound and the limiter would brake planned motion
 BRAKING_TORQUE_FRACTION = 0.75
 #: the torque a joint past its hard limit may get back toward its range after a reset. Assumed: a third of the
 #: limit brings the link back in well under a second without slamming it into the opposite side
 RECOVERY_TORQUE_FRACTION = 1.0 / 3.0
+
+#: (alpha, R, phi, theta) positions and rates -> the (heave, pitch) accelerations of the velocity terms, rad/s^2
+VelocityTerms = Callable[[tuple[float, float, float, float], tuple[float, float, float, float]], tuple[float, float]]
 
 
 def braking_speed_limit(distance_rad: float, deceleration_rad_s2: float, latency_s: float,
@@ -103,15 +116,42 @@ def braking_speed_limit(distance_rad: float, deceleration_rad_s2: float, latency
     """The largest speed v toward a limit distance_rad away from which a joint that may still be driven at
     drive_acceleration_rad_s2 for latency_s, then brakes at deceleration_rad_s2, stops by the limit:
     with u = v + A L the speed when braking starts, d = v L + A L^2 / 2 + u^2 / (2 a), so
-    u = a (sqrt(L^2 + (2 d + A L^2) / a) - L) and v = u - A L; 0 at or past the limit (or when even v = 0 is too
-    fast)."""
-    if distance_rad <= 0.0:
+    u = a (sqrt(L^2 + (2 d + A L^2) / a) - L) and v = u - A L; 0 at or past the limit, when even v = 0 is too
+    fast, or when the joint cannot be braked at all (a <= 0)."""
+    if distance_rad <= 0.0 or deceleration_rad_s2 <= 0.0:
         return 0.0
     if math.isinf(deceleration_rad_s2):
         return math.inf
     a, t, drive = deceleration_rad_s2, latency_s, drive_acceleration_rad_s2
     braking_speed = a * (math.sqrt(t * t + (2.0 * distance_rad + drive * t * t) / a) - t)
     return max(braking_speed - drive * t, 0.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class JointDynamicsBounds:
+    """What the braking rule counts on for each joint (heave, pitch) (braking.py builds it from the model; the
+    defaults: no braking bound).
+
+    decelerations_rad_s2: a, what its own motor surely gives, BRAKING_TORQUE_FRACTION tau_max / max M_jj;
+    drive_accelerations_rad_s2: A, the most its own motor gives, max tau_max (M^-1)_jj;
+    velocity_terms: the velocity terms' accelerations -(M^-1 Cm(q, qdot) qdot) of the joints at a state (None:
+        none counted).
+    """
+
+    decelerations_rad_s2: tuple[float, float] = (math.inf, math.inf)
+    drive_accelerations_rad_s2: tuple[float, float] = (0.0, 0.0)
+    velocity_terms: VelocityTerms | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class Motion:
+    """What the braking rule reads of the rig's motion at a sample: the (alpha rad, R m, phi rad, theta rad)
+    positions, their mean rates over the last sample interval (the difference quotient of the last two samples,
+    rad/s and m/s) and that interval, s (0: none yet, rates zero)."""
+
+    positions: tuple[float, float, float, float]
+    mean_rates: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    interval_s: float = 0.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -126,16 +166,13 @@ class SafetyLimits:
     watchdog_timeout_s: float
     stale_read_limit: int
     read_failure_limit: int
-    braking_decelerations_rad_s2: tuple[float, float] = (math.inf, math.inf)   # inf: no braking bound
-    drive_accelerations_rad_s2: tuple[float, float] = (0.0, 0.0)   # the most the motors can accelerate a link
+    dynamics: JointDynamicsBounds = JointDynamicsBounds()   # the default: no braking bound
     latency_s: float = 0.0   # from a state's read to the torque it sets: one period
-    rate_lag_s: float = 0.0  # the rate filter's time constant: under an acceleration a its estimate lags by a lag
 
     @classmethod
     def from_config(cls, config: BridgeConfig, sample_period_s: float, watchdog_periods: int,
                     stale_read_limit: int, read_failure_limit: int,
-                    braking_decelerations_rad_s2: tuple[float, float] = (math.inf, math.inf),
-                    drive_accelerations_rad_s2: tuple[float, float] = (0.0, 0.0)) -> "SafetyLimits":
+                    dynamics: JointDynamicsBounds = JointDynamicsBounds()) -> "SafetyLimits":
         return cls(
             torque_limits_n_m=config.torque_limits_n_m, current_limits_a=config.current_limits_a,
             torque_gains_n_m_per_a=config.motor_torque_gains_n_m_per_a,
@@ -143,9 +180,7 @@ class SafetyLimits:
                              (config.pitch_lower_hard_limit_rad, config.pitch_upper_hard_limit_rad)),
             soft_limit_margins_rad=(config.heave_soft_limit_margin_rad, config.pitch_soft_limit_margin_rad),
             watchdog_timeout_s=watchdog_periods * sample_period_s, stale_read_limit=stale_read_limit,
-            read_failure_limit=read_failure_limit, braking_decelerations_rad_s2=braking_decelerations_rad_s2,
-            drive_accelerations_rad_s2=drive_accelerations_rad_s2,
-            latency_s=sample_period_s, rate_lag_s=1.0 / (2.0 * math.pi * config.velocity_cutoff_hz))
+            read_failure_limit=read_failure_limit, dynamics=dynamics, latency_s=sample_period_s)
 
 
 class SafetyLayer:
@@ -158,7 +193,7 @@ class SafetyLayer:
         self.saturation_count = 0         # periods in which a torque or a current was clipped
         self.braking_count = 0            # periods in which a joint was braked short of a hard limit
         self.braking = [0, 0]             # per joint: +1 braking toward its upper limit, -1 its lower, 0 not
-        self._last_rates = [0.0, 0.0]     # the rate estimates of the period before, rad/s
+        self._last_torques = [0.0, 0.0]   # the joint torques of the period before, N m
         self.recovering = [False, False]  # a joint past its hard limit at the last reset, not yet back inside
         self._resume_after_s = -math.inf  # only commands received after this time are used
         self._last_sequence: int | None = None
@@ -210,29 +245,49 @@ class SafetyLayer:
 
     # --- the output --------------------------------------------------------------------------------------
     def output(self, now_s: float, command: Command | None, heave_rad: float, pitch_rad: float,
-               heave_rate_rad_s: float = 0.0, pitch_rate_rad_s: float = 0.0) -> tuple[float, float, float, float]:
+               motion: Motion | None = None) -> tuple[float, float, float, float]:
         """(heave_a, pitch_a, heave_n_m, pitch_n_m): currents to write and the joint torques they make, for the
-        joints' positions and rates (rad, rad/s)."""
-        if command is None or command.received_monotonic_s <= self._resume_after_s:
-            self.watchdog = WatchdogState.WAITING
+        joints' positions (rad) and the rig's motion (None: at rest as far as is known)."""
+        requested = self._requested(now_s, command)
+        if requested is None:
+            self._last_torques = [0.0, 0.0]
             return 0.0, 0.0, 0.0, 0.0
-        expired = now_s - command.received_monotonic_s > self.limits.watchdog_timeout_s
-        self.watchdog = WatchdogState.EXPIRED if expired else WatchdogState.OK
-        if self.faults or expired:
-            return 0.0, 0.0, 0.0, 0.0
-        if not (math.isfinite(command.heave_torque_n_m) and math.isfinite(command.pitch_torque_n_m)):
-            self.latch(FaultCode.NONFINITE_OUTPUT)   # infinity is a fault too, not a saturation
-            return 0.0, 0.0, 0.0, 0.0
-        heave_a, heave_n_m, heave_clipped = self._joint(0, command.heave_torque_n_m, heave_rad, heave_rate_rad_s)
-        pitch_a, pitch_n_m, pitch_clipped = self._joint(1, command.pitch_torque_n_m, pitch_rad, pitch_rate_rad_s)
+        velocity_terms = self.limits.dynamics.velocity_terms
+        if motion is None:
+            motion, accelerations = Motion((0.0, 0.0, heave_rad, pitch_rad)), (0.0, 0.0)
+        else:
+            accelerations = velocity_terms(motion.positions, motion.mean_rates) if velocity_terms else (0.0, 0.0)
+        heave_a, heave_n_m, heave_clipped = self._joint(0, requested[0], heave_rad, motion, accelerations[0])
+        pitch_a, pitch_n_m, pitch_clipped = self._joint(1, requested[1], pitch_rad, motion, accelerations[1])
         if not (math.isfinite(heave_a) and math.isfinite(pitch_a)):
             self.latch(FaultCode.NONFINITE_OUTPUT)
+            self._last_torques = [0.0, 0.0]
             return 0.0, 0.0, 0.0, 0.0
         if heave_clipped or pitch_clipped:
             self.saturation_count += 1
+        self._last_torques = [heave_n_m, pitch_n_m]
         return heave_a, pitch_a, heave_n_m, pitch_n_m
 
-    def _joint(self, joint: int, torque_n_m: float, position: float, rate_rad_s: float) -> tuple[float, float, bool]:
+    def _requested(self, now_s: float, command: Command | None) -> tuple[float, float] | None:
+        """The (heave, pitch) torque asked of the joints before the limits: the command's, or zero while waiting
+        for one or with the watchdog expired; None for zero output whatever the braking rule says (a latched
+        fault)."""
+        if command is None or command.received_monotonic_s <= self._resume_after_s:
+            self.watchdog = WatchdogState.WAITING
+            return None if self.faults else (0.0, 0.0)
+        expired = now_s - command.received_monotonic_s > self.limits.watchdog_timeout_s
+        self.watchdog = WatchdogState.EXPIRED if expired else WatchdogState.OK
+        if self.faults:
+            return None
+        if expired:
+            return 0.0, 0.0
+        if not (math.isfinite(command.heave_torque_n_m) and math.isfinite(command.pitch_torque_n_m)):
+            self.latch(FaultCode.NONFINITE_OUTPUT)   # infinity is a fault too, not a saturation
+            return None
+        return command.heave_torque_n_m, command.pitch_torque_n_m
+
+    def _joint(self, joint: int, torque_n_m: float, position: float, motion: Motion,
+               velocity_term_rad_s2: float) -> tuple[float, float, bool]:
         """(current A, joint torque N m, clipped?) for one motor; a NaN position gives a NaN current, which
         the caller catches."""
         limits = self.limits
@@ -244,29 +299,12 @@ class SafetyLayer:
             recovery = RECOVERY_TORQUE_FRACTION * torque_limit
             torque_n_m = min(max(torque_n_m, -recovery), 0.0) if position > upper else \
                 min(max(torque_n_m, 0.0), recovery)
+            self.braking[joint] = 0
+        elif self._braking(joint, position, motion, velocity_term_rad_s2):
+            torque_n_m = -self.braking[joint] * torque_limit
+            self.braking_count += 1
         else:
-            deceleration, latency = limits.braking_decelerations_rad_s2[joint], limits.latency_s
-            # the filtered rate lags the link by its acceleration times the filter's time constant: add it back
-            acceleration = (rate_rad_s - self._last_rates[joint]) / latency if latency > 0.0 else 0.0
-            self._last_rates[joint] = rate_rad_s
-            rate_rad_s += acceleration * limits.rate_lag_s
-            # once braking, brake until stopped: switching back to the command at the bound would drive the
-            # link on for a period each time and creep past the bound
-            braking = self.braking[joint]
-            if braking > 0 and rate_rad_s <= 0.0 or braking < 0 and rate_rad_s >= 0.0:
-                braking = 0
-            drive = limits.drive_accelerations_rad_s2[joint]
-            if braking == 0 and rate_rad_s > braking_speed_limit(upper - position, deceleration, latency, drive):
-                braking = 1
-            elif braking == 0 and -rate_rad_s > braking_speed_limit(position - lower, deceleration, latency, drive):
-                braking = -1
-            self.braking[joint] = braking
-            if braking:
-                torque_n_m = -braking * torque_limit
-                self.braking_count += 1
-            else:
-                torque_n_m *= soft_limit_scale(position, torque_n_m, lower, upper,
-                                               limits.soft_limit_margins_rad[joint])
+            torque_n_m *= soft_limit_scale(position, torque_n_m, lower, upper, limits.soft_limit_margins_rad[joint])
         gain = limits.torque_gains_n_m_per_a[joint]
         current_a = torque_n_m / gain
         current_limit = limits.current_limits_a[joint]
@@ -274,3 +312,33 @@ class SafetyLayer:
             clipped = True
             current_a = min(max(current_a, -current_limit), current_limit)
         return current_a, current_a * gain, clipped
+
+    def _braking(self, joint: int, position: float, motion: Motion, velocity_term_rad_s2: float) -> int:
+        """Rule 6 for a joint within its limits, whose velocity terms accelerate it by velocity_term_rad_s2: +1
+        braking it short of its upper limit, -1 of its lower one, 0 not (kept in self.braking: once braking, until
+        stopped)."""
+        limits, dynamics = self.limits, self.limits.dynamics
+        lower, upper = limits.hard_limits_rad[joint]
+        drive, deceleration = dynamics.drive_accelerations_rad_s2[joint], dynamics.decelerations_rad_s2[joint]
+        latency, half_interval = limits.latency_s, 0.5 * motion.interval_s
+        last_share = self._last_torques[joint] / limits.torque_limits_n_m[joint]
+        rate = motion.mean_rates[2 + joint]
+        # per limit: the velocity terms' push toward it (D), and the speed toward it at the sample: the mean rate
+        # is the speed at the interval's middle; over the half after, the last period's torque toward that limit
+        # and the push added at most this much
+        push_up, push_down = max(velocity_term_rad_s2, 0.0), max(-velocity_term_rad_s2, 0.0)
+        toward_upper = rate + (max(last_share, 0.0) * drive + push_up) * half_interval
+        toward_lower = -rate + (max(-last_share, 0.0) * drive + push_down) * half_interval
+        # once braking, brake until stopped: switching back to the command at the bound would drive the link on
+        # for a period each time and creep past the bound
+        braking = self.braking[joint]
+        if braking > 0 and toward_upper <= 0.0 or braking < 0 and toward_lower <= 0.0:
+            braking = 0
+        if braking == 0 and toward_upper > braking_speed_limit(upper - position, deceleration - push_up, latency,
+                                                               drive + push_up):
+            braking = 1
+        elif braking == 0 and toward_lower > braking_speed_limit(position - lower, deceleration - push_down,
+                                                                 latency, drive + push_down):
+            braking = -1
+        self.braking[joint] = braking
+        return braking

@@ -157,7 +157,7 @@ def test_an_impossible_encoder_jump_faults(config, conversions, limits):
 
 
 def test_soft_limit_then_hard_limit_through_the_loop(config, conversions, limits):
-    loop, device = make_loop(config, conversions, limits)
+    loop, device = make_loop(config, conversions, limits, hard_stops=False)   # the link is placed past the limit
     upper, margin = config.heave_upper_hard_limit_rad, config.heave_soft_limit_margin_rad
     home = np.array(config.home_positions)
     heave_currents = []
@@ -195,3 +195,33 @@ def test_velocities_from_filtered_differences(config, conversions, limits):
     one_count_per_period = 1.0 / (np.array(config.counts_per_unit) * PERIOD_S)
     assert np.all(np.abs(np.array(snapshot.velocities) - RampDevice.rate) <= 1.1 * one_count_per_period)
     assert np.all(one_count_per_period < 0.4 * np.abs(RampDevice.rate))   # so the check has teeth
+
+
+class MotionRecordingLayer(SafetyLayer):
+    """The safety layer, keeping the Motion each period hands it."""
+
+    def __init__(self, limits):
+        super().__init__(limits)
+        self.motions = []
+
+    def output(self, now_s, command, heave_rad, pitch_rad, motion=None):
+        self.motions.append(motion)
+        return super().output(now_s, command, heave_rad, pitch_rad, motion)
+
+
+def test_the_braking_rule_reads_the_plain_difference_quotient(config, conversions, limits):
+    """The mean rates the safety layer gets are the difference quotient of the last two samples over their own
+    interval: the ramp's rates within one count per interval from the first pair of samples on (no filter to
+    settle), and the positions those of the sample."""
+    device = RampDevice(config.device_config("emulated"))
+    device.open()
+    device.start_s = time.monotonic()
+    safety = MotionRecordingLayer(limits)
+    loop = IoLoop(device, conversions, safety, PERIOD_S, OVERRUN_LIMIT)
+    for _ in range(3):
+        snapshot = step(loop)
+    first, last = safety.motions[0], safety.motions[-1]
+    assert first.interval_s == 0.0 and first.mean_rates == (0.0, 0.0, 0.0, 0.0)   # one sample: no rate yet
+    assert last.positions == snapshot.positions and last.interval_s > 0.0
+    one_count = 1.0 / (np.array(config.counts_per_unit) * last.interval_s)
+    assert np.all(np.abs(np.array(last.mean_rates) - RampDevice.rate) <= 1.01 * one_count)

@@ -1,4 +1,5 @@
 """Each safety rule on its own, then hypothesis-fuzzed commands against the current limits."""
+import dataclasses
 import math
 
 import pytest
@@ -6,7 +7,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from conftest import PERIOD_S, READ_FAILURE_LIMIT, STALE_READ_LIMIT, WATCHDOG_PERIODS
-from swim_hw_bridge.safety import Command, FaultCode, SafetyLayer, WatchdogState, soft_limit_scale
+from swim_hw_bridge.safety import (Command, FaultCode, Motion, SafetyLayer, WatchdogState, braking_speed_limit,
+                                   soft_limit_scale)
 from swim_ros.codecs import MessageError, torque_from_command
 
 T0 = 100.0
@@ -110,6 +112,44 @@ def test_emergency_stop_latches_until_reset_and_resumes_only_on_a_fresh_command(
     assert currents(safety, command(at=T0 + 0.002), now=T0 + 0.005)[:2] == (0.0, 0.0)   # older than the reset
     assert safety.watchdog is WatchdogState.WAITING
     assert currents(safety, command(at=T0 + 0.006), now=T0 + 0.007)[0] != 0.0
+
+
+def braking_layer(limits, velocity_terms=None):
+    """A layer with a braking bound: 10 rad/s^2 of deceleration, 20 of drive, for both joints."""
+    from swim_hw_bridge.safety import JointDynamicsBounds
+    dynamics = JointDynamicsBounds((10.0, 10.0), (20.0, 20.0), velocity_terms)
+    return SafetyLayer(dataclasses.replace(limits, dynamics=dynamics, latency_s=PERIOD_S))
+
+
+def fast_toward_upper(theta_rate, upper, distance=0.1):
+    """The pitch link distance below its upper limit, moving toward it at theta_rate (mean rate over a period)."""
+    return Motion((0.0, 0.43, 0.0, upper - distance), (0.0, 0.0, 0.0, theta_rate), PERIOD_S)
+
+
+def test_braking_follows_the_bound_and_holds_while_the_watchdog_zeroes_but_not_with_a_fault(limits, config):
+    upper, pitch_limit = config.pitch_upper_hard_limit_rad, config.pitch_torque_limit_n_m
+    bound = braking_speed_limit(0.1, 10.0, PERIOD_S, 20.0)
+    slow, fast = fast_toward_upper(0.9 * bound, upper), fast_toward_upper(1.1 * bound, upper)
+    safety = braking_layer(limits)
+    assert safety.output(T0, command(0.0, 0.05), 0.0, upper - 0.1, slow)[3] == pytest.approx(0.05)
+    assert safety.output(T0, command(0.0, 0.05), 0.0, upper - 0.1, fast)[3] == pytest.approx(-pitch_limit)
+    expired = T0 + WATCHDOG_PERIODS * PERIOD_S + 0.001
+    safety = braking_layer(limits)
+    assert safety.output(expired, command(0.0, 0.05), 0.0, upper - 0.1, fast)[3] == pytest.approx(-pitch_limit)
+    assert safety.watchdog is WatchdogState.EXPIRED                   # zero asked, the link braked all the same
+    assert braking_layer(limits).output(T0, None, 0.0, upper - 0.1, fast)[3] == pytest.approx(-pitch_limit)
+    safety = braking_layer(limits)
+    safety.emergency_stop()
+    assert safety.output(T0, command(0.0, 0.05), 0.0, upper - 0.1, fast) == (0.0, 0.0, 0.0, 0.0)
+
+
+def test_velocity_terms_toward_a_limit_tighten_the_bound_and_away_do_not(limits, config):
+    upper = config.pitch_upper_hard_limit_rad
+    rate = 0.9 * braking_speed_limit(0.1, 10.0, PERIOD_S, 20.0)   # within the bound without velocity terms
+    for push, braked in ((5.0, True), (-5.0, False)):
+        safety = braking_layer(limits, lambda positions, rates, push=push: (0.0, push))
+        assert (safety.output(T0, command(0.0, 0.05), 0.0, upper - 0.1, fast_toward_upper(rate, upper))[3] < 0) \
+            is braked
 
 
 def test_stale_reads_latch_after_the_limit(safety):
