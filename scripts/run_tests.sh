@@ -24,7 +24,9 @@ pytest_status=$?
 
 python - "$colcon_summary" log/workspace-tests.xml <<'PY'
 import re, sys, xml.etree.ElementTree as ET
-m = re.search(r"(\d+) tests, (\d+) errors, (\d+) failures, (\d+) skipped", sys.argv[1])
+m = re.search(r"(\d+) tests?, (\d+) errors?, (\d+) failures?, (\d+) skipped", sys.argv[1])
+if m is None:
+    print(f"run_tests.sh: colcon's summary not understood: {sys.argv[1]!r}", file=sys.stderr)
 total, errors, failures, skipped = (int(g) for g in m.groups()) if m else (0, 0, 0, 0)
 suite = ET.parse(sys.argv[2]).getroot()
 suite = suite if suite.tag == "testsuite" else suite[0]

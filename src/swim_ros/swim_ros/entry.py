@@ -1,9 +1,9 @@
 """``run_node``: the one ``main()`` of every swim node.
 
 Follows ros2/demos: init (with swim's Fast DDS profile, swim_ros.transport), make the node, spin; Ctrl-C
-(SIGINT) and an external shutdown are a normal stop; the context is shut down however the process ends. A node
-whose construction raises one of ``fatal_errors`` (a bad parameter, a library that does not load) logs the reason
-as fatal and exits with status 2, without a traceback.
+(SIGINT, SIGTERM) and an external shutdown are a normal stop, wherever in the executor's loop they land; the
+context is shut down however the process ends. A node whose construction raises one of ``fatal_errors`` (a bad
+parameter, a library that does not load) logs the reason as fatal and exits with status 2, without a traceback.
 """
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ from typing import Callable, Optional, TypeVar
 
 import rclpy
 from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 
 from swim_ros.transport import use_large_message_transport
@@ -53,7 +54,20 @@ def run_node(make_node: Callable[[], NodeT], args: Optional[list[str]] = None, *
         spinner.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except _rclpy.RCLError:
+        _raise_unless_shut_down()
     finally:
         if node is not None and stop is not None:
             stop(node)
-        rclpy.try_shutdown()
+        try:
+            rclpy.try_shutdown()
+        except _rclpy.RCLError:
+            _raise_unless_shut_down()
+
+
+def _raise_unless_shut_down() -> None:
+    """Re-raise the RCLError being handled unless the context is shut down. rclpy's SIGINT/SIGTERM handler shuts
+    the context down from its own thread: landing between the executor's check and its new wait set, or between
+    try_shutdown's check and its shutdown, it makes those raise where a normal stop was meant."""
+    if rclpy.ok():
+        raise

@@ -9,8 +9,15 @@ import textwrap
 
 NODE_SCRIPT = textwrap.dedent("""
     import sys
+    from rclpy.executors import SingleThreadedExecutor
     from rclpy.node import Node
     from swim_ros.entry import run_node
+
+    class ShutDownBeforeWaiting(SingleThreadedExecutor):
+        # the context shut down between the executor's checks and its wait set, as a SIGINT can land
+        def spin_once(self, timeout_sec=None):
+            self._context.try_shutdown()
+            super().spin_once(timeout_sec)
 
     class Demo(Node):
         def __init__(self):
@@ -19,7 +26,9 @@ NODE_SCRIPT = textwrap.dedent("""
                 raise ValueError("lane_radius_m must be positive, got -1.0")
             self.create_timer(0.05, lambda: print("spinning", flush=True))
 
-    run_node(Demo, name="entry_demo", stop=lambda node: print("stopped", node.get_name(), flush=True))
+    executor = ShutDownBeforeWaiting if sys.argv[1] == "race" else SingleThreadedExecutor
+    run_node(Demo, name="entry_demo", executor=executor,
+             stop=lambda node: print("stopped", node.get_name(), flush=True))
 """)
 #: how long a child process may take to start rclpy and spin (seconds): generous for a loaded 2-core host
 START_TIMEOUT_S = 30.0
@@ -45,6 +54,13 @@ def test_sigint_stops_cleanly_and_runs_stop(ros_domain):
         process.kill()
     assert ready and process.stdout.readline().strip() == "spinning"   # the first timer tick: the node spins
     process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=START_TIMEOUT_S)
+    assert process.returncode == 0, err
+    assert "stopped entry_demo" in out and "Traceback" not in err
+
+
+def test_a_shutdown_landing_before_the_wait_set_is_a_clean_stop(ros_domain):
+    process = _start("race")
     out, err = process.communicate(timeout=START_TIMEOUT_S)
     assert process.returncode == 0, err
     assert "stopped entry_demo" in out and "Traceback" not in err
