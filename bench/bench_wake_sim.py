@@ -1,7 +1,7 @@
 """Benchmark: the simulator with the vortex wake on (issue 7), at the 8 ms control period, over the paper's 30 s
 constrained maneuver in closed loop (target >= 1x real time, so the wake can run in a live closed loop).
 
-The tracker (swim_controller.closed_loop, in one process) drives swim_sim's Plant with the default disturbances
+The tracker (swim_controller.testing.closed_loop, in one process) drives swim_sim's Plant with the default disturbances
 (seed 1, as the demo) and the wake on; measured: simulated seconds per wall second of the simulator's part (the
 plant's period with the wake's step, plus the statistics sim_node publishes each period) and of the whole loop,
 and the vortex count reached. The same maneuver with the wake off, and with the sliding-mode term off, gives the
@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 from swim_bringup.demo import PAPER_CONSTRAINED
-from swim_controller.closed_loop import simulate
+from swim_controller.testing.closed_loop import simulate
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.tracker import CascadeTracker, model_io_linearization
 from swim_model import VehicleModel, load_rig

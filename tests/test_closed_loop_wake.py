@@ -24,7 +24,7 @@ while the term rejects bounded torques on the motors (sliding_mode.py).
 import numpy as np
 import pytest
 
-from swim_controller.closed_loop import simulate
+from swim_controller.testing.closed_loop import simulate
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.tracker import CascadeTracker, model_io_linearization
 

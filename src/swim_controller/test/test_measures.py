@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from swim_controller.closed_loop import Run
+from swim_controller.testing.closed_loop import Run
 from swim_controller.measures import two_norm
 
 

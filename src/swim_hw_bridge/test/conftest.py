@@ -28,3 +28,7 @@ def limits(config):
 @pytest.fixture()
 def safety(limits):
     return SafetyLayer(limits)
+
+
+# the shared DDS fixtures of every package's tests (a ROS domain of the process's own, a context, a node process)
+from swim_ros.testing.fixtures import rclpy_context, ros_domain  # noqa: E402, F401

@@ -1,14 +1,15 @@
 """The cascade tracker in closed loop on the ideal model (no ROS): convergence, sliding mode, limits.
 
 Plans are concatenated from the shipped library with their stored, time-scaled gains; the plant is
-swim_model's vehicle integrated with RK4 substeps, the torque held over each 8 ms period (swim_controller.closed_loop).
+swim_model's vehicle integrated with RK4 substeps, the torque held over each 8 ms period
+(swim_controller.testing.closed_loop).
 """
 import math
 
 import numpy as np
 import pytest
 
-from swim_controller.closed_loop import simulate
+from swim_controller.testing.closed_loop import simulate
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.tracker import CascadeTracker, model_io_linearization
 

@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import running_node
+from swim_ros.testing.fixtures import running_node
 from swim_ros.testing.fuzz import fuzz_settings, joint_states, to_joint_state, torques
 from test_bridge_node import BAD_COMMAND_SPACING_S, HOLD_S, BridgeClient, efforts
 

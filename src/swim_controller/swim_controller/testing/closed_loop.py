@@ -12,6 +12,7 @@ from typing import Callable, Optional, Protocol
 import numpy as np
 import numpy.typing as npt
 
+from swim_controller.measures import two_norm
 from swim_controller.tracker import CascadeTracker
 from swim_controller.trajectory import Trajectory
 from swim_model import VehicleModel
@@ -51,7 +52,6 @@ class Run:
     def two_norm(self, column: int, until_s: Optional[float] = None) -> float:
         """sqrt(int e^2 dt) of one coordinate's error (the paper's measure, Sec. 7; measures.two_norm), over the
         run or over its samples before until_s."""
-        from swim_controller.measures import two_norm   # here: this method is the module's only user
         kept = slice(None) if until_s is None else self.time_s < until_s
         return two_norm(self.time_s[kept], self.error[kept, column])
 

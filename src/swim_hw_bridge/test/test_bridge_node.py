@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from conftest import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, running_node
+from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, running_node
 from swim_ros.calls import ParameterCalls, RetryPolicy, spin_until
 
 #: the bridge answers its services within a period or two; a try waits 10 s for a loaded host, a lost answer is
