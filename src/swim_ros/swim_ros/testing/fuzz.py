@@ -106,6 +106,8 @@ def joint_states(draw: Any, joints: tuple[str, ...], value: st.SearchStrategy[fl
             defect = None
     elif defect == "empty":
         names, values, velocities = [], [], []
+    if defect is None and not all(math.isfinite(v) for v in values + velocities):
+        defect = "non-finite value"   # a value strategy that can draw NaN or inf made this one malformed
     positions, efforts = (values, []) if field == "position" else ([], values)
     return JointStateFields(names, positions, velocities, efforts, defect)
 
