@@ -6,13 +6,12 @@ a plan only with finite values; afterwards the node is alive and plans the paper
 import math
 import time
 
-import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
 from swim_ros.testing.fixtures import running_node
-from swim_ros.testing.fuzz import any_float, fuzz_settings, is_non_finite_number, parameter_sets, unicode_name
+from swim_ros.testing.fuzz import any_float, fuzz_settings, parameter_sets, set_and_check_parameter, unicode_name
 from test_planner_node import PAPER, POLICY
 
 #: the longest answer: a plan at the node's own bounds (7200 s of plan, about 7 s to build on a quiet host, and
@@ -122,21 +121,7 @@ def test_parameter_sets_are_answered_refused_with_a_reason_or_applied(planner, c
     @fuzz_settings(40)
     @given(change=parameter_sets([spec.name for spec in PARAMETERS]))
     def set_one(change):
-        name, value = change
-        try:
-            parameter = Parameter(name, value=value)
-        except TypeError:   # a value rclpy itself cannot carry (a list of mixed types) never reaches the node
-            return
-        start = time.monotonic()
-        reply = parameters.set([parameter])[0]
-        assert time.monotonic() - start < REFUSAL_DEADLINE_S
-        counts["accepted" if reply.successful else "refused"] += 1
-        if name in read_only or name.startswith("fuzz.") or is_non_finite_number(value):
-            assert not reply.successful, (name, value)
-        if reply.successful:
-            assert list(np.atleast_1d(parameters.get([name])[0])) == list(np.atleast_1d(value))
-        else:
-            assert reply.reason
+        set_and_check_parameter(parameters, *change, read_only, REFUSAL_DEADLINE_S, counts)
         assert planner.poll() is None
 
     try:

@@ -14,7 +14,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from swim_ros.testing.fixtures import running_node
-from swim_ros.testing.fuzz import (EDGE_FLOATS, NON_FINITE, any_float, fuzz_settings, in_order, is_non_finite_number,
+from swim_ros.testing.fuzz import (EDGE_FLOATS, NON_FINITE, any_float, fuzz_settings, in_order, set_and_check_parameter,
                              joint_states, parameter_sets, to_joint_state, torques)
 from test_sim_node import POLICY, RESEND_AFTER_S, Driver
 
@@ -186,21 +186,7 @@ def test_parameter_sets_are_answered_refused_with_a_reason_or_applied(sim, drive
     @fuzz_settings(60)
     @given(change=parameter_sets([spec.name for spec in PARAMETERS]))
     def set_one(change):
-        name, value = change
-        start = time.monotonic()
-        try:
-            parameter = Parameter(name, value=value)
-        except TypeError:   # a value rclpy itself cannot carry (a list of mixed types) never reaches the node
-            return
-        reply = parameters.set([parameter])[0]
-        assert time.monotonic() - start < DEADLINE_S
-        counts["accepted" if reply.successful else "refused"] += 1
-        if name in read_only or name.startswith("fuzz.") or is_non_finite_number(value):
-            assert not reply.successful, (name, value)
-        if reply.successful:
-            assert list(np.atleast_1d(parameters.get([name])[0])) == list(np.atleast_1d(value))
-        else:
-            assert reply.reason
+        set_and_check_parameter(parameters, *change, read_only, DEADLINE_S, counts)
         assert sim.poll() is None
 
     try:

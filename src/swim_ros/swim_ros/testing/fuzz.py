@@ -11,8 +11,10 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import time
 from typing import Any, Optional
 
+import numpy as np
 from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 
@@ -148,3 +150,26 @@ def is_non_finite_number(value: Any) -> bool:
     """A float (or list of floats) with a NaN or infinite entry: no physical parameter may take it."""
     values = value if isinstance(value, list) else [value]
     return any(isinstance(v, float) and not math.isfinite(v) for v in values)
+
+
+def set_and_check_parameter(parameters: Any, name: str, value: Any, read_only: Any, deadline_s: float,
+                            counts: dict[str, int]) -> None:
+    """Set one fuzzed value on a node (swim_ros.calls.ParameterCalls) and check the reply: answered within
+    deadline_s; a read-only or unknown ("fuzz." prefixed) name or a non-finite number refused; an accepted value
+    read back; a refusal with a reason. counts["accepted"] or counts["refused"] goes up by one. A value rclpy
+    itself cannot carry (a list of mixed types) never reaches the node and is skipped."""
+    from rclpy.parameter import Parameter
+    try:
+        parameter = Parameter(name, value=value)
+    except TypeError:
+        return
+    start = time.monotonic()
+    reply = parameters.set([parameter])[0]
+    assert time.monotonic() - start < deadline_s
+    counts["accepted" if reply.successful else "refused"] += 1
+    if name in read_only or name.startswith("fuzz.") or is_non_finite_number(value):
+        assert not reply.successful, (name, value)
+    if reply.successful:
+        assert list(np.atleast_1d(parameters.get([name])[0])) == list(np.atleast_1d(value))
+    else:
+        assert reply.reason
