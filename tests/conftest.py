@@ -6,8 +6,12 @@ package sees them, packaging, and the checks of the whole source tree (style, ty
 A test of one node over DDS lives in that node's package, src/<package>/test/, so `colcon test
 --packages-select <package>` starts it. The DDS fixtures and timeouts every test shares are swim_ros.testing's.
 """
+import functools
 import subprocess
 from pathlib import Path
+from typing import Optional
+
+import pytest
 
 from swim_ros.testing.fixtures import (MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, rclpy_context,  # noqa: F401
                                        ros_domain, running_node)
@@ -19,14 +23,32 @@ PACKAGES = ("swim_model", "swim_ros", "swim_planner", "swim_controller", "swim_s
 #: a whole swim-demo process (bring-up, maneuver, recording, analysis, stop): about 10-20 s (bench_demo_walltime:
 #: 17 s at load ~5), more on a busier host; 300 s only stops a hung run (the demo's --timeout bounds the maneuver)
 DEMO_TIMEOUT_S = 300.0
+#: Docker's default /dev/shm, MiB: what a run in a container has for Fast DDS's shared memory
+CONTAINER_SHM_MIB = 64
 
 
-def run_demo(run_dir: Path, *arguments: str, timeout_s: float = DEMO_TIMEOUT_S, expected_returncode: int = 0) -> str:
+@functools.lru_cache(maxsize=None)
+def own_shm_possible() -> bool:
+    """Whether a process here may have a /dev/shm of its own (a tmpfs in a mount namespace of its own: root)."""
+    command = ["unshare", "-m", "sh", "-c", "mount -t tmpfs -o size=1m tmpfs /dev/shm"]
+    try:
+        return subprocess.run(command, capture_output=True, timeout=30).returncode == 0
+    except OSError:
+        return False
+
+
+def run_demo(run_dir: Path, *arguments: str, timeout_s: float = DEMO_TIMEOUT_S, expected_returncode: int = 0,
+             shm_mib: Optional[int] = None) -> str:
     """`ros2 run swim_bringup swim-demo --run-dir run_dir arguments` in the workspace's environment; its stdout
-    (the summary table) and stderr. Fails the test with the tail of its output if it does not exit with
-    expected_returncode."""
+    (the summary table) and stderr. With shm_mib, the run's processes share a new /dev/shm of that size (a tmpfs
+    in a mount namespace of their own; the test is skipped where that is not allowed). Fails the test with the
+    tail of its output if it does not exit with expected_returncode."""
     command = f"source scripts/env.sh && ros2 run swim_bringup swim-demo --run-dir {run_dir} {' '.join(arguments)}"
-    result = subprocess.run(["bash", "-c", command], cwd=WORKSPACE, capture_output=True, text=True,
-                            timeout=timeout_s)
+    argv = ["bash", "-c", command]
+    if shm_mib is not None:
+        if not own_shm_possible():
+            pytest.skip("a /dev/shm of the run's own needs a mount namespace (root)")
+        argv = ["unshare", "-m", "bash", "-c", f"mount -t tmpfs -o size={shm_mib}m tmpfs /dev/shm && {command}"]
+    result = subprocess.run(argv, cwd=WORKSPACE, capture_output=True, text=True, timeout=timeout_s)
     assert result.returncode == expected_returncode, result.stdout[-2000:] + result.stderr[-2000:]
     return result.stdout + result.stderr

@@ -4,7 +4,7 @@ bounds and against the bag read back with rosbags."""
 import numpy as np
 import pytest
 
-from conftest import run_demo
+from conftest import CONTAINER_SHM_MIB, run_demo
 
 SHORT = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05"]   # 4 s + 5 s (the library's)
 #: the demo's --timeout (wall time of the maneuver's execution): 9 s simulated at 6-8x real time (README) take
@@ -99,12 +99,16 @@ def test_a_run_that_misses_its_goal_tolerance_fails(ros_domain, tmp_path):
 def test_a_second_run_repeats_the_first_bit_for_bit(demo_run, tmp_path):
     """sim.yaml holds the vehicle until the tracker's first torque (hold_until_torque): however long each bring-up
     idled, the plan starts at the simulator's first step with the same disturbance sequence, so a second run of the
-    same maneuver measures exactly what the first did (the experiments compare sliding mode on and off this way)."""
+    same maneuver measures exactly what the first did (the experiments compare sliding mode on and off this way).
+    The second runs as in a container, whose /dev/shm is small (CONTAINER_SHM_MIB): the same run, to the bit."""
     from swim_bringup.bag import read_messages
     from swim_bringup.reports import RunReport
     first_dir, _ = demo_run
     second_dir = tmp_path / "run"
-    run_demo(second_dir, "--primitives", *SHORT, "--repeats", "1", "1", "--timeout", str(MANEUVER_TIMEOUT_S))
+    output = run_demo(second_dir, "--primitives", *SHORT, "--repeats", "1", "1", "--timeout", str(MANEUVER_TIMEOUT_S),
+                      shm_mib=CONTAINER_SHM_MIB)
+    # the planner's shared-memory segment fitted beside the others (swim_ros.transport)
+    assert "a plan crosses in one piece" in (second_dir / "logs" / "planner_node.log").read_text(), output[-2000:]
     runs = [RunReport.load(d / "report.json").measures for d in (first_dir, second_dir)]
     assert runs[0] == runs[1]   # every measure, exactly
     tracked = [[m for _, _, m in read_messages(d / "bag", ("tracking_state",))] for d in (first_dir, second_dir)]

@@ -67,11 +67,16 @@ def publisher(rclpy_context, tmp_path):
 
 
 def wait_for_recorder(node, publisher, bag_log):
-    """The recorder's subscription matched (joint_states) and its latched topics in (the line of counts)."""
+    """The recorder's joint_states subscription matched by the publisher, and its latched topics in.
+    rig_state_publisher subscribes to joint_states too, so the publisher's count alone does not tell: the graph
+    must show the recorder's subscription and the publisher must have matched every subscription there."""
+    def recorder_matched():
+        readers = node.get_subscriptions_info_by_topic("/joint_states")
+        return any(r.node_name == "swim_record" for r in readers) and publisher.get_subscription_count() >= len(readers)
     deadline = time.monotonic() + STARTUP_TIMEOUT_S
-    while publisher.get_subscription_count() == 0 and time.monotonic() < deadline:
+    while not recorder_matched() and time.monotonic() < deadline:
         time.sleep(0.1)
-    assert publisher.get_subscription_count() > 0, bag_log.read_text()
+    assert recorder_matched(), bag_log.read_text()
     wait_for_line(bag_log, "/robot_description 1", STARTUP_TIMEOUT_S)
     wait_for_line(bag_log, "/tf_static 1", MESSAGE_TIMEOUT_S)
 

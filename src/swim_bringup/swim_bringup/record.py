@@ -130,8 +130,6 @@ def main(argv: Optional[list[str]] = None) -> int:
     if bag_path.exists():
         print(f"swim-record: {bag_path} exists; choose another -o", file=sys.stderr)
         return 2
-    from swim_ros.transport import use_large_message_transport
-    use_large_message_transport()   # the nodes' transport: a plan arrives in one piece
     recording = Recording(bag_path, list(args.topics), args.all, args.include_hidden, sys.stderr)
     stop = StopRequest()
     live = sys.stderr.isatty()

@@ -221,7 +221,7 @@ class PlannerNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     run_node(PlannerNode, args, name="planner_node", fatal_errors=(PlannerError, SwimModelError),
-             executor=functools.partial(MultiThreadedExecutor, num_threads=SERVICE_THREADS))
+             executor=functools.partial(MultiThreadedExecutor, num_threads=SERVICE_THREADS), large_messages=True)
 
 
 if __name__ == "__main__":

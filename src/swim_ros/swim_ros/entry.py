@@ -1,9 +1,10 @@
 """``run_node``: the one ``main()`` of every swim node.
 
-Follows ros2/demos: init (with swim's Fast DDS profile, swim_ros.transport), make the node, spin; Ctrl-C
-(SIGINT, SIGTERM) and an external shutdown are a normal stop, wherever in the executor's loop they land; the
-context is shut down however the process ends. A node whose construction raises one of ``fatal_errors`` (a bad
-parameter, a library that does not load) logs the reason as fatal and exits with status 2, without a traceback.
+Follows ros2/demos: init (with swim's Fast DDS profile where the node sends plans, swim_ros.transport), make the
+node, spin; Ctrl-C (SIGINT, SIGTERM) and an external shutdown are a normal stop, wherever in the executor's loop
+they land; the context is shut down however the process ends. A node whose construction raises one of
+``fatal_errors`` (a bad parameter, a library that does not load) logs the reason as fatal and exits with status 2,
+without a traceback.
 """
 from __future__ import annotations
 
@@ -26,7 +27,7 @@ def run_node(make_node: Callable[[], NodeT], args: Optional[list[str]] = None, *
              fatal_errors: tuple[type[BaseException], ...] = (ValueError,),
              executor: Callable[[], Executor] = SingleThreadedExecutor,
              start: Optional[Callable[[NodeT], object]] = None,
-             stop: Optional[Callable[[NodeT], object]] = None) -> None:
+             stop: Optional[Callable[[NodeT], object]] = None, large_messages: bool = False) -> None:
     """Run one node until SIGINT or shutdown.
 
     Args:
@@ -37,9 +38,13 @@ def run_node(make_node: Callable[[], NodeT], args: Optional[list[str]] = None, *
         executor: makes the executor to spin in (single-threaded by default).
         start: called once with the node before spinning (for example a lifecycle node's autostart).
         stop: called with the node however spinning ends, before shutdown (for example to release hardware).
+        large_messages: the node sends plans: run it with swim's Fast DDS profile (swim_ros.transport).
     """
-    use_large_message_transport()
+    transport = use_large_message_transport() if large_messages else None
     rclpy.init(args=args)   # this rclpy's init() is not a context manager, hence try/finally
+    if transport is not None:
+        logger = rclpy.logging.get_logger(name)
+        (logger.warning if transport.warning else logger.info)(transport.reason)
     node: Optional[NodeT] = None
     try:
         try:

@@ -1,7 +1,9 @@
-"""swim's Fast DDS profile: set for Fast DDS unless the user chose a profile or another RMW; a valid profile that
-keeps UDP (other hosts) and enlarges shared memory; a node run with it sends a plan-sized message intact."""
+"""swim's Fast DDS profile: set for Fast DDS unless the user chose a profile, another RMW or a /dev/shm too small
+for its segment (checked in a tmpfs of a known size, in a mount namespace of its own); a valid profile that keeps
+UDP (other hosts) and enlarges shared memory; a node run with it sends a plan-sized message intact."""
 import os
 import select
+import shutil
 import signal
 import subprocess
 import sys
@@ -9,8 +11,10 @@ import textwrap
 import xml.etree.ElementTree as ElementTree
 
 import numpy as np
+import pytest
 
-from swim_ros.transport import PROFILE_VARIABLES, large_message_profile, use_large_message_transport
+from swim_ros.transport import (FREE_SHM_FACTOR, PROFILE_VARIABLES, choose_transport, large_message_profile,
+                                segment_bytes, use_large_message_transport)
 
 #: the size of a 20-primitive plan with per-sample gains (bench/bench_planner_latency.py's request), bytes
 PLAN_BYTES = 4_600_000
@@ -24,22 +28,56 @@ def _clear(monkeypatch):
         monkeypatch.delenv(variable, raising=False)
 
 
-def test_fastdds_gets_the_profile(monkeypatch):
+def test_fastdds_gets_the_profile_where_shared_memory_has_room(monkeypatch, tmp_path):
     _clear(monkeypatch)
     monkeypatch.setenv("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
-    assert use_large_message_transport() == large_message_profile()
+    choice = use_large_message_transport(shm_dir=tmp_path / "none")   # no /dev/shm: not Linux, nothing to check
+    assert choice.profile == large_message_profile() and not choice.warning
     assert os.environ[PROFILE_VARIABLES[0]] == str(large_message_profile())
+
+
+def test_the_segment_must_fit_twice_in_the_free_shared_memory():
+    segment = segment_bytes(large_message_profile())
+    assert segment == 16 << 20    # the profile's segment_size
+    assert choose_transport(segment, None)
+    assert choose_transport(segment, int(FREE_SHM_FACTOR * segment))
+    assert not choose_transport(segment, int(FREE_SHM_FACTOR * segment) - 1)
+
+
+CHOICE_SCRIPT = ("import os; from swim_ros.transport import use_large_message_transport as use; c = use(); "
+                 "print(c.profile, c.warning, os.environ.get('FASTRTPS_DEFAULT_PROFILES_FILE'), c.reason)")
+
+
+def _choice_in_shm_of(size_mib):
+    """What a process decides whose /dev/shm is a new tmpfs of size_mib (its own mount namespace): its line."""
+    if shutil.which("unshare") is None:
+        pytest.skip("no unshare here to give a process a /dev/shm of its own")
+    command = f"mount -t tmpfs -o size={size_mib}m tmpfs /dev/shm && exec {sys.executable} -c \"{CHOICE_SCRIPT}\""
+    result = subprocess.run(["unshare", "-m", "sh", "-c", command], capture_output=True, text=True, timeout=60,
+                            env={k: v for k, v in os.environ.items() if k not in PROFILE_VARIABLES})
+    if result.returncode != 0 and "mount" in result.stderr:
+        pytest.skip(f"no tmpfs of our own here (not root?): {result.stderr.strip()}")
+    assert result.returncode == 0, result.stderr
+    return result.stdout.strip()
+
+
+def test_a_small_dev_shm_keeps_fast_dds_defaults():
+    """A container's /dev/shm (Docker's default is 64 MiB) with less than twice the segment free: Fast DDS's
+    defaults and a warning; with room (64 MiB, empty): the profile."""
+    assert _choice_in_shm_of(24).startswith("None True None /dev/shm has 24 MiB free")
+    profile = str(large_message_profile())
+    assert _choice_in_shm_of(64).startswith(f"{profile} False {profile} ")
 
 
 def test_a_users_profile_or_rmw_is_left_alone(monkeypatch, tmp_path):
     for variable in PROFILE_VARIABLES:
         _clear(monkeypatch)
         monkeypatch.setenv(variable, str(tmp_path / "mine.xml"))
-        assert use_large_message_transport() is None
+        assert use_large_message_transport().profile is None
         assert os.environ[variable] == str(tmp_path / "mine.xml")
     _clear(monkeypatch)
     monkeypatch.setenv("RMW_IMPLEMENTATION", "rmw_cyclonedds_cpp")
-    assert use_large_message_transport() is None
+    assert use_large_message_transport().profile is None
     assert not any(os.environ.get(variable) for variable in PROFILE_VARIABLES)
 
 
@@ -54,7 +92,7 @@ def test_profile_keeps_udp_and_holds_a_plan_in_shared_memory():
     used = [t.text for t in participant.iterfind("p:rtps/p:userTransports/p:transport_id", NAMESPACE)]
     assert sorted(used) == sorted(transports)
     shm = next(d for d in transports.values() if d.findtext("p:type", namespaces=NAMESPACE) == "SHM")
-    assert int(shm.findtext("p:segment_size", namespaces=NAMESPACE)) >= 4 * PLAN_BYTES
+    assert int(shm.findtext("p:segment_size", namespaces=NAMESPACE)) >= 3 * PLAN_BYTES   # three plans in flight
 
 
 SENDER_SCRIPT = textwrap.dedent("""
@@ -74,7 +112,7 @@ SENDER_SCRIPT = textwrap.dedent("""
             self.create_publisher(JointState, "large", LATCHED_QOS).publish(message)
             print(os.environ["FASTRTPS_DEFAULT_PROFILES_FILE"], flush=True)
 
-    run_node(Sender, name="large_message_sender")
+    run_node(Sender, name="large_message_sender", large_messages=True)
 """)
 
 
