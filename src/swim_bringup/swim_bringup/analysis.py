@@ -6,6 +6,16 @@ From the tracking_state topic (reference and measured q each control period) and
 - the final lateral offset and final alpha error, the duration, peak |torque| per motor, the fraction of
   periods with a saturated motor, and the energy used, int (|tau_h phidot| + |tau_p thetadot|) dt in J (motors
   do not take energy back, so negative power is counted as spent too).
+
+Any rosbag2 bag opens (swim-demo's, swim-record's, one recorded by `ros2 bag record`; MCAP or sqlite3): its topics
+are listed with their types and message counts; from joint_states alone, each joint's range and peak speed and the
+messages' rate; the measures above when the bag has what they need (tracking_state, and for the constrained
+vehicle the plan). A topic is found under the name the demo gives it (joint_states), its full name
+(/joint_states) or one namespace (/test/joint_states). What a bag lacks is named, with why.
+
+Exit status: 0 every bag analysed in full; 1 some bag lacked what the run's measures need (what it holds is
+analysed, what it lacks named); 2 some bag could not be read (no bag at the path, a corrupt file) or the output
+not written, or the arguments were wrong. Nothing a bag holds ends in a traceback.
 """
 from __future__ import annotations
 
@@ -18,7 +28,7 @@ from typing import Any, Mapping, Optional
 
 import numpy as np
 
-from swim_bringup.bag import read_messages
+from swim_bringup.bag import RUN_TOPICS, BagError, BagInfo, bag_info, read_messages, swim_typestore
 from swim_bringup.reports import BridgeMeasures, RunAnalysis, RunMeasures
 from swim_controller.measures import two_norm
 
@@ -36,22 +46,68 @@ class Run:
     sliding_mode_enabled: bool
 
 
+#: swim-analyze's exit status: every bag analysed in full (the run's measures) ...
+EXIT_FULL_REPORT = 0
+#: ... some bag lacked what the run's measures need: what it holds was analysed, what it lacks named
+EXIT_PARTIAL_REPORT = 1
+#: ... some bag could not be read (or the output not written, or the arguments were wrong: argparse's status)
+EXIT_UNREADABLE = 2
+
+
+class MissingTopic(ValueError):
+    """A topic the analysis needs that a bag lacks, or holds in a form it cannot use: which, and why."""
+
+    def __init__(self, bag_path: Path, topic: str, reason: str) -> None:
+        super().__init__(f"{bag_path}: {topic}: {reason}")
+        self.topic, self.reason = topic, reason
+
+
+def find_topic(info: BagInfo, name: str) -> str:
+    """The bag's name for the run topic `name` (a key of bag.RUN_TOPICS): the topic recorded under that name
+    (swim-demo's joint_states), under its full name (rosbag2's and swim-record's /joint_states) or, failing both,
+    under one namespace (/test/joint_states). MissingTopic if there is none, several, one of another type than
+    RUN_TOPICS gives, or one without messages."""
+    bare = name.lstrip("/")
+    candidates = ([topic for topic in info.topics if topic.name.lstrip("/") == bare]
+                  or [topic for topic in info.topics if topic.name.endswith("/" + bare)])
+    if not candidates:
+        raise MissingTopic(info.path, name, "not in the bag")
+    if len(candidates) > 1:
+        raise MissingTopic(info.path, name, f"several topics could be it ({', '.join(t.name for t in candidates)})")
+    topic = candidates[0]
+    if topic.msgtype != RUN_TOPICS[name]:
+        raise MissingTopic(info.path, name, f"{topic.name} is {topic.msgtype}, not {RUN_TOPICS[name]}")
+    if topic.message_count == 0:
+        raise MissingTopic(info.path, name, f"{topic.name} was recorded without messages")
+    return topic.name
+
+
 def load_run(bag_path: Path) -> Run:
-    """The tracked periods of the last plan executed in the bag."""
+    """The tracked periods of the last plan executed in the bag. MissingTopic if the bag has no tracking_state, or,
+    for the constrained vehicle, no plan; BagError if the bag cannot be read."""
+    info = bag_info(bag_path)
+    tracking_topic = find_topic(info, "tracking_state")
+    try:
+        topics: tuple[str, ...] = (tracking_topic, find_topic(info, "plan"))
+        no_plan = ""
+    except MissingTopic as err:
+        topics, no_plan = (tracking_topic,), err.reason
     rows: list[Any] = []   # the tracking_state messages (the typestore's class)
     lane_radius_m = None
-    for topic, _, message in read_messages(bag_path, ("tracking_state", "plan")):
-        if topic == "plan":
+    for topic, _, message in read_messages(bag_path, topics):
+        if topic != tracking_topic:
             lane_radius_m = message.lane_radius_m
             continue
         if rows and message.plan_time_s < rows[-1].plan_time_s:
             rows = []   # a new plan started: keep the last one
         rows.append(message)
     if not rows:
-        raise ValueError(f"{bag_path}: no tracking_state messages (was a plan executed while recording?)")
+        raise MissingTopic(bag_path, "tracking_state", f"no message of {tracking_topic} could be read")
+    if "alpha" not in rows[0].joint_names:
+        raise MissingTopic(bag_path, "tracking_state", f"its joints {list(rows[0].joint_names)} have no alpha")
     if lane_radius_m is None and "R" not in rows[0].joint_names:
-        raise ValueError(f"{bag_path}: no plan message: the constrained vehicle's lane radius, which turns its "
-                         f"alpha errors into metres, is unknown")
+        raise MissingTopic(bag_path, "plan", f"no plan message ({no_plan}): the constrained vehicle's lane radius, "
+                                             f"which turns its alpha errors into metres, is unknown")
     return Run(time_s=np.array([r.plan_time_s for r in rows]),
                q=np.array([r.feedback.positions for r in rows]),
                qdot=np.array([r.feedback.velocities for r in rows]),
@@ -95,9 +151,13 @@ def bridge_measures(bag_path: Path) -> Optional[BridgeMeasures]:
     """From a bridge_node's /diagnostics in the bag (None without any): the faults it latched during the run (a
     latched fault holds the motors at zero until reset: the vehicle did not swim as commanded from then on) and
     its count of overrun periods."""
+    try:
+        topic = find_topic(bag_info(bag_path), "/diagnostics")
+    except MissingTopic:
+        return None
     faults: set[str] = set()
     overruns = None
-    for _, _, array in read_messages(bag_path, ("/diagnostics",)):
+    for _, _, array in read_messages(bag_path, (topic,)):
         for status in array.status:
             if status.name.endswith("bridge_node: I/O loop"):
                 values = {pair.key: pair.value for pair in status.values}
@@ -111,6 +171,167 @@ def bridge_measures(bag_path: Path) -> Optional[BridgeMeasures]:
 def analyze(bag_path: Path) -> RunAnalysis:
     """The measures of the last plan tracked in the bag, and the bridge's if a bridge ran."""
     return RunAnalysis(measures(load_run(bag_path)), bridge_measures(bag_path))
+
+
+@dataclasses.dataclass(frozen=True)
+class JointSeries:
+    """One joint's samples in a bag's joint_states: log time (when the recorder received the message) in s from
+    the topic's first message, position and velocity in the joint's unit (rad for a revolute joint, m for a
+    prismatic one such as R; per s for the velocity), each (n,); velocity is empty when the messages carry none."""
+    time_s: np.ndarray
+    position: np.ndarray
+    velocity: np.ndarray
+
+
+@dataclasses.dataclass(frozen=True)
+class JointMotion:
+    """One joint's range and peak speed in a bag's joint_states, in the joint's unit (rad or m, per s)."""
+    joint_name: str
+    samples: int
+    min_position: float
+    max_position: float
+    peak_speed: Optional[float]      # max |velocity|; None when the messages carry no velocities
+
+
+@dataclasses.dataclass(frozen=True)
+class JointStatesSummary:
+    """What a bag's joint_states alone tell, by log time (when the recorder received each message)."""
+    topic: str
+    messages: int
+    duration_s: float                # first to last message
+    mean_rate_hz: Optional[float]    # (messages - 1) / duration_s; None under two messages or no duration
+    longest_gap_s: Optional[float]   # between consecutive messages; None under two messages
+    joints: tuple[JointMotion, ...]
+
+
+def read_joint_states(bag_path: Path, topic: str) -> tuple[np.ndarray, dict[str, JointSeries]]:
+    """The log times (s, from the first message) of the sensor_msgs/JointState messages on topic, (messages,),
+    and each joint's samples by name, in the order the joints first appear. A message whose position (velocity)
+    list is shorter than its names gives no position (velocity) for the joints past its end."""
+    log_ns: list[int] = []
+    samples: dict[str, tuple[list[int], list[float], list[float]]] = {}
+    for _, stamp_ns, message in read_messages(bag_path, (topic,)):
+        log_ns.append(stamp_ns)
+        for k, name in enumerate(message.name):
+            if k < len(message.position):
+                times, positions, velocities = samples.setdefault(name, ([], [], []))
+                times.append(stamp_ns)
+                positions.append(float(message.position[k]))
+                if k < len(message.velocity):
+                    velocities.append(float(message.velocity[k]))
+    start_ns = min(log_ns, default=0)
+
+    def seconds(stamps: list[int]) -> np.ndarray:
+        return (np.array(stamps, dtype=np.int64) - start_ns) * 1e-9
+    return seconds(log_ns), {name: JointSeries(seconds(times), np.array(positions),
+                                               np.array(velocities) if len(velocities) == len(times) else
+                                               np.zeros(0))
+                             for name, (times, positions, velocities) in samples.items()}
+
+
+def joint_states_summary(topic: str, message_time_s: np.ndarray,
+                         joints: Mapping[str, JointSeries]) -> JointStatesSummary:
+    """The messages' count, span, rate and longest gap, and each joint's range and peak speed."""
+    times = np.sort(message_time_s)
+    duration_s = float(times[-1] - times[0]) if len(times) else 0.0
+    return JointStatesSummary(
+        topic=topic, messages=len(times), duration_s=duration_s,
+        mean_rate_hz=(len(times) - 1) / duration_s if len(times) > 1 and duration_s > 0.0 else None,
+        longest_gap_s=float(np.diff(times).max()) if len(times) > 1 else None,
+        joints=tuple(JointMotion(name, len(series.position), float(series.position.min()),
+                                 float(series.position.max()),
+                                 float(np.abs(series.velocity).max()) if len(series.velocity) else None)
+                     for name, series in joints.items()))
+
+
+@dataclasses.dataclass(frozen=True)
+class BagAnalysis:
+    """What swim-analyze makes of one bag: its topics, the joint motion when it has joint_states, the run's measures
+    when it has what they need, and what it lacks, each with why."""
+    info: BagInfo
+    unknown_types: tuple[str, ...]           # the bag's message types this environment cannot decode
+    joint_states: Optional[JointStatesSummary]
+    run: Optional[RunAnalysis]
+    missing: tuple[str, ...]                 # "what: why (what is not reported for it)"
+
+    def to_json(self) -> dict[str, Any]:
+        """bag_summary.json: the bag, its topics, the joint motion, the run's measures (report.json's keys), what
+        is missing."""
+        return {"bag": str(self.info.path), "storage": self.info.storage, "complete": self.info.complete,
+                "topics": [{**dataclasses.asdict(topic), "type_known": topic.msgtype not in self.unknown_types}
+                           for topic in self.info.topics],
+                "joint_states": dataclasses.asdict(self.joint_states) if self.joint_states else None,
+                "run_measures": self.run.to_json() if self.run else None,
+                "missing": list(self.missing)}
+
+
+def analyze_bag(bag_path: Path) -> BagAnalysis:
+    """All that swim-analyze can tell of the bag at bag_path (a bag folder, or one .mcap or .db3 file). BagError if
+    there is no readable bag there; anything else the bag lacks or holds unreadably is named in `missing`."""
+    info = bag_info(bag_path)
+    known_types = swim_typestore().fielddefs
+    missing = []
+    joints = None
+    try:
+        topic = find_topic(info, "joint_states")
+        joints = joint_states_summary(topic, *read_joint_states(bag_path, topic))
+    except MissingTopic as err:
+        missing.append(f"joint_states: {err.reason} (no joint motion)")
+    except BagError as err:
+        missing.append(f"joint_states: {err} (no joint motion)")
+    run = None
+    try:
+        run = analyze(bag_path)
+    except MissingTopic as err:
+        hint = ": the tracker publishes it while it executes a plan" if err.topic == "tracking_state" else ""
+        missing.append(f"{err.topic}: {err.reason} (no run measures{hint})")
+    except (ValueError, BagError) as err:   # ValueError: tracking_state messages that do not make a run
+        missing.append(f"run measures: {err}")
+    return BagAnalysis(info, tuple(sorted({t.msgtype for t in info.topics if t.msgtype not in known_types})),
+                       joints, run, tuple(missing))
+
+
+def bag_section(label: str, analysis: BagAnalysis) -> str:
+    """The bag's topics, joint motion and what it lacks, as swim-analyze prints them."""
+    info = analysis.info
+    state = "" if info.complete else ", cut before its close (no metadata.yaml): read up to its last complete chunk"
+    lines = [f"{label}: {info.storage} bag, {len(info.topics)} topics, {info.message_count} messages{state}"]
+    width = max([len(t.name) for t in info.topics] + [5])
+    type_width = max([len(t.msgtype) for t in info.topics] + [4])
+    lines.append(f"  {'topic':<{width}}  {'type':<{type_width}}  {'messages':>8}")
+    for topic in info.topics:
+        note = "  type unknown here: not decoded" if topic.msgtype in analysis.unknown_types else ""
+        lines.append(f"  {topic.name:<{width}}  {topic.msgtype:<{type_width}}  {topic.message_count:>8}{note}")
+    motion = analysis.joint_states
+    if motion is not None:
+        rate = f"{motion.mean_rate_hz:.4g} Hz mean" if motion.mean_rate_hz is not None else "no rate"
+        gap = f", longest gap {motion.longest_gap_s:.4g} s" if motion.longest_gap_s is not None else ""
+        lines.append(f"joint motion ({motion.topic}: {motion.messages} messages over {motion.duration_s:.4g} s, "
+                     f"{rate}{gap}); rad, or m for a prismatic joint such as R:")
+        name_width = max([len(j.joint_name) for j in motion.joints] + [5])
+        lines.append(f"  {'joint':<{name_width}}  {'samples':>8}  {'min':>11}  {'max':>11}  {'peak |velocity|':>15}")
+        for joint in motion.joints:
+            speed = _format(joint.peak_speed) if joint.peak_speed is not None else "-"
+            lines.append(f"  {joint.joint_name:<{name_width}}  {joint.samples:>8}  {_format(joint.min_position):>11}"
+                         f"  {_format(joint.max_position):>11}  {speed:>15}")
+    if analysis.missing:
+        lines.append("missing:")
+        lines.extend(f"  {entry}" for entry in analysis.missing)
+    return "\n".join(lines)
+
+
+def write_joint_figure(joints: Mapping[str, JointSeries], path: Path) -> Path:
+    """Each joint's position against log time, one panel per joint."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    figure, axes = plt.subplots(max(len(joints), 1), 1, sharex=True, figsize=(8, 1.0 + 1.8 * max(len(joints), 1)),
+                                squeeze=False)
+    for axis, (name, series) in zip(axes[:, 0], joints.items()):
+        axis.plot(series.time_s, series.position)
+        axis.set_ylabel(name)
+    axes[-1, 0].set_xlabel("log time [s]")
+    return _save(figure, path)
 
 
 def write_figures(bag_path: Path, output_dir: Path) -> list[Path]:
@@ -176,23 +397,59 @@ def _format(value) -> str:
     return f"{value:.4g}" if isinstance(value, float) else str(value)
 
 
+def _label(bag: Path) -> str:
+    return bag.parent.name if bag.name == "bag" else str(bag)   # a run folder's bag is named for its folder
+
+
+def write_outputs(bag_path: Path, analysis: BagAnalysis, output_dir: Path) -> list[Path]:
+    """bag_summary.json always; joint_states.png with joint_states; with the run's measures, report.json and the
+    run's figures (write_figures)."""
+    output_dir.mkdir(parents=True, exist_ok=True)
+    paths = [output_dir / "bag_summary.json"]
+    paths[0].write_text(json.dumps(analysis.to_json(), indent=2))
+    if analysis.joint_states is not None:
+        _, joints = read_joint_states(bag_path, analysis.joint_states.topic)
+        paths.append(write_joint_figure(joints, output_dir / "joint_states.png"))
+    if analysis.run is not None:
+        paths.append(output_dir / "report.json")
+        paths[-1].write_text(json.dumps(analysis.run.to_json(), indent=2))
+        paths.extend(write_figures(bag_path, output_dir))
+    return paths
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="swim-analyze", description=__doc__.splitlines()[0])
-    parser.add_argument("bags", type=Path, nargs="+", help="rosbag2 folders of runs (several: a side-by-side table)")
-    parser.add_argument("--output", type=Path, default=None, help="folder for report.json and figures (one bag)")
+    parser = argparse.ArgumentParser(
+        prog="swim-analyze", description=__doc__.splitlines()[0],
+        epilog=f"exit status: {EXIT_FULL_REPORT} every bag analysed in full; {EXIT_PARTIAL_REPORT} some bag lacked "
+               f"what the run's measures need (the rest analysed, what it lacks named); {EXIT_UNREADABLE} some bag "
+               f"could not be read, or the output not written")
+    parser.add_argument("bags", type=Path, nargs="+",
+                        help="rosbag2 bags: folders, or single .mcap or .db3 files (several: a side-by-side table)")
+    parser.add_argument("--output", type=Path, default=None,
+                        help="folder for bag_summary.json, report.json and figures (one bag)")
     args = parser.parse_args(argv)
-    try:
-        # a run folder's bag is named for its folder
-        reports = {(bag.parent.name if bag.name == "bag" else str(bag)): analyze(bag) for bag in args.bags}
-    except (ValueError, OSError) as err:
-        print(f"swim-analyze: {err}", file=sys.stderr)
-        return 2
-    print(summary_table(reports))
-    if args.output is not None and len(args.bags) == 1:
-        args.output.mkdir(parents=True, exist_ok=True)
-        (args.output / "report.json").write_text(json.dumps(next(iter(reports.values())).to_json(), indent=2))
-        write_figures(args.bags[0], args.output)
-    return 0
+    status = EXIT_FULL_REPORT
+    analyses: dict[str, BagAnalysis] = {}
+    for bag in args.bags:
+        try:
+            analyses[_label(bag)] = analysis = analyze_bag(bag)
+        except BagError as err:
+            print(f"swim-analyze: {err}", file=sys.stderr)
+            status = max(status, EXIT_UNREADABLE)
+            continue
+        print(bag_section(_label(bag), analysis) + "\n")
+        if analysis.run is None:
+            status = max(status, EXIT_PARTIAL_REPORT)
+    runs = {label: analysis.run for label, analysis in analyses.items() if analysis.run is not None}
+    if runs:
+        print(summary_table(runs))
+    if args.output is not None and len(args.bags) == 1 and analyses:
+        try:
+            write_outputs(args.bags[0], next(iter(analyses.values())), args.output)
+        except (OSError, BagError) as err:
+            print(f"swim-analyze: {args.output}: not written: {err}", file=sys.stderr)
+            status = EXIT_UNREADABLE
+    return status
 
 
 if __name__ == "__main__":

@@ -5,14 +5,20 @@ message definitions, ours included (from swim_interfaces' installed .msg files),
 decode them. A bag is written in chunks (MCAP); flush() ends the chunk under way and puts it on disk, so a
 recorder killed before close() leaves a bag whose written chunks read_messages still reads (without the summary
 and metadata.yaml that close() writes).
+
+Any rosbag2 bag reads back (bag_info, read_messages): a folder with its metadata.yaml and MCAP or sqlite3 (.db3)
+files, or one .mcap or .db3 file. Topic names are as recorded: rosbag2 and swim-record give full names
+(/joint_states), swim-demo's client the nodes' own (joint_states). What cannot be read (no bag at the path, a
+corrupt file, a message whose type this environment does not know) is a BagError that says which and why.
 """
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Any, Iterator, Sequence
 
 from rosbags.interfaces import Qos
-from rosbags.rosbag2 import Reader, StoragePlugin, Writer
+from rosbags.rosbag2 import Reader, ReaderError, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
@@ -90,31 +96,123 @@ class BagWriter:
             self._writer = None
 
 
+@dataclasses.dataclass(frozen=True)
+class TopicInfo:
+    """A topic of a bag: its name as recorded, its type (e.g. 'sensor_msgs/msg/JointState') and how many messages
+    the bag holds on it."""
+    name: str
+    msgtype: str
+    message_count: int
+
+
+@dataclasses.dataclass(frozen=True)
+class BagInfo:
+    """What a bag holds, from its metadata (a bag cut before close(): from a linear read of its complete chunks)."""
+    path: Path
+    storage: str                 # 'mcap' or 'sqlite3'
+    complete: bool               # False: cut before close(), no metadata.yaml; read up to its last complete chunk
+    topics: tuple[TopicInfo, ...]
+
+    @property
+    def message_count(self) -> int:
+        return sum(topic.message_count for topic in self.topics)
+
+
+def _is_cut_bag(path: Path) -> bool:
+    return path.is_dir() and not (path / "metadata.yaml").is_file()
+
+
+def _open_reader(path: Path) -> Reader:
+    """An open rosbags Reader of the bag folder or storage file at path; BagError if it is not a readable bag."""
+    if not path.exists():
+        raise BagError(f"{path}: no such file or folder")
+    try:
+        reader = Reader(path)
+        reader.open()
+    except (ReaderError, OSError) as err:
+        raise BagError(f"{path}: not a readable rosbag2 bag: {err}") from err
+    return reader
+
+
+def bag_info(path: Path) -> BagInfo:
+    """The topics of the bag at path (a folder, or one .mcap or .db3 file) with their types and message counts.
+    BagError if there is no readable bag there."""
+    path = Path(path)
+    if _is_cut_bag(path):
+        counts: dict[tuple[str, str], int] = {}
+        for topic, msgtype, _, raw in read_cut_bag(path):
+            counts[topic, msgtype] = counts.get((topic, msgtype), 0) + (raw is not None)
+        topics = tuple(TopicInfo(topic, msgtype, count) for (topic, msgtype), count in counts.items())
+        return BagInfo(path, "mcap", False, topics)
+    reader = _open_reader(path)
+    try:
+        storage = "sqlite3" if path.suffix == ".db3" or any(path.glob("*.db3")) else "mcap"
+        return BagInfo(path, storage, True, tuple(TopicInfo(c.topic, c.msgtype, c.msgcount)
+                                                  for c in reader.connections))
+    finally:
+        reader.close()
+
+
+def _decoded(store: Typestore, path: Path, topic: str, timestamp: int, msgtype: str, raw: bytes) -> Any:
+    try:
+        return store.deserialize_cdr(raw, msgtype)
+    except Exception as err:   # rosbags' generated deserializers raise whatever error the bad bytes trip
+        raise BagError(f"{path}: the message on {topic} at {timestamp} ns does not decode as {msgtype} "
+                       f"({type(err).__name__}: {err})") from err
+
+
+def _check_known(store: Typestore, path: Path, topic: str, msgtype: str) -> None:
+    if msgtype not in store.fielddefs:
+        raise BagError(f"{path}: {topic} is of type {msgtype}, which this environment does not know (ROS 2 "
+                       f"Jazzy's types and swim_interfaces')")
+
+
 def read_messages(path: Path, topics: tuple[str, ...]) -> Iterator[tuple[str, int, Any]]:
-    """(topic, log time ns, decoded message: the typestore's class of its type) for the topics asked, in log-time
-    order; of a bag cut before close() (no metadata.yaml), the messages of its complete chunks in the order
-    written."""
+    """(topic, log time ns, decoded message: the typestore's class of its type) for the topics asked (names exactly
+    as recorded; a topic not in the bag gives nothing), in log-time order; of a bag cut before close() (no
+    metadata.yaml), the messages of its complete chunks in the order written. BagError if the bag cannot be read
+    or a message asked for cannot be decoded (its type unknown here, its bytes not of its type)."""
     store = swim_typestore()
-    if not (Path(path) / "metadata.yaml").is_file():
-        for topic, timestamp, msgtype, raw in read_cut_bag(Path(path), topics):
-            yield topic, timestamp, store.deserialize_cdr(raw, msgtype)
+    path = Path(path)
+    if _is_cut_bag(path):
+        for topic, msgtype, timestamp, raw in read_cut_bag(path):
+            if raw is not None and topic in topics:
+                _check_known(store, path, topic, msgtype)
+                yield topic, timestamp, _decoded(store, path, topic, timestamp, msgtype, raw)
         return
-    with Reader(path) as reader:
+    reader = _open_reader(path)
+    try:
         connections = [c for c in reader.connections if c.topic in topics]
-        for connection, timestamp, raw in reader.messages(connections=connections):
-            yield connection.topic, timestamp, store.deserialize_cdr(raw, connection.msgtype)
+        if not connections:   # rosbags reads every message when given no connection
+            return
+        for connection in connections:
+            _check_known(store, path, connection.topic, connection.msgtype)
+        try:
+            for connection, timestamp, raw in reader.messages(connections=connections):
+                yield connection.topic, timestamp, _decoded(store, path, connection.topic, timestamp,
+                                                            connection.msgtype, raw)
+        except ReaderError as err:
+            raise BagError(f"{path}: cannot read its messages: {err}") from err
+    finally:
+        reader.close()
 
 
-def read_cut_bag(path: Path, topics: tuple[str, ...]) -> Iterator[tuple[str, int, str, bytes]]:
-    """(topic, log time ns, type name, CDR bytes) of the messages in the complete chunks of a bag folder's MCAP
-    file that has no summary (its recorder was killed), read linearly with the mcap library (Foxglove's reader)
-    up to the first incomplete record."""
-    from mcap.exceptions import EndOfFile
+def read_cut_bag(path: Path) -> Iterator[tuple[str, str, int, bytes | None]]:
+    """(topic, type name, log time ns, CDR bytes) of every message in the complete chunks of a bag folder's MCAP
+    file that has no summary (its recorder was killed), in the order written, read linearly with the mcap library
+    (Foxglove's reader) up to the first incomplete record; and (topic, type name, 0, None) for each channel as it
+    is declared (a topic recorded without messages). BagError if the folder has no single MCAP file."""
+    from mcap.exceptions import EndOfFile, McapError
     from mcap.records import Channel, Message, Schema
     from mcap.stream_reader import StreamReader
     files = sorted(Path(path).glob("*.mcap"))
+    databases = sorted(p.name for p in Path(path).glob("*.db3"))
+    if databases and not files:
+        raise BagError(f"{path}: a sqlite3 bag without its metadata.yaml: give its file ({', '.join(databases)}) "
+                       f"instead of the folder")
     if len(files) != 1:
-        raise BagError(f"{path}: no metadata.yaml and {len(files)} MCAP files (expected one)")
+        raise BagError(f"{path}: not a rosbag2 bag: no metadata.yaml, and "
+                       + (f"{len(files)} MCAP files (give one of them)" if files else "no .mcap or .db3 file"))
     schemas: dict[int, str] = {}
     channels: dict[int, tuple[str, str]] = {}
     with open(files[0], "rb") as stream:
@@ -124,8 +222,11 @@ def read_cut_bag(path: Path, topics: tuple[str, ...]) -> Iterator[tuple[str, int
                     schemas[record.id] = record.name
                 elif isinstance(record, Channel):
                     channels[record.id] = (record.topic, schemas[record.schema_id])
-                elif isinstance(record, Message) and channels[record.channel_id][0] in topics:
+                    yield record.topic, schemas[record.schema_id], 0, None
+                elif isinstance(record, Message):
                     topic, msgtype = channels[record.channel_id]
-                    yield topic, record.log_time, msgtype, record.data
+                    yield topic, msgtype, record.log_time, record.data
         except EndOfFile:
             return
+        except (McapError, KeyError) as err:   # not MCAP, or a record naming a schema or channel never declared
+            raise BagError(f"{files[0]}: not a readable MCAP file: {type(err).__name__}: {err}") from err
