@@ -29,24 +29,6 @@ from swim_controller.sliding_mode import SlidingMode
 from swim_controller.tracker import CascadeTracker, model_io_linearization
 
 
-@pytest.fixture(scope="module")
-def rig():
-    from swim_model import load_rig
-    return load_rig()
-
-
-@pytest.fixture(scope="module")
-def library(rig):
-    from swim_planner.library import PrimitiveLibrary
-    from swim_planner.paths import default_library_path
-    return PrimitiveLibrary.load(default_library_path(), rig)
-
-
-@pytest.fixture(scope="module")
-def model_for(rig):
-    from swim_model import VehicleModel
-    return lambda spec: VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m)
-
 ACCELERATE = "constrained/accelerate/E0.05"
 EARLY_S = 2.0                    # s: before the plan is lost (runs repeatable to round-off; see the docstring)
 TRACKED_ALPHA_TWO_NORM = 0.002   # rad s^0.5: the ideal-flow plant tracks to this (measured 0.0006)
@@ -71,14 +53,20 @@ class WakeRecorder:
 
 
 @pytest.fixture(scope="module")
-def runs(library, model_for, rig):
+def runs():
     """{(wake on, sliding mode on): (run, recorder)} and the planned hub travel."""
+    from swim_model import VehicleModel, load_rig
+    from swim_planner.library import PrimitiveLibrary
     from swim_planner.maneuver import concatenate, expand_sequence
+    from swim_planner.paths import default_library_path
     from swim_sim.disturbances import Disturbances
     from swim_sim.plant import Plant
     from swim_sim.wake_coupling import WakeCoupling
+    rig = load_rig()
+    library = PrimitiveLibrary.load(default_library_path(), rig)
     reference = concatenate(library, rig, expand_sequence([ACCELERATE], []), 1.0)
-    model = model_for(library.spec(ACCELERATE))
+    spec = library.spec(ACCELERATE)
+    model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m)
     results = {}
     for wake_on in (False, True):
         for sliding in (True, False):

@@ -22,6 +22,10 @@ from swim_ros.codecs import MessageError, float_array, joint_state_arrays, secon
 Array = npt.NDArray[np.float64]
 #: the PlannedTrajectory layout this module writes and reads (swim_interfaces' INTERFACE_VERSION)
 SUPPORTED_INTERFACE_VERSION = 2
+#: the largest magnitude a plan's time, values and their changes per second between samples may have (SI units):
+#: far past any plan a vehicle can follow, and small enough that the product of two (a gain times an error, a rate
+#: times a time step, in the tracker's interpolation and law) stays finite in float64 (largest 1.8e308)
+MAX_PLAN_MAGNITUDE = 1e150
 
 
 def trajectory_to_message(trajectory: Trajectory, stamp) -> PlannedTrajectory:
@@ -47,7 +51,8 @@ def trajectory_to_message(trajectory: Trajectory, stamp) -> PlannedTrajectory:
 def trajectory_from_message(plan: PlannedTrajectory) -> Trajectory:
     """A swim_interfaces/PlannedTrajectory as a Trajectory; raises PlanError naming what is wrong: another
     interface version, more than MAX_TRACKED_SAMPLES samples, joints that are not the vehicle's, arrays of the
-    wrong length, non-finite values, times out of order, segments that do not tile the samples."""
+    wrong length, non-finite values, times out of order or not from 0, values or their rates past
+    MAX_PLAN_MAGNITUDE, segments that do not tile the samples."""
     if plan.interface_version != SUPPORTED_INTERFACE_VERSION:
         raise PlanError(f"plan interface version {plan.interface_version}, this tracker reads "
                         f"{SUPPORTED_INTERFACE_VERSION}")
@@ -70,12 +75,32 @@ def trajectory_from_message(plan: PlannedTrajectory) -> Trajectory:
         return values.reshape(shape)
     fields = [field.name for field in dataclasses.fields(Segment)]   # PrimitiveSegment's, by name
     segments = tuple(Segment(**{name: getattr(s, name) for name in fields}) for s in plan.segments)
-    return Trajectory(
-        time_s=np.asarray(plan.time_from_start_s, dtype=float), q=array("positions", (samples, nq)),
-        qdot=array("velocities", (samples, nq)), foil_acceleration=array("foil_accelerations", (samples, 2)),
-        torque=array("feedforward_torques", (samples, 2)), lqr_gain=array("lqr_gains", (samples, 2, n)),
-        riccati_input_gain=array("sliding_gains", (samples, 2, n)), segments=segments,
-        lane_radius_m=plan.lane_radius_m, library_digest=plan.library_digest)
+    with np.errstate(over="ignore", invalid="ignore"):   # rates that overflow are refused by check_plan_range
+        trajectory = Trajectory(
+            time_s=np.asarray(plan.time_from_start_s, dtype=float), q=array("positions", (samples, nq)),
+            qdot=array("velocities", (samples, nq)), foil_acceleration=array("foil_accelerations", (samples, 2)),
+            torque=array("feedforward_torques", (samples, 2)), lqr_gain=array("lqr_gains", (samples, 2, n)),
+            riccati_input_gain=array("sliding_gains", (samples, 2, n)), segments=segments,
+            lane_radius_m=plan.lane_radius_m, library_digest=plan.library_digest)
+        check_plan_range(trajectory)
+    return trajectory
+
+
+def check_plan_range(trajectory: Trajectory) -> None:
+    """PlanError unless the sample times run from 0 to at most MAX_PLAN_MAGNITUDE s and every value of the plan and
+    its change per second between two samples is within MAX_PLAN_MAGNITUDE: then the tracker's references, its
+    errors and its law's products are finite (a Trajectory checks only that the values are)."""
+    time_s = trajectory.time_s
+    if not (time_s[0] == 0.0 and time_s[-1] <= MAX_PLAN_MAGNITUDE):
+        raise PlanError(f"plan sample times must run from 0 s to at most {MAX_PLAN_MAGNITUDE:g} s, got "
+                        f"{float(time_s[0])!r} to {float(time_s[-1])!r} s")
+    step_s = np.diff(time_s)[:, None]
+    for name in ("q", "qdot", "foil_acceleration", "torque", "lqr_gain", "riccati_input_gain"):
+        values = getattr(trajectory, name).reshape(len(time_s), -1)
+        rates = np.diff(values, axis=0) / step_s
+        if not (np.abs(values).max() <= MAX_PLAN_MAGNITUDE and np.abs(rates).max() <= MAX_PLAN_MAGNITUDE):
+            raise PlanError(f"plan {name} has values or changes per second past {MAX_PLAN_MAGNITUDE:g} (SI): "
+                            f"not a plan a vehicle can follow")
 
 
 def state_from_message(message, joint_names: Optional[Sequence[str]], velocity: VelocityEstimator,

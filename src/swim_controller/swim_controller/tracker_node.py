@@ -154,9 +154,12 @@ class TrackerNode(Node):
             self._velocity = VelocityEstimator(values["velocity_cutoff_hz"])
 
     def _model(self, constrained: bool, lane_radius_m: float) -> VehicleModel:
-        key = (constrained, lane_radius_m)
+        """The vehicle a plan runs on, built once (a new one is compiled: about 2 s with the loop held up): one
+        per lane for the constrained vehicle, one for the free vehicle (its lane is a coordinate, the model the
+        same for every starting lane)."""
+        key = (constrained, lane_radius_m if constrained else self.rig.constrained_lane_radius_m)
         if key not in self._models:
-            self._models[key] = VehicleModel(self.rig, constrained=constrained, lane_radius_m=lane_radius_m)
+            self._models[key] = VehicleModel(self.rig, constrained=constrained, lane_radius_m=key[1])
         return self._models[key]
 
     def _make_tracker(self, model: VehicleModel) -> CascadeTracker:
@@ -277,6 +280,10 @@ class TrackerNode(Node):
                                     request.goal_tolerance_alpha_rad, request.goal_tolerance_r_m)
             tolerances.validate()
             trajectory = trajectory_from_message(request.plan)
+            tank_radius_m = 0.5 * self.rig.tank_diameter_m
+            if trajectory.lane_radius_m >= tank_radius_m:   # the rig file's rule for its own lanes
+                raise PlanError(f"plan lane radius {trajectory.lane_radius_m!r} m is not inside the tank "
+                                f"(radius {tank_radius_m} m)")
             model = self._model(trajectory.constrained, trajectory.lane_radius_m)
             time_scale = self.get_parameter("time_scale").value
             if time_scale != 1.0:   # refused past the motor limits, with the largest feasible time scale named

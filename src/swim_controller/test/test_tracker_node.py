@@ -42,6 +42,9 @@ TRACKING_WAIT_PERIODS = 125
 PLAN_RAMP_S, PLAN_DURATION_S, PLAN_SAMPLE_PERIOD_S = 1.0, 4.0, 0.01
 #: the gait: the rig's size of stroke at 1 Hz, well within the motor limits (about half the heave limit at most)
 PLAN_HEAVE_AMPLITUDE_RAD, PLAN_PITCH_AMPLITUDE_RAD = 0.3, 0.4
+#: the hold after a plan ends or is canceled brings the foil to rest: after 100 periods (0.8 s) of it the heave and
+#: pitch rates are below 0.05 rad/s (the stroke's are about 2 rad/s)
+HOLD_PERIODS, HELD_STILL_RATE_RAD_S = 100, 0.05
 
 
 @pytest.fixture(scope="module")
@@ -134,6 +137,11 @@ class LockStepPlant:
         self.torques.append(torque)
         return torque
 
+    def step_periods(self, count):
+        """step() count times."""
+        for _ in range(count):
+            self.step()
+
     def spin_for(self, seconds):
         """Serve callbacks for seconds, stepping nothing."""
         end = time.monotonic() + seconds
@@ -190,6 +198,12 @@ def step_until(plant, condition, max_periods):
         plant.step()
 
 
+def assert_held_still(plant):
+    """Step HOLD_PERIODS periods; heave and pitch must then be at rest (the node's hold)."""
+    plant.step_periods(HOLD_PERIODS)
+    assert np.all(np.abs(plant.qdot[1:]) < HELD_STILL_RATE_RAD_S)
+
+
 def test_executes_a_plan_from_a_perturbed_start_within_tolerance(rig_loop, plan_message):
     from swim_interfaces.action import ExecutePlan
     plant, client = rig_loop
@@ -209,40 +223,31 @@ def test_executes_a_plan_from_a_perturbed_start_within_tolerance(rig_loop, plan_
     state = feedback[-1].feedback.state
     assert np.allclose(np.subtract(state.reference.positions, state.feedback.positions), state.error.positions)
     # after the plan: the foil is held still (small torques, psi settles)
-    for _ in range(100):
-        plant.step()
-    assert np.all(np.abs(plant.qdot[1:]) < 0.05)
+    assert_held_still(plant)
 
 
 def test_a_new_goal_preempts_and_cancel_holds(rig_loop, plan_message):
     from swim_interfaces.action import ExecutePlan
     plant, client = rig_loop
-    plant.q, plant.qdot = np.zeros(3), np.zeros(3)
     _, first = send(plant, client, plan_message)
-    for _ in range(20):
-        plant.step()
+    plant.step_periods(20)
     second_handle, second = send(plant, client, plan_message)
     result = run_until(plant, first, 50)
     assert result.error_code == ExecutePlan.Result.PREEMPTED
-    for _ in range(20):
-        plant.step()
+    plant.step_periods(20)
     cancel = second_handle.cancel_goal_async()
     result = run_until(plant, second, 100)
     assert cancel.done()
     assert result.error_code == ExecutePlan.Result.CANCELED
     # canceled: the foil is brought to rest where it is
-    for _ in range(100):
-        plant.step()
-    assert np.all(np.abs(plant.qdot[1:]) < 0.05)
+    assert_held_still(plant)
 
 
 def test_stale_state_stops_the_motors_and_aborts(rig_loop, plan_message):
     from swim_interfaces.action import ExecutePlan
     plant, client = rig_loop
-    plant.q, plant.qdot = np.zeros(3), np.zeros(3)
     _, future = send(plant, client, plan_message)
-    for _ in range(30):
-        plant.step()
+    plant.step_periods(30)
     plant.commands.clear()
     started = time.monotonic()
     spin_until(plant.executor, future.done, STALE_ABORT_TIMEOUT_S)   # no states: the node must notice
@@ -260,10 +265,8 @@ def test_stale_state_stops_the_motors_and_aborts(rig_loop, plan_message):
 def test_malformed_states_are_rejected_and_never_used(rig_loop, plan_message):
     from swim_interfaces.action import ExecutePlan
     plant, client = rig_loop
-    plant.q, plant.qdot = np.zeros(3), np.zeros(3)
     _, future = send(plant, client, plan_message)
-    for _ in range(10):
-        plant.step()
+    plant.step_periods(10)
     bad = [plant.state_message(names=("alpha", "R", "theta")), plant.state_message(q=[0.0, np.nan, 0.0]),
            plant.state_message(q=[0.0, 0.1])]
     for message in bad:   # each bad state between two good ones: refused, and the loop goes on
@@ -282,7 +285,6 @@ def test_parameters_are_validated_and_switch_sliding_mode_mid_plan(rig_loop, pla
     from swim_interfaces.msg import TrackingState
     from swim_ros.calls import ParameterCalls
     plant, client = rig_loop
-    plant.q, plant.qdot = np.zeros(3), np.zeros(3)
     tracking = []
     plant.node.create_subscription(TrackingState, "tracking_state", tracking.append, 10)
     parameters = ParameterCalls(plant.node, plant.executor, "tracker_node", POLICY)
@@ -301,14 +303,12 @@ def test_parameters_are_validated_and_switch_sliding_mode_mid_plan(rig_loop, pla
         assert not result.successful and name in result.reason
     assert "type" in set_parameter("sliding_mode_enabled", 1).reason   # rclpy's own check: types are fixed
     _, future = send(plant, client, plan_message)
-    for _ in range(20):
-        plant.step()
+    plant.step_periods(20)
     step_until(plant, lambda: tracking, TRACKING_WAIT_PERIODS)
     assert tracking and tracking[-1].sliding_mode_enabled, tracker.read_text()[-2000:]   # the default
     assert set_parameter("sliding_mode_enabled", False).successful
     tracking.clear()
-    for _ in range(20):
-        plant.step()
+    plant.step_periods(20)
     step_until(plant, lambda: tracking, TRACKING_WAIT_PERIODS)
     assert tracking and not any(t.sliding_mode_enabled for t in tracking), \
         f"parameter round trips {np.round(round_trips_s, 3)} s; tracker_node: {tracker.read_text()[-2000:]}"
@@ -326,7 +326,6 @@ def test_a_time_scale_past_the_motor_limits_refuses_the_goal(rig_loop, plan_mess
     from swim_model import load_rig
     from swim_ros.calls import ParameterCalls
     plant, client = rig_loop
-    plant.q, plant.qdot = np.zeros(3), np.zeros(3)
     parameters = ParameterCalls(plant.node, plant.executor, "tracker_node", POLICY)
     torque = np.asarray(plan_message.feedforward_torques).reshape(-1, 2)
     # lambda^2 tau reaches the limits at lambda = 1 / sqrt(max |tau| / limit)

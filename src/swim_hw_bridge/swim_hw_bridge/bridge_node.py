@@ -354,14 +354,18 @@ class BridgeNode(LifecycleNode):
         if snapshot is None:
             status.level, status.message = DiagnosticStatus.WARN, f"{self._state_label}: I/O loop not running yet"
         else:
+            running = self._loop_running()
+            # a stopped loop's last period is not what the device holds: a deactivate stops the loop, then writes
+            # zero; one that cannot write it ends in on_error, which drops the loop
+            currents_a, torques_n_m = (snapshot.currents_a, snapshot.torques_n_m) if running else ((0.0, 0.0),) * 2
             values.update(
                 loop_rate_hz=f"{snapshot.loop_rate_hz:.2f}", periods=snapshot.periods, overruns=snapshot.overruns,
                 consecutive_overruns=snapshot.consecutive_overruns, watchdog=snapshot.watchdog.name,
                 saturation_count=snapshot.saturation_count, fault_code=int(snapshot.faults),
-                faults=fault_names(snapshot.faults), loop_running=self._loop_running(),
-                enable_toggling=snapshot.enable_toggling and self._loop_running(),
-                heave_current_a=snapshot.currents_a[0], pitch_current_a=snapshot.currents_a[1],
-                heave_torque_n_m=snapshot.torques_n_m[0], pitch_torque_n_m=snapshot.torques_n_m[1])
+                faults=fault_names(snapshot.faults), loop_running=running,
+                enable_toggling=snapshot.enable_toggling and running,
+                heave_current_a=currents_a[0], pitch_current_a=currents_a[1],
+                heave_torque_n_m=torques_n_m[0], pitch_torque_n_m=torques_n_m[1])
             if snapshot.faults:
                 status.level, status.message = DiagnosticStatus.ERROR, f"fault: {fault_names(snapshot.faults)}"
             elif not self.active or snapshot.watchdog is not WatchdogState.OK:

@@ -4,6 +4,7 @@ Each server here drops its first answer(s) on purpose (its send is replaced), or
 was sent; the helpers must still return exactly one answer, and a request that must not act twice (a goal, a
 lifecycle transition) acts once.
 """
+import contextlib
 import threading
 import time
 
@@ -30,24 +31,33 @@ def drop_first_answers(service, count):
     return dropped
 
 
-@pytest.fixture()
-def pair(rclpy_context):
-    """(server node, client node, the client's executor, a thread spinning the server)."""
-    import rclpy
-    from rclpy.executors import SingleThreadedExecutor as Spinner
-    server = rclpy.create_node("calls_test_server", context=rclpy_context)
-    client = rclpy.create_node("calls_test_client", context=rclpy_context)
-    executor = SingleThreadedExecutor(context=rclpy_context)
+@contextlib.contextmanager
+def served(server, client, context):
+    """The client's executor (the test spins it), with a thread of its own spinning the server; both nodes
+    destroyed on leaving."""
+    executor = SingleThreadedExecutor(context=context)
     executor.add_node(client)
-    spinner = Spinner(context=rclpy_context)
+    spinner = SingleThreadedExecutor(context=context)
     spinner.add_node(server)
     thread = threading.Thread(target=spinner.spin, daemon=True)
     thread.start()
-    yield server, client, executor
-    spinner.shutdown()
-    thread.join(timeout=5.0)
-    server.destroy_node()
-    client.destroy_node()
+    try:
+        yield executor
+    finally:
+        spinner.shutdown()
+        thread.join(timeout=5.0)
+        server.destroy_node()
+        client.destroy_node()
+
+
+@pytest.fixture()
+def pair(rclpy_context):
+    """(server node, client node, the client's executor), the server spun by a thread of its own."""
+    import rclpy
+    server = rclpy.create_node("calls_test_server", context=rclpy_context)
+    client = rclpy.create_node("calls_test_client", context=rclpy_context)
+    with served(server, client, rclpy_context) as executor:
+        yield server, client, executor
 
 
 def test_a_lost_answer_is_asked_again_and_one_answer_returned(pair):
@@ -119,13 +129,7 @@ def test_a_lifecycle_transition_whose_answer_was_lost_is_not_repeated(rclpy_cont
             return TransitionCallbackReturn.SUCCESS
     server = Counting("calls_test_lifecycle", context=rclpy_context)
     client = rclpy.create_node("calls_test_lifecycle_client", context=rclpy_context)
-    executor = SingleThreadedExecutor(context=rclpy_context)
-    executor.add_node(client)
-    spinner = SingleThreadedExecutor(context=rclpy_context)
-    spinner.add_node(server)
-    thread = threading.Thread(target=spinner.spin, daemon=True)
-    thread.start()
-    try:
+    with served(server, client, rclpy_context) as executor:
         drop_first_answers(_service_named(server, "change_state"), 1)
         assert change_lifecycle_state(client, executor, "calls_test_lifecycle", Transition.TRANSITION_CONFIGURE,
                                       QUICK)
@@ -134,11 +138,6 @@ def test_a_lifecycle_transition_whose_answer_was_lost_is_not_repeated(rclpy_cont
         assert change_lifecycle_state(client, executor, "calls_test_lifecycle", Transition.TRANSITION_ACTIVATE,
                                       QUICK)
         assert server._state_machine.current_state[0] == State.PRIMARY_STATE_ACTIVE
-    finally:
-        spinner.shutdown()
-        thread.join(timeout=5.0)
-        server.destroy_node()
-        client.destroy_node()
 
 
 class _DroppingHandle:

@@ -13,10 +13,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from swim_ros.testing.fixtures import running_node
-from swim_ros.testing.fuzz import (EDGE_FLOATS, NON_FINITE, any_float, fuzz_settings, in_order, set_and_check_parameter,
-                             joint_states, parameter_sets, to_joint_state, torques)
-from test_sim_node import POLICY, RESEND_AFTER_S, Driver
+from swim_ros.testing.fixtures import new_rclpy_context
+from swim_ros.testing.fuzz import (EDGE_FLOATS, NON_FINITE, any_float, fuzz_parameter_sets, fuzz_settings, in_order,
+                                   joint_states, to_joint_state, torques)
+from test_sim_node import POLICY, RESEND_AFTER_S, Driver, running_sim
 
 SEED = 5
 ACTUATED = ("phi", "theta")
@@ -31,24 +31,15 @@ MEASURED_POSITION_TOLERANCE_RAD = 1e-3
 @pytest.fixture(scope="module")
 def sim(ros_domain, tmp_path_factory):
     log = tmp_path_factory.mktemp("fuzz_sim_node") / "log.txt"
-    with running_node("swim_sim", "sim_node", log, "-p", "constrained:=true", "-p", f"seed:={SEED}",
-                      "-p", f"resend_after_s:={RESEND_AFTER_S}") as process:
+    with running_sim(log, "-p", f"seed:={SEED}") as process:
         yield process
 
 
 @pytest.fixture(scope="module")
 def driver(sim, ros_domain):
-    import rclpy
-    from std_srvs.srv import Trigger
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    driver = Driver(context)
-    assert driver.call(Trigger, "reset", Trigger.Request()).success
-    assert driver.wait_for_states(1)
-    yield driver
-    driver.executor.shutdown()
-    driver.node.destroy_node()
-    rclpy.shutdown(context=context)
+    with new_rclpy_context() as context, Driver(context) as driver:
+        driver.reset_and_wait()
+        yield driver
 
 
 @pytest.fixture(scope="module")
@@ -174,28 +165,12 @@ def test_fuzzed_set_state_is_refused_with_a_reason_or_puts_the_vehicle_there(sim
 
 
 def test_parameter_sets_are_answered_refused_with_a_reason_or_applied(sim, driver, limits):
-    from rclpy.parameter import Parameter
     from swim_ros.calls import ParameterCalls
     from swim_sim.sim_node import PARAMETERS
     parameters = ParameterCalls(driver.node, driver.executor, "sim_node", POLICY)
-    read_only = {spec.name for spec in PARAMETERS if spec.read_only}
-    changeable = [spec for spec in PARAMETERS if not spec.read_only]
-    counts = {"accepted": 0, "refused": 0}
-    parameters.get(["seed"]), parameters.set([])   # discovery of the parameter services, outside the deadlines
-
-    @fuzz_settings(60)
-    @given(change=parameter_sets([spec.name for spec in PARAMETERS]))
-    def set_one(change):
-        set_and_check_parameter(parameters, *change, read_only, DEADLINE_S, counts)
-        assert sim.poll() is None
-
-    try:
-        set_one()
-    finally:   # the module's other tests run with the defaults (the resend delay: the test's own)
-        restored = [Parameter(s.name, value=RESEND_AFTER_S if s.name == "resend_after_s" else s.default)
-                    for s in changeable]
-        assert all(r.successful for r in parameters.set(restored))
-    assert counts["refused"] > 0
+    # afterwards the module's other tests run with the defaults (the resend delay: the test's own)
+    fuzz_parameter_sets(parameters, PARAMETERS, 60, DEADLINE_S, lambda: sim.poll() is None,
+                        {"resend_after_s": RESEND_AFTER_S})
     # still serving: a reset answers and a good command steps
     from std_srvs.srv import Trigger
     driver.states.clear()

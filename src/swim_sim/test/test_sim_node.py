@@ -19,16 +19,22 @@ RESEND_AFTER_S = 5.0
 SEED = 11
 
 
+def running_sim(log_path, *ros_args):
+    """sim_node as these tests run it (swim_ros.testing.fixtures.running_node): lock-step on the constrained
+    vehicle, an unanswered state resent after RESEND_AFTER_S; ros_args add more (``-p name:=value``, ``-r``)."""
+    return running_node("swim_sim", "sim_node", log_path, "-p", "constrained:=true",
+                        "-p", f"resend_after_s:={RESEND_AFTER_S}", *ros_args)
+
+
 @pytest.fixture(scope="module")
 def sim(ros_domain, tmp_path_factory):
-    log = tmp_path_factory.mktemp("sim_node") / "log.txt"
-    with running_node("swim_sim", "sim_node", log, "-p", "constrained:=true", "-p", f"seed:={SEED}",
-                      "-p", f"resend_after_s:={RESEND_AFTER_S}") as process:
+    with running_sim(tmp_path_factory.mktemp("sim_node") / "log.txt", "-p", f"seed:={SEED}") as process:
         yield process
 
 
 class Driver:
-    """The test's side of the lock-step: answers each state with a command stamped like it."""
+    """The test's side of the lock-step: answers each state with a command stamped like it. A context manager:
+    its node is destroyed on leaving."""
 
     def __init__(self, context, namespace=""):
         import rclpy
@@ -66,17 +72,26 @@ class Driver:
         from swim_ros.calls import call_service
         return call_service(self.executor, self.node.create_client(service_type, name), request, POLICY)
 
+    def reset_and_wait(self):
+        """Reset the simulator and wait for a state: the node publishes its state at start and on resend only,
+        so a new driver asks for a fresh one by resetting."""
+        from std_srvs.srv import Trigger
+        assert self.call(Trigger, "reset", Trigger.Request()).success
+        assert self.wait_for_states(1)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc_info):
+        self.executor.shutdown()
+        self.node.destroy_node()
+
 
 @pytest.fixture()
 def driver(sim, rclpy_context):
-    driver = Driver(rclpy_context)
-    # the node publishes its state at start and on resend; ask for a fresh one by resetting
-    from std_srvs.srv import Trigger
-    assert driver.call(Trigger, "reset", Trigger.Request()).success
-    assert driver.wait_for_states(1)
-    yield driver
-    driver.executor.shutdown()
-    driver.node.destroy_node()
+    with Driver(rclpy_context) as driver:
+        driver.reset_and_wait()
+        yield driver
 
 
 def positions(states):
@@ -177,9 +192,8 @@ def stiff_sim(ros_domain, tmp_path_factory):
     times the default makes the explicit integration unstable for a pitch rate of 40 rad/s (measured: the
     first period blows up)."""
     log = tmp_path_factory.mktemp("stiff_sim_node") / "log.txt"
-    with running_node("swim_sim", "sim_node", log, "-p", "constrained:=true", "-p", "sample_period_s:=0.05",
-                      "-p", "substeps:=1", "-p", "disturbances.foil_normal_drag_coefficient:=100.0",
-                      "-p", f"resend_after_s:={RESEND_AFTER_S}", "-r", "__ns:=/stiff") as process:
+    with running_sim(log, "-p", "sample_period_s:=0.05", "-p", "substeps:=1",
+                     "-p", "disturbances.foil_normal_drag_coefficient:=100.0", "-r", "__ns:=/stiff") as process:
         yield process
 
 
@@ -187,8 +201,7 @@ def test_blow_up_stops_publishing_until_reset(stiff_sim, rclpy_context):
     from sensor_msgs.msg import JointState
     from std_srvs.srv import Trigger
     from swim_interfaces.srv import SetVehicleState
-    driver = Driver(rclpy_context, namespace="/stiff")
-    try:
+    with Driver(rclpy_context, namespace="/stiff") as driver:
         fast = JointState(name=["alpha", "phi", "theta"], position=[0.0, 0.0, 0.0], velocity=[0.0, 0.0, 40.0])
         assert driver.call(SetVehicleState, "set_state", SetVehicleState.Request(state=fast)).success
         assert driver.wait_for_states(1)
@@ -198,27 +211,20 @@ def test_blow_up_stops_publishing_until_reset(stiff_sim, rclpy_context):
         assert all(np.all(np.isfinite(s.position)) for s in driver.states)
         assert driver.call(Trigger, "reset", Trigger.Request()).success
         assert driver.wait_for_states(count + 1)
-    finally:
-        driver.executor.shutdown()
-        driver.node.destroy_node()
 
 
 @pytest.fixture(scope="module")
 def held_sim(ros_domain, tmp_path_factory):
     """A second simulator with hold_until_torque, in a namespace of its own (beside the module's other one)."""
     log = tmp_path_factory.mktemp("held_sim_node") / "log.txt"
-    with running_node("swim_sim", "sim_node", log, "-p", "constrained:=true", "-p", f"seed:={SEED}",
-                      "-p", f"resend_after_s:={RESEND_AFTER_S}", "-p", "hold_until_torque:=true",
-                      "-r", "__ns:=/held") as process:
+    with running_sim(log, "-p", f"seed:={SEED}", "-p", "hold_until_torque:=true", "-r", "__ns:=/held") as process:
         yield process
 
 
 def test_hold_until_torque_keeps_the_state_until_a_nonzero_command(held_sim, rclpy_context):
     from std_srvs.srv import Trigger
-    driver = Driver(rclpy_context, namespace="/held")
-    try:
-        assert driver.call(Trigger, "reset", Trigger.Request()).success
-        assert driver.wait_for_states(1)
+    with Driver(rclpy_context, namespace="/held") as driver:
+        driver.reset_and_wait()
         held = driver.states[-1]
         started = time.monotonic()
         held_states = driver.drive(np.zeros((10, 2)))   # zero commands: the same state, published again
@@ -236,6 +242,3 @@ def test_hold_until_torque_keeps_the_state_until_a_nonzero_command(held_sim, rcl
         reset_state = driver.states[-1]
         again = driver.drive(np.zeros((3, 2)))
         assert all(s.header.stamp == reset_state.header.stamp for s in again)
-    finally:
-        driver.executor.shutdown()
-        driver.node.destroy_node()

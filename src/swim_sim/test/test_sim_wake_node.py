@@ -6,7 +6,7 @@ import pytest
 
 from swim_ros.calls import spin_until
 from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, running_node
-from test_sim_node import RESEND_AFTER_S, Driver
+from test_sim_node import Driver, running_sim
 
 SEED = 11
 PERIODS = 120
@@ -18,23 +18,18 @@ REFUSED_START_TIMEOUT_S = 60
 @pytest.fixture(scope="module")
 def wake_sim(ros_domain, tmp_path_factory):
     log = tmp_path_factory.mktemp("sim_node_wake") / "log.txt"
-    with running_node("swim_sim", "sim_node", log, "-p", "constrained:=true", "-p", f"seed:={SEED}",
-                      "-p", f"resend_after_s:={RESEND_AFTER_S}", "-p", "wake.enabled:=true") as process:
+    with running_sim(log, "-p", f"seed:={SEED}", "-p", "wake.enabled:=true") as process:
         yield process
 
 
 @pytest.fixture()
 def driver(wake_sim, rclpy_context):
-    from std_srvs.srv import Trigger
     from swim_interfaces.msg import WakeStatistics
-    driver = Driver(rclpy_context)
-    driver.wakes = []
-    driver.node.create_subscription(WakeStatistics, "wake_statistics", driver.wakes.append, PERIODS + 10)
-    assert driver.call(Trigger, "reset", Trigger.Request()).success
-    assert driver.wait_for_states(1)
-    yield driver
-    driver.executor.shutdown()
-    driver.node.destroy_node()
+    with Driver(rclpy_context) as driver:
+        driver.wakes = []
+        driver.node.create_subscription(WakeStatistics, "wake_statistics", driver.wakes.append, PERIODS + 10)
+        driver.reset_and_wait()
+        yield driver
 
 
 def wait_for_wakes(driver, count, timeout_s=MESSAGE_TIMEOUT_S):

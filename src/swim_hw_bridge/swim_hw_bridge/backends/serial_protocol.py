@@ -98,6 +98,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 import struct
+from typing import ClassVar
 
 PROTOCOL_VERSION = 1
 FRAME_DELIMITER = 0x00
@@ -328,19 +329,31 @@ class FrameDecoder:
         return frame
 
 
-# --- payloads --------------------------------------------------------------------------------------------------
+# --- payloads ---------------------------------------------------------------------------------------------------
 
 @dataclasses.dataclass(frozen=True)
-class Hello:
+class _Payload:
+    """A message's payload: its fields, in declaration order, are the values of its LAYOUT (a tuple field gives
+    one value per item), as parse_payload reads them back."""
+
+    LAYOUT: ClassVar[struct.Struct]
+
+    def pack(self) -> bytes:
+        values: list[int] = []
+        for field in dataclasses.fields(self):
+            value = getattr(self, field.name)
+            values.extend(value if isinstance(value, tuple) else (value,))
+        return self.LAYOUT.pack(*values)
+
+
+@dataclasses.dataclass(frozen=True)
+class Hello(_Payload):
     protocol_version: int = PROTOCOL_VERSION
     LAYOUT = struct.Struct("<B")
 
-    def pack(self) -> bytes:
-        return self.LAYOUT.pack(self.protocol_version)
-
 
 @dataclasses.dataclass(frozen=True)
-class HelloReply:
+class HelloReply(_Payload):
     request_sequence: int
     protocol_version: int
     counter_bits: int
@@ -348,32 +361,22 @@ class HelloReply:
     toggle_timeout_ms: int
     LAYOUT = struct.Struct("<HBBHH")
 
-    def pack(self) -> bytes:
-        return self.LAYOUT.pack(self.request_sequence, self.protocol_version, self.counter_bits,
-                                self.command_timeout_ms, self.toggle_timeout_ms)
-
 
 @dataclasses.dataclass(frozen=True)
-class Command:
+class Command(_Payload):
     heave_current_ua: int
     pitch_current_ua: int
     flags: int
     LAYOUT = struct.Struct("<iiB")
 
-    def pack(self) -> bytes:
-        return self.LAYOUT.pack(self.heave_current_ua, self.pitch_current_ua, self.flags)
-
 
 @dataclasses.dataclass(frozen=True)
-class StateRequest:
+class StateRequest(_Payload):
     LAYOUT = struct.Struct("<")
 
-    def pack(self) -> bytes:
-        return b""
-
 
 @dataclasses.dataclass(frozen=True)
-class State:
+class State(_Payload):
     request_sequence: int
     last_command_sequence: int
     device_time_us: int
@@ -383,11 +386,6 @@ class State:
     status: int
     rx_error_count: int
     LAYOUT = struct.Struct("<HHI4IiiHH")
-
-    def pack(self) -> bytes:
-        return self.LAYOUT.pack(self.request_sequence, self.last_command_sequence, self.device_time_us,
-                                *self.counts, self.applied_heave_current_ua, self.applied_pitch_current_ua,
-                                self.status, self.rx_error_count)
 
 
 PAYLOAD_CLASSES: dict[MessageType, type[Hello | HelloReply | Command | StateRequest | State]] = {

@@ -29,14 +29,24 @@ def ros_domain() -> int:
     return claim_ros_domain()
 
 
-@pytest.fixture()
-def rclpy_context(ros_domain: int) -> Iterator[Any]:
-    """An rclpy context of the test's own in the test session's domain, shut down after the test."""
+@contextlib.contextmanager
+def new_rclpy_context() -> Iterator[Any]:
+    """An rclpy context of its own, initialised, shut down on leaving: for a fixture that outlives one test (a
+    module's client node). Enter it inside a fixture holding ros_domain, so the context joins that domain."""
     import rclpy
     context = rclpy.Context()
     rclpy.init(context=context)
-    yield context
-    rclpy.shutdown(context=context)
+    try:
+        yield context
+    finally:
+        rclpy.shutdown(context=context)
+
+
+@pytest.fixture()
+def rclpy_context(ros_domain: int) -> Iterator[Any]:
+    """An rclpy context of the test's own in the test session's domain, shut down after the test."""
+    with new_rclpy_context() as context:
+        yield context
 
 
 @contextlib.contextmanager

@@ -2,7 +2,7 @@
 by field, valid, borderline and malformed, each example labelled with what the node must do with it.
 
 Sizes: seeded (derandomize) and sized for CI by default; SWIM_FUZZ_PROFILE=long multiplies every surface's count
-by LONG_RUN_FACTOR (the CI total, 500 examples, becomes 8,000):
+by LONG_RUN_FACTOR (the CI total, 675 examples, becomes 10,800; the explicit examples run once in either):
 
     SWIM_FUZZ_PROFILE=long python -m pytest -q src/swim_sim/test/test_fuzz_sim_node.py
 """
@@ -12,13 +12,13 @@ import dataclasses
 import math
 import os
 import time
-from typing import Any, Optional
+from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
-from hypothesis import HealthCheck, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-#: how many times the CI count each surface runs with SWIM_FUZZ_PROFILE=long: 16 x 500 is 8,000
+#: how many times the CI count each surface runs with SWIM_FUZZ_PROFILE=long: 16 x 675 is 10,800
 LONG_RUN_FACTOR = 16
 PROFILE = os.environ.get("SWIM_FUZZ_PROFILE", "ci")
 if PROFILE not in ("ci", "long"):
@@ -173,3 +173,32 @@ def set_and_check_parameter(parameters: Any, name: str, value: Any, read_only: A
         assert list(np.atleast_1d(parameters.get([name])[0])) == list(np.atleast_1d(value))
     else:
         assert reply.reason
+
+
+def fuzz_parameter_sets(parameters: Any, specs: Sequence[Any], ci_examples: int, deadline_s: float,
+                        alive: Callable[[], bool], launched: Optional[dict[str, Any]] = None) -> dict[str, int]:
+    """ci_examples fuzzed sets (parameter_sets over the names of specs, a node's swim_ros.parameters.ParameterSpec
+    table) on one node through parameters (swim_ros.calls.ParameterCalls), each checked by set_and_check_parameter
+    and the node alive() after it; then every changeable parameter set back to its launch value (launched: name ->
+    value, else its default), which must be accepted. Returns the counts of accepted and refused sets; a run with
+    no refusal fails (the unknown and non-finite ones must be refused)."""
+    from rclpy.parameter import Parameter
+    launched = launched or {}
+    read_only = {spec.name for spec in specs if spec.read_only}
+    counts = {"accepted": 0, "refused": 0}
+    parameters.get([specs[0].name]), parameters.set([])   # discovery of the parameter services, outside deadlines
+
+    @fuzz_settings(ci_examples)
+    @given(change=parameter_sets([spec.name for spec in specs]))
+    def set_one(change: tuple[str, Any]) -> None:
+        set_and_check_parameter(parameters, *change, read_only, deadline_s, counts)
+        assert alive()
+
+    try:
+        set_one()
+    finally:
+        restored = [Parameter(spec.name, value=launched.get(spec.name, spec.default))
+                    for spec in specs if not spec.read_only]
+        assert all(result.successful for result in parameters.set(restored))
+    assert counts["refused"] > 0
+    return counts
