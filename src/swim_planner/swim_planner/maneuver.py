@@ -89,9 +89,10 @@ DEFAULT_BOUNDS = PlanBounds()
 
 def check_plan_size(library: PlanLibrary, primitive_ids: Sequence[str], repeat_counts: Sequence[int],
                     time_scale: float, bounds: PlanBounds = DEFAULT_BOUNDS) -> None:
-    """Refuse (ManeuverError) a sequence whose plan would pass bounds, from the library's specs alone: nothing
-    is expanded or built. Unknown ids and mismatched lengths are left to concatenate and expand_sequence."""
+    """Refuse (ManeuverError) a sequence with an unknown primitive or whose plan would pass bounds, from the
+    library's specs alone: nothing is expanded or built. Mismatched lengths are left to expand_sequence."""
     check_time_scale(time_scale)
+    check_known(library, primitive_ids)
     counts = list(repeat_counts) or [1] * len(primitive_ids)
     known = [(pid, int(count)) for pid, count in zip(primitive_ids, counts) if pid in library]
     duration_s = sum(library.spec(pid).duration_s * count for pid, count in known) / time_scale
@@ -102,6 +103,13 @@ def check_plan_size(library: PlanLibrary, primitive_ids: Sequence[str], repeat_c
     if samples > bounds.max_samples:
         raise ManeuverError(f"the plan would have {samples} samples, more than the largest plan served "
                             f"({bounds.max_samples}; planner_node parameter max_plan_samples)")
+
+
+def check_known(library: PlanLibrary, primitive_ids: Sequence[str]) -> None:
+    """Refuse (ManeuverError) ids that are not in the library, naming them."""
+    unknown = sorted({pid for pid in primitive_ids if pid not in library})
+    if unknown:
+        raise ManeuverError(f"unknown primitives: {', '.join(unknown)} (see `swim-primitives list`)")
 
 
 def check_start_alpha(start_alpha_rad: float, bounds: PlanBounds = DEFAULT_BOUNDS) -> None:
@@ -132,9 +140,7 @@ def concatenate(library: PlanLibrary, rig: RigParameters, sequence: Sequence[tup
     """The plan that runs the primitives of ``sequence`` one after another at time scale lambda."""
     check_time_scale(time_scale)
     check_start_alpha(start_alpha_rad)
-    unknown = sorted({pid for pid, _ in sequence if pid not in library})
-    if unknown:
-        raise ManeuverError(f"unknown primitives: {', '.join(unknown)} (see `swim-primitives list`)")
+    check_known(library, [pid for pid, _ in sequence])
     try:
         primitives = [library.get(pid) for pid, _ in sequence]
     except LibraryError as err:

@@ -7,9 +7,10 @@ import math
 import time
 
 import pytest
-from hypothesis import given
+from hypothesis import example, given
 from hypothesis import strategies as st
 
+from swim_interfaces.srv import RequestManeuver
 from swim_ros.testing.fixtures import new_rclpy_context, running_node
 from swim_ros.testing.fuzz import any_float, fuzz_parameter_sets, fuzz_settings, unicode_name
 from test_planner_node import PAPER, POLICY
@@ -19,6 +20,10 @@ from test_planner_node import PAPER, POLICY
 DEADLINE_S = 20.0
 #: the planner's answers are refusals within a second (the issue's requirement for the bounded requests)
 REFUSAL_DEADLINE_S = 5.0
+#: an unknown id repeated 2**32 - 1 times: refused before its repeats are expanded (they would fill the memory)
+UNKNOWN_REPEATED = RequestManeuver.Request(mode=RequestManeuver.Request.MODE_SEQUENCE, primitive_ids=["no/such"],
+                                           repeat_counts=[2**32 - 1], time_scale=1.0,
+                                           request_id="fuzz-unknown-id-repeated")
 GOAL_STATES = ("constrained/rest", "free/rest/R0.43", "free/cruise/R0.48/E0.10", "constrained/cruise/E0.05")
 
 
@@ -89,6 +94,7 @@ def finite_plan(plan):
 
 @fuzz_settings(80)
 @given(request=requests())
+@example(request=UNKNOWN_REPEATED)
 def test_fuzzed_requests_are_answered_refused_with_a_reason_or_planned_finite(planner, client, request):
     from swim_ros.calls import call_service
     _, executor, service = client

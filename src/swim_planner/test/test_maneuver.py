@@ -110,3 +110,6 @@ def test_plan_bounds_refuse_by_the_specs_alone_and_admit_a_thousand_cruises(libr
     check_plan_size(library, ids, [1, 1000, 1], 1.0, PlanBounds(max_samples=samples))   # the bound itself passes
     with pytest.raises(ValueError, match="max_duration_s"):
         PlanBounds(max_duration_s=float("nan")).validate()
+    # an unknown id is refused before its repeats are expanded: 4.3e9 of them would fill the memory
+    with pytest.raises(ManeuverError, match="unknown primitives: no/such"):
+        check_plan_size(library, [ids[0], "no/such"], [1, 2**32 - 1], 1.0)
