@@ -43,8 +43,6 @@ class RunClient:
         from rclpy.executors import SingleThreadedExecutor
         from swim_interfaces.action import ExecutePlan
         from swim_interfaces.srv import RequestManeuver
-        from swim_ros.transport import use_large_message_transport
-        use_large_message_transport()   # it sends the plan to the tracker; read at the process's first init
         self.context = rclpy.Context()
         rclpy.init(context=self.context)
         self.bag: Optional[BagWriter] = None

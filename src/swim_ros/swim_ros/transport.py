@@ -5,9 +5,10 @@ maneuver request grows from about 35 ms to about 110 ms (bench/bench_planner_lat
 ``config/fastdds_large_messages.xml`` of this package keeps Fast DDS's default transports and enlarges the segment.
 
 A Fast DDS writer sends from its own segment and a reader reads from the writer's, so only a process that sends
-plans needs the profile (planner_node, and a run client sending a plan to the tracker). Fast DDS writes the
-whole segment into /dev/shm when the participant starts, so the profile is used only where /dev/shm has room
-for it (``FREE_SHM_FACTOR``): a container's /dev/shm is often 64 MiB, and a participant whose segment does not
+plans needs the profile (planner_node). Fast DDS reads the variable in this process and every process it starts:
+set it only in a process that starts no nodes of its own (the run client, which starts them, does not). Fast DDS
+writes the whole segment into /dev/shm when the participant starts, so the profile is used only where /dev/shm has
+room for it (``FREE_SHM_FACTOR``): a container's /dev/shm is often 64 MiB, and a participant whose segment does not
 fit there loses its messages. A user's own profile, or another RMW, is left alone.
 """
 from __future__ import annotations
