@@ -1,5 +1,8 @@
-"""The recorder's stamp reader against rclpy's own serialization of the loop's message types."""
+"""The recorder's stamp reader against rclpy's own serialization of the loop's message types; the environment the
+run client leaves to the nodes it starts."""
 import pytest
+
+from swim_ros.testing.fixtures import ros_domain  # noqa: F401
 
 
 @pytest.mark.parametrize("sec, nanosec", [(0, 0), (63, 184_000_000), (1_795_444_603, 86_991_424), (-5, 999_999_999)])
@@ -14,3 +17,19 @@ def test_header_stamp_read_from_cdr_equals_the_messages_stamp(sec, nanosec):
         message.header.stamp.sec, message.header.stamp.nanosec = sec, nanosec
         message.header.frame_id = "a frame id of some length"   # after the stamp: must not matter
         assert header_stamp_ns(serialize_message(message)) == sec * 1_000_000_000 + nanosec
+
+
+@pytest.mark.usefixtures("ros_domain")
+def test_the_run_client_leaves_the_nodes_it_starts_fast_dds_defaults(tmp_path, monkeypatch):
+    """The run client starts the nodes of a run, which inherit its environment: it sets no Fast DDS profile, or
+    every node would take planner_node's large shared-memory segment (swim_ros.transport)."""
+    import os
+    from swim_bringup.run_client import RunClient
+    from swim_ros.transport import PROFILE_VARIABLES
+    for variable in PROFILE_VARIABLES:
+        monkeypatch.delenv(variable, raising=False)
+    client = RunClient(tmp_path / "bag")
+    try:
+        assert not any(os.environ.get(variable) for variable in PROFILE_VARIABLES)
+    finally:
+        client.close()
