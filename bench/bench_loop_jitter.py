@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from swim_bringup.bag import read_messages
-from swim_bringup.run_client import RunClient
+from swim_bringup.bag import RUN_TOPICS, read_messages
+from swim_bringup.run_client import LOOP_TOPICS, RunClient
 from swim_bringup.system import System, closed_loop_specs, config_dir
 
 PERIODS_S = (0.008, 0.002)
@@ -36,8 +36,7 @@ def record_run(period_s: float, work: Path) -> Path:
         config_dir(), ("mode:=realtime", f"sample_period_s:={period_s}"),
         (f"sample_period_s:={period_s}", f"stale_after_periods:={round(STALE_AFTER_S / period_s)}"))
     bag = work / f"bag_{period_s * 1e3:g}ms"
-    topics = {"joint_states": "sensor_msgs/msg/JointState", "joint_commands": "sensor_msgs/msg/JointState",
-              "tracking_state": "swim_interfaces/msg/TrackingState"}
+    topics = {topic: RUN_TOPICS[topic] for topic in LOOP_TOPICS}
     with System(specs, work / f"logs_{period_s * 1e3:g}ms"), RunClient(bag, topics) as client:
         client.wait_for_nodes()
         handle = client.execute(client.request(*MANEUVER, 1.0))
@@ -57,13 +56,13 @@ def period_jitter_ms(receipts_ns: list[int], period_s: float) -> np.ndarray:
 
 def loop_timing(bag: Path, period_s: float) -> dict:
     """Jitter, latency and missed periods over the tracked part of the recorded run."""
-    rows = list(read_messages(bag, ("joint_states", "joint_commands", "tracking_state")))
-    tracked = [log_ns for topic, log_ns, _ in rows if topic == "tracking_state"]
+    rows = list(read_messages(bag, LOOP_TOPICS))
+    tracked = [log_ns for topic, log_ns, _ in rows if topic == "/tracking_state"]
     first_ns, last_ns = tracked[0], tracked[-1]
     states = {stamp_ns(m): log_ns for topic, log_ns, m in rows
-              if topic == "joint_states" and first_ns <= log_ns <= last_ns}
+              if topic == "/joint_states" and first_ns <= log_ns <= last_ns}
     commands = [(stamp_ns(m), log_ns) for topic, log_ns, m in rows
-                if topic == "joint_commands" and first_ns <= log_ns <= last_ns]
+                if topic == "/joint_commands" and first_ns <= log_ns <= last_ns]
     jitter_ms = period_jitter_ms([log_ns for _, log_ns in commands], period_s)
     state_jitter_ms = period_jitter_ms(sorted(states.values()), period_s)
     latency_ms = np.array([log_ns - states[stamp] for stamp, log_ns in commands if stamp in states]) * 1e-6

@@ -27,12 +27,11 @@ from pathlib import Path
 
 from swim_bringup.bag import RUN_TOPICS, read_messages
 from swim_bringup.recorded_run import PAPER_CONSTRAINED, RUN_TOLERANCES
-from swim_bringup.run_client import RunClient
+from swim_bringup.run_client import LOOP_TOPICS, RunClient
 from swim_bringup.system import System, closed_loop_specs, config_dir
 
 PERIOD_NS = 8_000_000   # the demo's control period (rig.yaml sample_period: paper Sec. 2)
 STARTUP_TIMEOUT_S, GOAL_TIMEOUT_S, RECORDER_TIMEOUT_S = 120.0, 600.0, 120.0
-LOOP_TOPICS = ("/joint_states", "/joint_commands", "/tracking_state")
 REPEATS = 2
 
 
@@ -74,9 +73,8 @@ def recorded_counts(log_path: Path) -> dict[str, int]:
 def swim_record(work: Path) -> tuple[float, dict[str, int], int]:
     """(speed, messages per loop topic in the bag, tracked periods missing from any loop topic)."""
     bag, log_path = work / "bag_swim_record", work / "swim_record.log"
-    topics = ["/" + topic.lstrip("/") for topic in RUN_TOPICS]
     with System(closed_loop_specs(config_dir()), work / "logs_swim_record"), open(log_path, "w") as log:
-        recorder = subprocess.Popen(["ros2", "run", "swim_bringup", "swim-record", "-o", str(bag), *topics],
+        recorder = subprocess.Popen(["ros2", "run", "swim_bringup", "swim-record", "-o", str(bag), *RUN_TOPICS],
                                     stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
         try:
             # joint_states and joint_commands flow before the goal: messages on them show the recorder matched

@@ -74,10 +74,10 @@ def test_the_bag_holds_the_bridges_states_in_real_time(bridge_run):
     from swim_bringup.bag import read_messages
     run_dir, _ = bridge_run
     states = {}
-    for _, _, message in read_messages(run_dir / "bag", ("joint_states",)):
+    for _, _, message in read_messages(run_dir / "bag", ("/joint_states",)):
         assert list(message.name) == ["alpha", "R", "phi", "theta"]   # the bridge, not sim_node
         states[(message.header.stamp.sec, message.header.stamp.nanosec)] = message
-    tracked = [(log_ns, m) for _, log_ns, m in read_messages(run_dir / "bag", ("tracking_state",))]
+    tracked = [(log_ns, m) for _, log_ns, m in read_messages(run_dir / "bag", ("/tracking_state",))]
     # the tracker's feedback is exactly the bridge's state it answered (same stamp, same positions)
     missing = [index for index, (_, m) in enumerate(tracked) if (m.header.stamp.sec, m.header.stamp.nanosec)
                not in states]

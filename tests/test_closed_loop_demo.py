@@ -42,17 +42,18 @@ def test_report_is_within_bounds(demo_run):
 
 def test_bag_reads_back_and_agrees_with_the_report(demo_run):
     from rosbags.rosbag2 import Reader
-    from swim_bringup.bag import read_messages
+    from swim_bringup.bag import RUN_TOPICS, read_messages
     from swim_bringup.reports import RunReport
     run_dir, _ = demo_run
     with Reader(run_dir / "bag") as reader:
         counts = {c.topic: c.msgcount for c in reader.connections}
         assert reader.connections[0].msgdef.data   # definitions stored: readable by any rosbag2 reader
-    assert counts["plan"] == 1 and counts["tracking_state"] >= 1125 and counts["joint_commands"] >= 1125
+    assert set(counts) == set(RUN_TOPICS)   # every run topic, by its full name (/joint_states), as rosbag2 names it
+    assert counts["/plan"] == 1 and counts["/tracking_state"] >= 1125 and counts["/joint_commands"] >= 1125
     # a state recorded twice is one the simulator published again: the held initial state until the first torque
     # (hold_until_torque), or a resend (no command came for it within resend_after_s): identical, one period
     states = []
-    for _, _, message in read_messages(run_dir / "bag", ("joint_states",)):
+    for _, _, message in read_messages(run_dir / "bag", ("/joint_states",)):
         if states and message.header.stamp == states[-1].header.stamp:
             assert list(message.position) == list(states[-1].position)
             continue
@@ -60,7 +61,7 @@ def test_bag_reads_back_and_agrees_with_the_report(demo_run):
     stamps = np.array([s.header.stamp.sec + 1e-9 * s.header.stamp.nanosec for s in states])
     np.testing.assert_allclose(np.diff(stamps), 0.008, atol=1e-6)   # lock-step: one period per state, none lost
     # energy used, independently: from the simulator's applied efforts and velocities over the tracked stretch
-    tracking = [m for _, _, m in read_messages(run_dir / "bag", ("tracking_state",))]
+    tracking = [m for _, _, m in read_messages(run_dir / "bag", ("/tracking_state",))]
     first = next(i for i, s in enumerate(states) if s.header.stamp == tracking[0].header.stamp)
     # the effort reported with state k+1 is the torque held over period k
     efforts = np.array([s.effort[-2:] for s in states[first + 1:first + 1 + len(tracking)]])
@@ -111,7 +112,7 @@ def test_a_second_run_repeats_the_first_bit_for_bit(demo_run, tmp_path):
     assert "a plan crosses in one piece" in (second_dir / "logs" / "planner_node.log").read_text(), output[-2000:]
     runs = [RunReport.load(d / "report.json").measures for d in (first_dir, second_dir)]
     assert runs[0] == runs[1]   # every measure, exactly
-    tracked = [[m for _, _, m in read_messages(d / "bag", ("tracking_state",))] for d in (first_dir, second_dir)]
+    tracked = [[m for _, _, m in read_messages(d / "bag", ("/tracking_state",))] for d in (first_dir, second_dir)]
     for run in tracked:   # the plan began at the held initial state: simulated time start_time_s (1 s)
         assert (run[0].header.stamp.sec, run[0].header.stamp.nanosec) == (1, 0)
     assert [list(m.feedback.positions) for m in tracked[0]] == [list(m.feedback.positions) for m in tracked[1]]

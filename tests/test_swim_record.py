@@ -82,7 +82,7 @@ def wait_for_recorder(node, publisher, bag_log):
 
 
 def test_sigint_closes_the_bag_with_rosbag2_metadata(publisher, tmp_path):
-    from swim_bringup.bag import read_messages
+    from swim_bringup.bag import RUN_TOPICS, read_messages
     bag, log_path = tmp_path / "bag", tmp_path / "record.log"
     with recording_all_published(bag, log_path, publisher, "joint_states", "robot_description", "/tf_static") \
             as recorder:
@@ -92,6 +92,8 @@ def test_sigint_closes_the_bag_with_rosbag2_metadata(publisher, tmp_path):
     info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     assert info["version"] == 9 and info["storage_identifier"] == "mcap"
     topics = {t["topic_metadata"]["name"]: t for t in info["topics_with_message_count"]}
+    assert set(topics) == {"/joint_states", "/robot_description", "/tf_static"}   # named in full, with or without /
+    assert set(topics) <= set(RUN_TOPICS)   # as swim-demo's bags name them
     assert topics["/joint_states"]["message_count"] == STATES
     assert topics["/robot_description"]["message_count"] == 1
     assert topics["/robot_description"]["topic_metadata"]["type"] == "std_msgs/msg/String"

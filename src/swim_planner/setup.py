@@ -11,7 +11,8 @@ setup(
         ('share/' + package_name, ['package.xml']),
     ],
     install_requires=['setuptools', 'numpy', 'scipy', 'casadi', 'tqdm'],
-    package_data={package_name: ['library/default/manifest.json', 'library/default/primitives/*.npz']},
+    package_data={package_name: [f'library/{folder}/{files}' for folder in ('default', 'circulatory')
+                                  for files in ('manifest.json', 'primitives/*.npz')]},
     zip_safe=True,
     maintainer='swim maintainers',
     maintainer_email='swim@example.com',

@@ -10,8 +10,9 @@ From the tracking_state topic (reference and measured q each control period) and
 Any rosbag2 bag opens (swim-demo's, swim-record's, one recorded by `ros2 bag record`; MCAP or sqlite3): its topics
 are listed with their types and message counts; from joint_states alone, each joint's range and peak speed and the
 messages' rate; the measures above when the bag has what they need (tracking_state, and for the constrained
-vehicle the plan). A topic is found under the name the demo gives it (joint_states), its full name
-(/joint_states) or one namespace (/test/joint_states). What a bag lacks is named, with why.
+vehicle the plan). A topic is found under its full name (/joint_states: swim-demo's, swim-record's and
+rosbag2's), a relative one (joint_states, as other recorders may give it) or one namespace (/test/joint_states).
+What a bag lacks is named, with why.
 
 Exit status: 0 every bag analysed in full; 1 some bag lacked what the run's measures need (what it holds is
 analysed, what it lacks named); 2 some bag could not be read (no bag at the path, a corrupt file) or the output
@@ -63,8 +64,8 @@ class MissingTopic(ValueError):
 
 
 def find_topic(info: BagInfo, name: str) -> str:
-    """The bag's name for the run topic `name` (a key of bag.RUN_TOPICS): the topic recorded under that name
-    (swim-demo's joint_states), under its full name (rosbag2's and swim-record's /joint_states) or, failing both,
+    """The bag's name for the run topic `name` (a key of bag.RUN_TOPICS, /joint_states): the topic recorded under
+    that full name (swim-demo's, swim-record's and rosbag2's) or its relative one (joint_states) or, failing both,
     under one namespace (/test/joint_states). MissingTopic if there is none, several, one of another type than
     RUN_TOPICS gives, or one without messages."""
     bare = name.lstrip("/")
@@ -86,9 +87,9 @@ def load_run(bag_path: Path) -> Run:
     """The tracked periods of the last plan executed in the bag. MissingTopic if the bag has no tracking_state, or,
     for the constrained vehicle, no plan; BagError if the bag cannot be read."""
     info = bag_info(bag_path)
-    tracking_topic = find_topic(info, "tracking_state")
+    tracking_topic = find_topic(info, "/tracking_state")
     try:
-        topics: tuple[str, ...] = (tracking_topic, find_topic(info, "plan"))
+        topics: tuple[str, ...] = (tracking_topic, find_topic(info, "/plan"))
         no_plan = ""
     except MissingTopic as err:
         topics, no_plan = (tracking_topic,), err.reason
@@ -102,12 +103,12 @@ def load_run(bag_path: Path) -> Run:
             rows = []   # a new plan started: keep the last one
         rows.append(message)
     if not rows:
-        raise MissingTopic(bag_path, "tracking_state", f"no message of {tracking_topic} could be read")
+        raise MissingTopic(bag_path, "/tracking_state", f"no message of {tracking_topic} could be read")
     if "alpha" not in rows[0].joint_names:
-        raise MissingTopic(bag_path, "tracking_state", f"its joints {list(rows[0].joint_names)} have no alpha")
+        raise MissingTopic(bag_path, "/tracking_state", f"its joints {list(rows[0].joint_names)} have no alpha")
     if lane_radius_m is None and "R" not in rows[0].joint_names:
-        raise MissingTopic(bag_path, "plan", f"no plan message ({no_plan}): the constrained vehicle's lane radius, "
-                                             f"which turns its alpha errors into metres, is unknown")
+        raise MissingTopic(bag_path, "/plan", f"no plan message ({no_plan}): the constrained vehicle's lane "
+                                              f"radius, which turns its alpha errors into metres, is unknown")
     return Run(time_s=np.array([r.plan_time_s for r in rows]),
                q=np.array([r.feedback.positions for r in rows]),
                qdot=np.array([r.feedback.velocities for r in rows]),
@@ -273,17 +274,17 @@ def analyze_bag(bag_path: Path) -> BagAnalysis:
     missing = []
     joints = None
     try:
-        topic = find_topic(info, "joint_states")
+        topic = find_topic(info, "/joint_states")
         joints = joint_states_summary(topic, *read_joint_states(bag_path, topic))
     except MissingTopic as err:
-        missing.append(f"joint_states: {err.reason} (no joint motion)")
+        missing.append(f"/joint_states: {err.reason} (no joint motion)")
     except BagError as err:
-        missing.append(f"joint_states: {err} (no joint motion)")
+        missing.append(f"/joint_states: {err} (no joint motion)")
     run = None
     try:
         run = analyze(bag_path)
     except MissingTopic as err:
-        hint = ": the tracker publishes it while it executes a plan" if err.topic == "tracking_state" else ""
+        hint = ": the tracker publishes it while it executes a plan" if err.topic == "/tracking_state" else ""
         missing.append(f"{err.topic}: {err.reason} (no run measures{hint})")
     except (ValueError, BagError) as err:   # ValueError: tracking_state messages that do not make a run
         missing.append(f"run measures: {err}")

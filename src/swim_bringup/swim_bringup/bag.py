@@ -7,9 +7,13 @@ recorder killed before close() leaves a bag whose written chunks read_messages s
 and metadata.yaml that close() writes).
 
 Any rosbag2 bag reads back (bag_info, read_messages): a folder with its metadata.yaml and MCAP or sqlite3 (.db3)
-files, or one .mcap or .db3 file. Topic names are as recorded: rosbag2 and swim-record give full names
-(/joint_states), swim-demo's client the nodes' own (joint_states). What cannot be read (no bag at the path, a
-corrupt file, a message whose type this environment does not know) is a BagError that says which and why.
+files, or one .mcap or .db3 file. Topic names are as recorded: rosbag2, swim-record and swim-demo's client
+(RUN_TOPICS) give full names (/joint_states); other recorders may give relative ones (joint_states), which
+analysis.find_topic finds too. Messages are decoded by the definition of their type that the bag carries (the one
+they were recorded with), and by the installed one only where the bag has none:
+a bag recorded with an older version of our messages (swim_interfaces v2's PlannedTrajectory, before the flow
+model's fields) reads as it was written. What cannot be read (no bag at the path, a corrupt file, a message whose
+type neither the bag defines nor this environment knows) is a BagError that says which and why.
 """
 from __future__ import annotations
 
@@ -17,26 +21,28 @@ import dataclasses
 from pathlib import Path
 from typing import Any, Iterator, Sequence
 
-from rosbags.interfaces import Qos
+from rosbags.interfaces import MessageDefinition, MessageDefinitionFormat, Qos
 from rosbags.rosbag2 import Reader, ReaderError, StoragePlugin, Writer
-from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+from rosbags.typesys import Stores, TypesysError, get_types_from_idl, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
-#: the run's topics and their types (the demo records all of them)
+#: the run's topics and their types (the demo records all of them), by their fully qualified names: the nodes of a
+#: run are in the root namespace, and rosbag2, swim-record and Foxglove's layouts (docs/foxglove_layout.json) name
+#: topics in full
 RUN_TOPICS = {
-    "joint_states": "sensor_msgs/msg/JointState",
-    "joint_commands": "sensor_msgs/msg/JointState",
-    "tracking_state": "swim_interfaces/msg/TrackingState",
-    "plan": "swim_interfaces/msg/PlannedTrajectory",
-    "wake_statistics": "swim_interfaces/msg/WakeStatistics",   # only when the simulator's wake is on
-    "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",      # bridge_node's loop, watchdog and faults
-    "robot_description": "std_msgs/msg/String",                 # swim_viz's rig_state_publisher: the URDF
-    "/tf": "tf2_msgs/msg/TFMessage",                            # ... the rig's moving frames
-    "/tf_static": "tf2_msgs/msg/TFMessage",                     # ... and its fixed ones
-    "markers": "visualization_msgs/msg/MarkerArray",            # swim_viz's marker_node: planned, travelled path
+    "/joint_states": "sensor_msgs/msg/JointState",
+    "/joint_commands": "sensor_msgs/msg/JointState",
+    "/tracking_state": "swim_interfaces/msg/TrackingState",
+    "/plan": "swim_interfaces/msg/PlannedTrajectory",
+    "/wake_statistics": "swim_interfaces/msg/WakeStatistics",   # only when the simulator's wake is on
+    "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",       # bridge_node's loop, watchdog and faults
+    "/robot_description": "std_msgs/msg/String",                 # swim_viz's rig_state_publisher: the URDF
+    "/tf": "tf2_msgs/msg/TFMessage",                             # ... the rig's moving frames
+    "/tf_static": "tf2_msgs/msg/TFMessage",                      # ... and its fixed ones
+    "/markers": "visualization_msgs/msg/MarkerArray",            # swim_viz's marker_node: planned, travelled path
 }
 #: the latched topics (transient local, depth 1): a recorder that subscribes late still gets their last message
-LATCHED_TOPICS = ("plan", "robot_description", "/tf_static")
+LATCHED_TOPICS = ("/plan", "/robot_description", "/tf_static")
 
 
 class BagError(RuntimeError):
@@ -153,32 +159,80 @@ def bag_info(path: Path) -> BagInfo:
         reader.close()
 
 
-def _decoded(store: Typestore, path: Path, topic: str, timestamp: int, msgtype: str, raw: bytes) -> Any:
+#: MCAP schema encodings (rosbag2's) as rosbags names the formats of message definitions
+SCHEMA_FORMATS = {"ros2msg": MessageDefinitionFormat.MSG, "ros2idl": MessageDefinitionFormat.IDL,
+                  "omgidl": MessageDefinitionFormat.IDL}
+#: the line rosbag2 puts between the IDL definitions of a type and the types it uses
+IDL_SEPARATOR = "=" * 80 + "\n"
+
+
+def definition_types(msgtype: str, definition: MessageDefinition) -> dict[str, Any]:
+    """The types of a bag's own definition of msgtype (msgtype and every type it uses, as the bag's recorder knew
+    them), parsed by rosbags; empty when the bag has no definition or one rosbags cannot parse."""
     try:
-        return store.deserialize_cdr(raw, msgtype)
-    except Exception as err:   # rosbags' generated deserializers raise whatever error the bad bytes trip
-        raise BagError(f"{path}: the message on {topic} at {timestamp} ns does not decode as {msgtype} "
-                       f"({type(err).__name__}: {err})") from err
+        if definition.format == MessageDefinitionFormat.MSG:
+            return dict(get_types_from_msg(definition.data, msgtype))
+        if definition.format == MessageDefinitionFormat.IDL:
+            types: dict[str, Any] = {}
+            if definition.data.startswith(f"{IDL_SEPARATOR}IDL: "):
+                for part in definition.data.split(IDL_SEPARATOR)[1:]:
+                    types.update(get_types_from_idl(part.split("\n", 1)[1]))
+            else:
+                types.update(get_types_from_idl(definition.data))
+            return types
+    except (TypesysError, IndexError):   # a definition that does not parse: the installed type is used instead
+        pass
+    return {}
 
 
-def _check_known(store: Typestore, path: Path, topic: str, msgtype: str) -> None:
-    if msgtype not in store.fielddefs:
-        raise BagError(f"{path}: {topic} is of type {msgtype}, which this environment does not know (ROS 2 "
-                       f"Jazzy's types and swim_interfaces')")
+class BagDecoder:
+    """Decodes the messages of one bag: each by its own type's definition in the bag (the one it was recorded with),
+    or by the installed one (swim_typestore) where the bag has none."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self._installed: Typestore | None = None
+        self._stores: dict[tuple[str, MessageDefinition], Typestore] = {}
+
+    def store(self, topic: str, msgtype: str, definition: MessageDefinition) -> Typestore:
+        """The type store msgtype is decoded with; BagError if neither the bag nor this environment defines it."""
+        key = (msgtype, definition)
+        if key not in self._stores:
+            types = definition_types(msgtype, definition)
+            if msgtype in types:
+                store = get_typestore(Stores.EMPTY)
+                store.register(types)
+            else:
+                if self._installed is None:
+                    self._installed = swim_typestore()
+                store = self._installed
+                if msgtype not in store.fielddefs:
+                    raise BagError(f"{self.path}: {topic} is of type {msgtype}, which neither the bag defines nor "
+                                   f"this environment knows (ROS 2 Jazzy's types and swim_interfaces')")
+            self._stores[key] = store
+        return self._stores[key]
+
+    def decode(self, topic: str, timestamp: int, msgtype: str, definition: MessageDefinition, raw: bytes) -> Any:
+        store = self.store(topic, msgtype, definition)
+        try:
+            return store.deserialize_cdr(raw, msgtype)
+        except Exception as err:   # rosbags' generated deserializers raise whatever error the bad bytes trip
+            raise BagError(f"{self.path}: the message on {topic} at {timestamp} ns does not decode as {msgtype} "
+                           f"({type(err).__name__}: {err})") from err
 
 
 def read_messages(path: Path, topics: tuple[str, ...]) -> Iterator[tuple[str, int, Any]]:
     """(topic, log time ns, decoded message: the typestore's class of its type) for the topics asked (names exactly
     as recorded; a topic not in the bag gives nothing), in log-time order; of a bag cut before close() (no
     metadata.yaml), the messages of its complete chunks in the order written. BagError if the bag cannot be read
-    or a message asked for cannot be decoded (its type unknown here, its bytes not of its type)."""
-    store = swim_typestore()
+    or a message asked for cannot be decoded (its type neither defined in the bag nor known here, its bytes not of
+    its type). Each message is decoded by its type's definition in the bag (BagDecoder)."""
     path = Path(path)
+    decoder = BagDecoder(path)
     if _is_cut_bag(path):
-        for topic, msgtype, timestamp, raw in read_cut_bag(path):
+        for topic, msgtype, timestamp, raw, definition in _cut_bag_records(path):
             if raw is not None and topic in topics:
-                _check_known(store, path, topic, msgtype)
-                yield topic, timestamp, _decoded(store, path, topic, timestamp, msgtype, raw)
+                yield topic, timestamp, decoder.decode(topic, timestamp, msgtype, definition, raw)
         return
     reader = _open_reader(path)
     try:
@@ -186,11 +240,11 @@ def read_messages(path: Path, topics: tuple[str, ...]) -> Iterator[tuple[str, in
         if not connections:   # rosbags reads every message when given no connection
             return
         for connection in connections:
-            _check_known(store, path, connection.topic, connection.msgtype)
+            decoder.store(connection.topic, connection.msgtype, connection.msgdef)
         try:
             for connection, timestamp, raw in reader.messages(connections=connections):
-                yield connection.topic, timestamp, _decoded(store, path, connection.topic, timestamp,
-                                                            connection.msgtype, raw)
+                yield connection.topic, timestamp, decoder.decode(connection.topic, timestamp, connection.msgtype,
+                                                                  connection.msgdef, raw)
         except ReaderError as err:
             raise BagError(f"{path}: cannot read its messages: {err}") from err
     finally:
@@ -202,6 +256,12 @@ def read_cut_bag(path: Path) -> Iterator[tuple[str, str, int, bytes | None]]:
     file that has no summary (its recorder was killed), in the order written, read linearly with the mcap library
     (Foxglove's reader) up to the first incomplete record; and (topic, type name, 0, None) for each channel as it
     is declared (a topic recorded without messages). BagError if the folder has no single MCAP file."""
+    for topic, msgtype, timestamp, raw, _ in _cut_bag_records(path):
+        yield topic, msgtype, timestamp, raw
+
+
+def _cut_bag_records(path: Path) -> Iterator[tuple[str, str, int, bytes | None, MessageDefinition]]:
+    """read_cut_bag's records, each with the definition of its type the bag carries (its channel's schema)."""
     from mcap.exceptions import EndOfFile, McapError
     from mcap.records import Channel, Message, Schema
     from mcap.stream_reader import StreamReader
@@ -213,19 +273,22 @@ def read_cut_bag(path: Path) -> Iterator[tuple[str, str, int, bytes | None]]:
     if len(files) != 1:
         raise BagError(f"{path}: not a rosbag2 bag: no metadata.yaml, and "
                        + (f"{len(files)} MCAP files (give one of them)" if files else "no .mcap or .db3 file"))
-    schemas: dict[int, str] = {}
-    channels: dict[int, tuple[str, str]] = {}
+    schemas: dict[int, tuple[str, MessageDefinition]] = {}
+    channels: dict[int, tuple[str, str, MessageDefinition]] = {}
     with open(files[0], "rb") as stream:
         try:
             for record in StreamReader(stream, skip_magic=False, validate_crcs=False).records:
                 if isinstance(record, Schema):
-                    schemas[record.id] = record.name
+                    definition_format = SCHEMA_FORMATS.get(record.encoding, MessageDefinitionFormat.NONE)
+                    schemas[record.id] = (record.name, MessageDefinition(definition_format,
+                                                                         record.data.decode(errors="replace")))
                 elif isinstance(record, Channel):
-                    channels[record.id] = (record.topic, schemas[record.schema_id])
-                    yield record.topic, schemas[record.schema_id], 0, None
+                    msgtype, definition = schemas[record.schema_id]
+                    channels[record.id] = (record.topic, msgtype, definition)
+                    yield record.topic, msgtype, 0, None, definition
                 elif isinstance(record, Message):
-                    topic, msgtype = channels[record.channel_id]
-                    yield topic, msgtype, record.log_time, record.data
+                    topic, msgtype, definition = channels[record.channel_id]
+                    yield topic, msgtype, record.log_time, record.data, definition
         except EndOfFile:
             return
         except (McapError, KeyError) as err:   # not MCAP, or a record naming a schema or channel never declared

@@ -3,7 +3,8 @@
 RunClient owns an rclpy context of its own (so a process can hold several, one after another), a node with
 the planner's service client and the tracker's action client, and a rosbag2 MCAP bag (bag.BagWriter) with one raw
 subscription per recorded topic: messages go into the bag as the CDR bytes received, stamped with the wall time
-of receipt. swim-demo uses it for a whole maneuver; the kill-a-node tests use it to stop a node mid-run.
+of receipt, under the topic's fully qualified name (bag.RUN_TOPICS: /joint_states, as rosbag2 records it).
+swim-demo uses it for a whole maneuver; the kill-a-node tests use it to stop a node mid-run.
 """
 from __future__ import annotations
 
@@ -26,8 +27,10 @@ STARTUP_TIMEOUT_S = 60.0
 #: a repeat carries the same request id, so the planner never plans twice
 PLANNER_POLICY = RetryPolicy(attempt_timeout_s=20.0, attempts=3, discovery_timeout_s=STARTUP_TIMEOUT_S)
 DRAIN_TIMEOUT_S = 60.0
-LOOP_TOPICS = ("joint_states", "joint_commands", "tracking_state")   # published every period by the nodes of a run
-IDLE_LOOP_TOPICS = ("joint_states", "joint_commands")   # ... these also before a plan (plant and idle tracker)
+#: published every period by the nodes of a run (keys of RUN_TOPICS)
+LOOP_TOPICS = ("/joint_states", "/joint_commands", "/tracking_state")
+#: ... these also before a plan (plant and idle tracker)
+IDLE_LOOP_TOPICS = ("/joint_states", "/joint_commands")
 
 
 class RunError(RuntimeError):
@@ -35,9 +38,14 @@ class RunError(RuntimeError):
 
 
 class RunClient:
-    """Planner and tracker clients plus a recorder of topics (name -> type name) into the bag at bag_path."""
+    """Planner and tracker clients plus a recorder of topics (fully qualified name -> type name) into the bag at
+    bag_path. ValueError for a relative name: the client's waits look the loop's topics up by LOOP_TOPICS' names."""
 
     def __init__(self, bag_path: Path, topics: dict[str, str] = RUN_TOPICS) -> None:
+        relative = [topic for topic in topics if not topic.startswith("/")]
+        if relative:
+            raise ValueError(f"RunClient records topics under their full names (/joint_states), not: "
+                             f"{', '.join(relative)}")
         import rclpy
         from rclpy.action import ActionClient
         from rclpy.executors import SingleThreadedExecutor
@@ -77,7 +85,7 @@ class RunClient:
         """Plan time of the latest tracking_state recorded (-1 before the first)."""
         from rclpy.serialization import deserialize_message
         from swim_interfaces.msg import TrackingState
-        cdr = self.latest_cdr.get("tracking_state")
+        cdr = self.latest_cdr.get("/tracking_state")
         return -1.0 if cdr is None else deserialize_message(cdr, TrackingState).plan_time_s
 
     def __enter__(self) -> "RunClient":
@@ -183,7 +191,7 @@ class RunClient:
                 raise RunError(f"the recorder did not get the plan's last period within {DRAIN_TIMEOUT_S:.0f} s "
                                f"({self._recording_status(final_stamp_ns)})")
             self.executor.spin_once(timeout_sec=0.05)
-            latest = self.latest_cdr.get("tracking_state")
+            latest = self.latest_cdr.get("/tracking_state")
             # deserialize each tracking_state once
             if final_stamp_ns is None and latest is not None and latest is not checked:
                 checked = latest
@@ -195,7 +203,7 @@ class RunClient:
     def _recorded_up_to(self, stamp_ns: Optional[int]) -> bool:
         """Every loop topic recorded up to stamp_ns, and the plan recorded: a plan of thousands of samples goes out
         in fragments, and one lost beside a fast loop is repaired only at the writer's next heartbeat."""
-        return stamp_ns is not None and ("plan" not in self.recordings or "plan" in self.latest_cdr) and all(
+        return stamp_ns is not None and ("/plan" not in self.recordings or "/plan" in self.latest_cdr) and all(
             topic in self.latest_cdr and header_stamp_ns(self.latest_cdr[topic]) >= stamp_ns
             for topic in LOOP_TOPICS if topic in self.recordings)
 
@@ -203,7 +211,7 @@ class RunClient:
         latest = {topic: header_stamp_ns(cdr) * 1e-9 for topic, cdr in self.latest_cdr.items() if topic in LOOP_TOPICS}
         return (f"last period {'not seen' if final_stamp_ns is None else f'{final_stamp_ns * 1e-9:.3f} s'}, "
                 f"latest stamps {', '.join(f'{t} {v:.3f} s' for t, v in latest.items())}, "
-                f"plan {'recorded' if 'plan' in self.latest_cdr else 'missing'}")
+                f"plan {'recorded' if '/plan' in self.latest_cdr else 'missing'}")
 
 
 def header_stamp_ns(cdr: bytes) -> int:

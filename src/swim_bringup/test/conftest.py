@@ -18,7 +18,7 @@ def tracking_state_cdr(store, joint_names, stamp_ns: int, plan_time_s: float, fe
     message = types["swim_interfaces/msg/TrackingState"](
         types["std_msgs/msg/Header"](Time(stamp_ns // 1_000_000_000, stamp_ns % 1_000_000_000), ""),
         list(joint_names), point(reference), point(feedback), point(error), np.array(output_torques, float),
-        np.zeros(2), np.array(saturated, bool), plan_time_s, 1.0, 0, sliding_mode_enabled)
+        np.zeros(2), np.array(saturated, bool), plan_time_s, 1.0, 0, sliding_mode_enabled, np.zeros(0), np.zeros(0))
     return bytes(store.serialize_cdr(message, message.__msgtype__))
 
 

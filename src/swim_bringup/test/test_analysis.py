@@ -66,7 +66,7 @@ def test_a_constrained_run_without_its_plan_is_refused_not_measured_at_radius_ze
     from swim_bringup.bag import BagWriter
     writer = BagWriter(tmp_path / "bag")
     for k in range(3):
-        writer.write("tracking_state", k + 1,
+        writer.write("/tracking_state", k + 1,
                      tracking_state_cdr(writer.store, ["alpha", "phi", "theta"], 1_000_000_000 + 8_000_000 * k,
                                         0.008 * k, feedback=[0.01 * k, 0.0, 0.0], reference=[0.0] * 3))
     writer.close()

@@ -1,4 +1,4 @@
-"""swim-analyze on bags other than swim-demo's (no ROS): swim-record's (full topic names), joint_states alone, a
+"""swim-analyze on bags other than swim-demo's (no ROS): relative topic names, joint_states alone, a
 sqlite3 bag with a type this environment does not know, and paths that are no bag. What it reports is checked
 against what was written; a bag that lacks something gets its other parts analysed and the missing part named."""
 import json
@@ -20,6 +20,7 @@ from swim_bringup.bag import RUN_TOPICS, BagWriter, bag_info, read_messages, swi
 PERIOD_S, PERIODS = 0.008, 251                  # 2 s of tracking at the controller's period
 LANE_M, ALPHA_OFFSET_RAD = 0.43, 0.02
 JOINTS = ["alpha", "phi", "theta"]              # the constrained vehicle
+MEASURED = ("/joint_states", "/tracking_state", "/plan")   # the run topics (RUN_TOPICS' names) the measures read
 
 
 def joint_state_cdr(store, stamp_ns, names, positions, velocities=()):
@@ -36,42 +37,49 @@ def plan_cdr(store, lane_radius_m):
     types = store.types
     header = types["std_msgs/msg/Header"](types["builtin_interfaces/msg/Time"](1, 0), "")
     empty = np.zeros(0)
-    message = types["swim_interfaces/msg/PlannedTrajectory"](header, 2, True, lane_radius_m, JOINTS, empty, empty,
-                                                             empty, empty, empty, empty, empty, [], "")
+    plan_type = types["swim_interfaces/msg/PlannedTrajectory"]
+    message = plan_type(header=header, interface_version=plan_type.INTERFACE_VERSION, constrained=True,
+                        lane_radius_m=lane_radius_m, flow_model="ideal", joint_names=JOINTS, time_from_start_s=empty,
+                        positions=empty, velocities=empty, foil_accelerations=empty, feedforward_torques=empty,
+                        lag_states=empty, lqr_gains=empty, sliding_gains=empty, segments=[], library_digest="")
     return bytes(store.serialize_cdr(message, "swim_interfaces/msg/PlannedTrajectory"))
 
 
 def record_constrained_run(path, names):
-    """A constrained run ALPHA_OFFSET_RAD behind its plan for 2 s, under the topic names given (as swim-demo or
-    swim-record names them): names maps joint_states, tracking_state and plan to the bag's names."""
-    writer = BagWriter(path, {names[topic]: RUN_TOPICS[topic] for topic in ("joint_states", "tracking_state", "plan")})
-    writer.write(names["plan"], 1, plan_cdr(writer.store, LANE_M))
+    """A constrained run ALPHA_OFFSET_RAD behind its plan for 2 s, under the topic names given: names maps each of
+    MEASURED to the bag's name for it."""
+    writer = BagWriter(path, {names[topic]: RUN_TOPICS[topic] for topic in MEASURED})
+    writer.write(names["/plan"], 1, plan_cdr(writer.store, LANE_M))
     for k in range(PERIODS):
         time_s = k * PERIOD_S
         reference = [0.3 * time_s, math.sin(time_s), math.cos(time_s)]
         feedback = [reference[0] - ALPHA_OFFSET_RAD, *reference[1:]]
         stamp_ns = 1_000_000_000 + round(time_s * 1e9)
-        writer.write(names["tracking_state"], stamp_ns,
+        writer.write(names["/tracking_state"], stamp_ns,
                      tracking_state_cdr(writer.store, JOINTS, stamp_ns, time_s, feedback, reference))
-        writer.write(names["joint_states"], stamp_ns, joint_state_cdr(writer.store, stamp_ns, JOINTS, feedback))
+        writer.write(names["/joint_states"], stamp_ns, joint_state_cdr(writer.store, stamp_ns, JOINTS, feedback))
     writer.close()
     return path
 
 
-def test_a_swim_record_bag_full_names_is_measured_as_the_demo_bag(tmp_path, capsys):
-    demo = record_constrained_run(tmp_path / "demo", {t: t for t in ("joint_states", "tracking_state", "plan")})
-    record = record_constrained_run(tmp_path / "record", {t: "/" + t for t in ("joint_states", "tracking_state",
-                                                                                "plan")})
-    assert [t.name for t in bag_info(record).topics] == ["/joint_states", "/tracking_state", "/plan"]
-    assert analyze(record) == analyze(demo)
+def test_a_bag_of_relative_topic_names_is_measured_as_one_of_full_names(tmp_path, capsys):
+    """swim-demo, swim-record and rosbag2 name topics in full (/joint_states); a bag whose topics are relative
+    (joint_states, as a recorder that subscribes by the nodes' own names writes them) is measured alike."""
+    full = record_constrained_run(tmp_path / "full", {t: t for t in MEASURED})
+    relative = record_constrained_run(tmp_path / "relative", {t: t.lstrip("/") for t in MEASURED})
+    assert [t.name for t in bag_info(relative).topics] == ["joint_states", "tracking_state", "plan"]
+    assert analyze(relative) == analyze(full)
     # alpha behind by a constant offset for 2 s: R_d * offset * sqrt(2 s)
-    longitudinal = analyze(record).measures.longitudinal_error_two_norm_m_s05
+    longitudinal = analyze(relative).measures.longitudinal_error_two_norm_m_s05
     assert longitudinal == pytest.approx(LANE_M * ALPHA_OFFSET_RAD * math.sqrt((PERIODS - 1) * PERIOD_S))
-    assert main([str(record)]) == EXIT_FULL_REPORT
-    out = capsys.readouterr().out
-    assert "missing" not in out and "longitudinal_error_two_norm_m_s05" in out
-    motion = analyze_bag(record).joint_states
-    assert motion is not None and motion.topic == "/joint_states" and motion.messages == PERIODS
+    for bag, joint_states in ((full, "/joint_states"), (relative, "joint_states")):
+        assert main([str(bag)]) == EXIT_FULL_REPORT
+        out = capsys.readouterr().out
+        assert "missing" not in out and "longitudinal_error_two_norm_m_s05" in out
+        analysis = analyze_bag(bag)
+        motion = analysis.joint_states
+        assert analysis.missing == () and analysis.run == analyze(full)
+        assert motion is not None and motion.topic == joint_states and motion.messages == PERIODS
     alpha = next(j for j in motion.joints if j.joint_name == "alpha")
     assert (alpha.min_position, alpha.max_position) == pytest.approx(
         (-ALPHA_OFFSET_RAD, 0.3 * (PERIODS - 1) * PERIOD_S - ALPHA_OFFSET_RAD))
@@ -79,22 +87,22 @@ def test_a_swim_record_bag_full_names_is_measured_as_the_demo_bag(tmp_path, caps
 
 def test_a_namespaced_plan_of_another_type_is_named_not_read(tmp_path, capsys):
     """A navigation stack's /plan (nav_msgs/Path) is not ours: the constrained run's lane stays unknown, said so."""
-    names = {"joint_states": "/test/joint_states", "tracking_state": "/test/tracking_state", "plan": "/test/plan"}
-    writer = BagWriter(tmp_path / "bag", {names["tracking_state"]: RUN_TOPICS["tracking_state"],
+    names = {topic: "/test" + topic for topic in MEASURED}
+    writer = BagWriter(tmp_path / "bag", {names["/tracking_state"]: RUN_TOPICS["/tracking_state"],
                                           "/plan": "nav_msgs/msg/Path"})
     path_type = writer.store.types["nav_msgs/msg/Path"]
     header = writer.store.types["std_msgs/msg/Header"](writer.store.types["builtin_interfaces/msg/Time"](0, 0), "")
     writer.write("/plan", 1, bytes(writer.store.serialize_cdr(path_type(header, []), "nav_msgs/msg/Path")))
     for k in range(3):
-        writer.write(names["tracking_state"], k + 2,
+        writer.write(names["/tracking_state"], k + 2,
                      tracking_state_cdr(writer.store, JOINTS, k, k * PERIOD_S, [0.0] * 3, [0.0] * 3))
     writer.close()
     analysis = analyze_bag(tmp_path / "bag")
     assert analysis.run is None
-    assert any(entry.startswith("plan: no plan message (/plan is nav_msgs/msg/Path, not "
+    assert any(entry.startswith("/plan: no plan message (/plan is nav_msgs/msg/Path, not "
                                 "swim_interfaces/msg/PlannedTrajectory)") for entry in analysis.missing)
     assert main([str(tmp_path / "bag")]) == EXIT_PARTIAL_REPORT
-    assert "plan: no plan message" in capsys.readouterr().out
+    assert "/plan: no plan message" in capsys.readouterr().out
 
 
 def test_joint_states_alone_give_ranges_rates_and_the_missing_topics_named(tmp_path, capsys):
@@ -120,11 +128,11 @@ def test_joint_states_alone_give_ranges_rates_and_the_missing_topics_named(tmp_p
     assert (alpha.joint_name, alpha.min_position, alpha.max_position) == ("alpha", 0.0, pytest.approx(0.3 * time_s[-1]))
     assert (phi.min_position, phi.max_position) == pytest.approx((heave.min(), heave.max()))
     assert phi.peak_speed == pytest.approx(np.abs(heave_rate).max()) and phi.samples == len(time_s)
-    assert [entry.split(":")[0] for entry in analysis.missing] == ["tracking_state"]
+    assert [entry.split(":")[0] for entry in analysis.missing] == ["/tracking_state"]
 
     assert main([str(tmp_path / "bag"), "--output", str(tmp_path / "out")]) == EXIT_PARTIAL_REPORT
     out = capsys.readouterr().out
-    assert "tracking_state: not in the bag (no run measures" in out and "joint motion (/joint_states" in out
+    assert "/tracking_state: not in the bag (no run measures" in out and "joint motion (/joint_states" in out
     summary = json.loads((tmp_path / "out" / "bag_summary.json").read_text())
     assert summary["run_measures"] is None and summary["joint_states"]["messages"] == len(time_s)
     assert (tmp_path / "out" / "joint_states.png").stat().st_size > 0
@@ -169,7 +177,7 @@ def test_a_sqlite3_bag_with_a_type_unknown_here(tmp_path, capsys):
     assert {(t.name, t.message_count) for t in analysis.info.topics} == {("/thing", 7), ("/joint_states", 4)}
     theta, = analysis.joint_states.joints
     assert (theta.min_position, theta.max_position) == pytest.approx((0.0, 0.3))
-    assert list(read_messages(bag, ("tracking_state",))) == []   # absent: nothing, not every message of the bag
+    assert list(read_messages(bag, ("/tracking_state",))) == []   # absent: nothing, not every message of the bag
     assert main([str(bag)]) == EXIT_PARTIAL_REPORT
     assert "other_msgs/msg/Thing" in capsys.readouterr().out
     # the .db3 file itself opens as its folder does
@@ -203,7 +211,7 @@ def test_what_is_no_bag_is_an_error_that_names_it(tmp_path, capsys):
 def test_a_corrupt_bag_beside_a_good_one_no_traceback(tmp_path):
     """swim-analyze in a process of its own on a good bag and a corrupt one: the good one is reported, the other
     named; no traceback."""
-    good = record_constrained_run(tmp_path / "good", {t: t for t in ("joint_states", "tracking_state", "plan")})
+    good = record_constrained_run(tmp_path / "good", {t: t for t in MEASURED})
     bad = corrupt_inputs(tmp_path)[-1]
     result = subprocess.run([sys.executable, "-m", "swim_bringup.analysis", str(good), str(bad)],
                             capture_output=True, text=True, timeout=120)

@@ -37,7 +37,7 @@ def record_free_run(path, bridge_faults=None):
         time_s = k * PERIOD_S
         reference = [0.3 * time_s, LANE_M, math.sin(time_s), math.cos(time_s)]
         feedback = [reference[0], LANE_M + OFFSET_M, *reference[2:]]
-        writer.write("tracking_state", k + 1,
+        writer.write("/tracking_state", k + 1,
                      tracking_state_cdr(writer.store, ["alpha", "R", "phi", "theta"], 1_000_000_000 + 8_000_000 * k,
                                         time_s, feedback, reference, output_torques=(0.5, 0.0)))
     if bridge_faults is not None:

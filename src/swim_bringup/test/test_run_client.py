@@ -1,5 +1,5 @@
 """The recorder's stamp reader against rclpy's own serialization of the loop's message types; the environment the
-run client leaves to the nodes it starts."""
+run client leaves to the nodes it starts; the run's topic names, fully qualified as rosbag2 records them."""
 import pytest
 
 from swim_ros.testing.fixtures import ros_domain  # noqa: F401
@@ -9,9 +9,11 @@ from swim_ros.testing.fixtures import ros_domain  # noqa: F401
 def test_header_stamp_read_from_cdr_equals_the_messages_stamp(sec, nanosec):
     from rclpy.serialization import serialize_message
     from sensor_msgs.msg import JointState
+    from swim_bringup.bag import RUN_TOPICS
     from swim_bringup.run_client import LOOP_TOPICS, header_stamp_ns
     from swim_interfaces.msg import TrackingState
-    assert set(LOOP_TOPICS) == {"joint_states", "joint_commands", "tracking_state"}   # the types below
+    assert {RUN_TOPICS[topic] for topic in LOOP_TOPICS} == {"sensor_msgs/msg/JointState",
+                                                           "swim_interfaces/msg/TrackingState"}   # the types below
     for message in (JointState(name=["phi", "theta"], effort=[0.1, -0.2]),
                     TrackingState(joint_names=["alpha", "phi", "theta"], plan_time_s=4.5, output_torques=[1.0, 2.0])):
         message.header.stamp.sec, message.header.stamp.nanosec = sec, nanosec
@@ -33,3 +35,15 @@ def test_the_run_client_leaves_the_nodes_it_starts_fast_dds_defaults(tmp_path, m
         assert not any(os.environ.get(variable) for variable in PROFILE_VARIABLES)
     finally:
         client.close()
+
+
+def test_the_run_topics_are_fully_qualified_and_the_client_records_none_other(tmp_path):
+    """The names a run's bag holds are rosbag2's (/joint_states): RUN_TOPICS and the subsets the client waits on
+    name topics in full, and a relative name given to the client is refused before anything starts."""
+    from swim_bringup.bag import LATCHED_TOPICS, RUN_TOPICS
+    from swim_bringup.run_client import IDLE_LOOP_TOPICS, LOOP_TOPICS, RunClient
+    assert all(topic.startswith("/") and "/" not in topic[1:] for topic in RUN_TOPICS)   # the root namespace
+    assert set(LATCHED_TOPICS) | set(LOOP_TOPICS) <= set(RUN_TOPICS) and set(IDLE_LOOP_TOPICS) <= set(LOOP_TOPICS)
+    with pytest.raises(ValueError, match="joint_states"):
+        RunClient(tmp_path / "bag", {"joint_states": RUN_TOPICS["/joint_states"]})
+    assert not (tmp_path / "bag").exists()

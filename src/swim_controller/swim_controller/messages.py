@@ -1,6 +1,6 @@
 """Between ROS messages and the tracker's types: checked, so a bad message is refused, never used.
 
-PlannedTrajectory (swim_interfaces v2) <-> trajectory.Trajectory: ``trajectory_to_message`` (the planner's
+PlannedTrajectory (swim_interfaces v3) <-> trajectory.Trajectory: ``trajectory_to_message`` (the planner's
 encoder) and ``trajectory_from_message`` (the tracker's decoder) side by side, so the layout is written once.
 """
 from __future__ import annotations
@@ -15,13 +15,14 @@ from swim_interfaces.msg import PlannedTrajectory, PrimitiveSegment
 from swim_controller.errors import PlanError, StateMessageError
 from swim_controller.riccati import error_state_size
 from swim_controller.trajectory import MAX_TRACKED_SAMPLES, Segment, Trajectory
+from swim_model.flow import FLOW_MODELS, LAG_STATE_NAMES
 from swim_model.velocity_filter import VelocityEstimator
 from swim_model.vehicle import JOINT_NAMES_CONSTRAINED, JOINT_NAMES_UNCONSTRAINED
 from swim_ros.codecs import MessageError, float_array, joint_state_arrays, seconds_of
 
 Array = npt.NDArray[np.float64]
 #: the PlannedTrajectory layout this module writes and reads (swim_interfaces' INTERFACE_VERSION)
-SUPPORTED_INTERFACE_VERSION = 2
+SUPPORTED_INTERFACE_VERSION = 3
 #: the largest magnitude a plan's time, values and their changes per second between samples may have (SI units):
 #: far past any plan a vehicle can follow, and small enough that the product of two (a gain times an error, a rate
 #: times a time step, in the tracker's interpolation and law) stays finite in float64 (largest 1.8e308)
@@ -45,17 +46,22 @@ def trajectory_to_message(trajectory: Trajectory, stamp) -> PlannedTrajectory:
     message.sliding_gains = float_array(trajectory.riccati_input_gain)
     message.segments = [PrimitiveSegment(**dataclasses.asdict(s)) for s in trajectory.segments]
     message.library_digest = trajectory.library_digest
+    message.flow_model = trajectory.flow_model
+    message.lag_states = float_array(trajectory.lag if trajectory.lag is not None else np.zeros(0))
     return message
 
 
 def trajectory_from_message(plan: PlannedTrajectory) -> Trajectory:
     """A swim_interfaces/PlannedTrajectory as a Trajectory; raises PlanError naming what is wrong: another
-    interface version, more than MAX_TRACKED_SAMPLES samples, joints that are not the vehicle's, arrays of the
-    wrong length, non-finite values, times out of order or not from 0, values or their rates past
-    MAX_PLAN_MAGNITUDE, segments that do not tile the samples."""
+    interface version, more than MAX_TRACKED_SAMPLES samples, joints that are not the vehicle's, a flow model
+    that is not swim_model's, arrays of the wrong length (the lag states: N x n_lag, none for the ideal flow),
+    non-finite values, times out of order or not from 0, values or their rates past MAX_PLAN_MAGNITUDE,
+    segments that do not tile the samples."""
     if plan.interface_version != SUPPORTED_INTERFACE_VERSION:
+        older = (" (a version 2 plan does not say which flow model it was made with nor carry the flow's lag "
+                 "states: plan it again with this version's planner)" if plan.interface_version == 2 else "")
         raise PlanError(f"plan interface version {plan.interface_version}, this tracker reads "
-                        f"{SUPPORTED_INTERFACE_VERSION}")
+                        f"{SUPPORTED_INTERFACE_VERSION}{older}")
     samples = len(plan.time_from_start_s)
     if samples > MAX_TRACKED_SAMPLES:
         raise PlanError(f"the plan has {samples} samples, more than the largest plan this tracker accepts "
@@ -65,7 +71,10 @@ def trajectory_from_message(plan: PlannedTrajectory) -> Trajectory:
         vehicle = "constrained" if plan.constrained else "free"
         raise PlanError(f"plan joints {list(plan.joint_names)} are not the {vehicle} vehicle's {list(joint_names)}")
     nq = len(joint_names)
-    n = error_state_size(nq, nq - 2)
+    if plan.flow_model not in FLOW_MODELS:
+        raise PlanError(f"plan flow model {plan.flow_model!r} is not one of {', '.join(FLOW_MODELS)}")
+    n_lag = len(LAG_STATE_NAMES) if plan.flow_model == "circulatory" else 0
+    n = error_state_size(nq, nq - 2, n_lag)
 
     def array(name: str, shape: tuple[int, ...]) -> Array:
         values = np.asarray(getattr(plan, name), dtype=float)
@@ -75,13 +84,15 @@ def trajectory_from_message(plan: PlannedTrajectory) -> Trajectory:
         return values.reshape(shape)
     fields = [field.name for field in dataclasses.fields(Segment)]   # PrimitiveSegment's, by name
     segments = tuple(Segment(**{name: getattr(s, name) for name in fields}) for s in plan.segments)
+    lag = array("lag_states", (samples, n_lag))   # an ideal-flow plan carries none
     with np.errstate(over="ignore", invalid="ignore"):   # rates that overflow are refused by check_plan_range
         trajectory = Trajectory(
             time_s=np.asarray(plan.time_from_start_s, dtype=float), q=array("positions", (samples, nq)),
             qdot=array("velocities", (samples, nq)), foil_acceleration=array("foil_accelerations", (samples, 2)),
             torque=array("feedforward_torques", (samples, 2)), lqr_gain=array("lqr_gains", (samples, 2, n)),
             riccati_input_gain=array("sliding_gains", (samples, 2, n)), segments=segments,
-            lane_radius_m=plan.lane_radius_m, library_digest=plan.library_digest)
+            lane_radius_m=plan.lane_radius_m, library_digest=plan.library_digest, flow_model=plan.flow_model,
+            lag=lag if n_lag else None)
         check_plan_range(trajectory)
     return trajectory
 
@@ -95,7 +106,8 @@ def check_plan_range(trajectory: Trajectory) -> None:
         raise PlanError(f"plan sample times must run from 0 s to at most {MAX_PLAN_MAGNITUDE:g} s, got "
                         f"{float(time_s[0])!r} to {float(time_s[-1])!r} s")
     step_s = np.diff(time_s)[:, None]
-    for name in ("q", "qdot", "foil_acceleration", "torque", "lqr_gain", "riccati_input_gain"):
+    names = ("q", "qdot", "foil_acceleration", "torque", "lqr_gain", "riccati_input_gain")
+    for name in names + (("lag",) if trajectory.lag is not None else ()):
         values = getattr(trajectory, name).reshape(len(time_s), -1)
         rates = np.diff(values, axis=0) / step_s
         if not (np.abs(values).max() <= MAX_PLAN_MAGNITUDE and np.abs(rates).max() <= MAX_PLAN_MAGNITUDE):

@@ -30,6 +30,16 @@ linear Hamiltonian system d/dt (X, Y) = [[F, -G R^-1 G'], [-Q, -F']] (X, Y), P =
 each interval between the plan's samples (F, G linear there) is one matrix exponential of a sixth-order
 Magnus expansion. P is carried back interval by interval, so a periodic motion's cycle is computed once and
 its map applied cycle after cycle.
+
+With the circulatory flow model (swim_model.flow; docs/model_and_method.md section 5.2) the flow's n_lag = 2 lag
+states z (m/s) are part of the plant: qddot = f(q, qdot, u, z) and zdot = g(q, qdot, z), driven by the motion
+alone. The error state gains their errors, x = (int e_y, e_q, edot_q, e_z), e_z = z - z_des (n = ny + 2 nq + 2),
+and the linearization their rows and columns::
+
+    F = [[0, [I_ny 0], 0, 0], [0, 0, I_nq, 0], [0, df/dq, df/dqdot, df/dz], [0, dg/dq, dg/dqdot, dg/dz]],
+    G = [[0], [0], [df/du], [0]]
+
+Q has no weight on e_z (``LqrWeights.state_weight_matrix``); the gains still act on it, through df/dz.
 """
 from __future__ import annotations
 
@@ -92,10 +102,17 @@ class LqrWeights:
         """R, 2 x 2 diagonal, for u = (phi_ddot, theta_ddot)."""
         return np.diag([self.heave_input_weight, self.pitch_input_weight])
 
-    def state_weight_matrix(self, constrained: bool) -> Array:
-        """Q = Z' Gg Z (Sec. 7) on x = (int e_y, e_q, edot_q)."""
+    def state_weight_matrix(self, constrained: bool, n_lag: int = 0) -> Array:
+        """Q = Z' Gg Z (Sec. 7) on x = (int e_y, e_q, edot_q[, e_z]), n x n.
+
+        The flow's lag-state errors e_z (n_lag of them, the circulatory flow) get no weight: z is the flow's
+        memory of the foil's motion, not a quantity the task asks to track, and the inputs cannot steer it apart
+        from the motion (zdot = g(q, qdot, z) has no u). Its dynamics are stable (dg/dz < 0: a disturbance of
+        the flow decays at the Wagner rates), so e_z -> 0 once the motion's errors do; weighting it would trade
+        tracking error for a flow error no one asked to remove. Its effect on the motion is not ignored: F's
+        df/dz columns make P, and the gains, act on e_z as the disturbance of the motion it is."""
         nq, ny = (3, 1) if constrained else (4, 2)
-        n = error_state_size(nq, ny)
+        n = error_state_size(nq, ny, n_lag)
         rates_y = [self.alpha_rate_per_s] if constrained else [self.alpha_rate_per_s, self.lateral_rate_per_s]
         gains = [self.alpha_gain] if constrained else [self.alpha_gain, self.lateral_gain]
         gains += [self.heave_gain, self.pitch_gain]
@@ -111,14 +128,15 @@ class LqrWeights:
         return z_map.T @ np.diag(gains) @ z_map
 
 
-def error_state_size(nq: int, ny: int) -> int:
-    """n = ny + 2 nq: integral errors of y, position errors, velocity errors."""
-    return ny + 2 * nq
+def error_state_size(nq: int, ny: int, n_lag: int = 0) -> int:
+    """n = ny + 2 nq + n_lag: integral errors of y, position errors, velocity errors, and the flow's lag-state
+    errors (n_lag = 0 for the ideal flow, 2 for the circulatory one)."""
+    return ny + 2 * nq + n_lag
 
 
 @dataclasses.dataclass(frozen=True)
 class Linearization:
-    """F(t_k) (N, n, n) and G(t_k) (N, n, 2) at the plan's samples."""
+    """F(t_k) (N, n, n) and G(t_k) (N, n, 2) at the plan's samples, n = error_state_size(nq, ny, n_lag)."""
 
     state_matrix: Array
     input_matrix: Array
@@ -131,23 +149,55 @@ def _jacobian_function(model: VehicleModel) -> ca.Function:
     return ca.Function("shape_jacobians", [s.q, s.qdot, s.u], outputs)
 
 
-def linearize(model: VehicleModel, q: Array, qdot: Array, foil_acceleration: Array) -> Linearization:
-    """F and G of eq. 16 along a trajectory, by CasADi's exact derivatives (no finite differences)."""
-    samples, nq, ny = len(q), model.nq, model.n_unactuated
-    n = error_state_size(nq, ny)
-    jacobians = _jacobian_function(model).map(samples)
-    d_q, d_qdot, d_u = (np.asarray(a, dtype=float) for a in jacobians(q.T, qdot.T, foil_acceleration.T))
-    # map() stacks the per-sample nq x m blocks side by side: (nq, samples * m)
-    d_q = d_q.reshape(nq, samples, nq).transpose(1, 0, 2)
-    d_qdot = d_qdot.reshape(nq, samples, nq).transpose(1, 0, 2)
+def _lag_jacobian_function(model: VehicleModel) -> ca.Function:
+    """(q, qdot, u, z) -> the Jacobians of (f, g) = (qddot, zdot) in q, qdot, z (rows: f then g) and of f in u."""
+    s = model.symbolic
+    lag = s.lag
+    assert lag is not None   # called for a circulatory model only (linearize checks)
+    qddot, _ = s.functions["shape_dynamics"](s.q, s.qdot, s.u, lag)
+    rates = ca.vertcat(qddot, s.functions["lag_rate"](s.q, s.qdot, lag))
+    outputs = [ca.jacobian(rates, s.q), ca.jacobian(rates, s.qdot), ca.jacobian(rates, lag),
+               ca.jacobian(qddot, s.u)]
+    return ca.Function("shape_lag_jacobians", [s.q, s.qdot, s.u, lag], outputs)
+
+
+def linearize(model: VehicleModel, q: Array, qdot: Array, foil_acceleration: Array,
+              lag: Optional[Array] = None) -> Linearization:
+    """F and G of eq. 16 along a trajectory, by CasADi's exact derivatives (no finite differences).
+
+    q, qdot (N, nq); foil_acceleration (N, 2); lag (N, n_lag), m/s: the plan's lag states, required by a
+    circulatory model (model.n_lag = 2) and refused by the ideal one. F is (N, n, n), G (N, n, 2) with
+    n = error_state_size(nq, ny, n_lag) (module docstring)."""
+    samples, nq, ny, n_lag = len(q), model.nq, model.n_unactuated, model.n_lag
+    if (lag is None) != (n_lag == 0):
+        raise GainComputationError(f"linearize: the {model.flow} flow model "
+                                   f"{'needs the plan' if n_lag else 'takes no'} lag states")
+    n = error_state_size(nq, ny, n_lag)
+    rows = nq + n_lag                                     # the rows of (f, g)
+    if lag is None:
+        jacobians = _jacobian_function(model).map(samples)
+        d_q, d_qdot, d_u = (np.asarray(a, dtype=float) for a in jacobians(q.T, qdot.T, foil_acceleration.T))
+    else:
+        lag = np.asarray(lag, dtype=float)
+        if lag.shape != (samples, n_lag):
+            raise GainComputationError(f"linearize: lag must have shape {(samples, n_lag)}, got {lag.shape}")
+        jacobians = _lag_jacobian_function(model).map(samples)
+        d_q, d_qdot, d_z, d_u = (np.asarray(a, dtype=float)
+                                 for a in jacobians(q.T, qdot.T, foil_acceleration.T, lag.T))
+        d_z = d_z.reshape(rows, samples, n_lag).transpose(1, 0, 2)
+    # map() stacks the per-sample rows x m blocks side by side: (rows, samples * m)
+    d_q = d_q.reshape(rows, samples, nq).transpose(1, 0, 2)
+    d_qdot = d_qdot.reshape(rows, samples, nq).transpose(1, 0, 2)
     d_u = d_u.reshape(nq, samples, 2).transpose(1, 0, 2)
     state = np.zeros((samples, n, n))
     state[:, np.arange(ny), ny + np.arange(ny)] = 1.0                    # d/dt int e_y = e_y
     state[:, ny + np.arange(nq), ny + nq + np.arange(nq)] = 1.0          # d/dt e_q = edot_q
     state[:, ny + nq:, ny:ny + nq] = d_q
-    state[:, ny + nq:, ny + nq:] = d_qdot
+    state[:, ny + nq:, ny + nq:ny + 2 * nq] = d_qdot
+    if lag is not None:
+        state[:, ny + nq:, ny + 2 * nq:] = d_z                           # df/dz, dg/dz
     inputs = np.zeros((samples, n, 2))
-    inputs[:, ny + nq:, :] = d_u
+    inputs[:, ny + nq:ny + 2 * nq, :] = d_u
     return Linearization(state, inputs)
 
 
@@ -288,8 +338,12 @@ class TrackingGains:
 
 
 def primitive_gains(model: VehicleModel, time_s: Array, q: Array, qdot: Array, foil_acceleration: Array,
-                    weights: Optional[LqrWeights] = None, cycle_samples: Optional[int] = None) -> TrackingGains:
+                    weights: Optional[LqrWeights] = None, cycle_samples: Optional[int] = None,
+                    lag: Optional[Array] = None) -> TrackingGains:
     """P(t) and G'P along a planned trajectory, for the weights given (the defaults if None).
+
+    lag: the plan's lag states (N, n_lag), m/s, for a circulatory model (None for the ideal one); the gains are
+    then on the extended error state, n = ny + 2 nq + n_lag (module docstring).
 
     cycle_samples: a cruise, whose first cycle_samples samples are one period of it (the rest are copies):
     P(T) is then not S but the solution of eq. 20 over ``weights.cruise_lookahead_s`` more seconds of the
@@ -297,8 +351,8 @@ def primitive_gains(model: VehicleModel, time_s: Array, q: Array, qdot: Array, f
     enter them, Prop. 1)."""
     weights = weights or LqrWeights()
     weights.validate()
-    linearization = linearize(model, q, qdot, foil_acceleration)
-    state_weight = weights.state_weight_matrix(model.constrained)
+    linearization = linearize(model, q, qdot, foil_acceleration, lag)
+    state_weight = weights.state_weight_matrix(model.constrained, model.n_lag)
     input_weight = weights.input_weight_matrix()
     terminal = terminal_weight(linearization, state_weight, input_weight, weights)
     transitions = backward_transitions(time_s, linearization, state_weight, input_weight)

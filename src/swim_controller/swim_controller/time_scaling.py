@@ -16,6 +16,17 @@ proportionally faster error dynamics. The scaled control law is eq. 33:
     u(t) = lambda^2 u_des(lambda t) - lambda R^-1 G(lambda t)' Gamma P(lambda t) Gamma x(t),
 
 and since G has rows only on the velocity block, where Gamma is I, G' Gamma P Gamma = (G'P)(lambda t) Gamma.
+
+The circulatory flow's lag states (swim_model.flow) extend x by e_z = z - z_des (n_lag = 2, m/s). Their block of
+Gamma is I_n_lag, derived, not assumed. P3 holds with z_l(t) = lambda z(lambda t) (docs/flow_model.md,
+"Smoothness and P3"): f(q, lambda qdot, lambda^2 u, lambda z) = lambda^2 f and g(q, lambda qdot, lambda z) =
+lambda^2 g for qddot = f(q, qdot, u, z), zdot = g(q, qdot, z). An error motion of the nominal plan, run lambda
+times faster, is x_l(t) = Lambda x(lambda t) with Lambda = diag(I/lambda, I, lambda I, lambda I) (the integral
+loses a lambda, the rates and lag states gain one), so Gamma = lambda Lambda^-1 = diag(lambda^2, lambda, 1, 1).
+Entry by entry, F_l = lambda Gamma^-1 F(lambda t) Gamma is what the homogeneity gives: the lag rows of F_l are
+(lambda^2 dg/dq, lambda dg/dqdot, lambda dg/dz), the qddot rows' lag columns lambda df/dz, each a velocity-degree
+count of the derivative; G has no lag rows, so G_l = G(lambda t) and eq. 33 keep their form. The zero weight on
+e_z stays zero under Q_l = lambda Gamma Q Gamma.
 """
 from __future__ import annotations
 
@@ -25,28 +36,29 @@ import numpy.typing as npt
 Array = npt.NDArray[np.float64]
 
 
-def scaling_matrix(time_scale: float, ny: int, nq: int) -> Array:
-    """Gamma(lambda) of eq. 27, (ny + 2 nq) square."""
-    return np.diag(np.concatenate([np.full(ny, time_scale ** 2), np.full(nq, time_scale), np.ones(nq)]))
+def scaling_matrix(time_scale: float, ny: int, nq: int, n_lag: int = 0) -> Array:
+    """Gamma(lambda) of eq. 27, (ny + 2 nq + n_lag) square (the lag block is I, see above)."""
+    return np.diag(scaling_diagonal(time_scale, ny, nq, n_lag))
 
 
-def scaling_diagonal(time_scale: float | Array, ny: int, nq: int) -> Array:
-    """The diagonal of Gamma; for an array of lambdas, one row per lambda."""
+def scaling_diagonal(time_scale: float | Array, ny: int, nq: int, n_lag: int = 0) -> Array:
+    """The diagonal of Gamma, (lambda^2 [ny], lambda [nq], 1 [nq], 1 [n_lag]); for an array of lambdas, one row
+    per lambda."""
     scale = np.asarray(time_scale, dtype=float)[..., None]
     return np.concatenate([np.repeat(scale ** 2, ny, -1), np.repeat(scale, nq, -1),
-                           np.ones(scale.shape[:-1] + (nq,))], axis=-1)
+                           np.ones(scale.shape[:-1] + (nq + n_lag,))], axis=-1)
 
 
-def scale_riccati(riccati: Array, time_scale: float, ny: int, nq: int) -> Array:
+def scale_riccati(riccati: Array, time_scale: float, ny: int, nq: int, n_lag: int = 0) -> Array:
     """P_l at the scaled sample times t_k / lambda: Gamma P(t_k) Gamma, for P of shape (N, n, n)."""
-    gamma = scaling_diagonal(time_scale, ny, nq)
+    gamma = scaling_diagonal(time_scale, ny, nq, n_lag)
     return riccati * gamma[:, None] * gamma[None, :]
 
 
 def scale_weights(state_weight: Array, input_weight: Array, terminal: Array, time_scale: float, ny: int,
-                  nq: int) -> tuple[Array, Array, Array]:
+                  nq: int, n_lag: int = 0) -> tuple[Array, Array, Array]:
     """(Q_l, R_l, S_l) for which Gamma P(lambda t) Gamma is the optimal Riccati solution (see above)."""
-    gamma = scaling_diagonal(time_scale, ny, nq)
+    gamma = scaling_diagonal(time_scale, ny, nq, n_lag)
     outer = gamma[:, None] * gamma[None, :]
     return time_scale * state_weight * outer, input_weight / time_scale, terminal * outer
 
@@ -58,14 +70,15 @@ def lqr_gain_from(riccati_input_gain: Array, input_weight_diagonal: Array) -> Ar
 
 
 def retime_feedback(lqr_gain: Array, riccati_input_gain: Array, time_scale: float | Array, ny: int,
-                    nq: int) -> tuple[Array, Array]:
+                    nq: int, n_lag: int = 0) -> tuple[Array, Array]:
     """The gains of eq. 33 of a plan made at lambda = 1, rescaled to lambda per sample (scalar or (N,)).
 
     Returns:
         lqr_gain: K = lambda R^-1 (G'P) Gamma, so that u = lambda^2 u_des - K x  (1/s^2 and 1/s units by block)
         riccati_input_gain: (G'P) Gamma = G_l' P_l, so that s = Mio^-1 G_l' P_l x (eq. 24)
+    n_lag: the flow's lag states at the end of x (0: the ideal flow; 2: the circulatory one).
     Scalings compose: rescaling by lambda2 gains already at lambda1 gives those at lambda1 lambda2.
     """
     scale = np.broadcast_to(np.asarray(time_scale, dtype=float), lqr_gain.shape[:1])
-    gamma = scaling_diagonal(scale, ny, nq)[:, None, :]
+    gamma = scaling_diagonal(scale, ny, nq, n_lag)[:, None, :]
     return lqr_gain * gamma * scale[:, None, None], riccati_input_gain * gamma

@@ -3,9 +3,9 @@
 At each control period, with the plan (a trajectory.Trajectory) sampled at the current plan time t (gains
 already time-scaled and concatenated by the planner, see time_scaling):
 
-    x     = (int (y - y_des) dt, q - q_des, qdot - qdot_des)            error state (riccati)
+    x     = (int (y - y_des) dt, q - q_des, qdot - qdot_des[, z^ - z_des])   error state (riccati)
     u     = u_des(t + h/2) - K(t) x,    K = R_l^-1 G_l' P_l             LQ stage (eqs. 19, 33)
-    tau1  = Mio(q) u + Cio(q, qdot) qdot                                I/O linearization (eqs. 22-23)
+    tau1  = Mio(q) u + Cio(q, qdot[, z^]) qdot                          I/O linearization (eqs. 22-23)
     s     = Mio^-1 G_l' P_l x,  eps = -D s / max(||s||, phi)            sliding mode (eqs. 24-25)
     tau   = sat(tau1 + eps)                                             motor limits, saturation reported
 
@@ -14,6 +14,12 @@ through the same I/O linearization. The torque is held over the period h (zero-o
 u_des is taken at the period's midpoint (on the ideal model: worst pitch error 0.041 rad, 0.043 with u_des at the
 period's start).
 The hold law: (u = -kp (psi - psi_end) - kd psidot), alpha and R left free.
+
+A plan made with the circulatory flow model (swim_model.flow) adds the flow's n_lag = 2 lag states z (m/s). They
+are not measured, but they are driven by the foil's motion alone (zdot = g(q, qdot, z)), so the tracker
+estimates them from the measured motion (LagEstimator) and uses the estimate z^ in the I/O linearization (the
+flow's force is part of Cio qdot) and in the error state's lag block. With an ideal-flow plan there are none and
+the law is the paper's, unchanged.
 """
 from __future__ import annotations
 
@@ -27,16 +33,93 @@ import numpy.typing as npt
 from swim_controller.errors import PlanError
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.trajectory import Trajectory, TrajectoryPoint
+from swim_model.flow import LAG_STATE_NAMES
 
 if TYPE_CHECKING:
     from swim_model import VehicleModel
 
 Array = npt.NDArray[np.float64]
-#: (q, qdot) -> (Mio 2x2, Cio qdot 2): the I/O linearization of the vehicle model (eqs. 22-23)
-IoLinearization = Callable[[Array, Array], tuple[Array, Array]]
+#: (q, qdot, lag) -> (Mio 2x2, Cio qdot 2): the I/O linearization of the vehicle model (eqs. 22-23); lag: the
+#: flow's lag states (n_lag,), m/s, empty (0,) for the ideal flow (the force of the circulatory flow is in Cio qdot)
+IoLinearization = Callable[[Array, Array, Array], tuple[Array, Array]]
+#: (q, qdot, lag) -> zdot (n_lag,), m/s^2: the circulatory flow's lag rate (swim_model.flow)
+LagRate = Callable[[Array, Array, Array], Array]
 
 HOLD_STIFFNESS_PER_S2 = 100.0   # assumed: kp of the hold law, a 10 rad/s, critically damped foil
 HOLD_DAMPING_PER_S = 20.0       # assumed: kd = 2 sqrt(kp)
+#: a lag-state offset (m/s) at which the lag rate is evaluated beside zero to read off its slope: any nonzero
+#: value gives the same slope (the rate is affine in z); 1 m/s is of the size of the rig's normal velocities,
+#: so neither evaluation loses digits to the other
+LAG_PROBE_M_S = 1.0
+#: the largest normal velocity Q (m/s) the lag estimate takes from a measured state: assumed, 5 m/s against the
+#: 0.3-0.8 m/s of the rig's strokes (0.3-0.6 rad of heave at 1-1.5 Hz): a larger one is a glitch of the state, not
+#: water the foil moved, and would set z^ off for seconds (the slow lag's 1/a is about 2 s)
+MAX_NORMAL_VELOCITY_M_S = 5.0
+NO_LAG = np.zeros(0)            # the ideal flow's (empty) lag states
+
+
+class LagEstimator:
+    """z^, the estimate of the circulatory flow's lag states (m/s), from the measured motion alone.
+
+    The lag rate is affine in z, one first-order lag per state (swim_model.flow; docs/flow_model.md, section 2):
+
+        zdot_i = g_i(q, qdot, z) = a_i (Q - z_i),   a_i = (|u| / b) b_i > 0,   Q: the normal velocity at 3/4 chord
+
+    with a_i and Q functions of the measured (q, qdot) only. Each update integrates it over the time since the
+    previous measurement with the coefficients averaged over the two measurements (a trapezoid of a and of c = a Q)
+    and solved exactly for those (an exponential integrator):
+
+        z^_k = Qbar + (z^_(k-1) - Qbar) exp(-abar dt),   abar = (a_(k-1) + a_k)/2,   Qbar = cbar / abar
+
+    Why this one: it is exact for coefficients constant over the period and second order in dt when they vary
+    (local error O(dt^3), as RK2); the new z^ lies between the old one and a weighted mean of the measured Q, so
+    it never overshoots, whatever the period (a_fast dt is 0.08 at |u| = 1 m/s and 8 ms: not stiff, but a late
+    state or a long gap cannot make it diverge); and it costs two evaluations of the compiled lag rate per period
+    (at z = 0 and z = LAG_PROBE_M_S: c = g(0), a = (g(0) - g(probe)) / probe), where RK4 needs four, on motion
+    interpolated between measurements (20 us a step here at load 4, most of it the two calls; the whole step's
+    target is a 100 us median). The estimate converges to the true lag at the rates a_i whatever it starts from
+    (the error obeys edot_i = -a_i e_i), and it is as good as the measured motion: noise in qdot passes through
+    the lag's low-pass filter (corner a_i: 10 rad/s per m/s of |u| for the rig's fast state). A measurement
+    whose lag rate is not finite, or whose normal velocity Q passes MAX_NORMAL_VELOCITY_M_S (a state no stroke
+    makes: a glitch), leaves z^ as it was, and the next one restarts the integration from there.
+    """
+
+    def __init__(self, lag_rate: LagRate, n_lag: int) -> None:
+        self._lag_rate = lag_rate
+        self._zero = np.zeros(n_lag)
+        self._probe = np.full(n_lag, LAG_PROBE_M_S)
+        self.estimate = np.zeros(n_lag)              # z^, m/s
+        self._slope: Optional[list[float]] = None    # a at the previous measurement, 1/s
+        self._forcing: Optional[list[float]] = None  # c = a Q at the previous measurement, m/s^2
+
+    def reset(self, lag: Array) -> None:
+        """Start from z^ = lag (m/s) at the next measurement."""
+        self.estimate = np.array(lag, dtype=float)
+        self._slope = self._forcing = None
+
+    def update(self, elapsed_s: float, q: Array, qdot: Array) -> Array:
+        """z^ at a measurement elapsed_s after the previous one (the first after reset: the reset value)."""
+        # a handful of scalars: Python floats cost a fraction of numpy's per-call overhead here
+        forcing = self._lag_rate(q, qdot, self._zero).tolist()
+        probed = self._lag_rate(q, qdot, self._probe).tolist()
+        slope = [(c - p) * (1.0 / LAG_PROBE_M_S) for c, p in zip(forcing, probed)]
+        previous_slope, previous_forcing = self._slope, self._forcing
+        estimate = self.estimate.tolist()
+        plausible = True
+        for i, (a, c) in enumerate(zip(slope, forcing)):
+            if previous_slope is not None and previous_forcing is not None and elapsed_s > 0.0:
+                mean_slope = 0.5 * (previous_slope[i] + a)
+                if not mean_slope > 0.0:   # a_i >= |u|_min b_i / b > 0: only a state past the model's range
+                    plausible = False
+                    break
+                relaxed = -math.expm1(-mean_slope * elapsed_s)   # 1 - exp(-abar dt), in [0, 1]
+                estimate[i] += relaxed * (0.5 * (previous_forcing[i] + c) / mean_slope - estimate[i])
+            plausible = plausible and math.isfinite(estimate[i]) and abs(c) <= MAX_NORMAL_VELOCITY_M_S * a < math.inf
+        if not plausible:
+            self._slope = self._forcing = None
+            return self.estimate
+        self.estimate, self._slope, self._forcing = np.array(estimate), slope, forcing
+        return self.estimate
 
 
 @dataclasses.dataclass
@@ -50,15 +133,22 @@ class ControlOutput:
     error_state: Array          # x
     reference: TrajectoryPoint   # the plan at this period
     holding: bool               # the plan has ended: the hold law is in charge
+    lag_estimate: Array         # z^, the flow's lag states (n_lag,) in the law, m/s; empty for the ideal flow
 
 
 class CascadeTracker:
-    """The tracking law for one plan at a time; no ROS (the tracker node wraps it)."""
+    """The tracking law for one plan at a time; no ROS (the tracker node wraps it).
+
+    lag_rate: the circulatory flow's lag rate (model_lag_rate) for a tracker of plans made with that model, whose
+    lag states it estimates (LagEstimator); None (the ideal flow) for the paper's plans. A plan of the other flow
+    model is refused by start()."""
 
     def __init__(self, io_linearization: IoLinearization, torque_limits_n_m: Array,
                  sliding_mode: SlidingMode = SlidingMode(), sliding_mode_enabled: bool = True,
-                 sample_period_s: float = 0.008) -> None:
+                 sample_period_s: float = 0.008, lag_rate: Optional[LagRate] = None) -> None:
         self._io = io_linearization
+        self._lag_rate = lag_rate
+        self.lag_estimator: Optional[LagEstimator] = None   # made by start() for a circulatory plan
         if not (math.isfinite(sample_period_s) and sample_period_s > 0.0):
             raise ValueError(f"sample period must be positive and finite, got {sample_period_s!r}")
         self.sample_period_s = sample_period_s
@@ -70,11 +160,29 @@ class CascadeTracker:
         self._integral = np.zeros(0)
         self._last_time_s: Optional[float] = None
 
-    def start(self, trajectory: Trajectory) -> None:
-        """Track ``trajectory`` from plan time 0; the integral error restarts at zero."""
+    @property
+    def flow_model(self) -> str:
+        """The flow model of the plans this tracker follows: "ideal" or "circulatory"."""
+        return "ideal" if self._lag_rate is None else "circulatory"
+
+    def start(self, trajectory: Trajectory, initial_lag: Optional[Array] = None) -> None:
+        """Track ``trajectory`` from plan time 0; the integral error restarts at zero.
+
+        A circulatory plan's lag estimate starts at the first step from initial_lag (m/s), by default the plan's
+        own lag states at t = 0: the tracker starts a plan with the vehicle taken to be on the plan's start, of
+        which the lag states are part; a planned start from rest has z = 0 there, still water, so both readings
+        agree, and a start elsewhere (a plan begun mid-stroke) is right where the plan is. PlanError if the plan
+        was made with another flow model than the tracker's."""
+        if trajectory.flow_model != self.flow_model:
+            raise PlanError(f"the plan was made with the {trajectory.flow_model} flow model, this tracker runs the "
+                            f"{self.flow_model} one")
         self.trajectory = trajectory
         self._integral = np.zeros(trajectory.ny)
         self._last_time_s = None
+        if self._lag_rate is not None:
+            assert trajectory.lag is not None   # a circulatory Trajectory has its lag states
+            self.lag_estimator = LagEstimator(self._lag_rate, trajectory.n_lag)
+            self.lag_estimator.reset(trajectory.lag[0] if initial_lag is None else initial_lag)
 
     def step(self, plan_time_s: float, q: Array, qdot: Array) -> ControlOutput:
         """The torque for the period starting at plan_time_s, from the measured q and qdot."""
@@ -85,11 +193,17 @@ class CascadeTracker:
         holding = plan_time_s > trajectory.duration_s
         ny, nq = trajectory.ny, trajectory.nq
         error_q = q - ref.q
+        elapsed_s = 0.0 if self._last_time_s is None else plan_time_s - self._last_time_s
         if self._last_time_s is not None and not holding:
-            self._integral = self._integral + error_q[:ny] * max(plan_time_s - self._last_time_s, 0.0)
+            self._integral = self._integral + error_q[:ny] * max(elapsed_s, 0.0)
         self._last_time_s = plan_time_s
-        error_state = np.concatenate([self._integral, error_q, qdot - ref.qdot])
-        mio, cio_qdot = self._io(q, qdot)
+        if self.lag_estimator is None:
+            lag = NO_LAG
+            error_state = np.concatenate([self._integral, error_q, qdot - ref.qdot])
+        else:
+            lag = self.lag_estimator.update(elapsed_s, q, qdot)
+            error_state = np.concatenate([self._integral, error_q, qdot - ref.qdot, lag - ref.lag])
+        mio, cio_qdot = self._io(q, qdot, lag)
         if holding:
             u = hold_acceleration(q[nq - 2:], qdot[nq - 2:], trajectory.q[-1, nq - 2:])
         else:
@@ -103,12 +217,18 @@ class CascadeTracker:
             torque = torque + sliding
         command, saturated = saturate(torque, self.torque_limits_n_m)
         return ControlOutput(torque=command, saturated=saturated, unsaturated_torque=torque,
-                             sliding_torque=sliding, error_state=error_state, reference=ref, holding=holding)
-
+                             sliding_torque=sliding, error_state=error_state, reference=ref, holding=holding,
+                             lag_estimate=lag)
 
     def hold(self, q: Array, qdot: Array, psi_target: Array) -> tuple[Array, tuple[bool, bool]]:
-        """The torque that holds the foil still at psi_target (heave, pitch), with no plan involved."""
-        mio, cio_qdot = self._io(q, qdot)
+        """The torque that holds the foil still at psi_target (heave, pitch), with no plan involved. A state comes
+        without its time here, one a period: the lag estimate advances by sample_period_s."""
+        lag = NO_LAG
+        if self.lag_estimator is not None:
+            lag = self.lag_estimator.update(self.sample_period_s, q, qdot)
+        elif self._lag_rate is not None:   # no plan started yet: the flow taken at rest
+            lag = np.zeros(len(LAG_STATE_NAMES))
+        mio, cio_qdot = self._io(q, qdot, lag)
         torque = mio @ hold_acceleration(q[-2:], qdot[-2:], psi_target) + cio_qdot
         return saturate(torque, self.torque_limits_n_m)
 
@@ -118,13 +238,36 @@ def model_io_linearization(model: VehicleModel) -> IoLinearization:
     (VehicleModel.native_function: the same numbers; the checked numpy API costs ~15 us more per call and CasADi's
     own call ~45 us, too much at 1 kHz; the tracker validates states itself)."""
     function = model.native_function("io_linearization")
-    (q_input, qdot_input), (mio_output, cio_output) = function.inputs, function.outputs
+    (q_input, qdot_input, *lag_input), (mio_output, cio_output) = function.inputs, function.outputs
     mio_shape = function.function.size_out(0)
 
-    def evaluate(q: Array, qdot: Array) -> tuple[Array, Array]:
-        q_input[:], qdot_input[:] = q, qdot
+    if not lag_input:   # the ideal flow: no lag states (lag is empty)
+        def evaluate(q: Array, qdot: Array, lag: Array) -> tuple[Array, Array]:
+            q_input[:], qdot_input[:] = q, qdot
+            function()
+            return mio_output.reshape(mio_shape, order="F").copy(), cio_output.copy()
+        return evaluate
+    lag_buffer, = lag_input
+
+    def evaluate_with_lag(q: Array, qdot: Array, lag: Array) -> tuple[Array, Array]:
+        q_input[:], qdot_input[:], lag_buffer[:] = q, qdot, lag
         function()
         return mio_output.reshape(mio_shape, order="F").copy(), cio_output.copy()
+    return evaluate_with_lag
+
+
+def model_lag_rate(model: VehicleModel) -> Optional[LagRate]:
+    """The lag rate zdot = g(q, qdot, z) of a circulatory VehicleModel on its compiled C entry point (as
+    model_io_linearization; one buffer set per model: the value returned is a copy); None for the ideal flow."""
+    if model.n_lag == 0:
+        return None
+    function = model.native_function("lag_rate")
+    (q_input, qdot_input, lag_input), (rate_output,) = function.inputs, function.outputs
+
+    def evaluate(q: Array, qdot: Array, lag: Array) -> Array:
+        q_input[:], qdot_input[:], lag_input[:] = q, qdot, lag
+        function()
+        return rate_output.copy()
     return evaluate
 
 

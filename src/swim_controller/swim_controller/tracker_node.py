@@ -18,18 +18,31 @@ describe` shows them), checked when set, applied after: time_scale (1.0: run pla
 Theorem 1 when a goal arrives), the sliding mode's switch and bounds, the stale-state limit, feedback rate and
 velocity filter.
 
-Speed (in lock-step every period waits on this node): the rig's models are built at start, not by the first goal
-(about half a second of model setup and compilation); per period the command and tracking_state messages are
+Plans of either flow model (PlannedTrajectory's flow_model) run on the vehicle model of that flow, one per vehicle
+and lane. The ideal flow's models of the rig's two vehicles on its default lane are built at start, not by the
+first goal (about half a second of model setup and compilation); another lane's ideal model is built by its first
+goal (about 2 s with the loop held up). A circulatory model is built by the first goal that needs it on a thread
+of its own (ModelBuilder), while this node's one thread keeps serving states, commands, cancels and the goal under
+way; that goal starts once it is built. Its C code takes about 7 s to compile the first time on a 2-core host
+(cached on disk after: 0.2-0.5 s to load); meanwhile the node answered each state of a lock-step plant within
+28 ms (the compilation runs in the C compiler's process, the model's symbolic setup holds the interpreter a few
+ms at a time).
+
+Speed (in lock-step every period waits on this node): per period the command and tracking_state messages are
 reused and their float64[] fields filled with array('d') (rosidl's setters check lists element by element), and
 the per-period topics have no QoS event handlers: rclpy gives each publisher and subscription two by default,
 each a waitable that the executor adds to its wait set again on every spin, in Python.
 """
 from __future__ import annotations
 
+import concurrent.futures
+import dataclasses
 import functools
 import math
+import queue
+import threading
 import time
-from typing import Optional
+from typing import Callable, Generator, Optional
 
 import numpy as np
 from builtin_interfaces.msg import Time
@@ -45,7 +58,7 @@ from swim_controller.errors import PlanError, StateMessageError
 from swim_controller.messages import state_from_message, trajectory_from_message
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.supervisor import Mode, Outcome, StaleStateWatch, Step, Supervisor, Tolerances
-from swim_controller.tracker import CascadeTracker, model_io_linearization
+from swim_controller.tracker import CascadeTracker, model_io_linearization, model_lag_rate
 from swim_model.velocity_filter import DEFAULT_CUTOFF_HZ, VelocityEstimator
 from swim_model import SwimModelError, VehicleModel, load_rig
 from swim_ros.codecs import ACTUATED_JOINTS, float_array
@@ -86,6 +99,69 @@ PARAMETERS = (
 )
 
 
+@dataclasses.dataclass(frozen=True)
+class ModelKey:
+    """Which vehicle model a plan runs on."""
+
+    constrained: bool
+    lane_radius_m: float   # the constrained vehicle's lane; the rig's default lane for the free vehicle
+    flow_model: str        # "ideal" | "circulatory"
+
+
+def build_model(rig, key: ModelKey) -> VehicleModel:
+    """The vehicle model of key with the compiled entry points the tracker calls loaded (compiled to C the first
+    time, cached on disk after)."""
+    model = VehicleModel(rig, constrained=key.constrained, lane_radius_m=key.lane_radius_m, flow=key.flow_model)
+    model_io_linearization(model)
+    model_lag_rate(model)
+    return model
+
+
+class ModelBuilder:
+    """Builds vehicle models one at a time on a daemon thread of its own (a process that stops mid-compilation
+    leaves no library behind: swim_model writes it under another name and renames it). on_built is called on that
+    thread after each build, to wake the thread that waits for it."""
+
+    def __init__(self, rig, on_built: Callable[[], None]) -> None:
+        self._rig = rig
+        self._on_built = on_built
+        self._requests: queue.Queue[Optional[tuple[ModelKey, concurrent.futures.Future]]] = queue.Queue()
+        self._thread = threading.Thread(target=self._run, name="tracker_model_builder", daemon=True)
+        self._thread.start()
+
+    def submit(self, key: ModelKey) -> concurrent.futures.Future:
+        """A future of the model of key."""
+        future: concurrent.futures.Future = concurrent.futures.Future()
+        self._requests.put((key, future))
+        return future
+
+    def stop(self) -> None:
+        """No more builds after the one under way (if any)."""
+        self._requests.put(None)
+
+    def _run(self) -> None:
+        while (request := self._requests.get()) is not None:
+            key, future = request
+            try:
+                future.set_result(build_model(self._rig, key))
+            except Exception as err:  # noqa: BLE001 - handed to the goal that waits for this model
+                future.set_exception(err)
+            self._on_built()
+
+
+class _Awaited:
+    """A concurrent.futures.Future awaited in an rclpy coroutine: yields (the executor resumes the coroutine on its
+    next wake-up) until the future is done, then gives its result."""
+
+    def __init__(self, future: concurrent.futures.Future) -> None:
+        self.future = future
+
+    def __await__(self) -> Generator[None, None, VehicleModel]:
+        while not self.future.done():
+            yield
+        return self.future.result()
+
+
 class ActiveGoal:
     """A goal being executed: its handle, its own supervisor, and the future its execute coroutine awaits."""
 
@@ -109,7 +185,10 @@ class TrackerNode(Node):
         super().__init__("tracker_node")
         declare_parameters(self, PARAMETERS)
         self.rig = load_rig(self.get_parameter("rig_path").value or None)
-        self._models: dict[tuple[bool, float], VehicleModel] = {}
+        self._models: dict[ModelKey, VehicleModel] = {}
+        self._building: dict[ModelKey, concurrent.futures.Future] = {}
+        self._goals_received = 0
+        self._waiting_for_model: list = []   # goal handles whose execute callback awaits its vehicle model
         self._supervisor: Optional[Supervisor] = None
         self._goal: Optional[ActiveGoal] = None
         self._last_q: Optional[np.ndarray] = None
@@ -136,7 +215,11 @@ class TrackerNode(Node):
         self._action = ActionServer(self, ExecutePlan, "execute_plan", execute_callback=self._execute,
                                     cancel_callback=self._on_cancel)
         for constrained in (True, False):   # the rig's two vehicles on its default lane, ready for a first goal
-            model_io_linearization(self._model(constrained, self.rig.constrained_lane_radius_m))
+            key = self._model_key(constrained, self.rig.constrained_lane_radius_m, "ideal")
+            self._models[key] = build_model(self.rig, key)
+        # a build's end wakes the executor (guard conditions may be triggered from any thread)
+        self._model_built = self.create_guard_condition(lambda: None)
+        self._builder = ModelBuilder(self.rig, self._wake_after_build)
         self.get_logger().info("tracker ready: waiting for joint_states and execute_plan goals")
 
     # ----- parameters ------------------------------------------------------------------------------
@@ -153,20 +236,53 @@ class TrackerNode(Node):
         if "velocity_cutoff_hz" in values:
             self._velocity = VelocityEstimator(values["velocity_cutoff_hz"])
 
-    def _model(self, constrained: bool, lane_radius_m: float) -> VehicleModel:
-        """The vehicle a plan runs on, built once (a new one is compiled: about 2 s with the loop held up): one
-        per lane for the constrained vehicle, one for the free vehicle (its lane is a coordinate, the model the
-        same for every starting lane)."""
-        key = (constrained, lane_radius_m if constrained else self.rig.constrained_lane_radius_m)
-        if key not in self._models:
-            self._models[key] = VehicleModel(self.rig, constrained=constrained, lane_radius_m=key[1])
-        return self._models[key]
+    def _model_key(self, constrained: bool, lane_radius_m: float, flow_model: str) -> ModelKey:
+        """One model per flow and lane for the constrained vehicle, one per flow for the free vehicle (its lane
+        is a coordinate, the model the same for every starting lane)."""
+        return ModelKey(constrained, lane_radius_m if constrained else self.rig.constrained_lane_radius_m, flow_model)
+
+    async def _model(self, key: ModelKey) -> VehicleModel:
+        """The vehicle a plan runs on, built once: the ideal flow's here (a new lane's: about 2 s with the loop
+        held up); the circulatory flow's off this thread (ModelBuilder): awaiting it lets the executor serve
+        everything else meanwhile."""
+        model = self._models.get(key)
+        if model is not None:
+            return model
+        if key.flow_model == "ideal":
+            model = self._models[key] = build_model(self.rig, key)
+            return model
+        if key not in self._building:
+            self.get_logger().info(f"building the {key.flow_model} flow's "
+                                   f"{'constrained' if key.constrained else 'free'} vehicle model "
+                                   f"(lane {key.lane_radius_m} m) for this plan")
+            self._building[key] = self._builder.submit(key)
+        future = self._building[key]
+        try:
+            model = await _Awaited(future)
+        except Exception as err:  # noqa: BLE001 - the goal is refused with the reason, the node keeps running
+            raise PlanError(f"the {key.flow_model} flow's vehicle model could not be built: {err!r}") from err
+        finally:
+            if self._building.get(key) is future:
+                del self._building[key]
+        self._models[key] = model
+        return model
+
+    def _wake_after_build(self) -> None:
+        try:
+            self._model_built.trigger()
+        except Exception:  # noqa: BLE001 - the node is being destroyed: nothing waits any more
+            pass
+
+    def destroy_node(self) -> None:
+        self._builder.stop()
+        super().destroy_node()
 
     def _make_tracker(self, model: VehicleModel) -> CascadeTracker:
         parameter = self.get_parameter
         return CascadeTracker(model_io_linearization(model), model.torque_limits(),
                               SlidingMode(parameter("disturbance_bound_n_m").value, parameter("boundary_layer").value),
-                              parameter("sliding_mode_enabled").value, parameter("sample_period_s").value)
+                              parameter("sliding_mode_enabled").value, parameter("sample_period_s").value,
+                              model_lag_rate(model))
 
     # ----- the control period ----------------------------------------------------------------------
     def _on_state(self, message: JointState) -> None:
@@ -260,11 +376,16 @@ class TrackerNode(Node):
         message.time_scale = float(plan.time_scale_at(reference.time_s))
         message.segment_index = plan.segment_index(reference.time_s)
         message.sliding_mode_enabled = bool(supervisor.tracker.sliding_mode_enabled)
+        message.estimated_lag_states = float_array(output.lag_estimate)
+        message.planned_lag_states = float_array(reference.lag)
         return message
 
     # ----- the action ------------------------------------------------------------------------------
     def _on_cancel(self, handle) -> CancelResponse:
-        """Cancel the active goal: hold the foil where it is now."""
+        """Cancel the active goal: hold the foil where it is now; or a goal still waiting for its vehicle model:
+        it never starts."""
+        if any(waiting is handle for waiting in self._waiting_for_model):
+            return CancelResponse.ACCEPT
         goal = self._goal
         if goal is None or goal.handle is not handle:
             return CancelResponse.REJECT
@@ -273,8 +394,11 @@ class TrackerNode(Node):
         return CancelResponse.ACCEPT
 
     async def _execute(self, handle) -> ExecutePlan.Result:
-        """Validate the plan, make it the active one (preempting any other), await its end."""
+        """Validate the plan, make it the active one (preempting any other), await its end. A goal that waited for
+        its vehicle model while a newer goal arrived is preempted by that one, never the other way round."""
         request = handle.request
+        self._goals_received += 1
+        arrival = self._goals_received
         try:
             tolerances = Tolerances(request.path_tolerance_alpha_rad, request.path_tolerance_r_m,
                                     request.goal_tolerance_alpha_rad, request.goal_tolerance_r_m)
@@ -284,7 +408,12 @@ class TrackerNode(Node):
             if trajectory.lane_radius_m >= tank_radius_m:   # the rig file's rule for its own lanes
                 raise PlanError(f"plan lane radius {trajectory.lane_radius_m!r} m is not inside the tank "
                                 f"(radius {tank_radius_m} m)")
-            model = self._model(trajectory.constrained, trajectory.lane_radius_m)
+            self._waiting_for_model.append(handle)
+            try:
+                model = await self._model(self._model_key(trajectory.constrained, trajectory.lane_radius_m,
+                                                          trajectory.flow_model))
+            finally:
+                self._waiting_for_model.remove(handle)
             time_scale = self.get_parameter("time_scale").value
             if time_scale != 1.0:   # refused past the motor limits, with the largest feasible time scale named
                 trajectory = trajectory.time_scaled(time_scale, model.torque_limits())
@@ -292,6 +421,14 @@ class TrackerNode(Node):
             handle.abort()
             self.get_logger().warning(f"plan refused: {err}")
             return ExecutePlan.Result(error_code=ExecutePlan.Result.INVALID_PLAN, error_string=str(err))
+        if handle.is_cancel_requested:
+            handle.canceled()
+            return ExecutePlan.Result(error_code=ExecutePlan.Result.CANCELED,
+                                      error_string="canceled while its vehicle model was built: not started")
+        if arrival != self._goals_received:
+            handle.abort()
+            return ExecutePlan.Result(error_code=ExecutePlan.Result.PREEMPTED,
+                                      error_string="preempted by a new goal while its vehicle model was built")
         if self._goal is not None:
             self._goal.finish(Outcome.PREEMPTED, "preempted by a new goal")
         goal = ActiveGoal(handle, Supervisor(self._make_tracker(model)), trajectory.duration_s)

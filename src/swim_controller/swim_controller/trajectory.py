@@ -1,19 +1,22 @@
 """A planned trajectory and its tracking gains: what the planner concatenates and the tracker executes.
 
-A trajectory is N samples of q, qdot, u = psiddot and the feed-forward torque tau, with the tracking gains of
+A trajectory is N samples of q, qdot, u = psiddot and the feed-forward torque tau (and, planned with the
+circulatory flow model, the flow's n_lag = 2 lag states z; swim_model.flow), with the tracking gains of
 eq. 33 at each sample: K = lambda R^-1 (G'P) Gamma(lambda) and the Riccati input gain G_l'P_l = (G'P) Gamma(lambda)
 (eq. 24), already time-scaled (swim_controller.time_scaling). Its segments say which primitive each run of samples
 came from (paper Sec. 4.2); a trajectory is checked when it is made, so one that exists is well formed.
 
 Time scaling by lambda > 0 (paper P3, Sec. 4.3; Theorem 1, Sec. 6.4) is ``Trajectory.time_scaled``, the one place
 it is done: t -> t / lambda, q(t) -> q(lambda t), qdot -> lambda qdot, u -> lambda^2 u, tau -> lambda^2 tau, the
-gains by Theorem 1. Scalings compose (lambda2 after lambda1 is lambda1 lambda2), and a lambda whose torques exceed
-the motor limits is refused with the largest feasible one named.
+lag states (velocities) z -> lambda z (docs/flow_model.md, "Smoothness and P3"), the gains by Theorem 1.
+Scalings compose (lambda2 after lambda1 is lambda1 lambda2), and a lambda whose torques exceed the motor limits
+is refused with the largest feasible one named.
 """
 from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Optional
 
 import numpy as np
 import numpy.typing as npt
@@ -21,6 +24,7 @@ import numpy.typing as npt
 from swim_controller.errors import PlanError
 from swim_controller.riccati import error_state_size
 from swim_controller.time_scaling import retime_feedback
+from swim_model.flow import FLOW_MODELS, LAG_STATE_NAMES
 from swim_model.vehicle import JOINT_NAMES_CONSTRAINED, JOINT_NAMES_UNCONSTRAINED
 
 Array = npt.NDArray[np.float64]
@@ -68,11 +72,16 @@ class TrajectoryPoint:
     torque: Array              # (2,) feed-forward torque, N m
     lqr_gain: Array            # (2, n) K
     riccati_input_gain: Array  # (2, n) G_l' P_l
+    lag: Array                 # (n_lag,) the flow's planned lag states, m/s; empty for the ideal flow
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class Trajectory:
-    """A concatenated, time-scaled trajectory on its sample grid, N samples, nq = 3 (constrained) or 4 (free)."""
+    """A concatenated, time-scaled trajectory on its sample grid, N samples, nq = 3 (constrained) or 4 (free).
+
+    flow_model: the flow model the plan was made with, "ideal" (the paper's) or "circulatory"; lag, its (N, n_lag)
+    planned lag states (m/s), is required with the circulatory flow (n_lag = 2) and must be None with the ideal
+    one. The gains act on the error state x = (int e_y, e_q, edot_q, e_z) of n = ny + 2 nq + n_lag entries."""
 
     time_s: Array              # (N,) trajectory time, s, strictly increasing
     q: Array                   # (N, nq) rad, m
@@ -84,6 +93,8 @@ class Trajectory:
     segments: tuple[Segment, ...]   # in order, tiling the samples (a junction sample belongs to the earlier one)
     lane_radius_m: float       # R of the locked rails (constrained), or the starting lane (free), m
     library_digest: str = ""   # the primitive library the trajectory came from
+    flow_model: str = "ideal"  # "ideal" | "circulatory" (swim_model.flow.FLOW_MODELS)
+    lag: Optional[Array] = None   # (N, n_lag) the flow's lag states, m/s; None for the ideal flow
     _segment_start_s: Array = dataclasses.field(init=False, repr=False)   # (segments,) their start times, s
     _rows: Array = dataclasses.field(init=False, repr=False)     # (N, m) every sampled quantity, one row a sample
     _slopes: Array = dataclasses.field(init=False, repr=False)   # (N - 1, m) the rows' slopes between samples
@@ -99,9 +110,19 @@ class Trajectory:
         nq = np.shape(self.q)[-1] if np.ndim(self.q) == 2 else 0
         if nq not in (3, 4):
             raise PlanError(f"positions must be (N, 3) or (N, 4), got shape {np.shape(self.q)}")
-        n = error_state_size(nq, nq - 2)
+        if not (isinstance(self.flow_model, str) and self.flow_model in FLOW_MODELS):
+            raise PlanError(f"plan flow model must be one of {FLOW_MODELS}, got {self.flow_model!r}")
+        n_lag = self.n_lag
+        if n_lag and self.lag is None:
+            raise PlanError(f"a plan made with the circulatory flow model needs its lag states "
+                            f"({', '.join(LAG_STATE_NAMES)}, m/s)")
+        if not n_lag and self.lag is not None:
+            raise PlanError("a plan made with the ideal flow model has no lag states (lag must be None)")
+        n = error_state_size(nq, nq - 2, n_lag)
         shapes = {"q": (samples, nq), "qdot": (samples, nq), "foil_acceleration": (samples, 2),
                   "torque": (samples, 2), "lqr_gain": (samples, 2, n), "riccati_input_gain": (samples, 2, n)}
+        if n_lag:
+            shapes["lag"] = (samples, n_lag)
         for name, shape in shapes.items():
             value = np.asarray(getattr(self, name), dtype=float)
             if value.shape != shape:
@@ -117,7 +138,8 @@ class Trajectory:
         self._check_segments(samples)
         set_field(self, "_segment_start_s", np.array([s.start_time_s for s in self.segments]))
         # one row per sample, interpolated in one operation per control period
-        rows = np.concatenate([self.q, self.qdot, self.foil_acceleration, self.torque,
+        lag_rows = [self.lag] if self.lag is not None else []
+        rows = np.concatenate([self.q, self.qdot, self.foil_acceleration, self.torque, *lag_rows,
                                self.lqr_gain.reshape(samples, -1), self.riccati_input_gain.reshape(samples, -1)],
                               axis=1)
         set_field(self, "_rows", rows)
@@ -148,6 +170,11 @@ class Trajectory:
         return self.nq - 2
 
     @property
+    def n_lag(self) -> int:
+        """The flow's lag states: 0 (ideal flow) or 2 (circulatory)."""
+        return len(LAG_STATE_NAMES) if self.flow_model == "circulatory" else 0
+
+    @property
     def constrained(self) -> bool:
         """The laterally constrained vehicle (q = alpha, phi, theta), else the free one (alpha, R, phi, theta)."""
         return self.nq == len(JOINT_NAMES_CONSTRAINED)
@@ -175,18 +202,18 @@ class Trajectory:
         k = min(int(np.searchsorted(self.time_s, t, side="right")) - 1, len(self.time_s) - 2)
         offset = t - self.time_s[k]
         row = rows[k] + offset * slopes[k]
-        nq, n = self.nq, self.lqr_gain.shape[2]
+        nq, n, n_lag = self.nq, self.lqr_gain.shape[2], self.n_lag
         q = row[:nq]
         # the Hermite correction to linear interpolation of q: h^2 w (1 - w) ((qdot0 - slope) (1 - w) - ...)
         step = self.time_s[k + 1] - self.time_s[k]
         w = offset / step
         secant = slopes[k, :nq]
         q = q + step * w * (1.0 - w) * ((self.qdot[k] - secant) * (1.0 - w) - (self.qdot[k + 1] - secant) * w)
-        gains = row[2 * nq + 4:]
+        gains = row[2 * nq + 4 + n_lag:]
         return TrajectoryPoint(
             time_s=t, q=q, qdot=row[nq:2 * nq], foil_acceleration=row[2 * nq:2 * nq + 2],
             torque=row[2 * nq + 2:2 * nq + 4], lqr_gain=gains[:2 * n].reshape(2, n),
-            riccati_input_gain=gains[2 * n:].reshape(2, n))
+            riccati_input_gain=gains[2 * n:].reshape(2, n), lag=row[2 * nq + 4:2 * nq + 4 + n_lag])
 
     def time_scaled(self, time_scale: float, torque_limits_n_m: npt.ArrayLike) -> Trajectory:
         """This trajectory run time_scale (lambda) times faster: P3 and Theorem 1 (module docstring).
@@ -200,14 +227,15 @@ class Trajectory:
             raise PlanError(f"time scale {time_scale:g} needs {peak:.0%} of the motor torque limits; the largest "
                             f"feasible time scale for this plan is {time_scale / math.sqrt(peak):.3f}")
         lqr_gain, riccati_input_gain = retime_feedback(self.lqr_gain, self.riccati_input_gain, time_scale,
-                                                       self.ny, self.nq)
+                                                       self.ny, self.nq, self.n_lag)
         segments = tuple(dataclasses.replace(s, start_time_s=s.start_time_s / time_scale,
                                              duration_s=s.duration_s / time_scale,
                                              time_scale=s.time_scale * time_scale) for s in self.segments)
         return dataclasses.replace(self, time_s=self.time_s / time_scale, qdot=self.qdot * time_scale,
                                    foil_acceleration=self.foil_acceleration * time_scale ** 2,
                                    torque=self.torque * time_scale ** 2, lqr_gain=lqr_gain,
-                                   riccati_input_gain=riccati_input_gain, segments=segments)
+                                   riccati_input_gain=riccati_input_gain, segments=segments,
+                                   lag=None if self.lag is None else self.lag * time_scale)
 
 
 def motor_limit_fraction(torque_n_m: Array, torque_limits_n_m: npt.ArrayLike) -> float:

@@ -166,7 +166,7 @@ LARGEST_FLOAT = 1.7976931348623157e308
 #: infinite end time, a value whose rates overflow, steps of 1e-300 s and a lane of 1e300 m, plans a Trajectory's
 #: own checks pass and only the decoder's range check and tracker_node's tank check refuse.
 PLAN_DEFECTS = {
-    "interface version": tuple(("", v) for v in (1.0, 0.0, 3.0, 4294967295.0)),
+    "interface version": tuple(("", v) for v in (1.0, 0.0, 2.0, 4.0, 4294967295.0)),
     "too many samples": (("", 0.0),),
     "no samples": (("", 0.0),),
     "one sample": (("", 0.0),),

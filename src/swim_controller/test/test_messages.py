@@ -71,7 +71,8 @@ def _corrupt(message, bad):
 
 
 @pytest.mark.parametrize("bad, reason", [
-    ("version", "interface version 3, this tracker reads 2"),
+    ("version", f"interface version {SUPPORTED_INTERFACE_VERSION + 1}, this tracker reads "
+                f"{SUPPORTED_INTERFACE_VERSION}"),
     ("joint names", r"plan joints \['alpha', 'R', 'phi', 'psi'\] are not the free vehicle's"),
     ("constrained flag", "are not the constrained vehicle's"),
     ("nan", "plan q has non-finite values"),

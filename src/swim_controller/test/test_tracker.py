@@ -36,7 +36,7 @@ def test_sliding_term_makes_the_lyapunov_derivative_nonpositive(s0, s1, angle, f
         np.testing.assert_allclose(eps, -0.3 * s, atol=1e-15)
 
 
-def _static_io(q, qdot):
+def _static_io(q, qdot, lag):
     return np.diag([2.0, 0.5]), np.zeros(2)
 
 

@@ -23,12 +23,16 @@ Progress = Callable[[str, str], None]
 
 
 def solve_job(rig: RigParameters, spec: PrimitiveSpec, limits: PlanningLimits, settings: SolverSettings,
-              start, end, guess: Optional[Primitive] = None, lqr_weights: LqrWeights = LqrWeights()) -> Primitive:
+              start, end, guess: Optional[Primitive] = None, lqr_weights: LqrWeights = LqrWeights(),
+              flow_model: str = "ideal") -> Primitive:
     """One primitive and its tracking gains, in a worker process: picklable arguments in, a Primitive out.
 
+    start, end: the boundary states it joins (Primitive.end_boundary_state / start_boundary_state: (q, qdot),
+    and the lag states with the circulatory flow), or None.
     guess: a primitive on the same grid to start from, or the cruise this primitive joins (its stroke
-    seeds the initial guess of an accelerate or decelerate)."""
-    model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m)
+    seeds the initial guess of an accelerate or decelerate).
+    flow_model: swim_model's flow model the primitive is solved with ("ideal" or "circulatory")."""
+    model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m, flow=flow_model)
     try:
         primitive = solve_primitive(model, spec, limits, start=start, end=end, guess=guess, settings=settings)
     except PrimitiveSolveError:
@@ -94,11 +98,11 @@ def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], exe
                 progress(spec.primitive_id, "skipped: a primitive it joins failed")
             elif all(d in library and d not in stale for d in deps):
                 pending.remove(spec)
-                start = library.get(spec.start_from).end_state if spec.start_from else None
-                end = library.get(spec.end_at).start_state if spec.end_at else None
+                start = library.get(spec.start_from).end_boundary_state if spec.start_from else None
+                end = library.get(spec.end_at).start_boundary_state if spec.end_at else None
                 cruise = library.get(cast(str, spec.start_from or spec.end_at)) if deps else None
                 running[executor.submit(solve_job, library.rig, spec, limits, library.solver, start, end,
-                                        cruise, library.lqr_weights)] = spec
+                                        cruise, library.lqr_weights, library.flow_model)] = spec
         if not running:
             break
         done, _ = concurrent.futures.wait(running, return_when=concurrent.futures.FIRST_COMPLETED)

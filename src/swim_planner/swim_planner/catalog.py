@@ -1,4 +1,6 @@
-"""The default primitive sets: the constrained graph of Fig. 9 and the free two-lane graph of Fig. 12.
+"""The primitive sets: the constrained graph of Fig. 9 and the free two-lane graph of Fig. 12 (``default_specs``,
+the paper's library, ideal flow), and the same graph with a third, faster energy level for the circulatory flow
+(``circulatory_specs``).
 
 Ids name what a primitive joins, e.g. ``constrained/cruise/E0.05``, ``constrained/accelerate/E0.05``,
 ``free/lane_change/R0.43-R0.48/E0.05``. Durations are the paper's (Sec. 7; docs/model_and_method.md section 3):
@@ -8,17 +10,27 @@ free accelerate 3 s, cruise 1 s, lane change 2 s outward (3 s inward, assumed), 
 """
 from __future__ import annotations
 
+import dataclasses
 import itertools
 
 from swim_model import RigParameters
 from swim_planner.primitives import PrimitiveSpec, PrimitiveType
 
 ENERGY_LEVELS_J = (0.05, 0.1)          # Sec. 7: E = 0.05 and 0.1
+CIRCULATORY_ENERGY_LEVELS_J = ENERGY_LEVELS_J + (0.2,)
+# the paper's two levels and a third, faster one (assumed): twice the mean kinetic energy of E = 0.1, as E = 0.1 is
+# of E = 0.05, so the levels are evenly spaced in speed ratio (speed ~ sqrt(E): about 1.4x a step). It solves
+# with every one of its edges within the planning limits (docs/circulatory_primitives.md); a level far above
+# it would need the heave torque past its planning limit to get there from rest in the accelerate's 4 s
 INTERVALS_PER_S = 20                   # collocation intervals per second of a transition primitive
 CRUISE_INTERVALS = 80                  # per 1 s cruise cycle: with 40 the optimizer exploited the
                                        # discretization (J 29 % above the converged value, open-loop
                                        # replay 0.13 rad off); 80 agree with 60 to 1e-4 in J
 INWARD_LANE_CHANGE_S = 3.0
+CIRCULATORY_FREE_ACCELERATE_S = 4.0
+# circulatory flow (assumed, as the constrained accelerate's 4 s): within its angle-of-attack bound the free
+# accelerate gets from rest to a cruise in 4 s and not in the paper's 3 s (IPOPT: the R = 0.43 m, E = 0.05 and
+# 0.10 ones infeasible in 3 s from both guesses, solved in 4 s)
 CRUISE_CYCLE_S = 1.0                   # assumed: one stroke per second, as the paper's cruise figures
 
 
@@ -41,10 +53,21 @@ def _intervals(duration_s: float) -> int:
     return max(20, int(round(INTERVALS_PER_S * duration_s)))
 
 
-def constrained_specs(rig: RigParameters) -> list[PrimitiveSpec]:
+def _neighbour_pairs(energy_levels_j: tuple[float, ...]) -> list[tuple[float, float]]:
+    """(from, to) energy levels of the cruise-to-cruise edges: each level to its neighbours, both ways."""
+    pairs = []
+    for low, high in zip(energy_levels_j[:-1], energy_levels_j[1:]):
+        pairs += [(low, high), (high, low)]
+    return pairs
+
+
+def constrained_specs(rig: RigParameters,
+                      energy_levels_j: tuple[float, ...] = ENERGY_LEVELS_J) -> list[PrimitiveSpec]:
+    """The constrained graph: a cruise, its accelerate and its decelerate at each level (ascending), and the
+    cruise-to-cruise edges between neighbouring levels."""
     lane = rig.constrained_lane_radius_m
     specs = []
-    for energy in ENERGY_LEVELS_J:
+    for energy in energy_levels_j:
         cruise = cruise_id(True, energy)
         specs.append(PrimitiveSpec(cruise, PrimitiveType.CRUISE, True, 5.0, lane, lane, energy_j=energy,
                                    intervals=CRUISE_INTERVALS, cycles=int(round(5.0 / CRUISE_CYCLE_S))))
@@ -52,7 +75,7 @@ def constrained_specs(rig: RigParameters) -> list[PrimitiveSpec]:
                                    4.0, lane, lane, end_at=cruise, intervals=_intervals(4.0)))
         specs.append(PrimitiveSpec(f"constrained/decelerate/{energy_tag(energy)}", PrimitiveType.DECELERATE, True,
                                    4.0, lane, lane, start_from=cruise, intervals=_intervals(4.0)))
-    for low, high in itertools.permutations(ENERGY_LEVELS_J, 2):
+    for low, high in _neighbour_pairs(energy_levels_j):
         specs.append(PrimitiveSpec(f"constrained/cruise_to_cruise/{energy_tag(low)}-{energy_tag(high)}",
                                    PrimitiveType.CRUISE_TO_CRUISE, True, 2.0, lane, lane,
                                    start_from=cruise_id(True, low), end_at=cruise_id(True, high),
@@ -60,10 +83,12 @@ def constrained_specs(rig: RigParameters) -> list[PrimitiveSpec]:
     return specs
 
 
-def free_specs(rig: RigParameters) -> list[PrimitiveSpec]:
+def free_specs(rig: RigParameters, energy_levels_j: tuple[float, ...] = ENERGY_LEVELS_J) -> list[PrimitiveSpec]:
+    """The free two-lane graph: in each lane the constrained graph's primitives, and a lane change each way at
+    every level."""
     lanes = (rig.lane_1_radius_m, rig.lane_2_radius_m)
     specs = []
-    for lane, energy in itertools.product(lanes, ENERGY_LEVELS_J):
+    for lane, energy in itertools.product(lanes, energy_levels_j):
         tags = f"{lane_tag(lane)}/{energy_tag(energy)}"
         cruise = cruise_id(False, energy, lane)
         specs.append(PrimitiveSpec(cruise, PrimitiveType.CRUISE, False, 1.0, lane, lane, energy_j=energy,
@@ -73,12 +98,12 @@ def free_specs(rig: RigParameters) -> list[PrimitiveSpec]:
         specs.append(PrimitiveSpec(f"free/decelerate/{tags}", PrimitiveType.DECELERATE, False, 3.0, lane, lane,
                                    start_from=cruise, intervals=_intervals(3.0)))
     for lane in lanes:
-        for low, high in itertools.permutations(ENERGY_LEVELS_J, 2):
+        for low, high in _neighbour_pairs(energy_levels_j):
             specs.append(PrimitiveSpec(
                 f"free/cruise_to_cruise/{lane_tag(lane)}/{energy_tag(low)}-{energy_tag(high)}",
                 PrimitiveType.CRUISE_TO_CRUISE, False, 2.0, lane, lane, start_from=cruise_id(False, low, lane),
                 end_at=cruise_id(False, high, lane), speeding_up=high > low, intervals=_intervals(2.0)))
-    for (start_lane, end_lane), energy in itertools.product(itertools.permutations(lanes, 2), ENERGY_LEVELS_J):
+    for (start_lane, end_lane), energy in itertools.product(itertools.permutations(lanes, 2), energy_levels_j):
         # the paper's lane change (outward, Sec. 7.3) takes 2 s; inward we allow 3 s (assumed: in 2 s the
         # E = 0.05 inward change is infeasible within the planning torque limits)
         duration = 2.0 if end_lane > start_lane else INWARD_LANE_CHANGE_S
@@ -91,4 +116,14 @@ def free_specs(rig: RigParameters) -> list[PrimitiveSpec]:
 
 
 def default_specs(rig: RigParameters) -> list[PrimitiveSpec]:
+    """The paper's library (ideal flow): Figs. 9 and 12 at E = 0.05 and 0.1."""
     return constrained_specs(rig) + free_specs(rig)
+
+
+def circulatory_specs(rig: RigParameters) -> list[PrimitiveSpec]:
+    """The circulatory flow's library: the paper's graph at CIRCULATORY_ENERGY_LEVELS_J, ids and durations as in
+    ``default_specs`` except the free accelerate's (CIRCULATORY_FREE_ACCELERATE_S)."""
+    specs = constrained_specs(rig, CIRCULATORY_ENERGY_LEVELS_J) + free_specs(rig, CIRCULATORY_ENERGY_LEVELS_J)
+    return [dataclasses.replace(s, duration_s=CIRCULATORY_FREE_ACCELERATE_S,
+                                intervals=_intervals(CIRCULATORY_FREE_ACCELERATE_S))
+            if not s.constrained and s.primitive_type is PrimitiveType.ACCELERATE else s for s in specs]

@@ -1,17 +1,20 @@
 """swim-primitives: build, list, show and plot primitive libraries.
 
-    swim-primitives build [LIBRARY] [--set constrained|free|all] [--only ID ...] [--workers N] [--scheduler ADDR]
-                          [--lqr-weights FILE.yaml]
-    swim-primitives list  [LIBRARY]
-    swim-primitives show  ID [--library LIBRARY]
-    swim-primitives plot  ID [--library LIBRARY] [--output FILE.png]
+    swim-primitives build [LIBRARY] [--flow ideal|circulatory] [--set constrained|free|all] [--only ID ...]
+                          [--workers N] [--scheduler ADDR] [--lqr-weights FILE.yaml]
+    swim-primitives list  [LIBRARY] [--flow ideal|circulatory]
+    swim-primitives show  ID [--library LIBRARY] [--flow ideal|circulatory]
+    swim-primitives plot  ID [--library LIBRARY] [--flow ideal|circulatory] [--output FILE.png]
     swim-primitives compare ID [--library LIBRARY] [--segments 1|2] [--evaluations N]
 
 `compare` solves a constrained cruise or accelerate again by the paper's own method (Fourier series, or
 eq. 11's polynomial sinusoids in one or two segments, by Nelder-Mead as MATLAB's fmin) and prints both
 methods' index J, how far each misses its constraints, and the wall time, as JSON.
 
-LIBRARY defaults to the library shipped with swim_planner. Builds are resumable: primitives already in
+--flow is swim_model's flow model: "ideal" (the paper's, the default) or "circulatory". A build solves that
+model's primitive set (catalog.default_specs or catalog.circulatory_specs) and refuses to add to a library of the
+other model. LIBRARY defaults to the library shipped with swim_planner for that flow model; list, show and plot
+of a LIBRARY named read it whatever its flow model. Builds are resumable: primitives already in
 the library are kept. Jobs run in local processes, or on a Dask cluster when --scheduler names one. Each
 primitive is stored with its tracking gains (the Riccati solution P(t) and G'P, swim_controller.riccati);
 when the LQ weights change, a build recomputes only the gains.
@@ -28,7 +31,8 @@ from pathlib import Path
 from swim_controller.riccati import LqrWeights
 from swim_model import SwimModelError, load_rig
 from swim_planner.build import build_library, dependencies
-from swim_planner.catalog import constrained_specs, default_specs, free_specs
+from swim_model.flow import FLOW_MODELS
+from swim_planner import catalog
 from swim_planner.errors import PlannerError
 from swim_planner.gains import load_lqr_weights
 from swim_planner.library import PrimitiveLibrary
@@ -39,7 +43,10 @@ def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="swim-primitives", description=__doc__.splitlines()[0])
     parser.add_argument("--rig", type=Path, default=None, help="rig parameter file (default: the shipped one)")
     commands = parser.add_subparsers(dest="command", required=True)
-    build = commands.add_parser("build", help="solve the primitives not yet in a library")
+    flow = argparse.ArgumentParser(add_help=False)
+    flow.add_argument("--flow", choices=FLOW_MODELS, default="ideal",
+                      help="flow model of the primitives (default: ideal, the paper's)")
+    build = commands.add_parser("build", help="solve the primitives not yet in a library", parents=[flow])
     build.add_argument("library", type=Path, nargs="?", default=None)
     build.add_argument("--set", choices=("constrained", "free", "all"), default="all")
     build.add_argument("--only", nargs="+", default=None, help="these ids (and what they join) only")
@@ -48,10 +55,10 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("--lqr-weights", type=Path, default=None,
                        help="YAML of swim_controller LqrWeights fields for the stored tracking gains "
                             "(default: the package defaults); changed weights recompute the gains only")
-    listing = commands.add_parser("list", help="one line per primitive")
+    listing = commands.add_parser("list", help="one line per primitive", parents=[flow])
     listing.add_argument("library", type=Path, nargs="?", default=None)
     for name in ("show", "plot"):
-        sub = commands.add_parser(name, help=f"{name} one primitive")
+        sub = commands.add_parser(name, help=f"{name} one primitive", parents=[flow])
         sub.add_argument("primitive_id")
         sub.add_argument("--library", type=Path, default=None)
         if name == "plot":
@@ -88,23 +95,34 @@ def _executor(args) -> concurrent.futures.Executor:
     return concurrent.futures.ProcessPoolExecutor(max_workers=args.workers)
 
 
+def _load(args, rig) -> PrimitiveLibrary:
+    """The library named (of whichever flow model), or the shipped one of --flow."""
+    if args.library is not None:
+        return PrimitiveLibrary.load(args.library, rig, flow_model=None)
+    return PrimitiveLibrary.load(default_library_path(args.flow), rig, args.flow)
+
+
 def command_build(args, rig) -> int:
     from tqdm import tqdm
-    sets = {"constrained": constrained_specs, "free": free_specs, "all": default_specs}
-    specs = _select(sets[args.set](rig), args.only)
+    specs_of_flow = catalog.circulatory_specs if args.flow == "circulatory" else catalog.default_specs
+    every = specs_of_flow(rig)
+    wanted = {"constrained": (True,), "free": (False,), "all": (True, False)}[args.set]
+    specs = _select([s for s in every if s.constrained in wanted], args.only)
     weights = load_lqr_weights(args.lqr_weights) if args.lqr_weights else LqrWeights()
-    library = PrimitiveLibrary.create_or_open(args.library or default_library_path(), rig, lqr_weights=weights)
+    library = PrimitiveLibrary.create_or_open(args.library or default_library_path(args.flow), rig,
+                                              lqr_weights=weights, flow_model=args.flow)
     with tqdm(total=len(specs), unit="primitive", file=sys.stderr) as bar, _executor(args) as executor:
         def progress(primitive_id: str, status: str) -> None:
             bar.update(1)
             bar.write(f"{primitive_id}: {status}")
         failed = build_library(library, specs, executor, progress=progress)
-    print(f"{library.path}: {len(library)} primitives" + (f"; failed: {', '.join(failed)}" if failed else ""))
+    print(f"{library.path}: {len(library)} primitives, {library.flow_model} flow"
+          + (f"; failed: {', '.join(failed)}" if failed else ""))
     return 1 if failed else 0
 
 
 def command_list(args, rig) -> int:
-    library = PrimitiveLibrary.load(args.library or default_library_path(), rig)
+    library = _load(args, rig)
     print(f"{'id':48s} {'type':16s} {'T (s)':>6s} {'J':>9s} {'solve (s)':>9s}  status")
     for primitive_id in library.ids():
         e = library.entry(primitive_id)
@@ -114,7 +132,7 @@ def command_list(args, rig) -> int:
 
 
 def command_show(args, rig) -> int:
-    library = PrimitiveLibrary.load(args.library or default_library_path(), rig)
+    library = _load(args, rig)
     entry = dict(library.entry(args.primitive_id))
     primitive = library.get(args.primitive_id)
     entry["start_q"], entry["end_q"] = primitive.q[0].tolist(), primitive.q[-1].tolist()
@@ -125,7 +143,7 @@ def command_show(args, rig) -> int:
 
 def command_plot(args, rig) -> int:
     from swim_planner.plots import plot_primitive
-    library = PrimitiveLibrary.load(args.library or default_library_path(), rig)
+    library = _load(args, rig)
     output = args.output or Path(args.primitive_id.replace("/", "_") + ".png")
     plot_primitive(library.get(args.primitive_id), output)
     print(f"wrote {output}")

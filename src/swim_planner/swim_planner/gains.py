@@ -24,13 +24,17 @@ from swim_planner.primitives import Primitive, PrimitiveSpec, PrimitiveType
 
 
 def gains_job(rig: RigParameters, primitive: Primitive, lqr_weights: LqrWeights) -> Primitive:
-    """The primitive with its LQ gains P(t), G'P computed (swim_controller.riccati), once, off-line."""
+    """The primitive with its LQ gains P(t), G'P computed (swim_controller.riccati), once, off-line.
+
+    A primitive with lag states was solved with the circulatory flow model: its gains are for that model, on the
+    extended error state (int e_y, e_q, edot_q, e_z)."""
     spec = primitive.spec
-    model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m)
+    flow = "ideal" if primitive.lag is None else "circulatory"
+    model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m, flow=flow)
     try:
         cycle_samples = 2 * spec.intervals + 1 if spec.primitive_type is PrimitiveType.CRUISE else None
         gains = primitive_gains(model, primitive.time_s, primitive.q, primitive.qdot, primitive.foil_acceleration,
-                                lqr_weights, cycle_samples)
+                                lqr_weights, cycle_samples, primitive.lag)
     except GainComputationError as err:
         raise PrimitiveSolveError(f"{spec.primitive_id}: {err}") from err
     return dataclasses.replace(primitive, gains=gains)

@@ -2,16 +2,20 @@
 
 Layout of a library directory::
 
-    manifest.json              format version, rig digest, model version, creation time, solver settings,
-                               the LQ weights the stored gains were computed with, and per primitive: its
-                               spec, index J, effort, solver status, solve time, whether it has gains,
-                               the array file's name and SHA-256
-    primitives/<file>.npz      time_s, q, qdot, foil_acceleration, torque (fine collocation grid), and
-                               riccati P (N, n, n) and riccati_input_gain G'P (N, 2, n) for the tracker
+    manifest.json              format version, rig digest, model version, flow model, creation time, solver
+                               settings, the LQ weights the stored gains were computed with, and per
+                               primitive: its spec, index J, effort, solver status, solve time, whether it has
+                               gains, a cruise's mean speed, the array file's name and SHA-256
+    primitives/<file>.npz      time_s, q, qdot, foil_acceleration, torque (fine collocation grid), lag (the
+                               flow's lag states, circulatory flow only), and riccati P (N, n, n) and
+                               riccati_input_gain G'P (N, 2, n) for the tracker
+
+A library is made with one flow model of swim_model (``FLOW_MODELS``: "ideal", the paper's, or "circulatory"),
+recorded in its manifest; a format-2 manifest predates the choice and is the ideal model's.
 
 Loading refuses, with a LibraryError naming the cause: a missing or unparsable manifest, another format
-version, a library built for other rig parameters or another model version, and an array file that is
-missing, truncated or altered (its SHA-256 differs from the manifest's).
+version, a library built for other rig parameters, another model version or another flow model than the one
+asked for, and an array file that is missing, truncated or altered (its SHA-256 differs from the manifest's).
 """
 from __future__ import annotations
 
@@ -30,13 +34,26 @@ import numpy as np
 
 from swim_controller.riccati import LqrWeights, TrackingGains
 from swim_model import MODEL_VERSION, RigParameters
+from swim_model.flow import FLOW_MODELS
 from swim_planner.errors import LibraryError
-from swim_planner.primitives import Primitive, PrimitiveSpec, PrimitiveType, SolverSettings
+from swim_planner.primitives import (Primitive, PrimitiveSpec, PrimitiveType, SolverSettings,
+                                     cruise_mean_speed_m_s)
 
-FORMAT_VERSION = 2   # 2: tracking gains (P(t), G'P) stored with the primitives
+FORMAT_VERSION = 3   # 3: the flow model and the lag states; 2: tracking gains (P(t), G'P) stored
+READABLE_FORMAT_VERSIONS = (2, 3)
+#: the flow model of a format-2 library: it was made before the choice existed, with the paper's model
+FORMAT_2_FLOW_MODEL = "ideal"
 MANIFEST = "manifest.json"
 ARRAYS = ("time_s", "q", "qdot", "foil_acceleration", "torque")
+LAG_ARRAY = "lag"
 GAIN_ARRAYS = ("riccati", "riccati_input_gain")
+
+
+def check_flow_model(flow_model: str) -> str:
+    """flow_model if it is one of swim_model's FLOW_MODELS, else a LibraryError naming them."""
+    if flow_model not in FLOW_MODELS:
+        raise LibraryError(f"unknown flow model {flow_model!r}: one of {', '.join(FLOW_MODELS)}")
+    return flow_model
 
 
 def _file_name(primitive_id: str) -> str:
@@ -56,6 +73,8 @@ def _spec_from_json(data: dict) -> PrimitiveSpec:
 def _encode_arrays(primitive: Primitive) -> bytes:
     buffer = io.BytesIO()
     arrays = {name: getattr(primitive, name) for name in ARRAYS}
+    if primitive.lag is not None:
+        arrays[LAG_ARRAY] = primitive.lag
     if primitive.gains is not None:
         arrays.update(riccati=primitive.gains.riccati, riccati_input_gain=primitive.gains.riccati_input_gain)
     np.savez(buffer, **arrays)
@@ -66,9 +85,10 @@ class PrimitiveLibrary:
     """A library directory: write primitives into it, read them back verified."""
 
     def __init__(self, path: str | Path, rig: RigParameters, solver: SolverSettings = SolverSettings(),
-                 lqr_weights: LqrWeights = LqrWeights()) -> None:
+                 lqr_weights: LqrWeights = LqrWeights(), flow_model: str = "ideal") -> None:
         self.path = Path(path)
         self.rig = rig
+        self.flow_model = check_flow_model(flow_model)
         self.solver = solver
         self.lqr_weights = lqr_weights
         self._entries: dict[str, dict] = {}
@@ -78,18 +98,19 @@ class PrimitiveLibrary:
     # ----- writing -------------------------------------------------------------------------------
     @classmethod
     def create_or_open(cls, path: str | Path, rig: RigParameters, solver: SolverSettings = SolverSettings(),
-                       lqr_weights: Optional[LqrWeights] = None) -> "PrimitiveLibrary":
+                       lqr_weights: Optional[LqrWeights] = None, flow_model: str = "ideal") -> "PrimitiveLibrary":
         """Open an existing library for adding to it (resuming a build), or start a new one.
 
         lqr_weights: the weights gains are to be computed with (None: keep the library's own); primitives
-        whose stored gains were computed with other weights then report ``needs_gains``."""
+        whose stored gains were computed with other weights then report ``needs_gains``.
+        flow_model: the model the primitives are solved with; an existing library of another is refused."""
         if (Path(path) / MANIFEST).exists():
-            library = cls.load(path, rig)
+            library = cls.load(path, rig, flow_model)
             library.solver = solver
             if lqr_weights is not None:
                 library.lqr_weights = lqr_weights
             return library
-        library = cls(path, rig, solver, lqr_weights or LqrWeights())
+        library = cls(path, rig, solver, lqr_weights or LqrWeights(), flow_model)
         library._write_manifest()
         return library
 
@@ -101,6 +122,9 @@ class PrimitiveLibrary:
     def add(self, primitive: Primitive) -> None:
         """Store one primitive (its array file first, then the manifest, each replaced atomically)."""
         spec = primitive.spec
+        if (primitive.lag is not None) != (self.flow_model == "circulatory"):
+            raise LibraryError(f"'{spec.primitive_id}' {'has' if primitive.lag is not None else 'has no'} lag "
+                               f"states: not a primitive of this {self.flow_model}-flow library")
         payload = _encode_arrays(primitive)
         name = _file_name(spec.primitive_id)
         (self.path / "primitives").mkdir(parents=True, exist_ok=True)
@@ -112,6 +136,8 @@ class PrimitiveLibrary:
             "samples": int(len(primitive.time_s)), "has_gains": primitive.gains is not None,
             "gains_lqr_weights": dataclasses.asdict(self.lqr_weights) if primitive.gains is not None else None,
         }
+        if spec.primitive_type is PrimitiveType.CRUISE:
+            self._entries[spec.primitive_id]["mean_speed_m_s"] = cruise_mean_speed_m_s(primitive)
         self._cache[spec.primitive_id] = primitive
         self._write_manifest()
 
@@ -121,6 +147,7 @@ class PrimitiveLibrary:
             "format_version": FORMAT_VERSION,
             "rig_digest": self.rig.digest(),
             "model_version": MODEL_VERSION,
+            "flow_model": self.flow_model,
             "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
             "solver": dataclasses.asdict(self.solver),
             "lqr_weights": dataclasses.asdict(self.lqr_weights),
@@ -130,8 +157,11 @@ class PrimitiveLibrary:
 
     # ----- reading -------------------------------------------------------------------------------
     @classmethod
-    def load(cls, path: str | Path, rig: RigParameters) -> "PrimitiveLibrary":
-        """Open a library, checking its format, rig and model (arrays are verified as they are read)."""
+    def load(cls, path: str | Path, rig: RigParameters, flow_model: Optional[str] = "ideal") -> "PrimitiveLibrary":
+        """Open a library, checking its format, rig, model and flow model (arrays are verified as they are read).
+
+        flow_model: the flow model the library must have been made with (swim_model's FLOW_MODELS); None takes
+        the library's own, whichever it is (to list or show it)."""
         directory = Path(path)
         try:
             manifest = json.loads((directory / MANIFEST).read_text())
@@ -140,9 +170,16 @@ class PrimitiveLibrary:
                                f"`swim-primitives build {directory}`") from err
         except (OSError, ValueError) as err:
             raise LibraryError(f"{directory / MANIFEST} is unreadable or not JSON: {err}") from err
-        if not isinstance(manifest, dict) or manifest.get("format_version") != FORMAT_VERSION:
-            found = manifest.get("format_version") if isinstance(manifest, dict) else None
-            raise LibraryError(f"{directory}: library format {found!r}, this planner reads format {FORMAT_VERSION}")
+        found = manifest.get("format_version") if isinstance(manifest, dict) else None
+        if found not in READABLE_FORMAT_VERSIONS:
+            raise LibraryError(f"{directory}: library format {found!r}, this planner reads formats "
+                               f"{', '.join(map(str, READABLE_FORMAT_VERSIONS))}")
+        stored_flow = manifest.get("flow_model") if found == FORMAT_VERSION else FORMAT_2_FLOW_MODEL
+        if stored_flow not in FLOW_MODELS:
+            raise LibraryError(f"{directory / MANIFEST}: unknown flow model {stored_flow!r}")
+        if flow_model is not None and stored_flow != check_flow_model(flow_model):
+            raise LibraryError(f"{directory} holds primitives of the {stored_flow} flow model, not the {flow_model} "
+                               f"one asked for; use a library built with `swim-primitives build --flow {flow_model}`")
         if manifest.get("rig_digest") != rig.digest():
             raise LibraryError(f"{directory} was built for other rig parameters (digest "
                                f"{str(manifest.get('rig_digest'))[:12]}..., this rig {rig.digest()[:12]}...); "
@@ -153,7 +190,7 @@ class PrimitiveLibrary:
         try:
             # a manifest without a derivatives setting (the shipped library's) was solved with CasADi's own AD
             solver = SolverSettings(**{"derivatives": "casadi", **manifest.get("solver", {})})
-            library = cls(directory, rig, solver, LqrWeights(**manifest.get("lqr_weights", {})))
+            library = cls(directory, rig, solver, LqrWeights(**manifest.get("lqr_weights", {})), stored_flow)
         except (TypeError, ValueError) as err:
             raise LibraryError(f"{directory / MANIFEST}: unknown solver or LQR setting: {err}") from err
         entries = manifest.get("primitives")
@@ -201,6 +238,8 @@ class PrimitiveLibrary:
         try:
             with np.load(io.BytesIO(payload)) as arrays:
                 data = {name: np.array(arrays[name]) for name in ARRAYS}
+                if self.flow_model == "circulatory":
+                    data[LAG_ARRAY] = np.array(arrays[LAG_ARRAY])
                 gains = None
                 if not self.needs_gains(primitive_id):
                     gains = TrackingGains(riccati=np.array(arrays["riccati"]),

@@ -4,18 +4,20 @@ Concatenation: each primitive starts where the previous one ended; its alpha is 
 previous end value (Prop. 1), and the junction is checked: the states (all but alpha) must agree within
 JUNCTION_TOLERANCE, else the request is refused with the mismatch named, never spliced over. Our
 primitives are solved with equal junction states including qdot, so the plan's qdot is continuous there;
-only u = psiddot may jump.
+only u = psiddot may jump. Primitives solved with the circulatory flow model carry the flow's lag states z
+(m/s), which join like the velocities (within JUNCTION_TOLERANCE) and make a plan with flow_model "circulatory";
+a plan never mixes primitives of the two flow models.
 
 The plan is a swim_controller.trajectory.Trajectory: made at lambda = 1 (each sample carries K = R^-1 G'P and
 the Riccati input gain G'P of its primitive), then time-scaled by ``Trajectory.time_scaled`` (P3 and Theorem 1:
-t -> t / lambda, q(t) -> q(lambda t), qdot -> lambda qdot, u -> lambda^2 u, tau -> lambda^2 tau, K -> lambda
-R^-1 (G'P) Gamma(lambda), G'P -> (G'P) Gamma(lambda)), which refuses a lambda whose torques exceed the motor
-limits. The tracker's law is then u = u_des - K x.
+t -> t / lambda, q(t) -> q(lambda t), qdot -> lambda qdot, u -> lambda^2 u, tau -> lambda^2 tau, z -> lambda z,
+K -> lambda R^-1 (G'P) Gamma(lambda), G'P -> (G'P) Gamma(lambda)), which refuses a lambda whose torques exceed
+the motor limits. The tracker's law is then u = u_des - K x.
 
 A slowly varying lambda (Sec. 4.3): with s the nominal (lambda = 1) plan time and lambda(s) given,
 the plan runs t(s) = int_0^s ds' / lambda(s'), q(t) = q_nom(s), qdot = lambda qdot_nom(s),
-u = lambda^2 u_nom(s) + lambdadot qdot_nom and tau = lambda^2 tau_nom(s); the torque the lambdadot term
-would need (lambdadot Mm qdot_nom) is left to feedback, as in the paper.
+u = lambda^2 u_nom(s) + lambdadot qdot_nom, tau = lambda^2 tau_nom(s) and z = lambda z_nom(s); the torque the
+lambdadot term would need (lambdadot Mm qdot_nom) is left to feedback, as in the paper.
 """
 from __future__ import annotations
 
@@ -37,15 +39,29 @@ from swim_planner.primitives import Primitive, PrimitiveSpec
 
 Array = npt.NDArray[np.float64]
 
-#: largest junction mismatch accepted: rad, m, rad/s, m/s
+#: largest junction mismatch accepted: rad, m, rad/s, m/s (the lag states are velocities, m/s)
 JUNCTION_TOLERANCE = 1e-5
 
 
 def junction_mismatch(previous: Primitive, following: Primitive) -> float:
-    """Largest difference between previous's end state and following's start state, alpha aside."""
-    q_end, qdot_end = previous.end_state
-    q_start, qdot_start = following.start_state
-    return float(max(np.abs(q_end[1:] - q_start[1:]).max(), np.abs(qdot_end - qdot_start).max()))
+    """Largest difference between previous's end state and following's start state, alpha aside (and the lag
+    states, where both have them: Primitive.end_boundary_state, start_boundary_state)."""
+    q_end, qdot_end, *lag_end = previous.end_boundary_state
+    q_start, qdot_start, *lag_start = following.start_boundary_state
+    gaps = [np.abs(q_end[1:] - q_start[1:]).max(), np.abs(qdot_end - qdot_start).max()]
+    gaps += [np.abs(a - b).max() for a, b in zip(lag_end, lag_start)]
+    return float(max(gaps))
+
+
+def flow_model_of(primitives: Sequence[Primitive]) -> str:
+    """The flow model the primitives were solved with: "circulatory" if they carry lag states, else "ideal";
+    ManeuverError if they mix the two."""
+    flows = {"ideal" if p.lag is None else "circulatory" for p in primitives}
+    if len(flows) != 1:
+        raise ManeuverError("a plan cannot mix primitives of the ideal and the circulatory flow models "
+                            f"({', '.join(sorted({p.spec.primitive_id for p in primitives if p.lag is not None}))} "
+                            "carry lag states)")
+    return flows.pop()
 
 
 class PlanLibrary(Protocol):
@@ -152,6 +168,7 @@ def concatenate(library: PlanLibrary, rig: RigParameters, sequence: Sequence[tup
     kinds = {p.spec.constrained for p in primitives}
     if len(kinds) != 1:
         raise ManeuverError("a plan cannot mix constrained and free primitives")
+    flow_model = flow_model_of(primitives)
     for (pid_a, _), (pid_b, _), a, b in zip(sequence, sequence[1:], primitives, primitives[1:]):
         mismatch = junction_mismatch(a, b)
         if mismatch > JUNCTION_TOLERANCE:
@@ -170,19 +187,22 @@ def concatenate(library: PlanLibrary, rig: RigParameters, sequence: Sequence[tup
         offset = alpha - q[0, 0]
         q[:, 0] += offset
         skip = 0 if index == 0 else 1  # the junction sample is the previous segment's last
+        lag = [] if primitive.lag is None else [primitive.lag[skip:]]
         pieces.append((t[skip:] + clock, q[skip:], primitive.qdot[skip:], primitive.foil_acceleration[skip:],
                        primitive.torque[skip:], lqr_gain_from(riccati_input_gain[skip:], input_weights),
-                       riccati_input_gain[skip:]))
+                       riccati_input_gain[skip:], *lag))
         count = len(t) - skip
         segments.append(Segment(pid, primitive.spec.primitive_type.value, repeat, clock, float(t[-1]), 1.0,
                                 offset, sample, count))
         clock += float(t[-1])
         alpha = float(q[-1, 0])
         sample += count
-    time_s, q, qdot, u, tau, lqr_gain, riccati_input_gain = (np.concatenate(parts) for parts in zip(*pieces))
+    time_s, q, qdot, u, tau, lqr_gain, riccati_input_gain, *lag_rows = (np.concatenate(parts)
+                                                                         for parts in zip(*pieces))
     nominal = Trajectory(time_s=time_s, q=q, qdot=qdot, foil_acceleration=u, torque=tau, lqr_gain=lqr_gain,
                          riccati_input_gain=riccati_input_gain, segments=tuple(segments),
-                         lane_radius_m=primitives[0].spec.lane_radius_m, library_digest=library.digest())
+                         lane_radius_m=primitives[0].spec.lane_radius_m, library_digest=library.digest(),
+                         flow_model=flow_model, lag=lag_rows[0] if lag_rows else None)
     try:
         return nominal.time_scaled(time_scale, rig.torque_limits_n_m)
     except PlanError as err:
@@ -220,8 +240,9 @@ def vary_time_scale(nominal: Trajectory, time_scale_of: Callable[[float], float]
             segment, start_time_s=start, duration_s=float(time_s[last] - start),
             time_scale=float(scale[max(first - 1, 0):last + 1].mean())))
     lqr_gain, riccati_input_gain = retime_feedback(nominal.lqr_gain, nominal.riccati_input_gain, scale,
-                                                   nominal.ny, nominal.nq)
+                                                   nominal.ny, nominal.nq, nominal.n_lag)
     return dataclasses.replace(nominal, time_s=time_s, qdot=nominal.qdot * scale[:, None],
                                foil_acceleration=foil_acceleration,
                                torque=nominal.torque * scale[:, None] ** 2, lqr_gain=lqr_gain,
-                               riccati_input_gain=riccati_input_gain, segments=tuple(segments))
+                               riccati_input_gain=riccati_input_gain, segments=tuple(segments),
+                               lag=None if nominal.lag is None else nominal.lag * scale[:, None])

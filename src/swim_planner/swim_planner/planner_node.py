@@ -8,7 +8,9 @@ the last ANSWERS_KEPT gets that request's reply again (a client repeats a reques
 is planned or published twice. Topic ``plan`` (PlannedTrajectory, transient local): the last plan made.
 
 Parameters: the table PARAMETERS (description and range of each, checked when set, applied after).
-``library_path`` and ``rig_path`` (default: the shipped ones) are read-only. ``default_time_scale`` is used when
+``flow_model``, ``library_path`` and ``rig_path`` are read-only. ``flow_model`` ("ideal", the paper's, or
+"circulatory") is the flow model plans are made with: the library (default: the one shipped for that model) must
+have been built with it, or the node does not start. ``default_time_scale`` is used when
 a request's time_scale is 0. Setting ``lqr_weights_path`` (a YAML of swim_controller LqrWeights fields; empty: the
 gains stored in the library) at run time retunes the plans made after it: each primitive's gains for the new
 weights are computed on its first use (0.1-0.3 s each) and kept, while other requests are answered; a file that
@@ -32,6 +34,7 @@ from swim_interfaces.srv import RequestManeuver
 from swim_controller.messages import trajectory_to_message
 from swim_controller.trajectory import Trajectory
 from swim_model import SwimModelError, load_rig
+from swim_model.flow import FLOW_MODELS
 from swim_planner.errors import PlannerError
 from swim_planner.gains import RetunedLibrary, load_lqr_weights
 from swim_planner.graph import build_graph, plan_to_goal, rest_node
@@ -40,7 +43,7 @@ from swim_planner.maneuver import (DEFAULT_BOUNDS, PlanBounds, check_plan_size, 
                                    expand_sequence)
 from swim_planner.paths import default_library_path
 from swim_ros.entry import run_node
-from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, positive
+from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, one_of, positive
 from swim_ros.qos import LATCHED_QOS
 
 #: threads serving requests at once: a request whose primitives need new gains does not hold up the others
@@ -67,7 +70,10 @@ def _weights_file_loads(path: str) -> str | None:
 
 #: the planner's parameters (swim_ros.parameters); the library and rig are read once, at start
 PARAMETERS = (
-    ParameterSpec("library_path", "", "primitive library folder (empty: the shipped library)", read_only=True),
+    ParameterSpec("flow_model", "ideal", "flow model of the plans: ideal (the paper's) or circulatory",
+                  read_only=True, check=one_of(*FLOW_MODELS)),
+    ParameterSpec("library_path", "", "primitive library folder, built with flow_model (empty: the one shipped "
+                  "for flow_model)", read_only=True),
     ParameterSpec("rig_path", "", "rig YAML file (empty: the shipped rig)", read_only=True),
     ParameterSpec("default_time_scale", 1.0, "lambda for requests whose time_scale is 0 (Theorem 1)",
                   range=(0.1, 10.0)),
@@ -113,9 +119,10 @@ class PlannerNode(Node):
         declare_parameters(self, PARAMETERS)
         self.bounds = self._bounds({})
         rig_path = self.get_parameter("rig_path").value or None
-        library_path = self.get_parameter("library_path").value or default_library_path()
+        flow_model = self.get_parameter("flow_model").value
+        library_path = self.get_parameter("library_path").value or default_library_path(flow_model)
         self.rig = load_rig(rig_path)
-        self.library = PrimitiveLibrary.load(library_path, self.rig)
+        self.library = PrimitiveLibrary.load(library_path, self.rig, flow_model)
         self.graph = build_graph(self.library)
         self._plan_library = self._retuned(self.get_parameter("lqr_weights_path").value)
         self.answers = AnswerMemory()
@@ -126,7 +133,8 @@ class PlannerNode(Node):
         self.plan_publisher = self.create_publisher(PlannedTrajectory, "plan", LATCHED_QOS)
         self.create_service(RequestManeuver, "request_maneuver", self.on_request,
                             callback_group=ReentrantCallbackGroup())
-        self.get_logger().info(f"serving {len(self.library)} primitives from {self.library.path}")
+        self.get_logger().info(f"serving {len(self.library)} primitives of the {flow_model} flow model from "
+                               f"{self.library.path}")
 
     def _retuned(self, lqr_weights_path: str) -> PrimitiveLibrary | RetunedLibrary:
         """The library plans are made from: its stored gains, or gains for the weights in lqr_weights_path."""

@@ -19,14 +19,20 @@ def library(rig):
 
 
 @pytest.fixture(scope="session")
+def circulatory_library(rig):
+    """The shipped library of the circulatory flow model."""
+    return PrimitiveLibrary.load(default_library_path("circulatory"), rig, "circulatory")
+
+
+@pytest.fixture(scope="session")
 def model_for(rig):
-    """VehicleModel for a primitive's spec, built once per (constrained, lane)."""
+    """VehicleModel for a primitive's spec and a flow model, built once per (constrained, lane, flow)."""
     from swim_model import VehicleModel
     cache = {}
 
-    def make(spec):
-        key = (spec.constrained, spec.lane_radius_m)
+    def make(spec, flow="ideal"):
+        key = (spec.constrained, spec.lane_radius_m, flow)
         if key not in cache:
-            cache[key] = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m)
+            cache[key] = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m, flow=flow)
         return cache[key]
     return make

@@ -43,3 +43,27 @@ def test_compare_sets_the_papers_method_beside_ours(library, capsys):
     assert abs(report["paper_method"]["energy_error_j"]) > 0.0
     assert main(["compare", "free/cruise/R0.43/E0.05"]) == 2
     assert "constrained cruises and accelerates only" in capsys.readouterr().err
+
+
+def test_a_build_refuses_a_library_of_the_other_flow_model(library, rig, tmp_path, capsys):
+    from swim_planner.library import PrimitiveLibrary
+    PrimitiveLibrary.create_or_open(tmp_path / "ideal", rig).add(library.get("constrained/cruise/E0.05"))
+    assert main(["build", str(tmp_path / "ideal"), "--flow", "circulatory", "--only", "constrained/cruise/E0.05"]) == 2
+    assert "holds primitives of the ideal flow model, not the circulatory one" in capsys.readouterr().err
+    assert PrimitiveLibrary.load(tmp_path / "ideal", rig).ids() == ["constrained/cruise/E0.05"]
+
+
+def test_a_circulatory_build_stores_the_flow_model_lag_states_speed_and_gains(rig, tmp_path, capsys):
+    """One circulatory cruise built end to end, then listed and shown from the library it was written to."""
+    from swim_planner.library import MANIFEST, PrimitiveLibrary
+    from swim_planner.primitives import cruise_mean_speed_m_s
+    cruise = "constrained/cruise/E0.05"
+    assert main(["build", str(tmp_path / "lib"), "--flow", "circulatory", "--only", cruise, "--workers", "1"]) == 0
+    assert json.loads((tmp_path / "lib" / MANIFEST).read_text())["flow_model"] == "circulatory"
+    library = PrimitiveLibrary.load(tmp_path / "lib", rig, "circulatory")
+    primitive = library.get(cruise)
+    assert primitive.lag.shape == (len(primitive.time_s), 2) and primitive.gains is not None
+    assert library.entry(cruise)["mean_speed_m_s"] == cruise_mean_speed_m_s(primitive) > 0.0
+    capsys.readouterr()
+    assert main(["list", str(tmp_path / "lib")]) == 0
+    assert cruise in capsys.readouterr().out

@@ -94,3 +94,63 @@ def test_missing_array_file(rig, copy):
     shutil.rmtree(copy / "primitives")
     with pytest.raises(LibraryError, match="cannot read"):
         PrimitiveLibrary.load(copy, rig).get(SOME[0])
+
+
+def _with_lag(primitive):
+    """A primitive carrying lag states, as one of the circulatory flow model would (values: a known pattern)."""
+    lag = np.column_stack([np.linspace(0.0, 0.1, len(primitive.time_s)), np.linspace(0.2, -0.1, len(primitive.time_s))])
+    return dataclasses.replace(primitive, lag=lag)
+
+
+def test_a_library_records_its_flow_model_and_keeps_the_lag_states(library, rig, tmp_path):
+    new = PrimitiveLibrary.create_or_open(tmp_path / "lib", rig, flow_model="circulatory")
+    stored = [_with_lag(library.get(primitive_id)) for primitive_id in SOME]
+    for primitive in stored:
+        new.add(primitive)
+    assert json.loads((tmp_path / "lib" / MANIFEST).read_text())["flow_model"] == "circulatory"
+    loaded = PrimitiveLibrary.load(tmp_path / "lib", rig, "circulatory")
+    assert loaded.flow_model == "circulatory"
+    for primitive in stored:
+        np.testing.assert_array_equal(loaded.get(primitive.spec.primitive_id).lag, primitive.lag)
+    assert PrimitiveLibrary.load(tmp_path / "lib", rig, None).flow_model == "circulatory"
+
+
+def test_a_library_of_another_flow_model_is_refused(library, rig, tmp_path, copy):
+    with pytest.raises(LibraryError, match="ideal flow model, not the circulatory one"):
+        PrimitiveLibrary.load(copy, rig, "circulatory")
+    with pytest.raises(LibraryError, match="ideal flow model, not the circulatory one"):
+        PrimitiveLibrary.create_or_open(copy, rig, flow_model="circulatory")
+    with pytest.raises(LibraryError, match="unknown flow model 'viscous'"):
+        PrimitiveLibrary.load(copy, rig, "viscous")
+    _edit_manifest(copy, lambda m: m.__setitem__("flow_model", "viscous"))
+    with pytest.raises(LibraryError, match="unknown flow model 'viscous'"):
+        PrimitiveLibrary.load(copy, rig, None)
+
+
+def test_primitives_of_the_other_flow_model_are_not_added(library, rig, tmp_path):
+    ideal = PrimitiveLibrary.create_or_open(tmp_path / "ideal", rig)
+    circulatory = PrimitiveLibrary.create_or_open(tmp_path / "circulatory", rig, flow_model="circulatory")
+    primitive = library.get(SOME[0])
+    with pytest.raises(LibraryError, match="has lag states"):
+        ideal.add(_with_lag(primitive))
+    with pytest.raises(LibraryError, match="has no lag states"):
+        circulatory.add(primitive)
+    assert len(ideal) == len(circulatory) == 0
+
+
+def test_the_shipped_format_2_library_is_the_ideal_flow_models(library, rig):
+    manifest = json.loads((library.path / MANIFEST).read_text())
+    assert manifest["format_version"] == 2 and "flow_model" not in manifest
+    assert library.flow_model == "ideal"
+    with pytest.raises(LibraryError, match="not the circulatory one"):
+        PrimitiveLibrary.load(library.path, rig, "circulatory")
+
+
+def test_a_cruise_records_its_mean_speed(library, rig, copy):
+    """The manifest's speed is the cruise's alpha advance over its duration times its lane radius."""
+    cruise = library.get(SOME[0])
+    entry = PrimitiveLibrary.load(copy, rig).entry(SOME[0])
+    duration_s = cruise.time_s[-1] - cruise.time_s[0]
+    assert entry["mean_speed_m_s"] == pytest.approx(
+        (cruise.q[-1, 0] - cruise.q[0, 0]) / duration_s * cruise.spec.lane_radius_m, rel=1e-12)
+    assert "mean_speed_m_s" not in PrimitiveLibrary.load(copy, rig).entry(SOME[1])

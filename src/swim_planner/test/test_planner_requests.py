@@ -134,3 +134,31 @@ def test_parameters_follow_their_table(planner, name, value, reason):
     assert parameters.get([name])[0] == before
     described = {d.name: d for d in parameters.describe([spec.name for spec in PARAMETERS])}
     assert described["library_path"].read_only and described["max_plan_samples"].integer_range
+
+
+def _planner_with(*overrides: str):
+    """A PlannerNode started with ``name:=value`` parameter overrides, or the exception its start raised."""
+    import rclpy
+    from swim_planner.planner_node import PlannerNode
+    from swim_ros.domains import claim_ros_domain
+    claim_ros_domain()
+    rclpy.init(args=["--ros-args", *[a for o in overrides for a in ("-p", o)]])
+    try:
+        return PlannerNode()
+    except Exception as err:   # the tests assert on its type and message
+        return err
+
+
+@pytest.mark.parametrize("overrides, error, message", [
+    (("flow_model:=circulatory", f"library_path:={__import__('swim_planner.paths').paths.default_library_path()}"),
+     "LibraryError", "holds primitives of the ideal flow model, not the circulatory one"),
+    (("flow_model:=viscous",), "ValueError", "flow_model must be one of 'ideal', 'circulatory'"),
+])
+def test_a_library_of_another_flow_model_stops_the_planner_at_start(overrides, error, message):
+    import rclpy
+    try:
+        started = _planner_with(*overrides)
+        assert type(started).__name__ == error and message in str(started)
+    finally:
+        rclpy.shutdown()
+

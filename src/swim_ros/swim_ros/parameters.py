@@ -100,3 +100,10 @@ def positive(value: Any) -> Optional[str]:
 def finite(value: Any) -> Optional[str]:
     """A check: the value must be a finite number."""
     return None if isinstance(value, (int, float)) and math.isfinite(value) else "must be a finite number"
+
+
+def one_of(*choices: str) -> Check:
+    """A check: the value must be one of choices."""
+    def check(value: Any) -> Optional[str]:
+        return None if value in choices else f"must be one of {', '.join(repr(c) for c in choices)}"
+    return check

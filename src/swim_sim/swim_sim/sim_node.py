@@ -59,19 +59,13 @@ from swim_model import StateError, SwimModelError, VehicleModel, load_rig
 from swim_planner.maneuver import DEFAULT_BOUNDS
 from swim_ros.codecs import MessageError, float_array, joint_state_arrays, stamp_of, torque_from_command
 from swim_ros.entry import run_node
-from swim_ros.parameters import ParameterSpec, ParameterValue, check_parameters, declare_parameters, finite
+from swim_ros.parameters import (ParameterSpec, ParameterValue, check_parameters, declare_parameters, finite,
+                                 one_of)
 from swim_ros.qos import per_period_publisher, per_period_subscription
 from swim_sim.disturbances import Disturbances
 from swim_sim.plant import HardLimits, Plant, SimulationError
 from swim_sim.sensors import SensorNoise, Sensors
 from swim_sim.wake_coupling import WakeCoupling, parameter_defaults, parameters_from_values
-
-
-def one_of(*choices: str) -> Any:
-    """A parameter check: the value must be one of choices."""
-    def check(value: Any) -> Optional[str]:
-        return None if value in choices else f"must be one of {', '.join(repr(c) for c in choices)}"
-    return check
 
 
 def finite_entries(value: Any) -> Optional[str]:

@@ -1,8 +1,9 @@
 """A closed loop in one process, for tests and benchmarks: the tracker at its sample period and a plant with the
 torque held over each period (zero-order hold), plus an optional torque disturbance d(t) on the motors.
 
-The plant is swim_model's ideal vehicle integrated by RK4 substeps, or any ``Stepper`` at the same period (such
-as swim_sim's Plant, with its disturbances and the vortex wake).
+The plant is swim_model's vehicle integrated by RK4 substeps (with the circulatory flow, its lag states too,
+starting from the plan's, or from still water under an ideal-flow plan), or any ``Stepper`` at the same period
+(such as swim_sim's Plant, with its disturbances and the vortex wake).
 """
 from __future__ import annotations
 
@@ -63,6 +64,9 @@ def simulate(model: VehicleModel, tracker: CascadeTracker, trajectory: Trajector
     tracker.start(trajectory)
     q = trajectory.q[0].copy() if q0 is None else np.array(q0, dtype=float)
     qdot = trajectory.qdot[0].copy() if qdot0 is None else np.array(qdot0, dtype=float)
+    lag = None
+    if model.n_lag:   # the plan's lag states, or still water's (zero) under a plan made without them
+        lag = trajectory.lag[0].copy() if trajectory.lag is not None else np.zeros(model.n_lag)
     if plant is not None:
         plant.reset(q, qdot)
     periods = int(round((trajectory.duration_s + extra_time_s) / sample_period_s))
@@ -80,6 +84,11 @@ def simulate(model: VehicleModel, tracker: CascadeTracker, trajectory: Trajector
             q, qdot = state.q, state.qdot
             continue
         applied = np.tile(out.torque + disturbance(t), (substeps, 1))
-        trajectory_q, trajectory_qdot = model.integrate_rk4(q, qdot, applied, sample_period_s / substeps)
+        if lag is None:
+            trajectory_q, trajectory_qdot = model.integrate_rk4(q, qdot, applied, sample_period_s / substeps)
+        else:
+            trajectory_q, trajectory_qdot, trajectory_lag = model.integrate_rk4(
+                q, qdot, applied, sample_period_s / substeps, lag=lag)
+            lag = trajectory_lag[-1]
         q, qdot = trajectory_q[-1], trajectory_qdot[-1]
     return Run(np.array(times), np.array(qs), np.array(refs), np.array(torques), np.array(saturations))
