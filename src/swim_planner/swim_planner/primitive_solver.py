@@ -33,17 +33,18 @@ states (swim_model.flow), collocated with their own dynamics zdot = g(Q2 qdot, z
     - start and end states are (q, qdot, z); rest has the lag states of still water (z = 0);
     - at every collocation point (knots and midpoints) |angle of attack| <= PlanningLimits.angle_of_attack_limit_rad,
       the angle atan2(-V, U) of the foil frame's velocity in foil axes (eq. 40, swim_model.flow.angle_of_attack),
-      written smoothly as U tan(a) + c -+ V >= 0 (for c = 0 the same set for a < 90 deg; atan2 itself has no
-      derivative at rest). c = PlanningLimits.angle_of_attack_speed_floor_m_s frees the angle while the foil crawls:
-      from rest the foil's first velocities are linear in the two foil accelerations, and V = 0 with Q = 0 (below)
-      leaves only u = 0, so with c = 0 an accelerate from rest is infeasible (IPOPT: Infeasible_Problem_Detected).
-      Points held at rest by a boundary condition are left out: the angle is undefined there.
-    - the same bound on the incidence at the three-quarter chord, U tan(a) + c -+ Q >= 0 with Q = -(V + Omega x_34)
+      written smoothly as U tan(a) -+ V >= 0 (the same set for a < 90 deg, rest included; atan2 itself has no
+      derivative at rest). Points within PlanningLimits.angle_of_attack_free_from_rest_s of rest (an accelerate's
+      start, a decelerate's end) are left out: from rest the foil's first velocities are linear in the two foil
+      accelerations, and V = 0 with Q = 0 (below) leaves only u = 0, so no accelerate from rest is feasible with the
+      bound at every point (IPOPT: Infeasible_Problem_Detected). The foil first turns about its pitch axis to a
+      posture from which it can swim inside the bound (PlanningLimits gives the numbers).
+    - the same bound on the incidence at the three-quarter chord, U tan(a) -+ Q >= 0 with Q = -(V + Omega x_34)
       (swim_model.flow's normal velocity, whose lagged value sets the circulation and the stall transition).
       The bound at F alone admits U = V = 0, where the angle at F has no value: the optimizer then held F still
       and turned the foil about it (Omega 4 rad/s, the three-quarter chord broadside), paddling with the separated
       flat plate's drag (measured on the constrained E = 0.05 accelerate). With both bounds, F at rest means the
-      foil at rest (to c).
+      foil at rest.
 
 Energy level of a cruise: the paper fixes E = T(q(Tf), qdot(Tf)), the kinetic energy at the cycle's end.
 Over a periodic cycle the kinetic energy oscillates, so that end-point value only selects where the cycle is
@@ -63,7 +64,6 @@ from typing import Optional, TypeVar
 import casadi as ca
 import numpy as np
 import numpy.typing as npt
-from scipy.integrate import solve_ivp
 
 from swim_model import SinusoidalGait, VehicleModel, simulate_gait
 from swim_planner.collocation import collocation_grid, fine_grid_times, hermite_simpson, simpson_integral
@@ -97,7 +97,11 @@ def foil_velocity_rows(model: VehicleModel) -> slice:
 
 
 GUESS_TOLERANCE = 1e-6   # relative tolerance of the simulated gait that is a cruise's initial guess
-GUESS_START_CYCLES = 3   # circulatory flow: cycles the guess's gait swims from rest before the one it keeps
+# circulatory cruise's guess (_folded_cruise_guess), assumed: a stroke small enough to leave the folded posture
+# and the steady flow about as they are, but not zero (IPOPT's first steps then have a stroke to grow or shrink)
+FOLDED_GUESS_HEAVE_AMPLITUDE_RAD = 0.02
+FOLDED_GUESS_PITCH_AMPLITUDE_RAD = 0.05
+FOLDED_GUESS_HEAVE_MARGIN_RAD = 0.01   # the guess's heave stays this far inside its planning range
 
 #: the compiled pointwise functions of the models used in this process, by (rig digest, constrained, lane)
 _POINTWISE: dict[tuple, PointwiseFunction] = {}
@@ -264,7 +268,7 @@ def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimi
     if model.n_lag:
         _angle_of_attack_bound(opti, model, spec, limits, grid, phi)
     _boundary_conditions(opti, model, spec, limits, grid, phi, start, end)
-    _initial_guess(opti, model, spec, grid, start, end, guess)
+    _initial_guess(opti, model, spec, limits, grid, start, end, guess)
 
     nlp = PointwiseNlp(z=grid.variables(), f=opti.f, g=opti.g, points=grid.points(), phi_placeholder=phi,
                        pointwise=phi_function, theta=np.array([spec.heave_effort_weight, spec.pitch_effort_weight]))
@@ -286,26 +290,35 @@ def _check_circulatory_states(model: VehicleModel, spec: PrimitiveSpec, start, e
 
 def _angle_of_attack_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits,
                            grid, phi: ca.MX) -> None:
-    """|atan2(-V, U)| <= a at every collocation point, as U tan(a) + c -+ V >= 0, and the same at the
-    three-quarter chord (module docstring)."""
+    """|atan2(-V, U)| <= a at the collocation points ``angle_of_attack_bounded`` names, as U tan(a) -+ V >= 0,
+    and the same at the three-quarter chord (module docstring)."""
     if not 0.0 < limits.angle_of_attack_limit_rad < math.pi / 2:
         raise ValueError(f"{spec.primitive_id}: angle_of_attack_limit_rad must be in (0, pi/2), got "
                          f"{limits.angle_of_attack_limit_rad!r}")
-    if not (math.isfinite(limits.angle_of_attack_speed_floor_m_s) and limits.angle_of_attack_speed_floor_m_s >= 0.0):
-        raise ValueError(f"{spec.primitive_id}: angle_of_attack_speed_floor_m_s must be finite and >= 0, got "
-                         f"{limits.angle_of_attack_speed_floor_m_s!r}")
-    velocity = grid.fine(phi[foil_velocity_rows(model), :])
-    if spec.primitive_type is PrimitiveType.ACCELERATE:
-        velocity = velocity[:, 1:]
-    if spec.primitive_type is PrimitiveType.DECELERATE:
-        velocity = velocity[:, :-1]
+    if not (math.isfinite(limits.angle_of_attack_free_from_rest_s) and limits.angle_of_attack_free_from_rest_s > 0.0):
+        raise ValueError(f"{spec.primitive_id}: angle_of_attack_free_from_rest_s must be finite and > 0, got "
+                         f"{limits.angle_of_attack_free_from_rest_s!r}")
+    velocity = grid.fine(phi[foil_velocity_rows(model), :])[:, np.flatnonzero(angle_of_attack_bounded(spec, limits))]
     assert model.circulatory_flow is not None
     normal_34 = -(velocity[1, :] + model.circulatory_flow.three_quarter_chord_x_m * velocity[2, :])
     slope = math.tan(limits.angle_of_attack_limit_rad)
-    floor = limits.angle_of_attack_speed_floor_m_s
     for across in (velocity[1, :], normal_34):
-        opti.subject_to(slope * velocity[0, :] - across >= -floor)
-        opti.subject_to(slope * velocity[0, :] + across >= -floor)
+        opti.subject_to(slope * velocity[0, :] - across >= 0.0)
+        opti.subject_to(slope * velocity[0, :] + across >= 0.0)
+
+
+def angle_of_attack_bounded(spec: PrimitiveSpec, limits: PlanningLimits) -> npt.NDArray[np.bool_]:
+    """Which of the fine grid's 2N + 1 points carry the angle-of-attack bound: all but those within
+    PlanningLimits.angle_of_attack_free_from_rest_s of rest (an accelerate's start, a decelerate's end)."""
+    times = fine_grid_times(spec.solved_duration_s, spec.intervals)
+    if spec.primitive_type is PrimitiveType.ACCELERATE:
+        from_rest_s = times
+    elif spec.primitive_type is PrimitiveType.DECELERATE:
+        from_rest_s = times[-1] - times
+    else:
+        return np.ones(times.shape, dtype=bool)
+    # a rounding margin: a point at exactly the window's end carries the bound
+    return from_rest_s >= limits.angle_of_attack_free_from_rest_s - 1e-9 * spec.solved_duration_s
 
 
 def _repeat_cycle(cycles: int, time_s: Array, q: Array, qdot: Array, u: Array, tau: Array):
@@ -339,6 +352,13 @@ def _boundary_conditions(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec
         opti.subject_to(x0[nq:] == x_end[nq:])                      # qdot (and the lag states z) periodic
         if model.n_lag == 0:
             opti.subject_to(grid.knots(phi)[MOMENTUM_ROW, 0] == 0.0)    # reachable from rest: p_alpha = 0
+        else:
+            # the cut at a turn of the heave: a periodic cycle shifted in time is a cycle of the same index, a
+            # continuous family of optima along which IPOPT's Hessian is singular (the constrained E = 0.05
+            # cruise took 109 iterations without this row, 50 with it, to the same J within 2e-6). Every cycle
+            # has a turn of the heave; alphadot(0) >= v_min is the only other condition on the cut, and the
+            # circulatory cruises move forward throughout
+            opti.subject_to(x0[2 * nq - 2] == 0.0)
         # cut the cycle where the vehicle moves forward: a decelerate from here can keep alphadot >= v_min
         opti.subject_to(x0[nq] >= limits.min_alpha_rate_rad_s)
         # energy level: the cycle's mean kinetic energy (see the module docstring)
@@ -359,15 +379,19 @@ def _boundary_conditions(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec
     opti.subject_to(_without_alpha(x_end, nq) == _without_alpha(ca.DM(end_x), nq))
 
 
-def _initial_guess(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, grid, start, end,
-                   guess: Optional[Primitive]) -> None:
+def _initial_guess(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits, grid, start,
+                   end, guess: Optional[Primitive]) -> None:
     times = fine_grid_times(spec.solved_duration_s, spec.intervals)
     if guess is not None and guess.spec.primitive_id == spec.primitive_id and len(guess.time_s) == len(times):
         x_guess, u_guess = np.column_stack([guess.q, guess.qdot, *_lag_columns(model, guess)]), guess.foil_acceleration
     elif spec.primitive_type is PrimitiveType.CRUISE and model.n_lag:
-        x_guess, u_guess = _circulatory_gait_guess(model, spec, times)
+        x_guess, u_guess = _folded_cruise_guess(model, spec, limits, times)
     elif spec.primitive_type is PrimitiveType.CRUISE:
         x_guess, u_guess = _gait_guess(model, spec, times)
+    elif spec.primitive_type is PrimitiveType.DECELERATE and model.n_lag and guess is not None:
+        x_guess, u_guess = _still_foil_guess(model, spec, limits, times, start)
+    elif spec.primitive_type is PrimitiveType.ACCELERATE and model.n_lag and guess is not None:
+        x_guess, u_guess = _still_foil_guess(model, spec, limits, times, end)
     else:
         x_guess, u_guess = _blend_guess(model, spec, times, start, end, guess)
     opti.set_initial(grid.x, x_guess[0::2].T)
@@ -392,33 +416,90 @@ def _lag_columns(model: VehicleModel, primitive: Primitive) -> list[Array]:
     return [primitive.lag if primitive.lag is not None else np.zeros((len(primitive.time_s), model.n_lag))]
 
 
-def _circulatory_gait_guess(model: VehicleModel, spec: PrimitiveSpec, times: Array) -> tuple[Array, Array]:
-    """_gait_guess's gait with the circulatory flow: swum from rest for GUESS_START_CYCLES cycles (the unactuated
-    coordinates and the lag states integrated under the prescribed foil motion), its last cycle with alpha from 0:
-    close to periodic, at the speed the gait makes."""
-    gait = SinusoidalGait(0.35, 0.6, 1.0 / spec.solved_duration_s)
-    nq, ny = model.nq, model.n_unactuated
-    y0 = np.zeros(ny) if model.constrained else np.array([0.0, spec.lane_radius_m])
-    start_s = GUESS_START_CYCLES * spec.solved_duration_s
+def _folded_cruise_guess(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits,
+                         times: Array) -> tuple[Array, Array]:
+    """A circulatory cruise's guess: the heave link folded inward near its limit (which lowers the hub's inertia),
+    the foil pitched along its own velocity, the hub turning at the rate that holds the energy level, with a small
+    stroke (pitch leading heave by 90 deg) and the lag states of that steady flow. The cruises this flow solves
+    to are close to it (docs/circulatory_primitives.md): a built-in guess of the ideal cruise's gait swum from rest
+    took 112-157 IPOPT iterations to the constrained E = 0.05 cruise."""
+    nq = model.nq
+    heave_rad = limits.heave_range_rad - FOLDED_GUESS_HEAVE_AMPLITUDE_RAD - FOLDED_GUESS_HEAVE_MARGIN_RAD
+    q_mean = np.zeros(nq)
+    q_mean[nq - 2] = heave_rad
+    if not model.constrained:
+        q_mean[1] = spec.lane_radius_m
+    hub_rate = np.zeros(nq)
+    hub_rate[0] = 1.0
 
-    def state(time_s: float, x: Array) -> tuple[Array, Array, Array, Array]:
-        psi, psidot, psiddot = gait.shape(time_s)
-        return (np.concatenate([x[:ny], psi]), np.concatenate([x[ny:2 * ny], psidot]), x[2 * ny:], psiddot)
+    def sideslip(theta_rad: float) -> float:   # V of the foil frame for a unit hub rate, m/s per rad/s
+        posture = q_mean.copy()
+        posture[nq - 1] = theta_rad
+        return float((model.foil_velocity_map(posture) @ hub_rate)[1])
 
-    def rhs(time_s: float, x: Array) -> Array:
-        q, qdot, lag, psiddot = state(time_s, x)
-        qddot, _ = model.shape_dynamics(q, qdot, psiddot, lag)
-        return np.concatenate([x[ny:2 * ny], qddot[:ny], model.lag_rate(q, qdot, lag)])
+    pitches = np.linspace(-limits.pitch_range_rad, limits.pitch_range_rad, 29)   # 5 deg apart: enough for a guess
+    q_mean[nq - 1] = pitches[int(np.argmin([abs(sideslip(p)) for p in pitches]))]
+    mass = model.mass_matrix(q_mean)
+    assert spec.energy_j is not None   # _boundary_conditions refused a cruise without one
+    alpha_rate = math.sqrt(2.0 * spec.energy_j / mass[0, 0])   # T = 1/2 M_aa alphadot^2, the stroke neglected
+    omega = 2.0 * math.pi / spec.solved_duration_s
+    amplitudes = np.array([FOLDED_GUESS_HEAVE_AMPLITUDE_RAD, FOLDED_GUESS_PITCH_AMPLITUDE_RAD])
+    phase = np.column_stack([omega * times, omega * times + 0.5 * math.pi])
+    q = np.tile(q_mean, (len(times), 1))
+    qdot = np.zeros_like(q)
+    q[:, 0] = alpha_rate * times
+    qdot[:, 0] = alpha_rate
+    q[:, nq - 2:] += amplitudes * np.sin(phase)
+    qdot[:, nq - 2:] = amplitudes * omega * np.cos(phase)
+    u = -amplitudes * omega ** 2 * np.sin(phase)
+    return np.column_stack([q, qdot, _steady_lag(model, q, qdot)]), u
 
-    x0 = np.concatenate([y0, np.zeros(ny + model.n_lag)])
-    solution = solve_ivp(rhs, (0.0, start_s + times[-1]), x0, method="DOP853", t_eval=start_s + times,
-                         rtol=GUESS_TOLERANCE, atol=GUESS_TOLERANCE * 1e-2)
-    rows = [state(t, x) for t, x in zip(solution.t, solution.y.T)]
-    q = np.array([r[0] for r in rows])
-    q[:, 0] -= q[0, 0]
-    x_guess = np.column_stack([q, np.array([r[1] for r in rows]), np.array([r[2] for r in rows])])
-    assert x_guess.shape[1] == 2 * nq + model.n_lag
-    return x_guess, np.array([r[3] for r in rows])
+
+def _steady_lag(model: VehicleModel, q: Array, qdot: Array) -> Array:
+    """The lag states of a steady flow at each sample (samples, n_lag), m/s: each at the three-quarter chord's
+    normal velocity -(V + Omega x_34), where its rate vanishes (swim_model.flow)."""
+    assert model.circulatory_flow is not None
+    x34 = model.circulatory_flow.three_quarter_chord_x_m
+    normal = np.array([-(v + w * x34) for _, v, w in (model.foil_velocity_map(a) @ b for a, b in zip(q, qdot))])
+    return np.tile(normal[:, None], (1, model.n_lag))
+
+
+def _smoothstep(x: Array) -> tuple[Array, Array, Array]:
+    """s(x) = 3x^2 - 2x^3 on [0, 1] (0 before, 1 after) and its first two derivatives."""
+    x = np.clip(x, 0.0, 1.0)
+    inside = (x > 0.0) & (x < 1.0)
+    return 3 * x ** 2 - 2 * x ** 3, (6 * x - 6 * x ** 2) * inside, (6 - 12 * x) * inside
+
+
+def _still_foil_guess(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits, times: Array,
+                      moving: tuple[Array, ...]) -> tuple[Array, Array]:
+    """A circulatory accelerate's or decelerate's guess inside the angle-of-attack bound. The foil is held still
+    in the posture of ``moving`` (the cruise's boundary state it joins; its stroke dropped), so it moves with
+    the hub only, along its own chord, while the hub's rate goes smoothly between 0 and the cruise's; in the
+    window next to rest where the bound is off (PlanningLimits.angle_of_attack_free_from_rest_s) the foil turns
+    between rest and that posture with the hub still. The guess neither thrusts nor brakes: IPOPT finds the
+    stroke. The blend of the boundary states has the foil broadside to its motion: from the blend with the
+    cruise's stroke IPOPT found the constrained E = 0.05 decelerate (also from the plain blend) and the E = 0.10
+    and 0.20 accelerates infeasible."""
+    nq = model.nq
+    q_moving, qdot_moving = np.asarray(moving[0], dtype=float), np.asarray(moving[1], dtype=float)
+    window_s = min(limits.angle_of_attack_free_from_rest_s, 0.5 * times[-1])
+    stop_s = times[-1] - window_s
+    # built as a decelerate (moving at t = 0, at rest at the end), then mirrored in time for an accelerate
+    q = np.tile(q_moving, (len(times), 1))
+    qdot = np.zeros_like(q)
+    qdot[:, 0] = qdot_moving[0] * (1.0 - _smoothstep(times / stop_s)[0])
+    fold, fold_rate, fold_acceleration = _smoothstep((times - stop_s) / window_s)
+    posture = q_moving[nq - 2:]
+    q[:, nq - 2:] = posture * (1.0 - fold[:, None])
+    qdot[:, nq - 2:] = -posture * fold_rate[:, None] / window_s
+    u = -posture * fold_acceleration[:, None] / window_s ** 2
+    if spec.primitive_type is PrimitiveType.ACCELERATE:
+        q, u = q[::-1].copy(), u[::-1].copy()
+        qdot = qdot[::-1].copy()
+        qdot[:, nq - 2:] *= -1.0          # the shape runs backwards; the hub still turns forward
+    q[:, 0] = np.concatenate([[0.0], np.cumsum(0.5 * (qdot[1:, 0] + qdot[:-1, 0]) * np.diff(times))])
+    return np.column_stack([q, qdot, _steady_lag(model, q, qdot)]), u
 
 
 def _blend_guess(model: VehicleModel, spec: PrimitiveSpec, times: Array, start, end,

@@ -42,16 +42,22 @@ class PlanningLimits:
     min_alpha_rate_rad_s: float = 0.0              # v_min of eq. 12 (assumed: never swim backwards)
     angle_of_attack_limit_rad: float = math.radians(20.0)
     # assumed, circulatory flow only: |angle of attack| of the foil frame (swim_model.flow.angle_of_attack, eq. 40)
-    # at every collocation point. A NACA 0012-like section stalls statically near 12-15 deg; oscillating, its
-    # lift peaks later, at 20-25 deg (McCroskey, AGARD-CP-227, 1981). 20 deg keeps the plans at the attached end
+    # at the collocation points outside angle_of_attack_free_from_rest_s. A NACA 0012-like section stalls
+    # statically near 12-15 deg; oscillating, its lift peaks later, at 20-25 deg (McCroskey, AGARD-CP-227,
+    # 1981). 20 deg keeps the plans at the attached end
     # of swim_model.flow's stall transition (stall_angle_rad 25 deg, width 2.5 deg: attached weight 0.997 at
     # 20 deg), where the reduced model is the validated thin-aerofoil theory and not its flat-plate fallback
-    angle_of_attack_speed_floor_m_s: float = 0.01
-    # assumed, circulatory flow only: c of the bound U tan(a) + c >= |V| (swim_planner.primitive_solver), which frees
-    # the angle while the foil frame crawls: below 1 cm/s (chord Reynolds number 600) the flow's forces are under
-    # (0.01 / 0.1)^2 = 1 % of those at 0.1 m/s, and from rest no foil motion starts inside a bound with c = 0
-    # (with c = 5 mm/s IPOPT found the constrained E = 0.05 accelerate infeasible from both of its guesses)
-
+    angle_of_attack_free_from_rest_s: float = 0.2
+    # assumed, circulatory flow only: the angle-of-attack bound is left out within this time of rest (an
+    # accelerate's start, a decelerate's end). From rest no foil motion starts inside the bound: with p_alpha
+    # still about 0 the hub barely turns, and a slow foil motion inside 20 deg exists only with the foil pitched
+    # more than about 50-60 deg off its heave link (measured over the heave and pitch ranges with p_alpha = 0).
+    # Pitching it there is a turn about the pitch axis, broadside to its own motion: about 60 deg takes at least
+    # 2 sqrt(1.05 rad / 300 rad/s^2) = 0.12 s at foil_acceleration_limit_rad_s2. With 0.15 s the constrained
+    # E = 0.05 accelerate is infeasible, with 0.2 s it solves. The window holds 7 of the 161 samples of a 4 s
+    # accelerate or decelerate (4.3 %) and 7 of the 121 of a free 3 s decelerate (5.8 %); the angle is unbounded
+    # only there. A speed floor at every time, U tan(a) + c >= |V| with c = 1 cm/s, instead lets the accelerate
+    # crawl at any angle for its first second (95th percentile 73 deg over its samples)
 
 @dataclasses.dataclass(frozen=True)
 class PrimitiveSpec:

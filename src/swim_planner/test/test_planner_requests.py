@@ -162,3 +162,19 @@ def test_a_library_of_another_flow_model_stops_the_planner_at_start(overrides, e
     finally:
         rclpy.shutdown()
 
+
+def test_the_circulatory_planner_serves_plans_of_its_flow_model():
+    import rclpy
+    from swim_interfaces.srv import RequestManeuver
+    from swim_controller.messages import trajectory_from_message
+    try:
+        node = _planner_with("flow_model:=circulatory")
+        assert node.library.flow_model == "circulatory"
+        response = node.on_request(RequestManeuver.Request(primitive_ids=SEQUENCE[0], repeat_counts=SEQUENCE[1]),
+                                   RequestManeuver.Response())
+        assert response.success, response.message
+        plan = trajectory_from_message(response.plan)
+        assert plan.flow_model == "circulatory" and plan.lag.shape == (len(plan.time_s), 2)
+        node.destroy_node()
+    finally:
+        rclpy.shutdown()
