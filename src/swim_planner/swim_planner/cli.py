@@ -6,10 +6,16 @@
     swim-primitives show  ID [--library LIBRARY] [--flow ideal|circulatory]
     swim-primitives plot  ID [--library LIBRARY] [--flow ideal|circulatory] [--output FILE.png]
     swim-primitives compare ID [--library LIBRARY] [--segments 1|2] [--evaluations N]
+    swim-primitives flows ID [--ideal-library LIBRARY] [--circulatory-library LIBRARY] [--output FILE.png] [--json]
 
 `compare` solves a constrained cruise or accelerate again by the paper's own method (Fourier series, or
 eq. 11's polynomial sinusoids in one or two segments, by Nelder-Mead as MATLAB's fmin) and prints both
 methods' index J, how far each misses its constraints, and the wall time, as JSON.
+
+`flows` draws a primitive of the ideal library and the same id of the circulatory one on the same axes (speed
+along the lane, heave, pitch, angle of attack, thrust, the motors' power; a cruise: one solved cycle each;
+swim_planner.plots.plot_flows) and prints their summary numbers, as JSON with --json (then the figure only
+with --output).
 
 --flow is swim_model's flow model: "ideal" (the paper's, the default) or "circulatory". A build solves that
 model's primitive set (catalog.default_specs or catalog.circulatory_specs) and refuses to add to a library of the
@@ -69,6 +75,14 @@ def _parser() -> argparse.ArgumentParser:
     compare.add_argument("--segments", type=int, choices=(1, 2), default=2,
                          help="accelerate: eq. 11 in one 18-coefficient piece or the paper's two of 9")
     compare.add_argument("--evaluations", type=int, default=6000, help="Nelder-Mead evaluations per solve")
+    flows = commands.add_parser("flows", help="one primitive of the ideal and of the circulatory flow side by side")
+    flows.add_argument("primitive_id")
+    flows.add_argument("--ideal-library", type=Path, default=None, help="default: the shipped ideal library")
+    flows.add_argument("--circulatory-library", type=Path, default=None,
+                       help="default: the shipped circulatory library")
+    flows.add_argument("--output", type=Path, default=None, help="PNG file (default: <id>_flows.png)")
+    flows.add_argument("--json", action="store_true",
+                       help="print the summary numbers as JSON (and draw the figure only with --output)")
     return parser
 
 
@@ -181,10 +195,42 @@ def command_compare(args, rig) -> int:
     return 0
 
 
+def command_flows(args, rig) -> int:
+    from swim_model import VehicleModel
+    from swim_planner.plots import flow_summary, flow_traces, plot_flows
+    sides, summaries = [], {}
+    for flow, path in (("ideal", args.ideal_library), ("circulatory", args.circulatory_library)):
+        library = PrimitiveLibrary.load(path or default_library_path(flow), rig, flow)
+        if args.primitive_id not in library:
+            raise PlannerError(f"'{args.primitive_id}' is not in the {flow} library at {library.path}; flows needs "
+                               f"an id of both libraries (`swim-primitives list --flow {flow}` lists its ids)")
+        primitive = library.get(args.primitive_id)
+        spec = primitive.spec
+        traces = flow_traces(primitive, VehicleModel(rig, constrained=spec.constrained,
+                                                     lane_radius_m=spec.lane_radius_m, flow=flow))
+        sides.append(traces)
+        summaries[flow] = flow_summary(primitive, traces)
+    report = {"primitive": args.primitive_id,
+              "thrust": "time average of the fluid's force on the foil (added mass, plus the circulatory flow's "
+                        "force in the circulatory model) along the hub's tangent at the foil frame origin F",
+              **summaries}
+    output = args.output or Path(args.primitive_id.replace("/", "_") + "_flows.png")
+    if args.output is not None or not args.json:
+        plot_flows(sides, args.primitive_id, output)
+    if args.json:
+        print(json.dumps(report, indent=2))
+        return 0
+    print(f"wrote {output}")
+    for flow, numbers in summaries.items():
+        print(f"{flow:12s} speed {numbers['mean_speed_m_s']:.3f} m/s, AoA p95 {numbers['angle_of_attack_p95_deg']:.1f} "
+              f"deg, power {numbers['mean_power_w']:.4f} W, thrust {numbers['mean_thrust_n']:.4f} N")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     commands = {"build": command_build, "list": command_list, "show": command_show, "plot": command_plot,
-                "compare": command_compare}
+                "compare": command_compare, "flows": command_flows}
     try:
         rig = load_rig(args.rig)
         return commands[args.command](args, rig)
