@@ -71,25 +71,19 @@ class CirculatoryPlant(LockStepPlant):
         return torque
 
 
-def test_a_circulatory_plan_is_tracked_on_its_estimated_lag_states(circulatory_tracker, circulatory_run,
-                                                                   rclpy_context):
+def _plant_and_client(name, rclpy_context, circulatory_run):
+    """(node, its executor, the lock-step CirculatoryPlant on it, the TrackingState messages received, an
+    execute_plan action client) for one test."""
     import rclpy
-    from builtin_interfaces.msg import Time
     from rclpy.action import ActionClient
     from rclpy.executors import SingleThreadedExecutor
     from swim_interfaces.action import ExecutePlan
     from swim_interfaces.msg import TrackingState
 
-    from swim_controller.messages import trajectory_to_message
-    from swim_controller.riccati import error_state_size
-    from swim_controller.testing.circulatory import plan_from_run
     from swim_ros.calls import GoalStatusWatch
     from swim_ros.qos import per_period_subscription
 
-    samples = round(PLAN_S / circulatory_run.step_s / 4) + 1
-    zero_gains = np.zeros((samples, 2, error_state_size(3, 1, 2)))
-    plan = plan_from_run(circulatory_run, PLAN_S, sample_stride=4, gains=(zero_gains, zero_gains))
-    node = rclpy.create_node("tracker_circulatory_plant", context=rclpy_context)
+    node = rclpy.create_node(name, context=rclpy_context)
     executor = SingleThreadedExecutor(context=rclpy_context)
     executor.add_node(node)
     plant = CirculatoryPlant(node, executor, circulatory_run)
@@ -97,6 +91,23 @@ def test_a_circulatory_plan_is_tracked_on_its_estimated_lag_states(circulatory_t
     per_period_subscription(node, TrackingState, "tracking_state", tracking.append)
     client = ActionClient(node, ExecutePlan, "execute_plan")
     plant.goal_status = GoalStatusWatch(node, "execute_plan")
+    return node, executor, plant, tracking, client
+
+
+def test_a_circulatory_plan_is_tracked_on_its_estimated_lag_states(circulatory_tracker, circulatory_run,
+                                                                   rclpy_context):
+    from builtin_interfaces.msg import Time
+    from swim_interfaces.action import ExecutePlan
+
+    from swim_controller.messages import trajectory_to_message
+    from swim_controller.riccati import error_state_size
+    from swim_controller.testing.circulatory import plan_from_run
+
+    samples = round(PLAN_S / circulatory_run.step_s / 4) + 1
+    zero_gains = np.zeros((samples, 2, error_state_size(3, 1, 2)))
+    plan = plan_from_run(circulatory_run, PLAN_S, sample_stride=4, gains=(zero_gains, zero_gains))
+    node, executor, plant, tracking, client = _plant_and_client("tracker_circulatory_plant", rclpy_context,
+                                                                 circulatory_run)
     try:
         assert client.wait_for_server(timeout_sec=STARTUP_TIMEOUT_S), "tracker_node did not come up"
         _, result_future = send(plant, client, trajectory_to_message(plan, Time()), goal_tolerance_alpha_rad=0.02,
@@ -135,27 +146,15 @@ def test_a_goal_canceled_while_its_model_is_built_never_starts(circulatory_track
     at the least) when the cancel arrives, so the goal ends CANCELED without a period tracked."""
     import dataclasses
 
-    import rclpy
     from builtin_interfaces.msg import Time
-    from rclpy.action import ActionClient
-    from rclpy.executors import SingleThreadedExecutor
     from swim_interfaces.action import ExecutePlan
-    from swim_interfaces.msg import TrackingState
 
     from swim_controller.messages import trajectory_to_message
     from swim_controller.testing.circulatory import plan_from_run
-    from swim_ros.calls import GoalStatusWatch
-    from swim_ros.qos import per_period_subscription
 
     plan = dataclasses.replace(plan_from_run(circulatory_run, PLAN_S), lane_radius_m=0.48)   # the rig's second lane
-    node = rclpy.create_node("tracker_circulatory_canceler", context=rclpy_context)
-    executor = SingleThreadedExecutor(context=rclpy_context)
-    executor.add_node(node)
-    plant = CirculatoryPlant(node, executor, circulatory_run)
-    tracking = []
-    per_period_subscription(node, TrackingState, "tracking_state", tracking.append)
-    client = ActionClient(node, ExecutePlan, "execute_plan")
-    plant.goal_status = GoalStatusWatch(node, "execute_plan")
+    node, executor, plant, tracking, client = _plant_and_client("tracker_circulatory_canceler", rclpy_context,
+                                                                 circulatory_run)
     try:
         assert client.wait_for_server(timeout_sec=STARTUP_TIMEOUT_S), "tracker_node did not come up"
         handle, result_future = send(plant, client, trajectory_to_message(plan, Time()))
