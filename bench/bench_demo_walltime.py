@@ -13,7 +13,8 @@ from pathlib import Path
 #: name -> command, timed from start to exit; "{run_dir}" becomes a fresh temporary folder
 RUNS: dict[str, list[str]] = {
     "demo": ["ros2", "run", "swim_bringup", "swim-demo", "--run-dir", "{run_dir}"],
-    "experiments": ["ros2", "run", "swim_bringup", "swim-experiments", "--run-dir", "{run_dir}"],  # 16 runs
+    "experiments": ["ros2", "run", "swim_bringup", "swim-experiments", "--pipeline", "paper", "--seeds", "1",
+                    "--run-dir", "{run_dir}"],  # 16 runs, the paper's pipeline
 }
 
 

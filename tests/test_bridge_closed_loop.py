@@ -26,7 +26,7 @@ MANEUVER_TIMEOUT_S = 60
 def bridge_run(ros_domain, tmp_path_factory):
     from swim_bringup.system import config_dir
     work = tmp_path_factory.mktemp("bridge_demo")
-    config = Path(shutil.copytree(config_dir(), work / "config"))
+    config = Path(shutil.copytree(config_dir("paper"), work / "config"))
     tracker = yaml.safe_load((config / "tracker.yaml").read_text())
     tracker["tracker_node"]["ros__parameters"]["stale_after_periods"] = round(STALE_AFTER_S / PERIOD_S)
     (config / "tracker.yaml").write_text(yaml.safe_dump(tracker))

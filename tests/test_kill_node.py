@@ -57,7 +57,7 @@ WATCHDOG_SETTLE_S = 0.5
 @contextlib.contextmanager
 def maneuver_under_way(tmp_path, plant, maneuver, topics=RUN_TOPICS, plant_overrides=()):
     """The loop up, the maneuver requested and executing, recorded; yields (system, client, plan, result future)."""
-    specs = closed_loop_specs(config_dir(), plant_overrides, TRACKER_OVERRIDES, plant=plant)
+    specs = closed_loop_specs(config_dir("paper"), plant_overrides, TRACKER_OVERRIDES, plant=plant)
     with System(specs, tmp_path / "logs") as system, RunClient(tmp_path / "bag", topics) as client:
         client.wait_for_nodes()
         plan = client.request(*maneuver, 1.0)

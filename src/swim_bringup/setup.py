@@ -12,6 +12,7 @@ setup(
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/config', glob('config/*.yaml')),
+        ('share/' + package_name + '/config/paper', glob('config/paper/*.yaml')),
         ('share/' + package_name + '/launch', glob('launch/*.launch.*')),
     ],
     install_requires=['setuptools'],

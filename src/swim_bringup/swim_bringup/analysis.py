@@ -332,11 +332,12 @@ def write_joint_figure(joints: Mapping[str, JointSeries], path: Path) -> Path:
         axis.plot(series.time_s, series.position)
         axis.set_ylabel(name)
     axes[-1, 0].set_xlabel("log time [s]")
-    return _save(figure, path)
+    return save_figure(figure, path)
 
 
 def write_figures(bag_path: Path, output_dir: Path) -> list[Path]:
-    """Desired vs actual alpha and alphadot (Figs. 19-20 style), heave and pitch, the Cartesian path."""
+    """Desired vs actual alpha and alphadot (Figs. 19-20 style), heave and pitch, the Cartesian path; with the vortex
+    wake recorded, its last vortices over the path (wake.png)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -352,7 +353,7 @@ def write_figures(bag_path: Path, output_dir: Path) -> list[Path]:
     axes[1].plot(run.time_s, run.qdot[:, alpha], label="actual")
     axes[1].set_ylabel("alphadot [rad/s]")
     axes[1].set_xlabel("plan time [s]")
-    paths.append(_save(figure, output_dir / "displacement.png"))
+    paths.append(save_figure(figure, output_dir / "displacement.png"))
     figure, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 6))
     for axis, column, name in ((axes[0], -2, "phi (heave)"), (axes[1], -1, "theta (pitch)")):
         axis.plot(run.time_s, run.q_reference[:, column], "--", label="desired")
@@ -360,7 +361,7 @@ def write_figures(bag_path: Path, output_dir: Path) -> list[Path]:
         axis.set_ylabel(f"{name} [rad]")
     axes[0].legend()
     axes[1].set_xlabel("plan time [s]")
-    paths.append(_save(figure, output_dir / "heave_pitch.png"))
+    paths.append(save_figure(figure, output_dir / "heave_pitch.png"))
     figure, axis = plt.subplots(figsize=(6, 6))
     for q, style, label in ((run.q_reference, "--", "desired"), (run.q, "-", "actual")):
         radius = _radius(run, q)
@@ -369,11 +370,24 @@ def write_figures(bag_path: Path, output_dir: Path) -> list[Path]:
     axis.set_xlabel("x [m]")
     axis.set_ylabel("y [m]")
     axis.legend()
-    paths.append(_save(figure, output_dir / "cartesian_path.png"))
+    paths.append(save_figure(figure, output_dir / "cartesian_path.png"))
+    wake = [message for _, _, message in read_messages(bag_path, ("/wake_vortices",))]
+    if wake:   # a run in the vortex wake (sim_node's flow: wake): its last vortices over the path
+        from swim_bringup.wake_figure import write_wake_figure
+        from swim_model import load_rig
+
+        def tank_xy(q: np.ndarray) -> np.ndarray:
+            radius = _radius(run, q)
+            return np.column_stack([radius * np.cos(q[:, alpha]), radius * np.sin(q[:, alpha])])
+        last = wake[-1]
+        paths.append(write_wake_figure(output_dir / "wake.png", tank_xy(run.q),
+                                       np.column_stack([last.x_m, last.y_m]), np.asarray(last.circulations_m2_s),
+                                       reference_xy_m=tank_xy(run.q_reference),
+                                       tank_radius_m=0.5 * load_rig().tank_diameter_m))
     return paths
 
 
-def _save(figure, path: Path) -> Path:
+def save_figure(figure, path: Path) -> Path:
     figure.tight_layout()
     figure.savefig(path, dpi=100)
     import matplotlib.pyplot as plt

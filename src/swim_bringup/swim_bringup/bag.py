@@ -34,7 +34,8 @@ RUN_TOPICS = {
     "/joint_commands": "sensor_msgs/msg/JointState",
     "/tracking_state": "swim_interfaces/msg/TrackingState",
     "/plan": "swim_interfaces/msg/PlannedTrajectory",
-    "/wake_statistics": "swim_interfaces/msg/WakeStatistics",   # only when the simulator's wake is on
+    "/wake_statistics": "swim_interfaces/msg/WakeStatistics",   # only with the simulator's flow: wake
+    "/wake_vortices": "swim_interfaces/msg/WakeVortices",       # only with the simulator's flow: wake
     "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",       # bridge_node's loop, watchdog and faults
     "/robot_description": "std_msgs/msg/String",                 # swim_viz's rig_state_publisher: the URDF
     "/tf": "tf2_msgs/msg/TFMessage",                             # ... the rig's moving frames

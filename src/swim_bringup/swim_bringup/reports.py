@@ -12,6 +12,8 @@ import json
 from pathlib import Path
 from typing import Any, Generic, Mapping, Optional, TypeVar
 
+from swim_bringup.statistics import NormStatistics, PairedChange, Spread
+
 JsonObject = dict[str, Any]
 T = TypeVar("T")
 
@@ -131,8 +133,9 @@ class SlidingModePair(Generic[T]):
 
 @dataclasses.dataclass(frozen=True)
 class NormComparison:
-    """A two-norm with and without sliding mode, m s^0.5, and the relative change sliding mode brought, here and
-    in the paper (None: not computable, or not reported there)."""
+    """A two-norm with and without sliding mode, m s^0.5 (over seeds: the seed's of largest magnitude), and the
+    relative change sliding mode brought, here (over seeds: the mean of each seed's change) and in the paper (None:
+    not computable, or not reported there)."""
     sliding_on: float
     sliding_off: float
     change: Optional[float]          # (on - off) / off: negative where sliding mode lowers the error
@@ -140,18 +143,61 @@ class NormComparison:
 
 
 @dataclasses.dataclass(frozen=True)
+class SeedRuns:
+    """An experiment's runs seed by seed: each list in the order of seeds, None where a run gave no report."""
+    seeds: list[int]
+    outcome: SlidingModePair[list[str]]          # "ok", or why the run failed or gave no report
+    duration_s: SlidingModePair[list[Optional[float]]]
+    final_lateral_offset_m: SlidingModePair[list[Optional[float]]]
+    final_alpha_error_rad: SlidingModePair[list[Optional[float]]]
+    saturated_fraction: SlidingModePair[list[Optional[float]]]
+    two_norms: dict[str, SlidingModePair[list[Optional[float]]]]   # m s^0.5, by measure
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> SeedRuns:
+        _checked_keys(data, _field_names(cls), "an experiment's runs by seed")
+        return cls(data["seeds"], _pair(data["outcome"]), _pair(data["duration_s"]),
+                   _pair(data["final_lateral_offset_m"]), _pair(data["final_alpha_error_rad"]),
+                   _pair(data["saturated_fraction"]), {name: _pair(value) for name, value in data["two_norms"].items()})
+
+
+def _pair(value: Mapping[str, Any]) -> SlidingModePair[Any]:
+    _checked_keys(value, _field_names(SlidingModePair), "a pair of runs")
+    return SlidingModePair(**value)
+
+
+def _norm_statistics(data: Mapping[str, Any]) -> NormStatistics:
+    _checked_keys(data, _field_names(NormStatistics), "a two-norm's statistics")
+
+    def spread(value: Mapping[str, Any]) -> Spread:
+        _checked_keys(value, _field_names(Spread), "a mean and standard deviation")
+        return Spread(**value)
+    change = data["change"]
+    if change is not None:
+        _checked_keys(change, _field_names(PairedChange), "a paired change")
+        interval = None if change["interval"] is None else tuple(change["interval"])
+        change = PairedChange(change["per_seed"], change["mean"], interval, change["excludes_zero"])
+    return NormStatistics(spread(data["sliding_on"]), spread(data["sliding_off"]), change, data["paper_change"])
+
+
+@dataclasses.dataclass(frozen=True)
 class ExperimentRow:
-    """One experiment's runs set beside the paper's (experiments.compare)."""
+    """One experiment's runs over seeds set beside the paper's (experiments.compare). Each of the quantities of a
+    pair of runs is the seed's value of largest magnitude (sign kept; outcome "ok" only when every seed's is);
+    per_seed holds them all, statistics the two-norms' over the paired_seeds (those with both runs reported)."""
     experiment: str
     time_scale: float
-    duration_s: float                # of the run with sliding mode
+    duration_s: float                # of the runs with sliding mode
     paper_duration_s: float          # nominal / lambda (Sec. 4.3)
     final_lateral_offset_m: SlidingModePair[float]
     final_alpha_error_rad: SlidingModePair[float]
     saturated_fraction: SlidingModePair[float]
     two_norms: dict[str, NormComparison]
-    succeeded: bool                  # both runs
-    outcome: SlidingModePair[str]    # "ok", or why a run failed
+    succeeded: bool                  # every run of every seed
+    outcome: SlidingModePair[str]    # "ok", or why runs failed ("seed k: why; ...")
+    per_seed: SeedRuns
+    paired_seeds: list[int]
+    statistics: dict[str, NormStatistics]   # by two-norm measure
 
     def to_json(self) -> JsonObject:
         return dataclasses.asdict(self)
@@ -160,50 +206,47 @@ class ExperimentRow:
     def from_json(cls, data: Mapping[str, Any]) -> ExperimentRow:
         _checked_keys(data, _field_names(cls), "an experiment's row")
 
-        def pair(value: Mapping[str, Any]) -> SlidingModePair[Any]:
-            _checked_keys(value, _field_names(SlidingModePair), "a pair of runs")
-            return SlidingModePair(**value)
-
         def norm(value: Mapping[str, Any]) -> NormComparison:
             _checked_keys(value, _field_names(NormComparison), "a two-norm comparison")
             return NormComparison(**value)
         return cls(data["experiment"], data["time_scale"], data["duration_s"], data["paper_duration_s"],
-                   pair(data["final_lateral_offset_m"]), pair(data["final_alpha_error_rad"]),
-                   pair(data["saturated_fraction"]), {name: norm(v) for name, v in data["two_norms"].items()},
-                   data["succeeded"], pair(data["outcome"]))
+                   _pair(data["final_lateral_offset_m"]), _pair(data["final_alpha_error_rad"]),
+                   _pair(data["saturated_fraction"]), {name: norm(v) for name, v in data["two_norms"].items()},
+                   data["succeeded"], _pair(data["outcome"]), SeedRuns.from_json(data["per_seed"]),
+                   data["paired_seeds"], {name: _norm_statistics(v) for name, v in data["statistics"].items()})
 
 
 @dataclasses.dataclass(frozen=True)
-class StoppedRun:
-    """The run that stopped swim-experiments, and why."""
-    run: str             # <experiment>/sliding_<on|off>
+class FailedRun:
+    """A run of swim-experiments that gave no report, and why."""
+    run: str             # <experiment>/seed<k>/sliding_<on|off>
     reason: str
 
 
 @dataclasses.dataclass(frozen=True)
 class ExperimentsSummary:
-    """swim-experiments' results (experiments.json): the experiments done, the wall time, and the run that stopped
-    the rest if one did (the key "stopped" only then)."""
+    """swim-experiments' results (experiments.json): the pipeline (config/ folder) and seeds run, the experiments
+    with at least one seed run with and without sliding mode, the wall time, and the runs that gave no report."""
+    pipeline: str
+    seeds: list[int]
     experiments: list[ExperimentRow]
     wall_time_s: float
-    stopped: Optional[StoppedRun] = None
+    failed_runs: list[FailedRun]
 
     def to_json(self) -> JsonObject:
-        data: JsonObject = {"experiments": [row.to_json() for row in self.experiments],
-                            "wall_time_s": self.wall_time_s}
-        if self.stopped is not None:
-            data["stopped"] = dataclasses.asdict(self.stopped)
-        return data
+        return {"pipeline": self.pipeline, "seeds": self.seeds,
+                "experiments": [row.to_json() for row in self.experiments], "wall_time_s": self.wall_time_s,
+                "failed_runs": [dataclasses.asdict(failed) for failed in self.failed_runs]}
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> ExperimentsSummary:
-        _checked_keys(data, ["experiments", "wall_time_s"] + (["stopped"] if "stopped" in data else []),
-                      "experiments' results")
-        stopped = None
-        if "stopped" in data:
-            _checked_keys(data["stopped"], _field_names(StoppedRun), "a stopped run")
-            stopped = StoppedRun(**data["stopped"])
-        return cls([ExperimentRow.from_json(row) for row in data["experiments"]], data["wall_time_s"], stopped)
+        _checked_keys(data, _field_names(cls), "experiments' results")
+
+        def failed(value: Mapping[str, Any]) -> FailedRun:
+            _checked_keys(value, _field_names(FailedRun), "a failed run")
+            return FailedRun(**value)
+        return cls(data["pipeline"], data["seeds"], [ExperimentRow.from_json(row) for row in data["experiments"]],
+                   data["wall_time_s"], [failed(value) for value in data["failed_runs"]])
 
     def write(self, path: Path) -> None:
         path.write_text(json.dumps(self.to_json(), indent=2))

@@ -13,10 +13,20 @@ import yaml
 from swim_ros.processes import STOP_GRACE_S, NodeProcess, NodeSpec
 
 
-def config_dir() -> Path:
-    """The installed swim_bringup/config folder (parameter files of the demo and the experiments)."""
+#: the pipelines a run can use, each a folder of parameter files (config_dir): "realistic", the default, flies the
+#: circulatory flow model's plans in the vortex wake under the physical disturbances; "paper" flies the ideal-flow
+#: plans in ideal flow under the small disturbances they survive (the paper's reproduction)
+PIPELINES = ("realistic", "paper")
+
+
+def config_dir(pipeline: str = "realistic") -> Path:
+    """The installed folder of a pipeline's parameter files (sim, planner, tracker, bridge YAML): swim_bringup's
+    config/ for "realistic", config/paper/ for "paper". ValueError for another pipeline."""
+    if pipeline not in PIPELINES:
+        raise ValueError(f"pipeline must be one of {', '.join(PIPELINES)}, got {pipeline!r}")
     from ament_index_python.packages import get_package_share_directory
-    return Path(get_package_share_directory("swim_bringup")) / "config"
+    folder = Path(get_package_share_directory("swim_bringup")) / "config"
+    return folder if pipeline == "realistic" else folder / pipeline
 
 
 class System:

@@ -1,5 +1,5 @@
 """A bag recorded with swim_interfaces v2 (PlannedTrajectory and TrackingState before the flow model's fields) still
-analyses: its messages are decoded by the definitions the bag carries, not by the installed v3 ones. The v2
+analyses: its messages are decoded by the definitions the bag carries, not by the installed ones. The v2
 definitions are written out here as they were shipped, the bag written with them by rosbags, then analysed."""
 import math
 from pathlib import Path
@@ -107,12 +107,12 @@ def record_v2_run(path: Path, close: bool = True) -> Path:
     return path
 
 
-def test_the_installed_v3_types_cannot_read_a_v2_message():
-    """What makes the bag's own definitions necessary: v2 bytes do not decode as v3."""
+def test_the_installed_types_cannot_read_a_v2_message():
+    """What makes the bag's own definitions necessary: v2 bytes do not decode as the installed version."""
     store = v2_typestore()
     (_, _, plan), (_, _, tracking) = [m for m, _ in zip(v2_messages(store), range(2))]
     installed = swim_typestore()
-    assert installed.types[TOPICS["plan"]].INTERFACE_VERSION == 3
+    assert installed.types[TOPICS["plan"]].INTERFACE_VERSION == 4
     for cdr, msgtype in ((plan, TOPICS["plan"]), (tracking, TOPICS["tracking_state"])):
         with pytest.raises(Exception):
             installed.deserialize_cdr(cdr, msgtype)

@@ -10,8 +10,8 @@ from swim_bringup.analysis import analyze
 from swim_bringup.bag import BagWriter
 from swim_bringup.experiments import compare, paper_experiments
 from swim_bringup.recorded_run import run_failures
-from swim_bringup.reports import (ExperimentsSummary, ReportError, RunAnalysis, RunReport, StoppedRun,
-                                  TrackerResult)
+from swim_bringup.reports import (ExperimentsSummary, FailedRun, ReportError, RunAnalysis, RunReport,
+                                  SlidingModePair, TrackerResult)
 
 #: report.json's keys, in order, as swim-demo writes them (the file's readers and the docs rely on them)
 MEASURE_KEYS = ["duration_s", "longitudinal_error_two_norm_m_s05", "lateral_error_two_norm_m_s05",
@@ -20,11 +20,19 @@ MEASURE_KEYS = ["duration_s", "longitudinal_error_two_norm_m_s05", "lateral_erro
                 "sliding_mode_enabled", "periods"]
 BRIDGE_KEYS = ["bridge_faults", "bridge_overruns"]
 RESULT_KEYS = ["error_code", "error_string", "final_alpha_error_rad", "duration_s"]
-#: experiments.json's keys: a row, its pairs of runs and its two-norm comparisons
+#: experiments.json's keys: a row (the keys of one seed's row, then the seeds'), its pairs of runs, its two-norm
+#: comparisons, its runs by seed and its statistics
 ROW_KEYS = ["experiment", "time_scale", "duration_s", "paper_duration_s", "final_lateral_offset_m",
-            "final_alpha_error_rad", "saturated_fraction", "two_norms", "succeeded", "outcome"]
+            "final_alpha_error_rad", "saturated_fraction", "two_norms", "succeeded", "outcome", "per_seed",
+            "paired_seeds", "statistics"]
 PAIR_KEYS = ["sliding_on", "sliding_off"]
 NORM_KEYS = ["sliding_on", "sliding_off", "change", "paper_change"]
+SEED_KEYS = ["seeds", "outcome", "duration_s", "final_lateral_offset_m", "final_alpha_error_rad",
+             "saturated_fraction", "two_norms"]
+STATISTICS_KEYS = ["sliding_on", "sliding_off", "change", "paper_change"]
+SPREAD_KEYS = ["mean", "std"]
+CHANGE_KEYS = ["per_seed", "mean", "interval", "excludes_zero"]
+NORMS = ["longitudinal_error_two_norm_m_s05", "lateral_error_two_norm_m_s05", "cartesian_error_two_norm_m_s05"]
 PERIOD_S, PERIODS = 0.008, 251                 # 2 s of tracking
 LANE_M, OFFSET_M = 0.43, 0.01
 
@@ -85,24 +93,43 @@ def test_an_object_that_is_not_a_report_is_refused(tmp_path):
 
 
 def test_experiments_json_keeps_its_keys_and_reads_back(tmp_path):
-    """compare() of two analysed runs, written as swim-experiments writes experiments.json."""
+    """compare() of analysed runs over two seeds, one run without a report, written as swim-experiments writes
+    experiments.json."""
     on = report_of(record_free_run(tmp_path / "on"))
     off = report_of(record_free_run(tmp_path / "off", bridge_faults="NONE"), -4, "path tolerance violated")
-    row = compare(paper_experiments()[4], on, off)
-    summary = ExperimentsSummary([row], 20.0, StoppedRun("lane_keeping_lambda1.10/sliding_on", "RuntimeError: x"))
+    failed = FailedRun("lane_keeping_lambda1.10/seed3/sliding_on", "RuntimeError: x")
+    row = compare(paper_experiments()[4], {1: SlidingModePair(on, off), 2: SlidingModePair(on, on),
+                                           3: SlidingModePair(failed, on)})
+    summary = ExperimentsSummary("paper", [1, 2, 3], [row], 20.0, [failed])
     summary.write(tmp_path / "experiments.json")
     data = json.loads((tmp_path / "experiments.json").read_text())
-    assert list(data) == ["experiments", "wall_time_s", "stopped"]
-    assert list(data["stopped"]) == ["run", "reason"]
+    assert list(data) == ["pipeline", "seeds", "experiments", "wall_time_s", "failed_runs"]
+    assert [list(failure) for failure in data["failed_runs"]] == [["run", "reason"]]
     (written,) = data["experiments"]
     assert list(written) == ROW_KEYS
     for key in ("final_lateral_offset_m", "final_alpha_error_rad", "saturated_fraction", "outcome"):
         assert list(written[key]) == PAIR_KEYS, key
-    assert list(written["two_norms"]) == ["longitudinal_error_two_norm_m_s05", "lateral_error_two_norm_m_s05",
-                                          "cartesian_error_two_norm_m_s05"]
+        assert list(written["per_seed"][key]) == PAIR_KEYS, key
+    assert list(written["two_norms"]) == NORMS and list(written["statistics"]) == NORMS
+    assert list(written["per_seed"]) == SEED_KEYS and list(written["per_seed"]["two_norms"]) == NORMS
     for comparison in written["two_norms"].values():
         assert list(comparison) == NORM_KEYS
-    assert written["outcome"] == {"sliding_on": "ok", "sliding_off": "the tracker ended with path tolerance violated"}
-    assert written["two_norms"]["lateral_error_two_norm_m_s05"]["change"] == 0.0   # the same bag's offset
+    for statistics in written["statistics"].values():
+        assert list(statistics) == STATISTICS_KEYS
+        assert list(statistics["sliding_on"]) == list(statistics["sliding_off"]) == SPREAD_KEYS
+    # the bag's vehicle is on its plan along the lane: a zero longitudinal two-norm has no relative change
+    assert written["statistics"][NORMS[0]]["change"] is None
+    for name in NORMS[1:]:
+        assert list(written["statistics"][name]["change"]) == CHANGE_KEYS
+    assert written["outcome"] == {"sliding_on": "seed 3: no report: RuntimeError: x",
+                                  "sliding_off": "seed 1: the tracker ended with path tolerance violated"}
+    assert written["paired_seeds"] == [1, 2]
+    lateral = written["statistics"]["lateral_error_two_norm_m_s05"]
+    assert lateral["change"]["per_seed"] == [0.0, 0.0]        # the same bag's offset, with and without
+    assert lateral["change"]["interval"] == [0.0, 0.0] and not lateral["change"]["excludes_zero"]
+    assert written["two_norms"]["lateral_error_two_norm_m_s05"]["change"] == 0.0
+    offsets = written["per_seed"]["final_lateral_offset_m"]["sliding_on"]
+    assert offsets[:2] == pytest.approx([OFFSET_M, OFFSET_M]) and offsets[2] is None
     assert ExperimentsSummary.load(tmp_path / "experiments.json") == summary
-    assert list(ExperimentsSummary([row], 20.0).to_json()) == ["experiments", "wall_time_s"]   # none stopped
+    with pytest.raises(ReportError, match="missing \\['failed_runs'\\]"):
+        ExperimentsSummary.from_json({key: value for key, value in data.items() if key != "failed_runs"})

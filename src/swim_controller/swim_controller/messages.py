@@ -1,6 +1,6 @@
 """Between ROS messages and the tracker's types: checked, so a bad message is refused, never used.
 
-PlannedTrajectory (swim_interfaces v3) <-> trajectory.Trajectory: ``trajectory_to_message`` (the planner's
+PlannedTrajectory (swim_interfaces v4) <-> trajectory.Trajectory: ``trajectory_to_message`` (the planner's
 encoder) and ``trajectory_from_message`` (the tracker's decoder) side by side, so the layout is written once.
 """
 from __future__ import annotations
@@ -22,7 +22,12 @@ from swim_ros.codecs import MessageError, float_array, joint_state_arrays, secon
 
 Array = npt.NDArray[np.float64]
 #: the PlannedTrajectory layout this module writes and reads (swim_interfaces' INTERFACE_VERSION)
-SUPPORTED_INTERFACE_VERSION = 3
+SUPPORTED_INTERFACE_VERSION = 4
+#: what the plans of older interface versions lack (named when one is refused)
+OLDER_PLAN_VERSIONS = {
+    2: "does not say which flow model it was made with nor carry the flow's lag states",
+    3: "does not carry the sliding mode's disturbance bound",
+}
 #: the largest magnitude a plan's time, values and their changes per second between samples may have (SI units):
 #: far past any plan a vehicle can follow, and small enough that the product of two (a gain times an error, a rate
 #: times a time step, in the tracker's interpolation and law) stays finite in float64 (largest 1.8e308)
@@ -48,18 +53,21 @@ def trajectory_to_message(trajectory: Trajectory, stamp) -> PlannedTrajectory:
     message.library_digest = trajectory.library_digest
     message.flow_model = trajectory.flow_model
     message.lag_states = float_array(trajectory.lag if trajectory.lag is not None else np.zeros(0))
+    message.disturbance_bounds_n_m = float_array(trajectory.disturbance_bound if trajectory.disturbance_bound
+                                                 is not None else np.zeros(0))
     return message
 
 
 def trajectory_from_message(plan: PlannedTrajectory) -> Trajectory:
     """A swim_interfaces/PlannedTrajectory as a Trajectory; raises PlanError naming what is wrong: another
     interface version, more than MAX_TRACKED_SAMPLES samples, joints that are not the vehicle's, a flow model
-    that is not swim_model's, arrays of the wrong length (the lag states: N x n_lag, none for the ideal flow),
-    non-finite values, times out of order or not from 0, values or their rates past MAX_PLAN_MAGNITUDE,
-    segments that do not tile the samples."""
+    that is not swim_model's, arrays of the wrong length (the lag states: N x n_lag, none for the ideal flow; the
+    disturbance bounds: N or none), non-finite or (the disturbance bounds) negative values, times out of order or
+    not from 0, values or their rates past MAX_PLAN_MAGNITUDE, segments that do not tile the samples."""
     if plan.interface_version != SUPPORTED_INTERFACE_VERSION:
-        older = (" (a version 2 plan does not say which flow model it was made with nor carry the flow's lag "
-                 "states: plan it again with this version's planner)" if plan.interface_version == 2 else "")
+        missing = OLDER_PLAN_VERSIONS.get(plan.interface_version)
+        older = f" (a version {plan.interface_version} plan {missing}: plan it again with this version's planner)" \
+            if missing else ""
         raise PlanError(f"plan interface version {plan.interface_version}, this tracker reads "
                         f"{SUPPORTED_INTERFACE_VERSION}{older}")
     samples = len(plan.time_from_start_s)
@@ -85,6 +93,8 @@ def trajectory_from_message(plan: PlannedTrajectory) -> Trajectory:
     fields = [field.name for field in dataclasses.fields(Segment)]   # PrimitiveSegment's, by name
     segments = tuple(Segment(**{name: getattr(s, name) for name in fields}) for s in plan.segments)
     lag = array("lag_states", (samples, n_lag))   # an ideal-flow plan carries none
+    # none: the tracker's constant bound; else one a sample
+    bound = array("disturbance_bounds_n_m", (samples,)) if len(plan.disturbance_bounds_n_m) else None
     with np.errstate(over="ignore", invalid="ignore"):   # rates that overflow are refused by check_plan_range
         trajectory = Trajectory(
             time_s=np.asarray(plan.time_from_start_s, dtype=float), q=array("positions", (samples, nq)),
@@ -92,7 +102,7 @@ def trajectory_from_message(plan: PlannedTrajectory) -> Trajectory:
             torque=array("feedforward_torques", (samples, 2)), lqr_gain=array("lqr_gains", (samples, 2, n)),
             riccati_input_gain=array("sliding_gains", (samples, 2, n)), segments=segments,
             lane_radius_m=plan.lane_radius_m, library_digest=plan.library_digest, flow_model=plan.flow_model,
-            lag=lag if n_lag else None)
+            lag=lag if n_lag else None, disturbance_bound=bound)
         check_plan_range(trajectory)
     return trajectory
 
@@ -106,8 +116,10 @@ def check_plan_range(trajectory: Trajectory) -> None:
         raise PlanError(f"plan sample times must run from 0 s to at most {MAX_PLAN_MAGNITUDE:g} s, got "
                         f"{float(time_s[0])!r} to {float(time_s[-1])!r} s")
     step_s = np.diff(time_s)[:, None]
-    names = ("q", "qdot", "foil_acceleration", "torque", "lqr_gain", "riccati_input_gain")
-    for name in names + (("lag",) if trajectory.lag is not None else ()):
+    names: tuple[str, ...] = ("q", "qdot", "foil_acceleration", "torque", "lqr_gain", "riccati_input_gain")
+    names += ("lag",) if trajectory.lag is not None else ()
+    names += ("disturbance_bound",) if trajectory.disturbance_bound is not None else ()
+    for name in names:
         values = getattr(trajectory, name).reshape(len(time_s), -1)
         rates = np.diff(values, axis=0) / step_s
         if not (np.abs(values).max() <= MAX_PLAN_MAGNITUDE and np.abs(rates).max() <= MAX_PLAN_MAGNITUDE):

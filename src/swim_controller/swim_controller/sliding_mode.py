@@ -15,11 +15,18 @@ paper writes s with an extra K'; with the matched input map above no K is needed
 chattering, the unit vector s / ||s|| is replaced by s / phi inside a boundary layer ||s|| < phi, where eps
 is linear in s and the guarantee weakens to ultimate boundedness of s. With time scaling, P and G are
 those of the scaled system: G_l' P_l = (G'P)(lambda t) Gamma (see time_scaling).
+
+D may vary with time: the argument above holds at each instant with ||d(t)|| <= D(t). A plan made with the
+circulatory flow model may carry D(t), measured off-line from the difference between the planned flow's force and
+the vortex wake's along each primitive (swim_planner.disturbance; time-scaled as a torque, lambda^2 D(lambda t));
+the tracker then uses D = disturbance_bound_margin D_plan(t) (``term(s, bound)``), and without one the constant
+``disturbance_bound_n_m``.
 """
 from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Optional
 
 import numpy as np
 import numpy.typing as npt
@@ -33,14 +40,24 @@ class SlidingMode:
 
     disturbance_bound_n_m: float = 0.02   # assumed: D, about 5 % of the pitch motor's limit (0.52 N m)
     boundary_layer: float = 1.0           # assumed: phi, in the units of s = Mio^-1 G'P x
+    disturbance_bound_margin: float = 1.5
+    # assumed: the plan's D(t) is the mismatch along the planned motion with the planned wake history; the tracked
+    # vehicle moves a little off it and its wake's history differs (a start from rest, a re-planned maneuver), so
+    # the bound used is 50 % above the measured one
 
     def validate(self) -> None:
         if not (math.isfinite(self.disturbance_bound_n_m) and self.disturbance_bound_n_m >= 0.0):
             raise ValueError(f"disturbance bound must be finite and >= 0, got {self.disturbance_bound_n_m!r}")
         if not (math.isfinite(self.boundary_layer) and self.boundary_layer > 0.0):
             raise ValueError(f"boundary layer must be finite and > 0, got {self.boundary_layer!r}")
+        if not (math.isfinite(self.disturbance_bound_margin) and self.disturbance_bound_margin >= 1.0):
+            raise ValueError(f"disturbance bound margin must be finite and >= 1, got {self.disturbance_bound_margin!r}")
 
-    def term(self, sliding_variable: Array) -> Array:
-        """eps (N m, heave and pitch) for the sliding variable s."""
+    def term(self, sliding_variable: Array, plan_bound_n_m: Optional[float] = None) -> Array:
+        """eps (N m, heave and pitch) for the sliding variable s, with D = disturbance_bound_margin plan_bound_n_m
+        (the plan's D(t) at this instant, N m) or, when the plan has none (None), the constant
+        disturbance_bound_n_m."""
+        bound = self.disturbance_bound_n_m if plan_bound_n_m is None else \
+            self.disturbance_bound_margin * plan_bound_n_m
         norm = math.hypot(sliding_variable[0], sliding_variable[1])
-        return sliding_variable * (-self.disturbance_bound_n_m / max(norm, self.boundary_layer))
+        return sliding_variable * (-bound / max(norm, self.boundary_layer))

@@ -39,9 +39,20 @@ class Outcome(enum.Enum):
     CANCELED = "canceled"
 
 
+@dataclasses.dataclass
+class Step:
+    """One period's command and report."""
+
+    torque: Array
+    saturated: tuple[bool, bool]
+    output: Optional[ControlOutput]   # None unless TRACKING
+    outcome: Optional[Outcome]        # set on the period the plan's execution ended
+
+
 @dataclasses.dataclass(frozen=True)
 class Tolerances:
-    """Limits on |alpha error| and |R error|; 0 means not checked."""
+    """Limits on the tracking errors, checked every period: |alpha error| (rad) and |R error| (m) along the plan
+    (path_*) and at its end (goal_*); 0 means not checked."""
 
     path_alpha_rad: float = 0.0
     path_r_m: float = 0.0
@@ -53,16 +64,6 @@ class Tolerances:
             value = getattr(self, field.name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"tolerance {field.name} must be finite and >= 0, got {value!r}")
-
-
-@dataclasses.dataclass
-class Step:
-    """One period's command and report."""
-
-    torque: Array
-    saturated: tuple[bool, bool]
-    output: Optional[ControlOutput]   # None unless TRACKING
-    outcome: Optional[Outcome]        # set on the period the plan's execution ended
 
 
 def _violates(error: float, tolerance: float) -> bool:

@@ -7,6 +7,7 @@ already time-scaled and concatenated by the planner, see time_scaling):
     u     = u_des(t + h/2) - K(t) x,    K = R_l^-1 G_l' P_l             LQ stage (eqs. 19, 33)
     tau1  = Mio(q) u + Cio(q, qdot[, z^]) qdot                          I/O linearization (eqs. 22-23)
     s     = Mio^-1 G_l' P_l x,  eps = -D s / max(||s||, phi)            sliding mode (eqs. 24-25)
+            D = margin D_plan(t) if the plan carries its disturbance bound, else the constant (sliding_mode)
     tau   = sat(tau1 + eps)                                             motor limits, saturation reported
 
 After the plan ends the tracker holds the foil still at the plan's last heave and pitch: a PD law on psi
@@ -213,7 +214,8 @@ class CascadeTracker:
         torque = mio @ u + cio_qdot
         sliding = np.zeros(2)
         if self.sliding_mode_enabled and not holding:
-            sliding = self.sliding_mode.term(np.linalg.solve(mio, ref.riccati_input_gain @ error_state))
+            sliding = self.sliding_mode.term(np.linalg.solve(mio, ref.riccati_input_gain @ error_state),
+                                             ref.disturbance_bound_n_m)
             torque = torque + sliding
         command, saturated = saturate(torque, self.torque_limits_n_m)
         return ControlOutput(torque=command, saturated=saturated, unsaturated_torque=torque,

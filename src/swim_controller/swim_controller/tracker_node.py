@@ -90,6 +90,9 @@ PARAMETERS = (
                   "sliding-mode disturbance bound D, N m (eq. 25)", range=(0.0, 100.0)),
     ParameterSpec("boundary_layer", _SLIDING_DEFAULTS.boundary_layer,
                   "sliding-mode boundary layer phi (eq. 25), in the units of s", range=(0.0, 1e3), check=positive),
+    ParameterSpec("disturbance_bound_margin", _SLIDING_DEFAULTS.disturbance_bound_margin,
+                  "factor on a plan's own disturbance bound D(t) (circulatory plans that carry one; the others use "
+                  "disturbance_bound_n_m)", range=(1.0, 100.0)),
     ParameterSpec("time_scale", 1.0, "lambda: run plans this many times faster (Theorem 1) when a goal arrives",
                   range=(0.1, 10.0)),
     ParameterSpec("feedback_rate_hz", 10.0, "action feedback rate, Hz", range=(0.1, 1000.0)),
@@ -232,7 +235,8 @@ class TrackerNode(Node):
                 tracker.sliding_mode_enabled = values["sliding_mode_enabled"]
             bound = values.get("disturbance_bound_n_m", tracker.sliding_mode.disturbance_bound_n_m)
             layer = values.get("boundary_layer", tracker.sliding_mode.boundary_layer)
-            tracker.sliding_mode = SlidingMode(bound, layer)
+            margin = values.get("disturbance_bound_margin", tracker.sliding_mode.disturbance_bound_margin)
+            tracker.sliding_mode = SlidingMode(bound, layer, margin)
         if "velocity_cutoff_hz" in values:
             self._velocity = VelocityEstimator(values["velocity_cutoff_hz"])
 
@@ -280,7 +284,8 @@ class TrackerNode(Node):
     def _make_tracker(self, model: VehicleModel) -> CascadeTracker:
         parameter = self.get_parameter
         return CascadeTracker(model_io_linearization(model), model.torque_limits(),
-                              SlidingMode(parameter("disturbance_bound_n_m").value, parameter("boundary_layer").value),
+                              SlidingMode(parameter("disturbance_bound_n_m").value, parameter("boundary_layer").value,
+                                          parameter("disturbance_bound_margin").value),
                               parameter("sliding_mode_enabled").value, parameter("sample_period_s").value,
                               model_lag_rate(model))
 

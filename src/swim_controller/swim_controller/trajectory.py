@@ -8,9 +8,18 @@ came from (paper Sec. 4.2); a trajectory is checked when it is made, so one that
 
 Time scaling by lambda > 0 (paper P3, Sec. 4.3; Theorem 1, Sec. 6.4) is ``Trajectory.time_scaled``, the one place
 it is done: t -> t / lambda, q(t) -> q(lambda t), qdot -> lambda qdot, u -> lambda^2 u, tau -> lambda^2 tau, the
-lag states (velocities) z -> lambda z (docs/flow_model.md, "Smoothness and P3"), the gains by Theorem 1.
+lag states (velocities) z -> lambda z (docs/flow_model.md, "Smoothness and P3"), the gains by Theorem 1, and the
+sliding mode's disturbance bound D -> lambda^2 D (below).
 Scalings compose (lambda2 after lambda1 is lambda1 lambda2), and a lambda whose torques exceed the motor limits
 is refused with the largest feasible one named.
+
+The disturbance bound D(t) (N m; planned with the circulatory flow, swim_planner.disturbance) bounds the matched
+torque d = B(q)' dQ by which the flow's real force differs from the planned one, dQ = Q2(q)' df. Along the plan run
+lambda times faster, q_l(t) = q(lambda t) and every velocity (qdot, Q2 qdot, and z) is lambda times the nominal
+one; both flow forces are homogeneous of degree 2 in those velocities (the reduced model: f(lambda nu, lambda z) =
+lambda^2 f(nu, z); the wake: vortex strengths scale as lambda, its force as lambda^2, on the same geometry), and
+Q2 and B depend on q alone, so d_l(t) = lambda^2 d(lambda t) and D_l(t) = lambda^2 D(lambda t): a torque, like tau.
+Without a stored bound (an ideal-flow plan, a library without one) the tracker's constant bound applies.
 """
 from __future__ import annotations
 
@@ -73,6 +82,7 @@ class TrajectoryPoint:
     lqr_gain: Array            # (2, n) K
     riccati_input_gain: Array  # (2, n) G_l' P_l
     lag: Array                 # (n_lag,) the flow's planned lag states, m/s; empty for the ideal flow
+    disturbance_bound_n_m: Optional[float] = None   # D(t), N m; None: the plan has none (the constant bound)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -81,7 +91,9 @@ class Trajectory:
 
     flow_model: the flow model the plan was made with, "ideal" (the paper's) or "circulatory"; lag, its (N, n_lag)
     planned lag states (m/s), is required with the circulatory flow (n_lag = 2) and must be None with the ideal
-    one. The gains act on the error state x = (int e_y, e_q, edot_q, e_z) of n = ny + 2 nq + n_lag entries."""
+    one. The gains act on the error state x = (int e_y, e_q, edot_q, e_z) of n = ny + 2 nq + n_lag entries.
+    disturbance_bound: (N,) the sliding mode's bound D(t), N m, finite and >= 0, or None (the tracker's constant
+    bound)."""
 
     time_s: Array              # (N,) trajectory time, s, strictly increasing
     q: Array                   # (N, nq) rad, m
@@ -95,6 +107,7 @@ class Trajectory:
     library_digest: str = ""   # the primitive library the trajectory came from
     flow_model: str = "ideal"  # "ideal" | "circulatory" (swim_model.flow.FLOW_MODELS)
     lag: Optional[Array] = None   # (N, n_lag) the flow's lag states, m/s; None for the ideal flow
+    disturbance_bound: Optional[Array] = None   # (N,) the sliding mode's bound D(t), N m; None: the constant bound
     _segment_start_s: Array = dataclasses.field(init=False, repr=False)   # (segments,) their start times, s
     _rows: Array = dataclasses.field(init=False, repr=False)     # (N, m) every sampled quantity, one row a sample
     _slopes: Array = dataclasses.field(init=False, repr=False)   # (N - 1, m) the rows' slopes between samples
@@ -123,6 +136,8 @@ class Trajectory:
                   "torque": (samples, 2), "lqr_gain": (samples, 2, n), "riccati_input_gain": (samples, 2, n)}
         if n_lag:
             shapes["lag"] = (samples, n_lag)
+        if self.disturbance_bound is not None:
+            shapes["disturbance_bound"] = (samples,)
         for name, shape in shapes.items():
             value = np.asarray(getattr(self, name), dtype=float)
             if value.shape != shape:
@@ -130,6 +145,8 @@ class Trajectory:
             if not np.all(np.isfinite(value)):
                 raise PlanError(f"plan {name} has non-finite values")
             set_field(self, name, value)
+        if self.disturbance_bound is not None and np.any(self.disturbance_bound < 0.0):
+            raise PlanError("plan disturbance_bound has negative values (a bound on a norm, N m)")
         if not (isinstance(self.lane_radius_m, (int, float)) and math.isfinite(self.lane_radius_m)
                 and self.lane_radius_m > 0.0):
             raise PlanError(f"plan lane radius must be positive and finite, got {self.lane_radius_m!r} m")
@@ -139,6 +156,8 @@ class Trajectory:
         set_field(self, "_segment_start_s", np.array([s.start_time_s for s in self.segments]))
         # one row per sample, interpolated in one operation per control period
         lag_rows = [self.lag] if self.lag is not None else []
+        if self.disturbance_bound is not None:
+            lag_rows.append(self.disturbance_bound[:, None])
         rows = np.concatenate([self.q, self.qdot, self.foil_acceleration, self.torque, *lag_rows,
                                self.lqr_gain.reshape(samples, -1), self.riccati_input_gain.reshape(samples, -1)],
                               axis=1)
@@ -209,11 +228,13 @@ class Trajectory:
         w = offset / step
         secant = slopes[k, :nq]
         q = q + step * w * (1.0 - w) * ((self.qdot[k] - secant) * (1.0 - w) - (self.qdot[k + 1] - secant) * w)
-        gains = row[2 * nq + 4 + n_lag:]
+        bound = None if self.disturbance_bound is None else float(row[2 * nq + 4 + n_lag])
+        gains = row[2 * nq + 4 + n_lag + (bound is not None):]
         return TrajectoryPoint(
             time_s=t, q=q, qdot=row[nq:2 * nq], foil_acceleration=row[2 * nq:2 * nq + 2],
             torque=row[2 * nq + 2:2 * nq + 4], lqr_gain=gains[:2 * n].reshape(2, n),
-            riccati_input_gain=gains[2 * n:].reshape(2, n), lag=row[2 * nq + 4:2 * nq + 4 + n_lag])
+            riccati_input_gain=gains[2 * n:].reshape(2, n), lag=row[2 * nq + 4:2 * nq + 4 + n_lag],
+            disturbance_bound_n_m=bound)
 
     def time_scaled(self, time_scale: float, torque_limits_n_m: npt.ArrayLike) -> Trajectory:
         """This trajectory run time_scale (lambda) times faster: P3 and Theorem 1 (module docstring).
@@ -235,7 +256,9 @@ class Trajectory:
                                    foil_acceleration=self.foil_acceleration * time_scale ** 2,
                                    torque=self.torque * time_scale ** 2, lqr_gain=lqr_gain,
                                    riccati_input_gain=riccati_input_gain, segments=segments,
-                                   lag=None if self.lag is None else self.lag * time_scale)
+                                   lag=None if self.lag is None else self.lag * time_scale,
+                                   disturbance_bound=None if self.disturbance_bound is None
+                                   else self.disturbance_bound * time_scale ** 2)
 
 
 def motor_limit_fraction(torque_n_m: Array, torque_limits_n_m: npt.ArrayLike) -> float:

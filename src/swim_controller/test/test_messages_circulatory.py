@@ -1,4 +1,4 @@
-"""PlannedTrajectory v3 <-> Trajectory with the flow model: the lag states travel bit for bit, and what an older or
+"""PlannedTrajectory v4 <-> Trajectory with the flow model: the lag states travel bit for bit, and what an older or
 broken message says about the flow is refused with its reason."""
 import numpy as np
 import pytest
@@ -35,7 +35,7 @@ def circulatory_trajectory(nq: int, seed: int = 5) -> Trajectory:
 def test_a_circulatory_plan_round_trips_bit_for_bit(nq):
     sent = circulatory_trajectory(nq)
     message = trajectory_to_message(sent, Time(sec=2))
-    assert message.interface_version == PlannedTrajectory.INTERFACE_VERSION == SUPPORTED_INTERFACE_VERSION == 3
+    assert message.interface_version == PlannedTrajectory.INTERFACE_VERSION == SUPPORTED_INTERFACE_VERSION == 4
     assert message.flow_model == "circulatory"
     np.testing.assert_array_equal(np.asarray(message.lag_states), sent.lag.ravel())   # row-major N x n_lag
     got = trajectory_from_message(message)
@@ -57,8 +57,8 @@ def test_an_ideal_plan_says_so_and_carries_no_lag_states(make_trajectory):
 
 def broken(bad: str) -> PlannedTrajectory:
     message = trajectory_to_message(circulatory_trajectory(3), Time())
-    if bad == "version 2":
-        message.interface_version = 2
+    if bad in ("version 2", "version 3"):
+        message.interface_version = int(bad[-1])
     elif bad == "flow model":
         message.flow_model = "potential"
     elif bad == "no flow model":
@@ -94,7 +94,9 @@ def broken(bad: str) -> PlannedTrajectory:
 
 
 @pytest.mark.parametrize("bad, reason", [
-    ("version 2", "plan interface version 2, this tracker reads 3 \\(a version 2 plan does not say which flow model"),
+    ("version 2", "plan interface version 2, this tracker reads 4 \\(a version 2 plan does not say which flow model"),
+    ("version 3", "plan interface version 3, this tracker reads 4 \\(a version 3 plan does not carry the sliding "
+                  "mode's disturbance bound"),
     ("flow model", "plan flow model 'potential' is not one of ideal, circulatory"),
     ("no flow model", "plan flow model '' is not one of ideal, circulatory"),
     ("short lag", f"plan lag_states has {2 * SAMPLES - 1} values, expected {2 * SAMPLES} for {SAMPLES} samples"),

@@ -20,8 +20,9 @@ zeroes, disables and closes whatever still answers and the node ends unconfigure
 (reconnects) the device. The amplifiers of a lost device are off by then anyway: its enable line stopped
 toggling (see below). Parameters: the table PARAMETERS (description and range of each; checked when set; they
 take effect at the next configure): backend (emulated | serial | mf624), config_path (bridge.yaml; empty: the
-shipped one), sample_period_s, watchdog_periods, overrun_limit, stale_read_limit, read_failure_limit; read-only:
-diagnostics_rate_hz, autostart (configure and activate at start-up, for runs without a lifecycle manager).
+shipped one), flow (the emulated rig's water: ideal | circulatory | wake, as sim_node's), sample_period_s,
+watchdog_periods, overrun_limit, stale_read_limit, read_failure_limit; read-only: diagnostics_rate_hz, autostart
+(configure and activate at start-up, for runs without a lifecycle manager).
 
 Amplifier-enable wiring (the charge pump). A DAC holds its last value when the process dies, so a current
 command alone cannot make a crashed bridge safe. The bridge therefore drives a digital output that it toggles
@@ -59,9 +60,10 @@ from swim_hw_bridge.io_loop import IoLoop, Snapshot
 from swim_hw_bridge.safety import Command, FaultCode, SafetyLayer, SafetyLimits, WatchdogState, fault_names
 from swim_model import load_rig
 from swim_model.vehicle import JOINT_NAMES_UNCONSTRAINED
+from swim_model.wake_coupling import FLOWS
 from swim_ros.codecs import MessageError, torque_from_command
 from swim_ros.entry import run_node
-from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters
+from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, one_of
 from swim_ros.qos import RECORDABLE_QOS
 
 
@@ -72,6 +74,8 @@ PARAMETERS = (
     ParameterSpec("backend", "emulated", f"device backend: {' | '.join(BACKENDS)}",
                   check=lambda value: None if value in BACKENDS else f"must be one of {', '.join(BACKENDS)}"),
     ParameterSpec("config_path", "", "bridge parameter YAML (empty: the shipped config/bridge.yaml)"),
+    ParameterSpec("flow", "ideal", f"the emulated rig's water: {' | '.join(FLOWS)}, as sim_node's flow (the other "
+                  "backends swim in real water)", check=one_of(*FLOWS)),
     ParameterSpec("sample_period_s", 0.008, "I/O loop period, s (the paper's 8 ms)", range=(0.0005, 0.1)),
     ParameterSpec("watchdog_periods", 5, "periods without a command before the torque is zeroed", range=(1, 10000)),
     ParameterSpec("overrun_limit", 3, "overruns in a row that latch the OVERRUN fault", range=(1, 10000)),
@@ -87,6 +91,7 @@ PARAMETERS = (
 class BridgeSettings:
     backend: str
     config_path: str
+    flow: str
     sample_period_s: float
     watchdog_periods: int
     overrun_limit: int
@@ -164,7 +169,10 @@ class BridgeNode(LifecycleNode):
         try:
             self.settings = self._read_settings()
             config = load_bridge_config(self.settings.config_path or None)
-            device = make_device(self.settings.backend, config.device_config(self.settings.backend))
+            device_config = config.device_config(self.settings.backend)
+            if self.settings.backend == "emulated":
+                device_config["flow"] = self.settings.flow
+            device = make_device(self.settings.backend, device_config)
             device.open()
         except (ValueError, BridgeConfigError, UnknownBackend, DeviceError) as err:
             self.get_logger().error(f"configure failed: {err}")
@@ -187,7 +195,8 @@ class BridgeNode(LifecycleNode):
             self.loop.emergency_stop()
         self._restart_diagnostics_timer()
         self._state_label = "inactive"
-        self.get_logger().info(f"configured: backend {self.settings.backend}, config {config.source_path}")
+        water = f" (flow {self.settings.flow})" if self.settings.backend == "emulated" else ""
+        self.get_logger().info(f"configured: backend {self.settings.backend}{water}, config {config.source_path}")
         return super().on_configure(state)
 
     def on_activate(self, state: State) -> TransitionCallbackReturn:

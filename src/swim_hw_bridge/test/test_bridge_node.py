@@ -367,7 +367,8 @@ def test_parameters_are_validated(bridge):
     from rclpy.parameter import Parameter
     parameters = ParameterCalls(bridge.node, bridge.executor, "bridge_node", POLICY)
     for name, value in [("sample_period_s", 5.0), ("watchdog_periods", 0), ("backend", "ethercat"),
-                        ("diagnostics_rate_hz", 5.0), ("autostart", True)]:   # the last two: read-only
+                        ("flow", "potential"), ("diagnostics_rate_hz", 5.0),
+                        ("autostart", True)]:   # the last two: read-only
         result = parameters.set([Parameter(name, value=value)])[0]
         assert not result.successful and name in result.reason
     described = {d.name: d for d in parameters.describe(["sample_period_s", "autostart"])}

@@ -45,13 +45,16 @@ from swim_model import codegen
 from swim_model.errors import FlowModelError, StateError
 from swim_model.flow import FLOW_MODELS, LAG_STATE_NAMES, CirculatoryFlow, FlowParameters
 from swim_model.joukowski import AddedMass, JoukowskiFoil
-from swim_model.kinematics import Coordinates, foil_velocity_map, rigid_mass_matrix
+from swim_model.kinematics import Coordinates, foil_reference_point, foil_velocity_map, rigid_mass_matrix
 from swim_model.rig import RigParameters, load_rig
 
 Array = npt.NDArray[np.float64]
 
 JOINT_NAMES_UNCONSTRAINED = ("alpha", "R", "phi", "theta")
 JOINT_NAMES_CONSTRAINED = ("alpha", "phi", "theta")
+#: kinematics.py's chord direction dir(a) = (-sin a, cos a) lies at angle a + pi/2 in the tank frame: the foil pose's
+#: angle is alpha + theta + this (the convention of swim_model.wake's pose)
+FOIL_CHORD_ANGLE_OFFSET_RAD = 0.5 * math.pi
 
 
 def coriolis_from_mass(mass: ca.SX, q: ca.SX, qdot: ca.SX) -> ca.SX:
@@ -214,6 +217,23 @@ class VehicleModel:
         k4 = f(x + h * k3, tau)
         x_next = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
         return ca.Function("rk4_step", [x, tau, h], [x_next], ["x", "tau", "h"], ["x_next"])
+
+    def foil_pose_function(self) -> ca.Function:
+        """q -> (x_F m, y_F m, chord angle alpha + theta + pi/2 rad): the foil frame's origin F and its chord's angle
+        in the tank frame (the pose swim_model.wake.Wake.step takes). A CasADi SX function (map it over many q, or
+        differentiate it); made once per model, not part of the compiled ``numeric`` set."""
+        cache: dict[str, ca.Function] = self.__dict__.setdefault("_foil_pose", {})
+        if "pose" not in cache:
+            q = self.symbolic.q
+            coords = self.coordinates(q)
+            pose = ca.vertcat(foil_reference_point(coords, self.rig),
+                              coords.alpha + coords.theta + FOIL_CHORD_ANGLE_OFFSET_RAD)
+            cache["pose"] = ca.Function("foil_pose", [q], [pose], ["q"], ["pose"])
+        return cache["pose"]
+
+    def foil_pose(self, q: npt.ArrayLike) -> Array:
+        """(x_F m, y_F m, chord angle rad) of the foil frame in the tank frame at q (``foil_pose_function``)."""
+        return np.asarray(self.foil_pose_function()(self._vector(q, self.nq, "q")), dtype=float).reshape(-1)
 
     # ----- numeric path ----------------------------------------------------------------------------
     @cached_property

@@ -11,7 +11,8 @@ Each call ``Wake.step(dt, pose, velocity)`` advances from t to t + dt:
    ``Z += dt (u_n + dt/(2 dt_prev) (u_n - u_{n-1}))``; forward Euler for a vortex's first step).
 2. Move the foil to the new pose (position ``X_0`` of the frame origin and chord angle theta in the tank frame)
    with its new velocity ``(U, V, Omega)`` in foil axes. A vortex the step carried into the foil is reflected
-   to its mirror point in the circle plane (counted in ``reflected_count``).
+   to its mirror point in the circle plane (counted in ``reflected_count``). A vortex then closer to the
+   surface than ``surface_absorption_gap_m`` is absorbed into the foil's bound circulation (next section).
 3. Shed one vortex on the chord line behind the trailing-edge cusp, at a distance
    ``max(shed_distance_fraction |v_TE| dt, min_shed_distance_m)`` (``v_TE`` the foil's velocity at its trailing
    edge); its strength makes the Kutta condition hold. The images carry the bound circulation
@@ -25,6 +26,25 @@ Each call ``Wake.step(dt, pose, velocity)`` advances from t to t + dt:
    preferred) that is closest together relative to its distance from the foil, at the circulation-weighted
    centroid (circulation conserved exactly; the impulse used for the next force is recomputed after merging,
    so merging causes no force spike). The newest ``protected_vortex_count`` vortices are never merged.
+
+Vortices at the surface (absorption). A point vortex next to a wall is a model artifact: with its image it
+is a dipole whose own velocity, ``Gamma / (4 pi d)`` along the wall at a gap d in the circle plane (and the Routh
+term, unbounded near the cusp), grows without bound as d -> 0, so an explicit step throws it about and the
+impulse it carries jumps. In a real flow vorticity that reaches the wall joins the boundary layer: it diffuses
+into the wall's vortex sheet instead of sliding along the surface as a concentrated vortex. Discrete-vortex
+methods therefore remove the vortices that come within a set distance of the body and keep their circulation
+in the body's bound circulation (Sarpkaya, J. Fluid Mech. 68, 1975, and Sarpkaya & Shoaff, AIAA J. 17, 1979,
+for the inclined plate and the cylinder; Clements, J. Fluid Mech. 57, 1973; Cottet & Koumoutsakos, "Vortex
+Methods: Theory and Practice", 2000, on vorticity at walls: what reaches the wall is given to the wall's
+vorticity). Here the distance is taken in the circle plane, where the wall is the circle and the image is exact:
+a vortex with ``|zeta_k| - r < surface_absorption_gap_m`` is removed. Its circulation is not lost: the images
+carry the bound circulation ``-sum Gamma_k`` over the free vortices, so removing vortex k adds ``Gamma_k`` to
+the foil's circulation and the flow's total circulation stays zero (Kelvin) exactly; ``absorbed_count`` and
+``absorbed_circulation_m2_s`` (the sum of the absorbed circulations, so that shed = free + absorbed) keep the
+books. The absorption is done before the step's impulse is evaluated, so the impulse the vortex carried,
+``-i rho Gamma_k (zeta_k - zeta_k*)``, of size ``2 rho |Gamma_k| d`` (vortex and image almost cancel), is handed
+to the foil in that step: momentum is conserved, and the force it adds is at most ``2 rho |Gamma_k| gap / dt``
+per metre of span.
 
 Force split (the integration rule): the total fluid force on the foil is ``F_Kirchhoff + F_v``, where
 ``F_Kirchhoff`` is the added-mass (ideal-flow) force of eq. 46 that swim_model's ideal model already applies
@@ -72,12 +92,20 @@ class WakeParameters:
     # assumed: the newest vortices (the near wake, about one cycle of the paper's gaits at 8 ms) are never merged
     opposite_sign_merge_penalty: float = 10.0
     # assumed: merging vortices of opposite sign destroys their dipole; such pairs are merged last
+    surface_absorption_gap_m: float = 1.5e-3
+    # assumed: a vortex within one core radius (core_radius_m) of the circle, |zeta| - r, has its core on the
+    # wall: its vorticity is in the boundary layer and it is absorbed into the bound circulation (module
+    # docstring). Smaller than the gap of a vortex just shed at min_shed_distance_m behind the cusp (1.8 mm on the
+    # rig's foil). 0: never absorb
 
     def __post_init__(self) -> None:
         for name in ("rho_kg_m3", "core_radius_m", "shed_distance_fraction", "min_shed_distance_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise StateError(f"WakeParameters.{name} must be positive and finite, got {value!r}")
+        if not (math.isfinite(self.surface_absorption_gap_m) and self.surface_absorption_gap_m >= 0.0):
+            raise StateError("WakeParameters.surface_absorption_gap_m must be finite and >= 0, "
+                             f"got {self.surface_absorption_gap_m!r}")
         if self.max_vortex_count is not None and self.max_vortex_count <= self.protected_vortex_count + 1:
             raise StateError("WakeParameters.max_vortex_count must exceed protected_vortex_count + 1")
 
@@ -116,6 +144,8 @@ class Wake:
         self._angular_impulse = 0.0  # about the tank origin, per metre of span
         self.reflected_count = 0
         self.merged_count = 0
+        self.absorbed_count = 0
+        self.absorbed_circulation_m2_s = 0.0  # sum of the absorbed vortices' circulations (now the foil's)
 
     # --- queries ------------------------------------------------------------------------------------------
     def vortex_count(self) -> int:
@@ -146,6 +176,30 @@ class Wake:
         unrotate: complex = np.exp(-1j * theta)
         return (self.positions_m - complex(x, y)) * unrotate
 
+    def add_vortex(self, position_m: complex, circulation_m2_s: float) -> None:
+        """Put a free vortex at a tank-frame position x + iy (m), circulation counter-clockwise (m^2/s).
+
+        An initial condition, not a shedding: the images take ``-circulation_m2_s`` into the bound circulation
+        (Kelvin holds), and the impulse the next force is measured from is re-evaluated, so placing it exerts no
+        force. Needs the foil's pose (one ``step`` first); a position inside the foil is refused.
+        """
+        if self._pose is None:
+            raise StateError("Wake.add_vortex: step the wake once first, so the foil has a pose")
+        position, gamma = complex(position_m), float(circulation_m2_s)
+        if not (math.isfinite(position.real) and math.isfinite(position.imag) and math.isfinite(gamma)):
+            raise StateError(f"Wake.add_vortex: position and circulation must be finite, got {position_m!r}, "
+                             f"{circulation_m2_s!r}")
+        x, y, theta = self._pose
+        unrotate = complex(math.cos(theta), -math.sin(theta))
+        zeta = self.plane.to_circle(np.array([(position - complex(x, y)) * unrotate]))
+        if abs(zeta[0]) <= self.plane.r_m:
+            raise StateError(f"Wake.add_vortex: {position_m!r} is inside the foil")
+        self.positions_m = np.append(self.positions_m, position)
+        self.circulations_m2_s = np.append(self.circulations_m2_s, gamma)
+        self._previous_velocities = np.append(self._previous_velocities, 0j)
+        self._has_previous_velocity = np.append(self._has_previous_velocity, False)
+        self._impulse, self._angular_impulse = self._impulses()
+
     # --- the step ----------------------------------------------------------------------------------------------
     def step(self, dt_s: float, pose: Pose, velocity: Velocity) -> WakeForce:
         """Advance by dt_s to the foil's new pose and velocity; return the vortical force over the step.
@@ -167,7 +221,7 @@ class Wake:
         self._convect(dt_s)
         self._pose, self._velocity = new_pose, new_velocity
         self.time_s += dt_s
-        self._reflect_inside_foil()
+        self._absorb_at_surface(self._reflect_inside_foil())
         self._shed(dt_s)
 
         impulse, angular_impulse = self._impulses()
@@ -209,15 +263,33 @@ class Wake:
         self._has_previous_velocity = np.ones(velocities.size, dtype=bool)
         self._previous_dt_s = dt_s
 
-    def _reflect_inside_foil(self) -> None:
+    def _reflect_inside_foil(self) -> npt.NDArray[np.complex128]:
+        """Mirror the vortices inside the circle to their image points; their circle-plane positions after it."""
         zeta, rotation = self._circle_plane_positions()
         inside = np.abs(zeta) < self.plane.r_m
         if not np.any(inside):
-            return
+            return zeta
         self.reflected_count += int(np.count_nonzero(inside))
         mirrored = self.plane.image(zeta[inside])
         x, y, _ = self._pose  # type: ignore[misc]
         self.positions_m[inside] = complex(x, y) + rotation * self.plane.to_foil(mirrored)
+        zeta[inside] = mirrored
+        return zeta
+
+    def _absorb_at_surface(self, zeta: npt.NDArray[np.complex128]) -> None:
+        """Remove the vortices (circle-plane positions zeta) closer to the circle than surface_absorption_gap_m."""
+        gap_m = self.params.surface_absorption_gap_m
+        if gap_m == 0.0 or zeta.size == 0:
+            return
+        absorbed = np.abs(zeta) - self.plane.r_m < gap_m
+        if not np.any(absorbed):
+            return
+        self.absorbed_count += int(np.count_nonzero(absorbed))
+        self.absorbed_circulation_m2_s += float(np.sum(self.circulations_m2_s[absorbed]))
+        keep = ~absorbed
+        self.positions_m, self.circulations_m2_s = self.positions_m[keep], self.circulations_m2_s[keep]
+        self._previous_velocities = self._previous_velocities[keep]
+        self._has_previous_velocity = self._has_previous_velocity[keep]
 
     def _shed(self, dt_s: float) -> None:
         u, v, omega = self._velocity

@@ -5,6 +5,11 @@ Cruises depend on nothing; every other primitive needs the states of the cruises
 each as soon as the primitives it depends on are in the library. Primitives already in the library are
 not solved again, so an interrupted build resumes where it stopped; a stored primitive whose spec has
 changed is solved again, with every primitive that joins it.
+
+A circulatory-flow library also stores each primitive's sliding-mode bound D(t) (swim_planner.disturbance),
+measured once the primitives whose motion gives the wake its history are in: a build run on a library that lacks
+some (one built before D(t) was stored, a format-3 one) measures only those, and a primitive solved again loses
+its D(t) and has it measured again.
 """
 from __future__ import annotations
 
@@ -13,7 +18,8 @@ from typing import Callable, Optional, Sequence, cast
 
 from swim_controller.riccati import LqrWeights
 from swim_model import RigParameters, VehicleModel
-from swim_planner.errors import PrimitiveSolveError
+from swim_planner.disturbance import disturbance_job, lead_in_ids
+from swim_planner.errors import ManeuverError, PrimitiveSolveError
 from swim_planner.gains import gains_job
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.primitive_solver import solve_primitive
@@ -115,4 +121,37 @@ def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], exe
             except PrimitiveSolveError as err:
                 failed.append(spec.primitive_id)
                 progress(spec.primitive_id, f"failed: {err}")
+    if library.flow_model == "circulatory":
+        failed += measure_disturbance_bounds(library, [s for s in specs if s.primitive_id not in failed], executor,
+                                             progress)
+    return failed
+
+
+def measure_disturbance_bounds(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec],
+                               executor: concurrent.futures.Executor,
+                               progress: Progress = lambda i, s: None) -> list[str]:
+    """Measure and store D(t) of every spec's primitive in the library that has none (disturbance_job, on the
+    executor); returns the ids whose measurement failed (their reasons reported) or whose wake history is missing."""
+    jobs: dict[concurrent.futures.Future, str] = {}
+    failed: list[str] = []
+    for spec in specs:
+        if spec.primitive_id not in library or not library.needs_disturbance_bound(spec.primitive_id):
+            continue
+        missing = [i for i in lead_in_ids(spec) if i not in library]
+        if missing:
+            failed.append(spec.primitive_id)
+            progress(spec.primitive_id, f"no disturbance bound: the primitives before it, {', '.join(missing)}, "
+                                        "are not in the library")
+            continue
+        lead_in = [library.get(i) for i in lead_in_ids(spec)]
+        jobs[executor.submit(disturbance_job, library.rig, library.get(spec.primitive_id), lead_in)] = \
+            spec.primitive_id
+    for future in concurrent.futures.as_completed(jobs):
+        try:
+            primitive_id, bound, record = future.result()
+            library.add_disturbance_bound(primitive_id, bound, record)
+            progress(primitive_id, f"disturbance bound measured (largest {bound.max():.3g} N m)")
+        except (ManeuverError, ValueError) as err:
+            failed.append(jobs[future])
+            progress(jobs[future], f"disturbance bound failed: {err}")
     return failed

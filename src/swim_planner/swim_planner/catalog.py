@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import math
 
 from swim_model import RigParameters
 from swim_planner.primitives import PrimitiveSpec, PrimitiveType
@@ -31,6 +32,23 @@ CIRCULATORY_FREE_ACCELERATE_S = 4.0
 # circulatory flow (assumed, as the constrained accelerate's 4 s): within its angle-of-attack bound the free
 # accelerate gets from rest to a cruise in 4 s and not in the paper's 3 s (IPOPT: the R = 0.43 m, E = 0.05 and
 # 0.10 ones infeasible in 3 s from both guesses, solved in 4 s)
+CIRCULATORY_FREE_DECELERATE_S = 5.0
+# circulatory flow (assumed, the shortest that solved): within its angle-of-attack bound the free vehicle's hub
+# momentum cannot be taken out in the paper's 3 s decelerate (IPOPT: all six infeasible from both guesses; with
+# p_alpha = 0 asked only at the window next to rest, 10 % of the R = 0.43 m, E = 0.05 cruise's p_alpha is left) nor
+# in 4 s (R = 0.43 m, E = 0.05: infeasible below 28 deg); in 5 s, with the continuation below, it solves
+CIRCULATORY_FREE_DECELERATE_CONTINUATION_RAD = tuple(math.radians(a) for a in (40.0, 30.0, 25.0, 22.0))
+# circulatory flow, the free decelerates (PrimitiveSpec.angle_of_attack_continuation_rad, assumed): from the
+# still-foil guess IPOPT finds each infeasible with the bound at 20 deg; solved first without the bound, the
+# bound then tightened in these steps (each warm-starting the next) reaches 20 deg (docs/circulatory_primitives.md)
+CIRCULATORY_LONGER_S = {"free/decelerate/R0.43/E0.10": 6.0, "free/decelerate/R0.43/E0.20": 6.0,
+                        "free/cruise_to_cruise/R0.43/E0.10-E0.05": 3.0}
+# circulatory flow: transitions given more than the durations above (assumed, each the shortest tried that solves).
+# The inner lane's E = 0.10 and 0.20 decelerates: in 5 s the continuation fails at its last step, 22 to 20 deg
+# (IPOPT: the hub's rate in the last intervals, the lane band active), in 6 s it solves. Slowing down from E = 0.10
+# to 0.05 in the inner lane is infeasible in 2 s within the angle-of-attack bound (from both guesses, from the
+# outer lane's solution moved inward, and at the end of the continuation above: solved at 22 deg, infeasible at
+# 20), as the free decelerate is in 3 s; in 3 s it solves directly (73 iterations)
 CRUISE_CYCLE_S = 1.0                   # assumed: one stroke per second, as the paper's cruise figures
 
 
@@ -122,8 +140,26 @@ def default_specs(rig: RigParameters) -> list[PrimitiveSpec]:
 
 def circulatory_specs(rig: RigParameters) -> list[PrimitiveSpec]:
     """The circulatory flow's library: the paper's graph at CIRCULATORY_ENERGY_LEVELS_J, ids and durations as in
-    ``default_specs`` except the free accelerate's (CIRCULATORY_FREE_ACCELERATE_S)."""
+    ``default_specs`` except the free accelerate's (CIRCULATORY_FREE_ACCELERATE_S), the free decelerate's
+    (CIRCULATORY_FREE_DECELERATE_S, solved by continuation in the angle-of-attack bound and ending at rest with the
+    lag states its braking leaves: PrimitiveSpec.end_lag_free) and those of CIRCULATORY_LONGER_S (which take
+    precedence)."""
     specs = constrained_specs(rig, CIRCULATORY_ENERGY_LEVELS_J) + free_specs(rig, CIRCULATORY_ENERGY_LEVELS_J)
-    return [dataclasses.replace(s, duration_s=CIRCULATORY_FREE_ACCELERATE_S,
-                                intervals=_intervals(CIRCULATORY_FREE_ACCELERATE_S))
-            if not s.constrained and s.primitive_type is PrimitiveType.ACCELERATE else s for s in specs]
+    unknown = set(CIRCULATORY_LONGER_S) - {s.primitive_id for s in specs}
+    assert not unknown, f"CIRCULATORY_LONGER_S names no spec of the set: {sorted(unknown)}"
+
+    def circulatory(spec: PrimitiveSpec) -> PrimitiveSpec:
+        if not spec.constrained and spec.primitive_type is PrimitiveType.ACCELERATE:
+            spec = _lasting(spec, CIRCULATORY_FREE_ACCELERATE_S)
+        if not spec.constrained and spec.primitive_type is PrimitiveType.DECELERATE:
+            spec = dataclasses.replace(_lasting(spec, CIRCULATORY_FREE_DECELERATE_S), end_lag_free=True,
+                                       angle_of_attack_continuation_rad=CIRCULATORY_FREE_DECELERATE_CONTINUATION_RAD)
+        if spec.primitive_id in CIRCULATORY_LONGER_S:
+            spec = _lasting(spec, CIRCULATORY_LONGER_S[spec.primitive_id])
+        return spec
+    return [circulatory(s) for s in specs]
+
+
+def _lasting(spec: PrimitiveSpec, duration_s: float) -> PrimitiveSpec:
+    """The spec with another duration, its collocation intervals at INTERVALS_PER_S."""
+    return dataclasses.replace(spec, duration_s=duration_s, intervals=_intervals(duration_s))

@@ -35,6 +35,11 @@ of the sliding mode's ``disturbance_bound_n_m``.
 
 Time scaling: both flow models' forces are homogeneous of degree 2 in the velocities (the wake's up to its core
 radius and least shedding distance), so a plan run lambda times faster meets lambda^2 D(lambda t).
+
+What the library stores (``disturbance_job``, run by swim_planner.build for every circulatory primitive): D(t)'s
+running maximum over +-ENVELOPE_HALF_WIDTH_S of each of the primitive's samples, measured with the wake's history
+``lead_in_ids`` gives, one scalar (N m) a sample: the Euclidean norm the sliding term uses, so one number a sample
+is all the law needs (a per-joint bound would serve only a per-joint law).
 """
 from __future__ import annotations
 
@@ -42,17 +47,15 @@ import dataclasses
 import math
 from typing import Sequence
 
-import casadi as ca
 import numpy as np
 import numpy.typing as npt
 from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
-from swim_model import VehicleModel
-from swim_model.kinematics import foil_reference_point
+from swim_model import RigParameters, VehicleModel
 from swim_model.wake import Wake, WakeParameters
 from swim_planner.errors import ManeuverError
 from swim_planner.maneuver import JUNCTION_TOLERANCE, junction_mismatch
-from swim_planner.primitives import Primitive
+from swim_planner.primitives import Primitive, PrimitiveSpec, PrimitiveType
 
 Array = npt.NDArray[np.float64]
 
@@ -62,8 +65,11 @@ MAX_WAKE_STEP_S = 0.008
 # most this
 DISTURBANCE_MARGIN = 1.0
 # no margin: D(t) is the measured mismatch itself; a caller sizing the sliding mode adds its own (named) margin
-CHORD_ANGLE_OFFSET_RAD = 0.5 * math.pi
-# kinematics.py's chord dir(a) = (-sin a, cos a) lies at angle a + pi/2 in the tank frame (the wake's pose angle)
+ENVELOPE_HALF_WIDTH_S = 0.05
+# the stored bound at a sample is D's largest value within +-0.05 s of it (two samples of the primitives' 0.025 s
+# fine grid each side, about six control periods): the tracked vehicle is not exactly where and when the plan is,
+# and D peaks sharply (the accelerate's D falls from 0.09 to 0.005 N m within 0.2 s), so a bound read at the plan's
+# time must cover the mismatch a little before and after it
 
 
 @dataclasses.dataclass(frozen=True)
@@ -114,14 +120,6 @@ class DisturbanceProfile:
         if bound.size == 0:
             raise ValueError(f"no sample of {self.primitive_id} in [{start_s}, {end_s}]")
         return DisturbanceStatistics(float(np.max(bound)), float(np.percentile(bound, 95.0)), float(np.mean(bound)))
-
-
-def foil_pose_function(model: VehicleModel) -> ca.Function:
-    """q -> (x_F m, y_F m, chord angle alpha + theta + pi/2 rad): the foil frame in the tank frame (the wake's pose)."""
-    q = model.symbolic.q
-    coords = model.coordinates(q)
-    pose = ca.vertcat(foil_reference_point(coords, model.rig), coords.alpha + coords.theta + CHORD_ANGLE_OFFSET_RAD)
-    return ca.Function("foil_pose", [q], [pose], ["q"], ["pose"])
 
 
 def _foil_velocity_maps(model: VehicleModel, q: Array) -> Array:
@@ -209,7 +207,7 @@ def flow_force_mismatch(model: VehicleModel, primitive: Primitive, *, lead_in: S
     wake_step_s = float(time_s[-1] - time_s[0]) / steps
     step_end_s = time_s[0] + wake_step_s * np.arange(1, steps + 1)
     q_end, qdot_end = position(step_end_s), velocity(step_end_s)
-    poses = np.asarray(foil_pose_function(model).map(steps)(q_end.T), dtype=float).T
+    poses = np.asarray(model.foil_pose_function().map(steps)(q_end.T), dtype=float).T
     nu_end = np.einsum("nij,nj->ni", _foil_velocity_maps(model, q_end), qdot_end)
     wake = Wake(model.foil, params)
     vortical = np.zeros((steps, 3))
@@ -236,3 +234,40 @@ def flow_force_mismatch(model: VehicleModel, primitive: Primitive, *, lead_in: S
                               reduced_force=reduced_force, generalized_force_difference=generalized,
                               matched_torque=matched, unmatched_acceleration=unmatched,
                               disturbance_bound_n_m=margin * np.linalg.norm(matched, axis=1))
+
+
+def bound_envelope(time_s: npt.ArrayLike, bound_n_m: npt.ArrayLike, half_width_s: float) -> Array:
+    """max of bound_n_m (N,) over the samples within +-half_width_s (s) of each of the N times time_s: (N,)."""
+    time = np.asarray(time_s, dtype=float)
+    bound = np.asarray(bound_n_m, dtype=float)
+    if not (math.isfinite(half_width_s) and half_width_s >= 0.0):
+        raise ValueError(f"bound_envelope: half width must be finite and >= 0, got {half_width_s!r}")
+    first = np.searchsorted(time, time - half_width_s - 1e-9, side="left")
+    last = np.searchsorted(time, time + half_width_s + 1e-9, side="right")
+    return np.array([bound[a:b].max() for a, b in zip(first, last)])
+
+
+def lead_in_ids(spec: PrimitiveSpec) -> list[str]:
+    """The primitives whose motion before ``spec``'s gives the wake its history: the primitive its start joins
+    (a cruise for a decelerate, cruise-to-cruise or lane change), a cruise itself once (a cruise follows a cruise
+    in every maneuver but the first, and the accelerate before that one ends on the cruise's stroke), none from rest
+    (an accelerate: the water is still)."""
+    if spec.start_from is not None:
+        return [spec.start_from]
+    return [spec.primitive_id] if spec.primitive_type is PrimitiveType.CRUISE else []
+
+
+def disturbance_job(rig: RigParameters, primitive: Primitive, lead_in: Sequence[Primitive],
+                    half_width_s: float = ENVELOPE_HALF_WIDTH_S) -> tuple[str, Array, dict]:
+    """(primitive id, stored bound (N,) N m, measurement record) of a circulatory primitive, in a worker process:
+    ``flow_force_mismatch`` along it after ``lead_in`` (``lead_in_ids``), D's envelope (``bound_envelope``), and
+    what the manifest records of how it was measured (JSON values)."""
+    spec = primitive.spec
+    model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m, flow="circulatory")
+    profile = flow_force_mismatch(model, primitive, lead_in=lead_in)
+    envelope = bound_envelope(profile.time_s, profile.disturbance_bound_n_m, half_width_s)
+    stats = profile.statistics()
+    record = {"lead_in": [p.spec.primitive_id for p in lead_in], "envelope_half_width_s": float(half_width_s),
+              "margin": profile.margin, "wake_step_s": profile.wake_step_s, "measured_max_n_m": stats.max_n_m,
+              "measured_p95_n_m": stats.p95_n_m, "measured_mean_n_m": stats.mean_n_m}
+    return spec.primitive_id, envelope, record

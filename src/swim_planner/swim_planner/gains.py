@@ -12,7 +12,9 @@ import hashlib
 import json
 import threading
 from pathlib import Path
+from typing import Optional
 
+import numpy as np
 import yaml
 
 from swim_controller.errors import GainComputationError
@@ -94,6 +96,10 @@ class RetunedLibrary:
                 self._retuned[primitive_id] = gains_job(self.library.rig, self.library.get(primitive_id),
                                                         self.lqr_weights)
             return self._retuned[primitive_id]
+
+    def disturbance_bound(self, primitive_id: str) -> Optional[np.ndarray]:
+        """The library's stored D(t) of a primitive (new weights change the gains, not the flow's force)."""
+        return self.library.disturbance_bound(primitive_id)
 
     def digest(self) -> str:
         """SHA-256 of the library's digest and the weights."""

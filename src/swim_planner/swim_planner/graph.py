@@ -94,7 +94,12 @@ def build_graph(library: PrimitiveLibrary) -> StateGraph:
     for into in edges:
         for out in edges:
             if into.target == out.source:
-                gap = junction_mismatch(library.get(into.primitive_id), library.get(out.primitive_id))
+                # a decelerate whose end lag is free (PrimitiveSpec.end_lag_free) rests with the lag states its
+                # braking left, which at zero motion put no force on the vehicle; an accelerate starts in still
+                # water. The two never follow each other in a plan (concatenate compares the lag states and refuses
+                # it): at that rest node the graph joins them on q and qdot
+                gap = junction_mismatch(library.get(into.primitive_id), library.get(out.primitive_id),
+                                        lag_states=not library.spec(into.primitive_id).end_lag_free)
                 if gap > JUNCTION_TOLERANCE:
                     mismatches.append(f"{into.primitive_id} -> {out.primitive_id}: states differ by {gap:.3g}")
                     bad.add(out.primitive_id)

@@ -9,9 +9,14 @@ Layout of a library directory::
     primitives/<file>.npz      time_s, q, qdot, foil_acceleration, torque (fine collocation grid), lag (the
                                flow's lag states, circulatory flow only), and riccati P (N, n, n) and
                                riccati_input_gain G'P (N, 2, n) for the tracker
+    primitives/<file>.disturbance.npz
+                               circulatory flow only, once measured: disturbance_bound_n_m (N,), the sliding
+                               mode's bound D(t) on the primitive's samples (swim_planner.disturbance), recorded in
+                               the manifest with the SHA-256 of the motion it was measured along
 
 A library is made with one flow model of swim_model (``FLOW_MODELS``: "ideal", the paper's, or "circulatory"),
-recorded in its manifest; a format-2 manifest predates the choice and is the ideal model's.
+recorded in its manifest; a format-2 manifest predates the choice and is the ideal model's. A primitive without a
+stored D(t) (an ideal-flow one, or any of a format-3 library) leaves the tracker its constant bound.
 
 Loading refuses, with a LibraryError naming the cause: a missing or unparsable manifest, another format
 version, a library built for other rig parameters, another model version or another flow model than the one
@@ -28,7 +33,7 @@ import os
 import re
 import threading
 from pathlib import Path
-from typing import Iterable, Iterator, Optional
+from typing import Any, Iterable, Iterator, Optional
 
 import numpy as np
 
@@ -39,14 +44,17 @@ from swim_planner.errors import LibraryError
 from swim_planner.primitives import (Primitive, PrimitiveSpec, PrimitiveType, SolverSettings,
                                      cruise_mean_speed_m_s)
 
-FORMAT_VERSION = 3   # 3: the flow model and the lag states; 2: tracking gains (P(t), G'P) stored
-READABLE_FORMAT_VERSIONS = (2, 3)
+FORMAT_VERSION = 4   # 4: the sliding mode's bound D(t); 3: the flow model and the lag states; 2: tracking gains
+READABLE_FORMAT_VERSIONS = (2, 3, 4)
 #: the flow model of a format-2 library: it was made before the choice existed, with the paper's model
 FORMAT_2_FLOW_MODEL = "ideal"
 MANIFEST = "manifest.json"
 ARRAYS = ("time_s", "q", "qdot", "foil_acceleration", "torque")
 LAG_ARRAY = "lag"
 GAIN_ARRAYS = ("riccati", "riccati_input_gain")
+DISTURBANCE_ARRAY = "disturbance_bound_n_m"
+#: the manifest's record of a primitive's D(t) (its file, SHA-256s and how it was measured)
+DISTURBANCE_RECORD = "disturbance_bound"
 
 
 def check_flow_model(flow_model: str) -> str:
@@ -68,6 +76,18 @@ def _spec_to_json(spec: PrimitiveSpec) -> dict:
 
 def _spec_from_json(data: dict) -> PrimitiveSpec:
     return PrimitiveSpec(**{**data, "primitive_type": PrimitiveType(data["primitive_type"])})
+
+
+def _disturbance_file_name(primitive_id: str) -> str:
+    return _file_name(primitive_id).removesuffix(".npz") + ".disturbance.npz"
+
+
+def motion_digest(primitive: Primitive) -> str:
+    """SHA-256 of a primitive's motion (times, q, qdot and the lag states): what its D(t) was measured along."""
+    digest = hashlib.sha256()
+    for array in (primitive.time_s, primitive.q, primitive.qdot, *([] if primitive.lag is None else [primitive.lag])):
+        digest.update(np.ascontiguousarray(array, dtype=np.float64).tobytes())
+    return digest.hexdigest()
 
 
 def _encode_arrays(primitive: Primitive) -> bytes:
@@ -93,6 +113,7 @@ class PrimitiveLibrary:
         self.lqr_weights = lqr_weights
         self._entries: dict[str, dict] = {}
         self._cache: dict[str, Primitive] = {}
+        self._bounds: dict[str, np.ndarray] = {}
         self._read_lock = threading.Lock()   # several planner threads may ask for one primitive at once
 
     # ----- writing -------------------------------------------------------------------------------
@@ -120,11 +141,13 @@ class PrimitiveLibrary:
         return not record.get("has_gains") or record.get("gains_lqr_weights") != dataclasses.asdict(self.lqr_weights)
 
     def add(self, primitive: Primitive) -> None:
-        """Store one primitive (its array file first, then the manifest, each replaced atomically)."""
+        """Store one primitive (its array file first, then the manifest, each replaced atomically). A stored D(t)
+        is kept if the primitive's motion is the one it was measured along (new gains), else dropped."""
         spec = primitive.spec
         if (primitive.lag is not None) != (self.flow_model == "circulatory"):
             raise LibraryError(f"'{spec.primitive_id}' {'has' if primitive.lag is not None else 'has no'} lag "
                                f"states: not a primitive of this {self.flow_model}-flow library")
+        previous = self._entries.get(spec.primitive_id, {})
         payload = _encode_arrays(primitive)
         name = _file_name(spec.primitive_id)
         (self.path / "primitives").mkdir(parents=True, exist_ok=True)
@@ -138,7 +161,38 @@ class PrimitiveLibrary:
         }
         if spec.primitive_type is PrimitiveType.CRUISE:
             self._entries[spec.primitive_id]["mean_speed_m_s"] = cruise_mean_speed_m_s(primitive)
+        bound = previous.get(DISTURBANCE_RECORD)
+        if bound is not None and bound.get("motion_sha256") == motion_digest(primitive):
+            self._entries[spec.primitive_id][DISTURBANCE_RECORD] = bound
+        else:
+            self._bounds.pop(spec.primitive_id, None)
         self._cache[spec.primitive_id] = primitive
+        self._write_manifest()
+
+    def needs_disturbance_bound(self, primitive_id: str) -> bool:
+        """True for a circulatory-flow primitive without a stored D(t) (ideal-flow ones have none)."""
+        return self.flow_model == "circulatory" and DISTURBANCE_RECORD not in self.entry(primitive_id)
+
+    def add_disturbance_bound(self, primitive_id: str, bound_n_m: np.ndarray, measurement: dict) -> None:
+        """Store D(t) of a stored circulatory primitive: bound_n_m (N,), N m, finite and >= 0, on its N samples;
+        measurement: how it was measured (JSON values, kept in the manifest's record). LibraryError otherwise."""
+        primitive = self.get(primitive_id)
+        bound = np.asarray(bound_n_m, dtype=float)
+        if self.flow_model != "circulatory":
+            raise LibraryError(f"'{primitive_id}': an {self.flow_model}-flow library stores no disturbance bound")
+        if bound.shape != primitive.time_s.shape or not np.all(np.isfinite(bound)) or np.any(bound < 0.0):
+            raise LibraryError(f"'{primitive_id}': the disturbance bound must be {len(primitive.time_s)} finite "
+                               f"values >= 0 (N m, one a sample), got shape {bound.shape}")
+        buffer = io.BytesIO()
+        arrays: dict[str, Any] = {DISTURBANCE_ARRAY: bound}
+        np.savez(buffer, **arrays)
+        payload = buffer.getvalue()
+        name = _disturbance_file_name(primitive_id)
+        _atomic_write(self.path / "primitives" / name, payload)
+        self._entries[primitive_id][DISTURBANCE_RECORD] = {
+            **measurement, "file": name, "sha256": hashlib.sha256(payload).hexdigest(),
+            "motion_sha256": motion_digest(primitive)}
+        self._bounds[primitive_id] = bound.copy()
         self._write_manifest()
 
     def _write_manifest(self) -> None:
@@ -174,7 +228,7 @@ class PrimitiveLibrary:
         if found not in READABLE_FORMAT_VERSIONS:
             raise LibraryError(f"{directory}: library format {found!r}, this planner reads formats "
                                f"{', '.join(map(str, READABLE_FORMAT_VERSIONS))}")
-        stored_flow = manifest.get("flow_model") if found == FORMAT_VERSION else FORMAT_2_FLOW_MODEL
+        stored_flow = manifest.get("flow_model") if found != 2 else FORMAT_2_FLOW_MODEL
         if stored_flow not in FLOW_MODELS:
             raise LibraryError(f"{directory / MANIFEST}: unknown flow model {stored_flow!r}")
         if flow_model is not None and stored_flow != check_flow_model(flow_model):
@@ -250,6 +304,30 @@ class PrimitiveLibrary:
                          solver_status=record["solver_status"], solve_time_s=record["solve_time_s"],
                          iterations=record["iterations"], gains=gains, **data)
 
+    def disturbance_bound(self, primitive_id: str) -> Optional[np.ndarray]:
+        """The stored D(t) of a primitive, (N,) N m on its samples, verified against the manifest (read once); None
+        if it has none (an ideal-flow primitive, a format-3 library, or not measured yet)."""
+        record = self.entry(primitive_id).get(DISTURBANCE_RECORD)
+        if record is None:
+            return None
+        with self._read_lock:
+            if primitive_id not in self._bounds:
+                file = self.path / "primitives" / record["file"]
+                try:
+                    payload = file.read_bytes()
+                except OSError as err:
+                    raise LibraryError(f"{file}: cannot read the disturbance bound of '{primitive_id}': "
+                                       f"{err.strerror}") from err
+                if hashlib.sha256(payload).hexdigest() != record["sha256"]:
+                    raise LibraryError(f"{file} is corrupt or truncated (SHA-256 differs from the manifest); "
+                                       f"measure the disturbance bound of '{primitive_id}' again")
+                try:
+                    with np.load(io.BytesIO(payload)) as arrays:
+                        self._bounds[primitive_id] = np.array(arrays[DISTURBANCE_ARRAY], dtype=float)
+                except (OSError, ValueError, KeyError) as err:
+                    raise LibraryError(f"{file}: not a valid disturbance-bound file: {err}") from err
+            return self._bounds[primitive_id].copy()
+
     def sample_count(self, primitive_id: str) -> int:
         """Samples of the primitive's arrays (read once and kept, as get)."""
         return len(self.get(primitive_id).time_s)
@@ -269,7 +347,8 @@ def _atomic_write(path: Path, payload: bytes) -> None:
 
 
 def verify_all(library: PrimitiveLibrary) -> Iterable[str]:
-    """Read every primitive (raising LibraryError on the first bad one); yields the ids read."""
+    """Read every primitive and its stored D(t) (raising LibraryError on the first bad one); yields the ids read."""
     for primitive_id in library.ids():
         library.get(primitive_id)
+        library.disturbance_bound(primitive_id)
         yield primitive_id

@@ -14,9 +14,15 @@ t -> t / lambda, q(t) -> q(lambda t), qdot -> lambda qdot, u -> lambda^2 u, tau 
 K -> lambda R^-1 (G'P) Gamma(lambda), G'P -> (G'P) Gamma(lambda)), which refuses a lambda whose torques exceed
 the motor limits. The tracker's law is then u = u_des - K x.
 
+The sliding mode's disturbance bound D(t) (N m; swim_planner.disturbance) joins like the torques: each
+primitive's stored samples in turn (the junction sample the earlier one's), scaled by lambda^2. A plan carries it
+only if every one of its primitives has one stored (a library that is a ``DisturbanceBounds``); otherwise it carries
+none and the tracker uses its constant bound.
+
 A slowly varying lambda (Sec. 4.3): with s the nominal (lambda = 1) plan time and lambda(s) given,
 the plan runs t(s) = int_0^s ds' / lambda(s'), q(t) = q_nom(s), qdot = lambda qdot_nom(s),
-u = lambda^2 u_nom(s) + lambdadot qdot_nom, tau = lambda^2 tau_nom(s) and z = lambda z_nom(s); the torque the
+u = lambda^2 u_nom(s) + lambdadot qdot_nom, tau = lambda^2 tau_nom(s), z = lambda z_nom(s) and D = lambda^2 D_nom(s)
+(the flow forces at the velocities lambda qdot_nom; swim_controller.trajectory); the torque the
 lambdadot term would need (lambdadot Mm qdot_nom) is left to feedback, as in the paper.
 """
 from __future__ import annotations
@@ -24,7 +30,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from pathlib import Path
-from typing import Callable, Protocol, Sequence
+from typing import Callable, Optional, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 import numpy.typing as npt
@@ -43,13 +49,14 @@ Array = npt.NDArray[np.float64]
 JUNCTION_TOLERANCE = 1e-5
 
 
-def junction_mismatch(previous: Primitive, following: Primitive) -> float:
+def junction_mismatch(previous: Primitive, following: Primitive, lag_states: bool = True) -> float:
     """Largest difference between previous's end state and following's start state, alpha aside (and the lag
-    states, where both have them: Primitive.end_boundary_state, start_boundary_state)."""
+    states, where both have them and ``lag_states``: Primitive.end_boundary_state, start_boundary_state)."""
     q_end, qdot_end, *lag_end = previous.end_boundary_state
     q_start, qdot_start, *lag_start = following.start_boundary_state
     gaps = [np.abs(q_end[1:] - q_start[1:]).max(), np.abs(qdot_end - qdot_start).max()]
-    gaps += [np.abs(a - b).max() for a, b in zip(lag_end, lag_start)]
+    if lag_states:
+        gaps += [np.abs(a - b).max() for a, b in zip(lag_end, lag_start)]
     return float(max(gaps))
 
 
@@ -79,6 +86,23 @@ class PlanLibrary(Protocol):
     def sample_count(self, primitive_id: str) -> int: ...
 
     def digest(self) -> str: ...
+
+
+@runtime_checkable
+class DisturbanceBounds(Protocol):
+    """A library that stores the sliding mode's bound D(t) per primitive (PrimitiveLibrary)."""
+
+    def disturbance_bound(self, primitive_id: str) -> Optional[Array]: ...
+
+
+def stored_disturbance_bounds(library: PlanLibrary, primitive_ids: Sequence[str]) -> Optional[list[Array]]:
+    """Each primitive's stored D(t) (N m on its samples), or None unless the library stores one for every one."""
+    if not isinstance(library, DisturbanceBounds):
+        return None
+    bounds = [library.disturbance_bound(pid) for pid in primitive_ids]
+    if any(bound is None for bound in bounds):
+        return None
+    return [bound for bound in bounds if bound is not None]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -169,6 +193,10 @@ def concatenate(library: PlanLibrary, rig: RigParameters, sequence: Sequence[tup
     if len(kinds) != 1:
         raise ManeuverError("a plan cannot mix constrained and free primitives")
     flow_model = flow_model_of(primitives)
+    try:
+        disturbance_bounds = stored_disturbance_bounds(library, [pid for pid, _ in sequence])
+    except LibraryError as err:
+        raise ManeuverError(str(err)) from err
     for (pid_a, _), (pid_b, _), a, b in zip(sequence, sequence[1:], primitives, primitives[1:]):
         mismatch = junction_mismatch(a, b)
         if mismatch > JUNCTION_TOLERANCE:
@@ -187,22 +215,27 @@ def concatenate(library: PlanLibrary, rig: RigParameters, sequence: Sequence[tup
         offset = alpha - q[0, 0]
         q[:, 0] += offset
         skip = 0 if index == 0 else 1  # the junction sample is the previous segment's last
-        lag = [] if primitive.lag is None else [primitive.lag[skip:]]
+        optional = [] if primitive.lag is None else [primitive.lag[skip:]]   # then D(t), if stored
+        if disturbance_bounds is not None:
+            optional.append(disturbance_bounds[index][skip:])
         pieces.append((t[skip:] + clock, q[skip:], primitive.qdot[skip:], primitive.foil_acceleration[skip:],
                        primitive.torque[skip:], lqr_gain_from(riccati_input_gain[skip:], input_weights),
-                       riccati_input_gain[skip:], *lag))
+                       riccati_input_gain[skip:], *optional))
         count = len(t) - skip
         segments.append(Segment(pid, primitive.spec.primitive_type.value, repeat, clock, float(t[-1]), 1.0,
                                 offset, sample, count))
         clock += float(t[-1])
         alpha = float(q[-1, 0])
         sample += count
-    time_s, q, qdot, u, tau, lqr_gain, riccati_input_gain, *lag_rows = (np.concatenate(parts)
-                                                                         for parts in zip(*pieces))
+    time_s, q, qdot, u, tau, lqr_gain, riccati_input_gain, *optional_rows = (np.concatenate(parts)
+                                                                              for parts in zip(*pieces))
+    bound_rows = [optional_rows.pop()] if disturbance_bounds is not None else []
+    lag_rows = optional_rows
     nominal = Trajectory(time_s=time_s, q=q, qdot=qdot, foil_acceleration=u, torque=tau, lqr_gain=lqr_gain,
                          riccati_input_gain=riccati_input_gain, segments=tuple(segments),
                          lane_radius_m=primitives[0].spec.lane_radius_m, library_digest=library.digest(),
-                         flow_model=flow_model, lag=lag_rows[0] if lag_rows else None)
+                         flow_model=flow_model, lag=lag_rows[0] if lag_rows else None,
+                         disturbance_bound=bound_rows[0] if bound_rows else None)
     try:
         return nominal.time_scaled(time_scale, rig.torque_limits_n_m)
     except PlanError as err:
@@ -245,4 +278,6 @@ def vary_time_scale(nominal: Trajectory, time_scale_of: Callable[[float], float]
                                foil_acceleration=foil_acceleration,
                                torque=nominal.torque * scale[:, None] ** 2, lqr_gain=lqr_gain,
                                riccati_input_gain=riccati_input_gain, segments=tuple(segments),
-                               lag=None if nominal.lag is None else nominal.lag * scale[:, None])
+                               lag=None if nominal.lag is None else nominal.lag * scale[:, None],
+                               disturbance_bound=None if nominal.disturbance_bound is None
+                               else nominal.disturbance_bound * scale ** 2)

@@ -30,7 +30,15 @@ states (swim_model.flow), collocated with their own dynamics zdot = g(Q2 qdot, z
 
     - a cruise is periodic in (psi, qdot, z), and p_alpha(0) is free: the fluid's force changes p_alpha, so rest
       reaches a cruise whatever its p_alpha (with the ideal flow p_alpha is conserved and must be 0);
-    - start and end states are (q, qdot, z); rest has the lag states of still water (z = 0);
+    - start and end states are (q, qdot, z); rest has the lag states of still water (z = 0), except at the end of a
+      decelerate whose spec leaves them free (PrimitiveSpec.end_lag_free). Rest is zero motion; there the lag
+      states put no force on the vehicle (each term of the flow's force has a factor of the foil's velocity) and
+      do not change (their rate has a factor of its speed), so the wake a braking foil leaves stays in the state.
+      Braking by lift sheds circulation of one sign, and within the angle-of-attack bound the free decelerates
+      cannot wash it out before the vehicle stops (R = 0.43 m, E = 0.05 in 5 s: with the end lag pinned to half
+      the value it comes to when free, IPOPT finds the problem infeasible; docs/circulatory_primitives.md). Such a
+      decelerate and an accelerate (from still water) do not join at rest: a plan never holds the two in a row
+      (concatenation compares the lag states and refuses it), a maneuver ends there;
     - at every collocation point (knots and midpoints) |angle of attack| <= PlanningLimits.angle_of_attack_limit_rad,
       the angle atan2(-V, U) of the foil frame's velocity in foil axes (eq. 40, swim_model.flow.angle_of_attack),
       written smoothly as U tan(a) -+ V >= 0 (the same set for a < 90 deg, rest included; atan2 itself has no
@@ -45,6 +53,10 @@ states (swim_model.flow), collocated with their own dynamics zdot = g(Q2 qdot, z
       and turned the foil about it (Omega 4 rad/s, the three-quarter chord broadside), paddling with the separated
       flat plate's drag (measured on the constrained E = 0.05 accelerate). With both bounds, F at rest means the
       foil at rest.
+    - a spec may name an angle-of-attack continuation (PrimitiveSpec.angle_of_attack_continuation_rad): the NLP is
+      solved without the bound first, then with looser bounds down to the limit, each step from the last solution
+      (``solve_primitive``, ``continuation_bounds``). From the still-foil guess the free decelerates are infeasible
+      with the bound at 20 deg; from the unbounded solution the tightened bounds converge.
 
 Energy level of a cruise: the paper fixes E = T(q(Tf), qdot(Tf)), the kinetic energy at the cycle's end.
 Over a periodic cycle the kinetic energy oscillates, so that end-point value only selects where the cycle is
@@ -161,6 +173,13 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
                     guess: Optional[Primitive] = None, settings: SolverSettings = SolverSettings()) -> Primitive:
     """Solve one primitive.
 
+    With the circulatory flow and a spec that names an angle-of-attack continuation
+    (``PrimitiveSpec.angle_of_attack_continuation_rad``), the NLP is solved in steps (``continuation_bounds``): first
+    without the angle-of-attack bound, then with each looser bound of the spec, then with the bound of ``limits``,
+    each step from the last converged step's solution (the first from the guess). A step that does not converge is
+    passed over (the next starts from the last converged one); the last must converge. The primitive's iterations
+    and solve time are the sums over the steps. Without a continuation: one solve.
+
     Args:
         start: (q, qdot) the primitive starts from (required for decelerate, cruise-to-cruise, lane change;
             alpha is ignored: it starts at 0); (q, qdot, lag) with the circulatory flow
@@ -169,21 +188,33 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
             (q, qdot, lag) with the circulatory flow (Primitive.start_boundary_state).
         guess: a primitive of the same grid size to warm-start from (else a built-in guess).
     Raises:
-        PrimitiveSolveError: IPOPT did not converge; the message gives its status.
+        PrimitiveSolveError: IPOPT did not converge (in the continuation's last step); the message gives its status.
+        ValueError: a continuation with the ideal flow, or one that is not descending from below 90 deg to above
+            the bound of ``limits``.
     """
-    problem = primitive_nlp(model, spec, limits, start, end, guess)
-    nlp = problem.nlp
     ipopt_options = {"print_level": settings.print_level, "tol": settings.tolerance,
                      "max_iter": settings.max_iterations, "mu_strategy": settings.barrier_strategy, "sb": "yes"}
-    started = time.perf_counter()
-    try:
-        result = pointwise.solve(nlp, problem.z0, problem.lbg, problem.ubg, ipopt_options, settings.derivatives,
-                                 settings.expand_to_sx)
-    except RuntimeError as err:   # CasADi refused the problem (e.g. bounds that contradict each other)
-        raise PrimitiveSolveError(f"{spec.primitive_id}: the NLP was refused: {err}") from err
-    elapsed = time.perf_counter() - started
+    bounds = continuation_bounds(model, spec, limits)
+    warm_start: Optional[Array] = None
+    iterations, elapsed = 0, 0.0
+    for bound in bounds:
+        step_limits = limits if bound is None else dataclasses.replace(limits, angle_of_attack_limit_rad=bound)
+        problem = primitive_nlp(model, spec, step_limits, start, end, guess, bound_angle_of_attack=bound is not None)
+        nlp = problem.nlp
+        started = time.perf_counter()
+        try:
+            result = pointwise.solve(nlp, problem.z0 if warm_start is None else warm_start, problem.lbg, problem.ubg,
+                                     ipopt_options, settings.derivatives, settings.expand_to_sx)
+        except RuntimeError as err:   # CasADi refused the problem (e.g. bounds that contradict each other)
+            raise PrimitiveSolveError(f"{spec.primitive_id}: the NLP was refused: {err}") from err
+        elapsed += time.perf_counter() - started
+        iterations += result.iterations
+        if result.status in CONVERGED_STATUSES:
+            warm_start = result.z
     if result.status not in CONVERGED_STATUSES:
-        raise PrimitiveSolveError(f"{spec.primitive_id}: IPOPT did not converge ({result.status})")
+        step = "" if len(bounds) == 1 else (f" in the continuation's last step, "
+                                            f"{math.degrees(limits.angle_of_attack_limit_rad):.1f} deg")
+        raise PrimitiveSolveError(f"{spec.primitive_id}: IPOPT did not converge ({result.status}){step}")
     samples = 2 * spec.intervals + 1
     values = ca.Function("values", [nlp.z], nlp.substitute(problem.states, problem.inputs, problem.torques,
                                                             problem.effort))
@@ -204,13 +235,34 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
     return Primitive(spec=spec, time_s=time_s, q=q, qdot=qdot, foil_acceleration=input_values,
                      torque=torque_values, index_j=float(spec.index_sign() * q[-1, 0] - effort_value),
                      effort=effort_value, solver_status=result.status, solve_time_s=elapsed,
-                     iterations=result.iterations, lag=lag)
+                     iterations=iterations, lag=lag)
+
+
+def continuation_bounds(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits) -> list[Optional[float]]:
+    """The angle-of-attack bounds ``solve_primitive`` solves with, in order, rad (None: no bound): the bound of
+    ``limits`` alone, or with the spec's continuation None, its looser bounds, then the bound of ``limits``.
+
+    Raises:
+        ValueError: a continuation with the ideal flow (which has no angle-of-attack bound), or bounds that do not
+            descend strictly from below pi/2 to above ``limits.angle_of_attack_limit_rad``.
+    """
+    looser = spec.angle_of_attack_continuation_rad
+    if not looser:
+        return [limits.angle_of_attack_limit_rad]
+    if model.n_lag == 0:
+        raise ValueError(f"{spec.primitive_id}: an angle-of-attack continuation needs the circulatory flow")
+    steps = (math.pi / 2, *looser, limits.angle_of_attack_limit_rad)
+    if not all(math.isfinite(a) and a > b for a, b in zip(steps[:-1], steps[1:])):
+        raise ValueError(f"{spec.primitive_id}: angle_of_attack_continuation_rad must descend strictly from below "
+                         f"pi/2 to above the limit {limits.angle_of_attack_limit_rad!r}; got {looser!r}")
+    return [None, *looser, limits.angle_of_attack_limit_rad]
 
 
 def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits = PlanningLimits(),
                   start: Optional[tuple[Array, ...]] = None, end: Optional[tuple[Array, ...]] = None,
-                  guess: Optional[Primitive] = None) -> PrimitiveNlp:
-    """The NLP of one primitive (arguments as for ``solve_primitive``).
+                  guess: Optional[Primitive] = None, *, bound_angle_of_attack: bool = True) -> PrimitiveNlp:
+    """The NLP of one primitive (arguments as for ``solve_primitive``). ``bound_angle_of_attack`` False leaves the
+    circulatory flow's angle-of-attack bound out (the first step of a continuation); the ideal flow has none.
 
     Raises:
         ValueError: a start or end state that is not (q, qdot) of finite numbers of the model's size
@@ -265,7 +317,7 @@ def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimi
     if spec.primitive_type is PrimitiveType.DECELERATE:
         end = rest_state(model, spec.end_lane_radius_m) if model.n_lag == 0 else rest_boundary_state(
             model, spec.end_lane_radius_m)
-    if model.n_lag:
+    if model.n_lag and bound_angle_of_attack:
         _angle_of_attack_bound(opti, model, spec, limits, grid, phi)
     _boundary_conditions(opti, model, spec, limits, grid, phi, start, end)
     _initial_guess(opti, model, spec, limits, grid, start, end, guess)
@@ -343,8 +395,10 @@ def _boundary_conditions(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec
                          grid, phi: ca.MX, start, end) -> None:
     nq = model.nq
     x0, x_end = grid.x[:, 0], grid.x[:, -1]
-    opti.subject_to(x0[0] == 0.0)
     kind = spec.primitive_type
+    if spec.end_lag_free and (kind is not PrimitiveType.DECELERATE or model.n_lag == 0):
+        raise ValueError(f"{spec.primitive_id}: end_lag_free is for a decelerate with the circulatory flow")
+    opti.subject_to(x0[0] == 0.0)
     if kind is PrimitiveType.CRUISE:
         if spec.energy_j is None:
             raise ValueError(f"{spec.primitive_id}: a cruise needs energy_j")
@@ -376,7 +430,10 @@ def _boundary_conditions(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec
     start_x = np.concatenate(start)
     end_x = np.concatenate(end)
     opti.subject_to(_without_alpha(x0, nq) == _without_alpha(ca.DM(start_x), nq))
-    opti.subject_to(_without_alpha(x_end, nq) == _without_alpha(ca.DM(end_x), nq))
+    if spec.end_lag_free:
+        opti.subject_to(x_end[1:2 * nq] == ca.DM(end_x[1:2 * nq]))   # at rest, the lag states as they come
+    else:
+        opti.subject_to(_without_alpha(x_end, nq) == _without_alpha(ca.DM(end_x), nq))
 
 
 def _initial_guess(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits, grid, start,

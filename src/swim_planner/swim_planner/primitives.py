@@ -55,7 +55,7 @@ class PlanningLimits:
     # Pitching it there is a turn about the pitch axis, broadside to its own motion: about 60 deg takes at least
     # 2 sqrt(1.05 rad / 300 rad/s^2) = 0.12 s at foil_acceleration_limit_rad_s2. With 0.15 s the constrained
     # E = 0.05 accelerate is infeasible, with 0.2 s it solves. The window holds 7 of the 161 samples of a 4 s
-    # accelerate or decelerate (4.3 %) and 7 of the 121 of a free 3 s decelerate (5.8 %); the angle is unbounded
+    # accelerate or decelerate (4.3 %) and 9 of the 201 of a free 5 s decelerate (4.5 %); the angle is unbounded
     # only there. A speed floor at every time, U tan(a) + c >= |V| with c = 1 cm/s, instead lets the accelerate
     # crawl at any angle for its first second (95th percentile 73 deg over its samples)
 
@@ -78,6 +78,18 @@ class PrimitiveSpec:
     heave_effort_weight: float = 0.1          # w_h of eq. 10 (assumed), rad/(N^2 m^2 s)
     pitch_effort_weight: float = 0.1          # w_p of eq. 10 (assumed)
     input_smoothness_weight: float = 1e-8     # w_u (assumed), rad/(rad/s^3)^2/s: see solve_primitive
+    end_lag_free: bool = False
+    # circulatory flow, a decelerate: its lag states at rest (its end) are left free, the wake its braking leaves
+    # (primitive_solver's module docstring); False: still water, rest_boundary_state
+    angle_of_attack_continuation_rad: tuple[float, ...] = ()
+    # circulatory flow: the looser angle-of-attack bounds, descending, solved in turn before
+    # PlanningLimits.angle_of_attack_limit_rad, after a first solve without the bound, each from the last converged
+    # solution (primitive_solver.solve_primitive); empty: one solve with the bound
+
+    def __post_init__(self) -> None:
+        # a library's manifest stores the continuation as a JSON list: the spec read back equals the one written
+        object.__setattr__(self, "angle_of_attack_continuation_rad",
+                           tuple(float(a) for a in self.angle_of_attack_continuation_rad))
 
     @property
     def solved_duration_s(self) -> float:

@@ -18,8 +18,9 @@ from scipy.interpolate import CubicHermiteSpline
 
 from swim_model import VehicleModel
 from swim_model.flow import angle_of_attack
-from swim_planner.catalog import (CIRCULATORY_ENERGY_LEVELS_J, CIRCULATORY_FREE_ACCELERATE_S, INTERVALS_PER_S,
-                                  circulatory_specs, cruise_id, default_specs)
+from swim_planner.catalog import (CIRCULATORY_ENERGY_LEVELS_J, CIRCULATORY_FREE_ACCELERATE_S,
+                                  CIRCULATORY_FREE_DECELERATE_CONTINUATION_RAD, CIRCULATORY_FREE_DECELERATE_S,
+                                  CIRCULATORY_LONGER_S, INTERVALS_PER_S, circulatory_specs, cruise_id, default_specs)
 from swim_planner.primitive_solver import solve_primitive
 from swim_planner.primitives import (PlanningLimits, Primitive, PrimitiveType, cruise_mean_speed_m_s,
                                      cruise_strouhal_number, rest_boundary_state)
@@ -235,6 +236,14 @@ def test_the_circulatory_set_is_the_papers_graph_with_a_third_level_joined_to_it
         if not spec.constrained and spec.primitive_type is PrimitiveType.ACCELERATE:
             spec = dataclasses.replace(spec, duration_s=CIRCULATORY_FREE_ACCELERATE_S,
                                        intervals=int(round(CIRCULATORY_FREE_ACCELERATE_S * INTERVALS_PER_S)))
+        if not spec.constrained and spec.primitive_type is PrimitiveType.DECELERATE:
+            spec = dataclasses.replace(spec, duration_s=CIRCULATORY_FREE_DECELERATE_S,
+                                       intervals=int(round(CIRCULATORY_FREE_DECELERATE_S * INTERVALS_PER_S)),
+                                       end_lag_free=True,
+                                       angle_of_attack_continuation_rad=CIRCULATORY_FREE_DECELERATE_CONTINUATION_RAD)
+        if spec.primitive_id in CIRCULATORY_LONGER_S:
+            longer_s = CIRCULATORY_LONGER_S[spec.primitive_id]
+            spec = dataclasses.replace(spec, duration_s=longer_s, intervals=int(round(longer_s * INTERVALS_PER_S)))
         assert specs[spec.primitive_id] == spec
     assert CIRCULATORY_ENERGY_LEVELS_J[:2] == (0.05, 0.1) and CIRCULATORY_ENERGY_LEVELS_J[2] > 0.1
     def primitive_id(kind, lane, tags):

@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 
 from swim_model import VehicleModel
-from swim_planner.disturbance import (flow_force_mismatch, foil_pose_function, generalized_force,
-                                      matched_disturbance)
+from swim_planner.disturbance import flow_force_mismatch, generalized_force, matched_disturbance
 from swim_planner.errors import ManeuverError
 from swim_planner.primitives import Primitive, PrimitiveSpec, PrimitiveType
 
@@ -78,10 +77,10 @@ def test_generalized_force_is_q2_transpose_f(accelerate):
     np.testing.assert_allclose(mapped, expected, rtol=1e-10, atol=1e-12)
     # and the difference equals the virtual work of the tank-frame force at F and the moment about it: J_F' F + J_th' M
     q_sym = model.symbolic.q
-    jacobian = ca.Function("pose_jacobian", [q_sym], [ca.jacobian(foil_pose_function(model)(q_sym), q_sym)])
+    jacobian = ca.Function("pose_jacobian", [q_sym], [ca.jacobian(model.foil_pose_function()(q_sym), q_sym)])
     for k in range(0, len(primitive.time_s), 16):
         q = primitive.q[k]
-        pose = np.asarray(foil_pose_function(model)(q), dtype=float).reshape(-1)
+        pose = model.foil_pose(q)
         jac = np.asarray(jacobian(q), dtype=float)
         fx, fy, mz = profile.force_difference[k]
         c, s = math.cos(pose[2]), math.sin(pose[2])

@@ -38,9 +38,6 @@ class MemoryLibrary:
     def __contains__(self, primitive_id: str) -> bool:
         return primitive_id in self._primitives
 
-    def __len__(self) -> int:
-        return len(self._primitives)
-
     def spec(self, primitive_id: str) -> PrimitiveSpec:
         return self._primitives[primitive_id].spec
 

@@ -12,6 +12,22 @@ F = -(W^-1 a0) (a0 its acceleration without that force, W the stuck block of Mm^
 the static limit; beyond it the coordinate breaks away with Coulomb friction opposing its motion.
 A period with no stopped coordinate and no velocity sign change runs as one compiled call (the fast path).
 
+Flow models (``flow``): how the water acts on the foil beyond the disturbances' platform, friction, tilt and waves.
+
+- ``"ideal"``: the paper's potential flow, the added mass in Mm only (``VehicleModel(flow="ideal")``), plus the
+  quadratic foil drag of Disturbances (``foil_axial_drag_coefficient``, ``foil_normal_drag_coefficient``).
+- ``"circulatory"``: the reduced flow model the circulatory plans are made with (``VehicleModel(flow=
+  "circulatory")``, swim_model.flow): its generalized force Q_flow(q, qdot, z) joins the right-hand side and its two
+  lag states z (m/s) the state, x = (q, qdot, z), zdot = g(Q2 qdot, z), integrated in the same compiled RK4 period.
+  The flow model's own profile drag and post-stall normal force are the foil's drag, so Disturbances' foil drag
+  coefficients are not applied (nothing is counted twice); friction, tilt, platform drag and waves are.
+  Stopped coordinates (friction, hard stops) lock q and qdot only: the lag states run on, driven by the foil's
+  motion.
+- ``"wake"``: the ideal model plus the free-vortex wake's force (swim_model.wake_coupling, held over each period)
+  plus the flat-plate separation drag the attached-flow wake lacks, which is Disturbances' quadratic foil drag.
+
+The lag states hold no energy and no momentum (swim_model.vehicle): ``energy`` is T + V for every flow model.
+
 Hard stops (hard_limits_rad: the rig's (lower, upper) heave and pitch limits, as swim_hw_bridge's bridge file and
 its safety layer name them): a joint reaching its stop meets an inelastic stop. Its position is held at the limit
 and its velocity into the stop removed by the same plastic impulse that stops a dry-friction coordinate (the
@@ -37,9 +53,9 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
-from swim_model import StateError, VehicleModel, codegen
+from swim_model import RigParameters, StateError, VehicleModel, codegen
+from swim_model.wake_coupling import FLOWS, MODEL_FLOWS, WakeCoupling, separation_drag
 from swim_sim.disturbances import GRAVITY_M_S2, Disturbances
-from swim_sim.wake_coupling import WakeCoupling
 
 Array = npt.NDArray[np.float64]
 
@@ -59,17 +75,29 @@ class PlantState:
     qdot: Array
     torque: Array               # the torque applied over the last period (after the limits), N m
     saturated: tuple[bool, bool]
+    lag: Array = dataclasses.field(default_factory=lambda: np.zeros(0))
+    # the circulatory flow's lag states z (VehicleModel.lag_names), m/s; empty for the ideal and wake flows
 
 
-def _parameter_vector(model: VehicleModel, disturbances: Disturbances) -> Array:
-    """p = (b per coordinate, k_foil_U, k_foil_V, k_platform, m g sin(tilt), tilt direction)."""
+def vehicle_model(flow: str, rig: Optional[RigParameters] = None, constrained: bool = False,
+                  lane_radius_m: Optional[float] = None) -> VehicleModel:
+    """The VehicleModel a plant of this flow (FLOWS) integrates: the circulatory one for "circulatory", else the
+    ideal one (the wake's force is added by the plant). ValueError for another flow."""
+    if flow not in FLOWS:
+        raise ValueError(f"flow must be one of {FLOWS}, got {flow!r}")
+    return VehicleModel(rig, constrained=constrained, lane_radius_m=lane_radius_m, flow=MODEL_FLOWS[flow])
+
+
+def _parameter_vector(model: VehicleModel, disturbances: Disturbances, foil_drag: bool = True) -> Array:
+    """p = (b per coordinate, k_foil_U, k_foil_V, k_platform, m g sin(tilt), tilt direction); the foil's drag
+    factors k_foil zero without foil_drag (the circulatory flow carries its own)."""
     rig = model.rig
     viscous = np.zeros(model.nq)
     viscous[0] = disturbances.hub_viscous_n_m_s
     if not model.constrained:
         viscous[1] = disturbances.rail_viscous_n_s_m
     half_rho = 0.5 * rig.water_density_kg_m3
-    planform_m2 = rig.foil_chord_m * rig.foil_span_m
+    planform_m2 = rig.foil_chord_m * rig.foil_span_m if foil_drag else 0.0
     moving_mass_kg = rig.platform_mass_kg + rig.heave_link_mass_kg + rig.foil_assembly_mass_kg
     return np.concatenate([viscous, [
         half_rho * disturbances.foil_axial_drag_coefficient * planform_m2,
@@ -81,16 +109,15 @@ def _parameter_vector(model: VehicleModel, disturbances: Disturbances) -> Array:
 
 def _dynamics(model: VehicleModel, substeps: int) -> list[ca.Function]:
     """The plant's compiled functions, symbolic: the RK4 step, the force holding stopped coordinates, the tilt's
-    potential energy, the wave force's shape and the whole period with and without a lock mask."""
+    potential energy, the wave force's shape and the whole period with and without a lock mask. The state is
+    x = (q, qdot), or (q, qdot, z) with the circulatory flow (the flow's force in the bias, z's rate appended)."""
     s = model.symbolic
     nq = model.nq
     q, qdot, tau = s.q, s.qdot, s.tau
     held = ca.SX.sym("f_held", nq)
     p = ca.SX.sym("p", nq + 5)
     coords = model.coordinates(q)
-    foil_velocity = s.foil_velocity_map @ qdot
-    u, v = foil_velocity[0], foil_velocity[1]
-    foil_force = ca.vertcat(-p[nq] * ca.fabs(u) * u, -p[nq + 1] * ca.fabs(v) * v, 0)
+    foil_force = separation_drag(s.foil_velocity_map @ qdot, p[nq:nq + 2])
     radial_rate = ca.SX(0) if model.constrained else qdot[1]
     tangential = coords.radius * qdot[0]
     platform_speed = ca.sqrt(tangential ** 2 + radial_rate ** 2 + 1e-12)
@@ -103,7 +130,8 @@ def _dynamics(model: VehicleModel, substeps: int) -> list[ca.Function]:
         tilt[1] = -p[nq + 3] * ca.cos(coords.alpha - p[nq + 4])
     input_map = ca.vertcat(ca.SX.zeros(nq - 2, 2), ca.SX.eye(2))
     force = (input_map @ tau - p[:nq] * qdot + s.foil_velocity_map.T @ foil_force + platform + tilt + held)
-    bias = s.functions["generalized_force"](q, qdot, ca.SX.zeros(nq))
+    lag = [] if s.lag is None else [s.lag]
+    bias = s.functions["generalized_force"](q, qdot, ca.SX.zeros(nq), *lag)   # Cm qdot [- Q_flow]
     free_qddot = ca.solve(s.mass, force - bias)
     # stopped coordinates (lock = 1) held by the constraint force lambda that makes their qddot zero:
     # (D Mm^-1 D + I - D) lambda = -D qddot_free, qddot = qddot_free + Mm^-1 D lambda, D = diag(lock)
@@ -112,8 +140,9 @@ def _dynamics(model: VehicleModel, substeps: int) -> list[ca.Function]:
     inverse_mass = ca.inv(s.mass)
     hold_force = ca.solve(locked @ inverse_mass @ locked + ca.SX.eye(nq) - locked, -locked @ free_qddot)
     qddot = free_qddot + inverse_mass @ locked @ hold_force
-    x, h = ca.vertcat(q, qdot), ca.SX.sym("h")
-    f = ca.Function("f", [x, tau, held, p, lock], [ca.vertcat(qdot, qddot)])
+    x, h = ca.vertcat(q, qdot, *lag), ca.SX.sym("h")
+    rates = [s.functions["lag_rate"](q, qdot, *lag)] if lag else []
+    f = ca.Function("f", [x, tau, held, p, lock], [ca.vertcat(qdot, qddot, *rates)])
     k1 = f(x, tau, held, p, lock)
     k2 = f(x + 0.5 * h * k1, tau, held, p, lock)
     k3 = f(x + 0.5 * h * k2, tau, held, p, lock)
@@ -133,16 +162,17 @@ def _dynamics(model: VehicleModel, substeps: int) -> list[ca.Function]:
     # Mm(q) for the plastic impulse that stops a coordinate (here, not the model's own numeric functions: those
     # would be generated and loaded in the middle of a run, at the first stop, ~0.1 s)
     mass = ca.Function("sim_mass_matrix", [q], [s.mass])
-    return [step, forward, potential, wave, _period(step, "sim_period_locked", nq, substeps),
-            _period(free_step, "sim_period_unlocked", nq, substeps), mass]
+    nx = model.nx
+    return [step, forward, potential, wave, _period(step, "sim_period_locked", nq, nx, substeps),
+            _period(free_step, "sim_period_unlocked", nq, nx, substeps), mass]
 
 
-def _period(step: ca.Function, name: str, nq: int, substeps: int) -> ca.Function:
+def _period(step: ca.Function, name: str, nq: int, nx: int, substeps: int) -> ca.Function:
     """substeps steps with the inputs held: (x, tau, held, p, [lock,] h) -> (x at the end, crossing, highest,
     lowest), where crossing[i] is the smallest qdot_i(t_k) sign(qdot_i(t_0)) over the substeps: <= 0 where a
     velocity reached or crossed zero inside the period, and highest[i], lowest[i] are the largest and smallest
     q_i(t_k) over the substeps (past a hard stop: the plant then redoes the period substep by substep)."""
-    x0 = ca.MX.sym("x", 2 * nq)
+    x0 = ca.MX.sym("x", nx)
     held_inputs = [ca.MX.sym(n, *step.size_in(i)) for i, n in enumerate(step.name_in()) if i > 0]
     states = step.mapaccum(substeps)(x0, *(ca.repmat(v, 1, substeps) for v in held_inputs))
     start_sign = ca.copysign(1.0, x0[nq:])
@@ -159,12 +189,30 @@ HardLimits = tuple[tuple[float, float], tuple[float, float]]
 class Plant:
     """The vehicle and its disturbances, stepped by control periods. Deterministic for a seed.
 
-    hard_limits_rad: the joints' hard stops ((heave lower, upper), (pitch lower, upper)), rad; None: no stops."""
+    model: the vehicle (``vehicle_model(flow, ...)`` makes the one a flow needs: the circulatory flow integrates
+        VehicleModel(flow="circulatory"), the others the ideal one).
+    wake: the vortex wake's coupling for flow "wake" (None: built with WakeCouplingParameters' defaults).
+    hard_limits_rad: the joints' hard stops ((heave lower, upper), (pitch lower, upper)), rad; None: no stops.
+    flow: one of FLOWS (module docstring); None: taken from the arguments ("circulatory" for a circulatory model,
+        "wake" with a wake, else "ideal"). A model or a wake that does not fit the flow is a ValueError."""
 
     def __init__(self, model: VehicleModel, disturbances: Disturbances = Disturbances(),
                  sample_period_s: Optional[float] = None, substeps: int = 8, seed: int = 0,
-                 wake: Optional[WakeCoupling] = None, hard_limits_rad: Optional[HardLimits] = None) -> None:
+                 wake: Optional[WakeCoupling] = None, hard_limits_rad: Optional[HardLimits] = None,
+                 flow: Optional[str] = None) -> None:
         disturbances.validate()
+        if flow is None:
+            flow = "circulatory" if model.flow == "circulatory" else "wake" if wake is not None else "ideal"
+        if flow not in FLOWS:
+            raise ValueError(f"flow must be one of {FLOWS}, got {flow!r}")
+        if model.flow != MODEL_FLOWS[flow]:
+            raise ValueError(f"flow {flow!r} integrates VehicleModel(flow={MODEL_FLOWS[flow]!r}), got a model of "
+                             f"flow {model.flow!r} (swim_sim.plant.vehicle_model makes the right one)")
+        if wake is not None and flow != "wake":
+            raise ValueError(f"a wake coupling is for flow 'wake', not {flow!r}")
+        if flow == "wake" and wake is None:
+            wake = WakeCoupling(model)
+        self.flow = flow
         # joint index -> (lower, upper) of each hard stop
         self._stops: dict[int, tuple[float, float]] = {}
         if hard_limits_rad is not None:
@@ -178,7 +226,7 @@ class Plant:
         if not (self.sample_period_s > 0.0 and substeps >= 1):
             raise ValueError("the sample period must be > 0 and substeps >= 1")
         self.substeps = int(substeps)
-        self._parameters = _parameter_vector(model, disturbances)
+        self._parameters = _parameter_vector(model, disturbances, foil_drag=flow != "circulatory")
         tag = f"sim_{model._codegen_tag()}_{hashlib.sha256(b'sim-dynamics-3').hexdigest()[:8]}"
         native = codegen.native(_dynamics(model, self.substeps), tag=tag)
         (self._step, self._forward, self._potential, self._wave, self._period_locked, self._period_unlocked,
@@ -195,6 +243,7 @@ class Plant:
         self._dry = disturbances.coulomb_and_static(model.constrained)
         self._limits = model.torque_limits()
         self.seed = seed
+        self.lag = np.zeros(model.n_lag)
         self.reset(self.rest_positions(), np.zeros(model.nq))
 
     def rest_positions(self) -> Array:
@@ -210,16 +259,20 @@ class Plant:
         """Joint name -> (lower, upper) of its hard stop, rad (empty: no stops)."""
         return {self.model.joint_names[i]: limits for i, limits in self._stops.items()}
 
-    def reset(self, q: npt.ArrayLike, qdot: npt.ArrayLike, time_s: float = 0.0) -> None:
-        """Put the vehicle at (q, qdot); restarts the noise from the seed, so runs repeat bit for bit.
-        StateError for a non-finite entry, a wrong size or a joint past its hard stop."""
+    def reset(self, q: npt.ArrayLike, qdot: npt.ArrayLike, time_s: float = 0.0,
+              lag: Optional[npt.ArrayLike] = None) -> None:
+        """Put the vehicle at (q, qdot) and the circulatory flow's lag states at lag (m/s; None: zeros, the flow at
+        rest; the other flows have none); restarts the noise from the seed and the wake from rest, so runs repeat
+        bit for bit. StateError for a non-finite entry, a wrong size or a joint past its hard stop; nothing changes
+        then."""
         q, qdot = (self.model._vector(v, self.model.nq, n) for v, n in ((q, "q"), (qdot, "qdot")))
+        lag = np.zeros(self.model.n_lag) if lag is None else self.model._vector(lag, self.model.n_lag, "lag")
         for i, (lower, upper) in self._stops.items():
             if not lower <= q[i] <= upper:
                 raise StateError(f"{self.model.joint_names[i]} = {q[i]:g} rad is past its hard stop "
                                  f"[{lower:g}, {upper:g}] rad")
         self.time_s = float(time_s)
-        self.q, self.qdot = q.copy(), qdot.copy()
+        self.q, self.qdot, self.lag = q.copy(), qdot.copy(), lag.copy()
         self.torque, self.saturated = np.zeros(2), (False, False)
         self.stuck = {i: qdot[i] == 0.0 for i, _, _ in self._dry}
         # joint index -> +1 held at its upper stop, -1 at its lower one, 0 free
@@ -231,10 +284,11 @@ class Plant:
 
     @property
     def state(self) -> PlantState:
-        return PlantState(self.time_s, self.q.copy(), self.qdot.copy(), self.torque.copy(), self.saturated)
+        return PlantState(self.time_s, self.q.copy(), self.qdot.copy(), self.torque.copy(), self.saturated,
+                          self.lag.copy())
 
     def energy(self) -> float:
-        """T + V: kinetic energy (eq. 5) plus the tilt's gravity potential, J."""
+        """T + V: kinetic energy (eq. 5) plus the tilt's gravity potential, J (the lag states hold none)."""
         self._potential.inputs[0][:] = self.q
         self._potential()
         potential = float(self._potential.outputs[0][0])
@@ -251,15 +305,15 @@ class Plant:
         wave = self._wave_force()
         if self.wake is not None:
             wave = wave + self.wake.step(self.q, self.qdot, self.sample_period_s)
-        x = np.concatenate([self.q, self.qdot])
+        x = np.concatenate([self.q, self.qdot, self.lag])
         x_next = None if any(self.at_stop.values()) else self._fast_period(x, applied, wave)
         if x_next is None:
             x_next = self._substep_period(x, applied, wave)
         nq = self.model.nq
-        if not np.isfinite(x_next).all() or np.abs(x_next[nq:]).max() > BLOW_UP_SPEED:
+        if not np.isfinite(x_next).all() or np.abs(x_next[nq:]).max() > BLOW_UP_SPEED:   # speeds, lag states
             raise SimulationError(f"the integration blew up at t = {self.time_s:.3f} s (state {x_next}); "
                                   f"try more substeps or smaller disturbances")
-        self.q, self.qdot = x_next[:nq], x_next[nq:]
+        self.q, self.qdot, self.lag = x_next[:nq], x_next[nq:2 * nq], x_next[2 * nq:]
         self.torque = applied
         self.time_s += self.sample_period_s
         return self.state
@@ -343,11 +397,12 @@ class Plant:
         inverse_mass = np.linalg.inv(self._mass.outputs[0].reshape((nq, nq), order="F"))
         if len(indices) == 1:
             index = indices[0]
-            x[nq:] -= inverse_mass[:, index] * (x[nq + index] / inverse_mass[index, index])
+            x[nq:2 * nq] -= inverse_mass[:, index] * (x[nq + index] / inverse_mass[index, index])
         else:
             selected = np.array(indices)
             velocities = x[nq + selected]
-            x[nq:] -= inverse_mass[:, selected] @ np.linalg.solve(inverse_mass[np.ix_(selected, selected)], velocities)
+            x[nq:2 * nq] -= inverse_mass[:, selected] @ np.linalg.solve(inverse_mass[np.ix_(selected, selected)],
+                                                                        velocities)
         x[nq + np.array(indices)] = 0.0
 
     def _friction(self, x: Array, torque: Array, wave: Array) -> tuple[Array, Array]:

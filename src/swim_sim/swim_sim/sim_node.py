@@ -5,8 +5,17 @@ Topics:
     joint_states (pub, sensor_msgs/JointState)    alpha, [R,] phi, theta: measured positions (quantized, noisy),
                                                   velocities (velocity_source "model") and applied efforts
     /clock (pub, rosgraph_msgs/Clock)             simulated time, one tick per period
-    wake_statistics (pub, swim_interfaces/WakeStatistics)  with wake.enabled: the vortex wake after each period
+    wake_statistics (pub, swim_interfaces/WakeStatistics)  with flow "wake": the vortex wake after each period
                                                   (vortex count, circulations, the vortical force and its Q)
+    wake_vortices (pub, swim_interfaces/WakeVortices)  with flow "wake": the free vortices themselves (positions,
+                                                  circulations, the shedding edge), at most once per
+                                                  wake.vortices_period_s of simulated time (each is up to
+                                                  MAX_VORTEX_COUNT entries: every period would swamp a bag)
+Flow (``flow``, swim_sim.plant's FLOWS): "ideal" (the paper's added mass only), "circulatory" (the reduced flow
+model the circulatory plans use, with its lag states; Disturbances' foil drag is then not applied, the flow model
+has its own) or "wake" (the ideal model, the vortex wake's force and the flat-plate separation drag of
+Disturbances' foil drag coefficients). The ``wake.*`` parameters are the wake's numerics (used with "wake").
+``reset`` and ``set_state`` put the water at rest: the circulatory flow's lag states at zero, the wake emptied.
 Services: ``reset`` (std_srvs/Trigger: back to the initial state, noise restarted from the seed; time runs on),
 ``set_state`` (swim_interfaces/SetVehicleState: a state within the bounds of StateBounds, else refused with the
 bound it passes and nothing changed).
@@ -51,11 +60,11 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
-from swim_interfaces.msg import WakeStatistics
+from swim_interfaces.msg import WakeStatistics, WakeVortices
 from swim_interfaces.srv import SetVehicleState
 
 from swim_hw_bridge.conversions import BridgeConfig, BridgeConfigError, load_bridge_config
-from swim_model import StateError, SwimModelError, VehicleModel, load_rig
+from swim_model import StateError, SwimModelError, load_rig
 from swim_planner.maneuver import DEFAULT_BOUNDS
 from swim_ros.codecs import MessageError, float_array, joint_state_arrays, stamp_of, torque_from_command
 from swim_ros.entry import run_node
@@ -63,7 +72,7 @@ from swim_ros.parameters import (ParameterSpec, ParameterValue, check_parameters
                                  one_of)
 from swim_ros.qos import per_period_publisher, per_period_subscription
 from swim_sim.disturbances import Disturbances
-from swim_sim.plant import HardLimits, Plant, SimulationError
+from swim_sim.plant import FLOWS, HardLimits, Plant, SimulationError, vehicle_model
 from swim_sim.sensors import SensorNoise, Sensors
 from swim_sim.wake_coupling import WakeCoupling, parameter_defaults, parameters_from_values
 
@@ -80,11 +89,17 @@ def finite_entries(value: Any) -> Optional[str]:
 #: the largest value of a sensors.* parameter (counts of noise, a noise fraction, counts per line). Assumed: a
 #: million counts of noise is far past any encoder, and keeps the noise and its quantization finite
 SENSOR_PARAMETER_BOUND = 1.0e6
+#: wake_vortices at 10 Hz: a few hundred vortices (the default merging bound: 300) at every 8 ms period would be
+#: ~1 MB/s of bag; 10 Hz still shows a vortex move less than a centimetre between frames at the foil's 0.1 m/s
+DEFAULT_VORTICES_PERIOD_S = 0.1
 PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec("rig_path", "", "rig YAML file (empty: swim_model's shipped rig)", read_only=True),
     ParameterSpec("bridge_config_path", "", "hardware bridge YAML file the hard stops and the physically possible "
                   "joint speeds are read from (empty: swim_hw_bridge's shipped bridge.yaml)", read_only=True),
     ParameterSpec("constrained", False, "simulate the laterally constrained vehicle (no R)", read_only=True),
+    ParameterSpec("flow", "ideal", "the water's model: 'ideal' (added mass), 'circulatory' (the reduced flow model, "
+                  "its own foil drag), 'wake' (the vortex wake plus the disturbances' foil separation drag)",
+                  check=one_of(*FLOWS), read_only=True),
     ParameterSpec("lane_radius_m", 0.0, "the constrained vehicle's lane radius, m (0: the rig's)",
                   range=(0.0, 10.0), read_only=True),
     ParameterSpec("sample_period_s", 0.008, "control period, s (the paper's 8 ms)", range=(1e-4, 1.0),
@@ -110,9 +125,11 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     *(ParameterSpec(f"sensors.{f.name}", cast(ParameterValue, f.default), f"swim_sim.sensors.SensorNoise.{f.name}",
                     range=None if isinstance(f.default, bool) else (0.0, SENSOR_PARAMETER_BOUND))
       for f in dataclasses.fields(SensorNoise)),
-    *(ParameterSpec(f"wake.{name}", default, f"the vortex wake's {name} (swim_sim.wake_coupling)",
-                    check=None if isinstance(default, bool) else finite, read_only=True)
+    *(ParameterSpec(f"wake.{name}", default, f"the vortex wake's {name} (swim_sim.wake_coupling)", check=finite,
+                    read_only=True)
       for name, default in parameter_defaults().items()),
+    ParameterSpec("wake.vortices_period_s", DEFAULT_VORTICES_PERIOD_S, "flow 'wake': wake_vortices is published at "
+                  "most once per this much simulated time, s", range=(1e-3, 3600.0), read_only=True),
 )
 
 
@@ -170,14 +187,15 @@ class SimNode(Node):
             bridge_config = load_bridge_config(value("bridge_config_path") or None)
         except BridgeConfigError as err:
             raise ValueError(f"parameter bridge_config_path: {err}") from err
-        model = VehicleModel(rig, constrained=value("constrained"), lane_radius_m=value("lane_radius_m") or None)
+        flow = value("flow")
+        model = vehicle_model(flow, rig, value("constrained"), value("lane_radius_m") or None)
         fields = dataclasses.fields
         disturbances = Disturbances(**{f.name: value(f"disturbances.{f.name}") for f in fields(Disturbances)})
         wake = None
-        if value("wake.enabled"):
+        if flow == "wake":
             wake = WakeCoupling(model, parameters_from_values({n: value(f"wake.{n}") for n in parameter_defaults()}))
         self.plant = Plant(model, disturbances, value("sample_period_s"), value("substeps"), value("seed"), wake,
-                           hard_limits_rad(bridge_config))
+                           hard_limits_rad(bridge_config), flow=flow)
         self.state_bounds = StateBounds.of(self.plant, bridge_config)
         self.sensors = Sensors(model, self._sensor_noise({}), self.plant.sample_period_s)
         self.start_time_s = float(value("start_time_s"))
@@ -202,6 +220,10 @@ class SimNode(Node):
         self.clock_publisher = per_period_publisher(self, Clock, "/clock", 10)
         self.wake_publisher = per_period_publisher(self, WakeStatistics, "wake_statistics") \
             if wake is not None else None
+        self.vortices_publisher = per_period_publisher(self, WakeVortices, "wake_vortices") \
+            if wake is not None else None
+        self._vortices_period_s = float(value("wake.vortices_period_s"))
+        self._vortices_due_s = -math.inf   # simulated time from which the next wake_vortices is sent
         per_period_subscription(self, JointState, "joint_commands", self._on_command)
         self.create_service(Trigger, "reset", self._on_reset)
         self.create_service(SetVehicleState, "set_state", self._on_set_state)
@@ -214,7 +236,7 @@ class SimNode(Node):
                 self.create_timer(self.plant.sample_period_s, self._republish_held_state)
         self._publish_state()
         self.get_logger().info(f"simulating the {'constrained' if model.constrained else 'free'} vehicle, "
-                               f"{self.mode}, period {self.plant.sample_period_s * 1e3:g} ms")
+                               f"flow {flow}, {self.mode}, period {self.plant.sample_period_s * 1e3:g} ms")
 
     # ----- parameters ------------------------------------------------------------------------------
     def _sensor_noise(self, changes: dict[str, Any]) -> SensorNoise:
@@ -287,6 +309,8 @@ class SimNode(Node):
         self._publish_state()
         if self.wake_publisher is not None:
             self._publish_wake(self.plant.time_s - self.plant.sample_period_s)
+            if self.plant.time_s >= self._vortices_due_s:
+                self._publish_vortices()
 
     def _publish_state(self, advance: bool = True) -> None:
         plant = self.plant
@@ -320,6 +344,23 @@ class SimNode(Node):
             reflected_count=statistics.reflected_count)
         message.header.stamp = stamp_of(time_s)
         publisher.publish(message)
+
+    def _publish_vortices(self) -> None:
+        """The free vortices (the newest WakeVortices.MAX_VORTEX_COUNT), stamped with the state they belong to."""
+        wake, publisher = self.plant.wake, self.vortices_publisher
+        assert wake is not None and publisher is not None   # called only with the wake on
+        vortices = wake.vortices()
+        newest = slice(-WakeVortices.MAX_VORTEX_COUNT, None)
+        positions = vortices.positions_m[newest]
+        message = WakeVortices(vortex_count=len(vortices.positions_m),
+                               trailing_edge_x_m=vortices.trailing_edge_m.real,
+                               trailing_edge_y_m=vortices.trailing_edge_m.imag)
+        message.x_m, message.y_m = float_array(positions.real), float_array(positions.imag)
+        message.circulations_m2_s = float_array(vortices.circulations_m2_s[newest])
+        message.header.stamp = stamp_of(self.plant.time_s)
+        publisher.publish(message)
+        # simulated time is a sum of periods: a nanosecond (the stamps' resolution) absorbs its round-off
+        self._vortices_due_s = self.plant.time_s + self._vortices_period_s - 1e-9
 
     # ----- services ------------------------------------------------------------------------------
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
@@ -355,6 +396,7 @@ class SimNode(Node):
             raise ValueError(str(err)) from err
         self.failed = None
         self.holding, self._held_state_answered = self._hold_enabled, False
+        self._vortices_due_s = -math.inf   # the fresh wake's first vortices are sent at once
         self._publish_state()
 
 

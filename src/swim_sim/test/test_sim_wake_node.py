@@ -1,4 +1,4 @@
-"""sim_node with the vortex wake on (wake.enabled) over DDS: one wake_statistics message per period, equal bit for
+"""sim_node with the vortex wake on (flow wake) over DDS: one wake_statistics message per period, equal bit for
 bit to the library's plant and wake driven by the same commands; reset clears the wake; bad wake parameters refuse
 to start with a message naming them."""
 import numpy as np
@@ -6,6 +6,7 @@ import pytest
 
 from swim_ros.calls import spin_until
 from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, running_node
+from test_sim_flow_node import library_run
 from test_sim_node import Driver, running_sim
 
 SEED = 11
@@ -18,7 +19,7 @@ REFUSED_START_TIMEOUT_S = 60
 @pytest.fixture(scope="module")
 def wake_sim(ros_domain, tmp_path_factory):
     log = tmp_path_factory.mktemp("sim_node_wake") / "log.txt"
-    with running_sim(log, "-p", f"seed:={SEED}", "-p", "wake.enabled:=true") as process:
+    with running_sim(log, "-p", f"seed:={SEED}", "-p", "flow:=wake") as process:
         yield process
 
 
@@ -36,30 +37,6 @@ def wait_for_wakes(driver, count, timeout_s=MESSAGE_TIMEOUT_S):
     spin_until(driver.executor, lambda: len(driver.wakes) >= count, timeout_s)
 
 
-def library_run(torques):
-    """The same run in this process: sim_node's defaults (disturbances, sensors drawing on the plant's generator,
-    the hard stops of the shipped bridge file)."""
-    from swim_hw_bridge.conversions import load_bridge_config
-    from swim_model import VehicleModel
-    from swim_sim.disturbances import Disturbances
-    from swim_sim.plant import Plant
-    from swim_sim.sensors import Sensors
-    from swim_sim.sim_node import hard_limits_rad
-    from swim_sim.wake_coupling import WakeCoupling
-    model = VehicleModel(constrained=True)
-    plant = Plant(model, Disturbances(), seed=SEED, wake=WakeCoupling(model),
-                  hard_limits_rad=hard_limits_rad(load_bridge_config()))
-    sensors = Sensors(model, sample_period_s=plant.sample_period_s)
-    plant.reset(plant.rest_positions(), np.zeros(model.nq))
-    sensors.measure(plant.q, plant.qdot, plant.rng)       # the state published after the reset
-    statistics = []
-    for torque in torques:
-        plant.step(torque)
-        sensors.measure(plant.q, plant.qdot, plant.rng)
-        statistics.append(plant.wake.statistics())
-    return statistics
-
-
 def test_wake_statistics_every_period_equal_to_the_librarys(driver):
     torques = 0.3 * np.sin(np.arange(PERIODS)[:, None] * np.array([0.05, 0.08]))
     start = driver.states[-1].header.stamp
@@ -70,7 +47,7 @@ def test_wake_statistics_every_period_equal_to_the_librarys(driver):
     # each message belongs to the period that starts at the state before it: its force was held over that period
     assert [w.header.stamp for w in wakes] == [start] + [s.header.stamp for s in states[:-1]]
     assert [w.vortex_count for w in wakes] == list(range(1, PERIODS + 1))   # one shed per period, none merged yet
-    expected = library_run(torques)
+    expected, _ = library_run("wake", SEED, torques, lambda plant, _: plant.wake.statistics())
     assert [list(w.generalized_force) for w in wakes] == [list(e.generalized_force) for e in expected]
     assert [(w.force_x_n, w.force_y_n, w.moment_n_m) for w in wakes] == [e.foil_force for e in expected]
     assert [w.thrust_n for w in wakes] == [e.thrust_n for e in expected]
@@ -94,7 +71,7 @@ def test_reset_clears_the_wake(driver):
 
 def test_bad_wake_parameters_refuse_to_start_with_a_message(ros_domain, tmp_path):
     log = tmp_path / "log.txt"
-    with running_node("swim_sim", "sim_node", log, "-p", "wake.enabled:=true",
+    with running_node("swim_sim", "sim_node", log, "-p", "flow:=wake",
                       "-p", "wake.core_radius_m:=-1.0") as process:
         assert process.wait(timeout=REFUSED_START_TIMEOUT_S) == 2
     assert "core_radius_m" in log.read_text()

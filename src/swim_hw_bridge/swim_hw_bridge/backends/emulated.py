@@ -6,6 +6,15 @@ For dry runs and tests of everything above the device layer. Between two reads t
 and the encoders are quantized as an incremental encoder counts, n = floor((q - q_home) * counts_per_unit),
 held in counters modulo 2**counter_bits that start at initial_counts.
 
+Flow (option flow, default "ideal"; bridge_node's parameter flow): the water the emulated rig swims in, the same
+choice as the simulator's (swim_model.wake_coupling.FLOWS): "ideal", the paper's added mass only; "circulatory",
+VehicleModel(flow="circulatory") with its two lag states z (m/s) integrated with (q, qdot), from rest at open();
+"wake", the ideal model plus the free-vortex wake's force (swim_model.wake_coupling.WakeCoupling, stepped once per
+read over the time since the last one and held over the next, as the simulator holds it over a period) plus the
+flat-plate separation drag the wake lacks, -1/2 rho Cd A |v| v on the foil's chordwise and normal velocities
+(options foil_axial_drag_coefficient, foil_normal_drag_coefficient). Nothing else of the simulator's disturbances
+is emulated: the rig's own friction is what a dry run on hardware adds.
+
 Hard stops (option hard_stops, default on; hard_stops_rad, ((heave lower, upper), (pitch lower, upper)), None for
 none): the rig's heave and pitch stops, at the bridge file's hard limits, as the simulator has them
 (swim_sim/plant.py). A joint reaching its stop meets an inelastic stop: its position is held at the stop and its
@@ -31,14 +40,40 @@ import math
 import time
 from typing import Any, cast
 
+import casadi as ca
 import numpy as np
-from swim_model import VehicleModel, load_rig
+from swim_model import SwimModelError, VehicleModel, codegen, load_rig
 from swim_model.codegen import NativeFunction
+from swim_model.wake_coupling import FLOWS, MODEL_FLOWS, WakeCoupling, separation_drag
 
 from swim_hw_bridge.conversions import BridgeConfig
 from swim_hw_bridge.device import CounterSample, Device, DeviceError
 
 DEFAULT_CHARGE_PUMP_TIMEOUT_S = 0.05   # assumed: about 6 periods of 8 ms
+#: the wake flow's separation drag coefficients when the options leave them out: a flat plate broadside (Hoerner,
+#: Fluid-Dynamic Drag, 1965, Ch. 3) and a thin section's skin friction (assumed, as swim_sim's Disturbances)
+DEFAULT_NORMAL_DRAG_COEFFICIENT = 1.2
+DEFAULT_AXIAL_DRAG_COEFFICIENT = 0.01
+
+
+def _forced_step(model: VehicleModel) -> ca.Function:
+    """One RK4 step of the ideal vehicle with a held generalized force and the foil's separation drag:
+    (x = (q, qdot), tau, held force per coordinate, drag factors (k_U, k_V) = 1/2 rho Cd A, h) -> x_next."""
+    s = model.symbolic
+    nq = model.nq
+    held, factors, h = ca.SX.sym("held", nq), ca.SX.sym("factors", 2), ca.SX.sym("h")
+    input_map = ca.vertcat(ca.SX.zeros(nq - 2, 2), ca.SX.eye(2))
+    drag = s.foil_velocity_map.T @ separation_drag(s.foil_velocity_map @ s.qdot, factors)
+    bias = s.functions["generalized_force"](s.q, s.qdot, ca.SX.zeros(nq))
+    x = ca.vertcat(s.q, s.qdot)
+    f = ca.Function("f", [x, s.tau, held, factors],
+                    [ca.vertcat(s.qdot, ca.solve(s.mass, input_map @ s.tau + drag + held - bias))])
+    k1 = f(x, s.tau, held, factors)
+    k2 = f(x + 0.5 * h * k1, s.tau, held, factors)
+    k3 = f(x + 0.5 * h * k2, s.tau, held, factors)
+    k4 = f(x + h * k3, s.tau, held, factors)
+    return ca.Function("emulated_wake_rk4_step", [x, s.tau, held, factors, h],
+                       [x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)])
 
 
 class EmulatedDevice(Device):
@@ -50,6 +85,14 @@ class EmulatedDevice(Device):
         self.max_integration_s = float(config.get("max_integration_s", 0.05))
         self.initial_counts = tuple(int(c) for c in config.get("initial_counts", (0, 0, 0, 0)))
         self.rig_path = str(config.get("rig_path", "")) or None
+        self.flow = str(config.get("flow", "ideal"))
+        if self.flow not in FLOWS:
+            raise ValueError(f"emulated device: flow must be one of {', '.join(FLOWS)}, got {self.flow!r}")
+        self.drag_coefficients = (float(config.get("foil_axial_drag_coefficient", DEFAULT_AXIAL_DRAG_COEFFICIENT)),
+                                  float(config.get("foil_normal_drag_coefficient", DEFAULT_NORMAL_DRAG_COEFFICIENT)))
+        if not all(math.isfinite(c) and c >= 0.0 for c in self.drag_coefficients):
+            raise ValueError(f"emulated device: drag coefficients must be finite and >= 0, got "
+                             f"{self.drag_coefficients}")
         limits = self.bridge
         self.hard_stops_rad: tuple[tuple[float, float], tuple[float, float]] | None = (
             ((limits.heave_lower_hard_limit_rad, limits.heave_upper_hard_limit_rad),
@@ -66,6 +109,10 @@ class EmulatedDevice(Device):
         self._mass: NativeFunction | None = None
         self.q = self.home.copy()
         self.qdot = np.zeros(4)
+        self.lag = np.zeros(0)   # the circulatory flow's lag states, m/s (set by open())
+        self.wake: WakeCoupling | None = None   # the vortex wake (flow "wake", set by open())
+        self._wake_force = np.zeros(4)   # the wake's generalized force held over the next read interval
+        self._wake_interval_s = 0.0   # the last read interval, s (0: none yet)
         self.commanded_currents_a = (0.0, 0.0)
         self.enable_requested = False
         self.enable_level = False
@@ -81,12 +128,21 @@ class EmulatedDevice(Device):
     # --- the Device interface --------------------------------------------------------------------------
     def open(self) -> None:
         if self.model is None:
-            self.model = VehicleModel(load_rig(self.rig_path), constrained=False)
+            self.model = VehicleModel(load_rig(self.rig_path), constrained=False, flow=MODEL_FLOWS[self.flow])
+            self.lag = np.zeros(self.model.n_lag)   # the flow at rest
             # compile and load the integrator now, not in the first period of the loop; and the single step and
             # the inertia a read at a stop takes, through their native entry points (microseconds a call)
-            self.model.integrate_rk4(self.q, self.qdot, self._torques, 1e-3)
+            self.model.integrate_rk4(self.q, self.qdot, self._torques, 1e-3, lag=self.lag if self.lag.size else None)
             self._step = self.model.native_function("rk4_step")
             self._mass = self.model.native_function("mass_matrix")
+            if self.flow == "wake":
+                rig = self.model.rig
+                half_rho_area = 0.5 * rig.water_density_kg_m3 * rig.foil_chord_m * rig.foil_span_m
+                self._step = codegen.native([_forced_step(self.model)], tag=f"emulated_{self.model._codegen_tag()}")[
+                    "emulated_wake_rk4_step"]
+                self._step.inputs[3][:] = [half_rho_area * c for c in self.drag_coefficients]
+                self.wake = WakeCoupling(self.model)
+                self._wake_interval_s = 0.0
         self.commanded_currents_a = (0.0, 0.0)
         self.enable_requested = False
         self._last_toggle_s = -math.inf
@@ -159,22 +215,48 @@ class EmulatedDevice(Device):
         self._torques[:, 0] = currents[0] * self.torque_gains[0]
         self._torques[:, 1] = currents[1] * self.torque_gains[1]
         step_s = elapsed_s / self.substeps
-        q, qdot = self.model.integrate_rk4(self.q, self.qdot, self._torques, step_s)
+        if self.wake is not None:
+            # the wake stepped to now over the last interval (the first: over this one), its force held over this
+            try:
+                self._wake_force = self.wake.step(self.q, self.qdot, self._wake_interval_s or elapsed_s)
+            except SwimModelError as err:
+                raise DeviceError(f"emulated device: the vortex wake failed: {err}") from err
+            self._wake_interval_s = elapsed_s
+            for k in range(self.substeps):   # a joint past its stop is stopped at the substep it passes it
+                self._single_step(self._torques[k], step_s)
+                if self.hard_stops_rad is not None:
+                    self._stop_at_hard_stops()
+            return
+        q, qdot, *lag = self.model.integrate_rk4(self.q, self.qdot, self._torques, step_s,
+                                                 lag=self.lag if self.lag.size else None)
         first = self._first_past_a_stop(q)
         if first is None:
             self.q, self.qdot = q[-1], qdot[-1]
+            if lag:
+                self.lag = lag[0][-1]
             return
         # exact up to the substep before a joint passed its stop, then substep by substep
         start = max(first - 1, 0)
         self.q, self.qdot = q[start].copy(), qdot[start].copy()
+        if lag:
+            self.lag = lag[0][start].copy()
+        for k in range(start, self.substeps):
+            self._single_step(self._torques[k], step_s)
+            self._stop_at_hard_stops()
+
+    def _single_step(self, torque: np.ndarray, step_s: float) -> None:
+        """One substep of step_s seconds with torque held (and, in the wake, the wake's force and the drag):
+        the model's RK4 step on x = (q, qdot[, lag]) through its native entry point."""
         assert self._step is not None
         step, nq = self._step, len(self.q)
-        step.inputs[2][0] = step_s
-        for k in range(start, self.substeps):
-            step.inputs[0][:nq], step.inputs[0][nq:], step.inputs[1][:] = self.q, self.qdot, self._torques[k]
-            step()
-            self.q, self.qdot = step.outputs[0][:nq].copy(), step.outputs[0][nq:2 * nq].copy()
-            self._stop_at_hard_stops()
+        step.inputs[0][:nq], step.inputs[0][nq:2 * nq], step.inputs[0][2 * nq:] = self.q, self.qdot, self.lag
+        step.inputs[1][:] = torque
+        if self.wake is not None:
+            step.inputs[2][:] = self._wake_force
+        step.inputs[-1][0] = step_s
+        step()
+        x = step.outputs[0]
+        self.q, self.qdot, self.lag = x[:nq].copy(), x[nq:2 * nq].copy(), x[2 * nq:].copy()
 
     def _first_past_a_stop(self, q: np.ndarray) -> int | None:
         """The first row of q (positions at the substeps' boundaries) with a joint past its stop; None: none."""

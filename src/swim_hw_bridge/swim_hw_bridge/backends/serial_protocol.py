@@ -266,12 +266,9 @@ class FrameDecoder:
     def __init__(self) -> None:
         self._buffer = bytearray()
         self._discarding = False  # an oversize candidate: drop bytes until the next delimiter
+        # counts since construction: frames passed, and frames rejected by each check
         self.frames_ok = 0
-        self.cobs_errors = 0
-        self.short_errors = 0
-        self.crc_errors = 0
-        self.length_errors = 0
-        self.oversize_errors = 0
+        self.cobs_errors = self.short_errors = self.crc_errors = self.length_errors = self.oversize_errors = 0
 
     @property
     def error_count(self) -> int:

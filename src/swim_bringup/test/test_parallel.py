@@ -1,0 +1,99 @@
+"""Runs side by side (swim_bringup.parallel) with cheap stand-in runs, pure Python in real processes (no DDS): each
+run's process holds a ROS domain no other run at the same time holds, none the caller's; whatever stops a run
+(an exception, a process that dies, one that hangs, on this host or a Dask worker) is named, and the other runs'
+results are kept."""
+import concurrent.futures
+import os
+import time
+from pathlib import Path
+
+import pytest
+
+from swim_bringup.parallel import RunFailed, run_all, run_isolated
+from swim_ros.domains import RUN_DOMAINS
+
+#: how long a stand-in waits for the others to start: all start at once on an idle host, within seconds on a busy one
+START_TIMEOUT_S = 120.0
+
+
+def domain_once_all_started(task: tuple[Path, int, str]) -> tuple[int, int]:
+    """A stand-in run: note it started, wait until `count` runs have, then give its ROS domain and process id
+    (so every run is alive, holding its domain, while the others read theirs)."""
+    folder, count, name = task
+    (folder / name).write_text(str(os.getpid()))
+    deadline = time.monotonic() + START_TIMEOUT_S
+    while len(list(folder.iterdir())) < count:
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"only {len(list(folder.iterdir()))} of {count} runs started")
+        time.sleep(0.05)
+    return int(os.environ["ROS_DOMAIN_ID"]), os.getpid()
+
+
+def fail_on_seed_three(seed: int) -> int:
+    """A stand-in run that fails for seed 3, and exits its process without a word for seed 4."""
+    if seed == 3:
+        raise ValueError("the plan of seed 3 was lost")
+    if seed == 4:
+        os._exit(7)
+    return 10 * seed
+
+
+def sleep_forever(_: object) -> None:
+    time.sleep(3600.0)
+
+
+def test_runs_at_once_hold_distinct_domains_none_the_callers(tmp_path, monkeypatch):
+    monkeypatch.setenv("ROS_DOMAIN_ID", "7")        # a caller's domain: no run may inherit it
+    runs = 3
+    tasks = {f"run{k}": (tmp_path, runs, f"run{k}") for k in range(runs)}
+    with concurrent.futures.ThreadPoolExecutor(runs) as executor:
+        outcomes = run_all(domain_once_all_started, tasks, executor, timeout_s=2 * START_TIMEOUT_S)
+    assert list(outcomes) == list(tasks)
+    assert all(outcome.failure is None for outcome in outcomes.values()), [o.failure for o in outcomes.values()]
+    results = [outcome.result for outcome in outcomes.values()]
+    domains, pids = [r[0] for r in results], [r[1] for r in results]
+    assert len(set(pids)) == runs and os.getpid() not in pids          # each run a process of its own
+    assert len(set(domains)) == runs, domains                          # ... and a domain of its own
+    assert all(domain in RUN_DOMAINS for domain in domains) and 7 not in domains
+
+
+def test_a_failed_run_is_named_and_the_others_kept():
+    tasks = {f"experiment/seed{seed}/sliding_on": seed for seed in (1, 2, 3, 4)}
+    finished = []
+    with concurrent.futures.ThreadPoolExecutor(2) as executor:
+        outcomes = run_all(fail_on_seed_three, tasks, executor, timeout_s=120.0,
+                           done=lambda run, outcome: finished.append(run))
+    assert sorted(finished) == sorted(tasks)
+    assert [outcomes[f"experiment/seed{seed}/sliding_on"].result for seed in (1, 2)] == [10, 20]
+    failure = outcomes["experiment/seed3/sliding_on"].failure
+    assert failure is not None and failure.run == "experiment/seed3/sliding_on"
+    assert failure.reason == "ValueError: the plan of seed 3 was lost"
+    died = outcomes["experiment/seed4/sliding_on"].failure
+    assert died is not None and died.reason.startswith("its process exited with 7"), died.reason
+
+
+def test_a_hung_run_is_interrupted_and_named():
+    started = time.monotonic()
+    with pytest.raises(RunFailed, match=r"^hung/seed1/sliding_off: no result within 2 s: interrupted") as failed:
+        run_isolated(sleep_forever, None, "hung/seed1/sliding_off", timeout_s=2.0)
+    assert failed.value.run == "hung/seed1/sliding_off"
+    assert time.monotonic() - started < 60.0
+
+
+def test_runs_go_to_a_dask_cluster_the_same_way(tmp_path):
+    """A Dask cluster in this process (one worker of two threads, on TCP as a remote one would be): its workers
+    start the runs' processes, each with a domain of its own, and a failure comes back named."""
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, protocol="tcp",
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster.scheduler_address) as client:
+        assert cluster.scheduler_address.startswith("tcp://")
+        executor = client.get_executor()
+        outcomes = run_all(domain_once_all_started, {f"run{k}": (tmp_path, 2, f"run{k}") for k in range(2)},
+                           executor, timeout_s=2 * START_TIMEOUT_S)
+        failed = run_all(fail_on_seed_three, {"lost/seed3/sliding_on": 3}, executor, timeout_s=120.0)
+    domains = [outcome.result[0] for outcome in outcomes.values() if outcome.result is not None]
+    assert len(set(domains)) == 2, [outcome.failure for outcome in outcomes.values()]
+    failure = failed["lost/seed3/sliding_on"].failure
+    assert failure is not None and (failure.run, failure.reason) == ("lost/seed3/sliding_on",
+                                                                     "ValueError: the plan of seed 3 was lost")

@@ -1,0 +1,213 @@
+"""The free-vortex wake (swim_model.wake) as a generalized force on a simulated vehicle, and the flat-plate
+separation drag the wake lacks. No ROS. Used by swim_sim's plant and swim_hw_bridge's emulated rig (flow "wake").
+
+What it adds. The plant's equations of motion already hold the ideal-flow (added-mass, Kirchhoff) force of the
+foil through Mm = M + Q2' M_A Q2. ``Wake.step`` returns only what that leaves out, the vortical force
+``F_v = -dI_v/dt`` of the shed vortices (swim_model.vortex_force), so adding it counts nothing twice:
+
+    Mm qddot + Cm qdot = B tau + (disturbances) + Q_wake,     Q_wake = Q2(q)' (fx, fy, M_z).
+
+Frames (checked by the tests against rigid-body statics). ``kinematics.py``'s foil frame and the wake's foil
+axes are the same frame: origin at the Joukowski map origin F (the added mass's reference point, Lf from the
+pitch axis), x along the chord toward the leading edge, y the chord rotated by +90 deg. The chord of
+kinematics.py points along ``dir(alpha + theta) = (-sin, cos)(alpha + theta)``, so the chord angle the wake
+takes in the tank frame is ``alpha + theta + pi/2``; its position is F(q) in the tank frame (origin on the hub
+axis); its velocity ``(U, V, Omega) = Q2(q) qdot`` (eq. 40) at F along the same axes; the wake's moment is
+about F, which is the point Q2's first two rows are taken at. By virtual work the generalized force is then
+``Q2' (fx, fy, M_z)`` and its power ``Q_wake . qdot`` equals ``(fx, fy, M_z) . (U, V, Omega)``.
+
+Timing (zero-order hold, once per control period). At the start of period k (time t_k, state q_k, qdot_k)
+the wake is stepped from t_{k-1} to t_k with the foil's pose and velocity at t_k; the force it returns belongs
+to the middle of [t_{k-1}, t_k] and is held over [t_k, t_{k+1}], like the torque: a lag of one period (8 ms,
+2 to 4 degrees of phase at the paper's 0.7-1.2 Hz gaits). Why not once per RK4 substep: the wake is validated
+(Wagner, Garrick: swim_model/test/test_wake.py) at steps of about a period; eight times as many steps would shed
+eight times as many vortices (the merging bound reached in 0.3 s instead of 2.4 s) and cost eight times as
+much, well under real time; and a force that changes inside the period would break the plant's one compiled
+call per period. Shedding one vortex per period is the discretization the wake's validation used.
+
+Force spikes. A vortex passing close to the foil, or one the step carried into the foil and the wake reflected
+out, changes the vortical impulse fast. Vortex-vortex velocities are desingularized (Krasny blob,
+``WakeParameters.core_radius_m``); what is left is clipped: the force vector's magnitude to ``force_limit_n`` and
+the moment to ``moment_limit_n_m`` (both assumed, sized to the largest circulatory force the foil could carry,
+see below), and each clipped period counted (``clipped_count``).
+
+No random numbers: a run with the wake repeats bit for bit.
+
+Separation drag. The wake sheds from the trailing edge only: the flow stays attached at the leading edge, so the
+wake alone carries no separated (post-stall) force. A simulated vehicle in the wake's water adds it as the
+quadratic drag ``F = -1/2 rho Cd A |v| v`` on the foil's chordwise (U) and normal (V) velocities
+(``separation_drag``; a flat plate broadside has Cd 1.2, Hoerner), mapped to q by Q2(q)'.
+
+Flows (``FLOWS``): the water a simulated vehicle swims in, the same choice for swim_sim's plant and the emulated
+rig: "ideal" (the paper's added mass only), "circulatory" (``VehicleModel(flow="circulatory")``, swim_model.flow)
+and "wake" (the ideal model plus this module's wake force and separation drag).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import cast
+
+import casadi as ca
+import numpy as np
+import numpy.typing as npt
+
+from swim_model.errors import StateError
+from swim_model.vehicle import VehicleModel
+from swim_model.wake import Wake, WakeParameters
+
+Array = npt.NDArray[np.float64]
+
+#: the water a simulated vehicle swims in (module docstring), and the VehicleModel flow each integrates
+FLOWS = ("ideal", "circulatory", "wake")
+MODEL_FLOWS = {"ideal": "ideal", "circulatory": "circulatory", "wake": "ideal"}
+
+
+# The clip limits. The plans move the foil at up to 0.6 m/s (trailing edge, constrained maneuver); the largest
+# circulatory force of thin-aerofoil theory, 2 pi (1/2 rho U^2 c s) (lift slope 2 pi, sin(angle of attack) = 1),
+# is then 20 N with the rig's foil, acting within half a chord of F (0.6 N m). Twice that is taken as no longer a
+# force of the flow but a point vortex inside the model's singular neighbourhood of the surface.
+FORCE_LIMIT_N = 40.0         # assumed, see above
+MOMENT_LIMIT_N_M = 1.2       # assumed: FORCE_LIMIT_N times half the 6 cm chord
+# Kelvin's total circulation in the statistics, measured each period: the contour rule converges as 2^-samples,
+# so 64 points reach round-off at a quarter of the default's cost (the default 256 cost more than the wake's step)
+KELVIN_SAMPLES = 64
+
+
+@dataclasses.dataclass(frozen=True)
+class WakeCouplingParameters:
+    """The wake's numerical parameters (swim_model.wake.WakeParameters) and the clip limits."""
+
+    wake: WakeParameters = WakeParameters()
+    force_limit_n: float = FORCE_LIMIT_N
+    moment_limit_n_m: float = MOMENT_LIMIT_N_M
+
+    def __post_init__(self) -> None:
+        for name in ("force_limit_n", "moment_limit_n_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise StateError(f"WakeCouplingParameters.{name} must be positive and finite, got {value!r}")
+
+
+@dataclasses.dataclass(frozen=True)
+class WakeStatistics:
+    """The wake after a period, for analysis (published by sim_node on ``wake_statistics``).
+
+    ``foil_force`` (fx N, fy N, M_z N m) is the force held over the period (after the clip), foil axes at F;
+    ``thrust_n`` its tank-frame component along the foil's direction of travel about the hub (``thrust_n``);
+    ``generalized_force`` = Q2' foil_force, per coordinate of q (N m, or N on R).
+    """
+
+    time_s: float
+    vortex_count: int
+    shed_circulation_m2_s: float
+    total_circulation_m2_s: float
+    foil_force: tuple[float, float, float]
+    thrust_n: float
+    generalized_force: tuple[float, ...]
+    clipped_count: int
+    merged_count: int
+    reflected_count: int
+
+
+@dataclasses.dataclass(frozen=True)
+class WakeVortices:
+    """The free vortices after a period (published by sim_node on ``wake_vortices``): positions x + iy in the tank
+    frame (m, oldest first), circulations (m^2/s, counter-clockwise positive), the trailing edge x + iy (m)."""
+
+    time_s: float
+    positions_m: npt.NDArray[np.complex128]
+    circulations_m2_s: Array
+    trailing_edge_m: complex
+
+
+class WakeCoupling:
+    """The wake behind the vehicle's foil, stepped once per control period; returns the held generalized force."""
+
+    def __init__(self, model: VehicleModel, params: WakeCouplingParameters = WakeCouplingParameters()) -> None:
+        self.model, self.params = model, params
+        self._wake_params = dataclasses.replace(params.wake, rho_kg_m3=model.rig.water_density_kg_m3)
+        self._pose = model.foil_pose_function()
+        self.reset()
+
+    def reset(self) -> None:
+        """A fresh wake: no vortices, counters at zero (the fluid at rest)."""
+        self.wake = Wake(self.model.foil, self._wake_params)
+        self.clipped_count = 0
+        self.foil_force = np.zeros(3)
+        self.generalized_force = np.zeros(self.model.nq)
+        self._pose_now = (0.0, 0.0, 0.0)
+
+    def foil_pose(self, q: Array) -> tuple[float, float, float]:
+        """(x_m, y_m, chord angle rad) of the foil frame in the tank frame (the wake's pose)."""
+        pose = np.asarray(self._pose(q), dtype=float).reshape(-1)
+        return float(pose[0]), float(pose[1]), float(pose[2])
+
+    def step(self, q: Array, qdot: Array, period_s: float) -> Array:
+        """Step the wake to the state (q, qdot) at the start of a period; the generalized force to hold over it.
+
+        Q = Q2(q)' clip(fx, fy, M_z): the vortical force of the period that just ended (module docstring: timing).
+        """
+        pose = np.asarray(self._pose(q), dtype=float).reshape(-1)
+        q2 = self.model.foil_velocity_map(q)
+        velocity = q2 @ np.asarray(qdot, dtype=float)
+        force = self.wake.step(period_s, (pose[0], pose[1], pose[2]), (velocity[0], velocity[1], velocity[2]))
+        self.foil_force = self._clipped(np.array([force.fx_n, force.fy_n, force.moment_n_m]))
+        self.generalized_force = q2.T @ self.foil_force   # virtual work: Q . qdot = foil_force . (U, V, Omega)
+        self._pose_now = (float(pose[0]), float(pose[1]), float(pose[2]))
+        return self.generalized_force
+
+    def to_generalized(self, q: Array, foil_force: Array) -> Array:
+        """Q = Q2(q)' (fx, fy, M_z): a force in foil axes at F and a moment about F as a generalized force."""
+        generalized: Array = self.model.foil_velocity_map(q).T @ np.asarray(foil_force, dtype=float)
+        return generalized
+
+    def _clipped(self, force: Array) -> Array:
+        """The force's magnitude to force_limit_n (direction kept) and the moment to moment_limit_n_m; counted."""
+        if not np.all(np.isfinite(force)):
+            raise StateError(f"the wake's force is not finite: {force}")
+        clipped = force.copy()
+        magnitude = math.hypot(force[0], force[1])
+        if magnitude > self.params.force_limit_n:
+            clipped[:2] *= self.params.force_limit_n / magnitude
+        clipped[2] = min(max(force[2], -self.params.moment_limit_n_m), self.params.moment_limit_n_m)
+        if not np.array_equal(clipped, force):
+            self.clipped_count += 1
+        return clipped
+
+    def thrust_n(self) -> float:
+        """The held force's tank-frame component along e_t = z x F/|F|, the direction in which the foil moves when
+        the whole vehicle turns about the hub (what propels it along alpha: Q_alpha = |F| thrust_n + M_z), N."""
+        x, y, angle = self._pose_now
+        radius = math.hypot(x, y)
+        if radius == 0.0:
+            return 0.0
+        tank = complex(self.foil_force[0], self.foil_force[1]) * complex(math.cos(angle), math.sin(angle))
+        return (x * tank.imag - y * tank.real) / radius
+
+    def vortices(self) -> WakeVortices:
+        """The free vortices now, tank frame, and the trailing edge they are shed from."""
+        wake = self.wake
+        x, y, angle = self._pose_now
+        edge = complex(x, y) + complex(math.cos(angle), math.sin(angle)) * wake.plane.z_te
+        return WakeVortices(time_s=wake.time_s, positions_m=wake.positions_m.copy(),
+                            circulations_m2_s=wake.circulations_m2_s.copy(), trailing_edge_m=edge)
+
+    def statistics(self) -> WakeStatistics:
+        """The wake's statistics now (Kelvin's total circulation measured from the velocity field)."""
+        wake = self.wake
+        return WakeStatistics(
+            time_s=wake.time_s, vortex_count=wake.vortex_count(), shed_circulation_m2_s=wake.shed_circulation(),
+            total_circulation_m2_s=wake.total_circulation(KELVIN_SAMPLES),
+            foil_force=cast(tuple[float, float, float], tuple(float(f) for f in self.foil_force)),
+            thrust_n=self.thrust_n(),
+            generalized_force=tuple(float(f) for f in self.generalized_force),
+            clipped_count=self.clipped_count, merged_count=wake.merged_count, reflected_count=wake.reflected_count)
+
+
+def separation_drag(foil_velocity: ca.SX, factors: ca.SX) -> ca.SX:
+    """The foil's quadratic drag (fx, fy, M_z) in foil axes at F, N and N m, for the foil frame's velocity
+    (U, V, Omega) = Q2 qdot and factors (k_U, k_V) = 1/2 rho Cd A (kg/m) on the chordwise and normal velocities:
+    (-k_U |U| U, -k_V |V| V, 0)."""
+    u, v = foil_velocity[0], foil_velocity[1]
+    return ca.vertcat(-factors[0] * ca.fabs(u) * u, -factors[1] * ca.fabs(v) * v, 0)

@@ -1,0 +1,59 @@
+"""The realistic pipeline end to end over DDS (swim-demo --pipeline realistic): planner_node serves the circulatory
+library, tracker_node tracks on the circulatory model with the plan's own sliding-mode bound D(t), and sim_node flies
+it in the vortex wake with the physical disturbances, publishing the wake's vortices; the run is recorded and
+analysed, the wake drawn over the path. The maneuver is the constrained accelerate (4 s), which this pipeline tracks
+(the whole paper maneuver is lost part-way: docs/disturbances.md)."""
+import numpy as np
+import pytest
+
+from conftest import run_demo
+
+ACCELERATE = "constrained/accelerate/E0.05"
+#: the demo's --timeout: 4 s simulated in the wake plant at about 1x real time over DDS, several on a loaded host
+MANEUVER_TIMEOUT_S = 120
+#: tracked: the accelerate ends within this of its plan (measured 4 mrad; 0.1 rad is 4 cm at the lane radius)
+FINAL_ALPHA_ERROR_RAD = 0.05
+
+
+@pytest.fixture(scope="module")
+def realistic_run(ros_domain, tmp_path_factory):
+    run_dir = tmp_path_factory.mktemp("realistic") / "run"
+    stdout = run_demo(run_dir, "--pipeline", "realistic", "--primitives", ACCELERATE, "--timeout",
+                      str(MANEUVER_TIMEOUT_S))
+    return run_dir, stdout
+
+
+def test_the_realistic_pipeline_tracks_the_accelerate(realistic_run):
+    from swim_bringup.reports import RunReport
+    run_dir, stdout = realistic_run
+    report = RunReport.load(run_dir / "report.json")
+    assert report.result.error_code == 0
+    assert report.measures.duration_s == pytest.approx(4.0, abs=0.02)
+    assert abs(report.measures.final_alpha_error_rad) < FINAL_ALPHA_ERROR_RAD
+    assert "the realistic pipeline" in stdout
+
+
+def test_the_plan_is_circulatory_and_carries_its_disturbance_bound(realistic_run):
+    from swim_bringup.bag import read_messages
+    run_dir, _ = realistic_run
+    (_, _, plan), = read_messages(run_dir / "bag", ("/plan",))
+    assert plan.flow_model == "circulatory"
+    bounds = np.asarray(plan.disturbance_bounds_n_m)
+    assert len(bounds) == len(plan.time_from_start_s) and np.all(np.isfinite(bounds)) and np.all(bounds >= 0.0)
+    assert bounds.max() > 0.0
+
+
+def test_the_wake_is_recorded_and_drawn(realistic_run):
+    from swim_bringup.bag import read_messages
+    from swim_model import load_rig
+    run_dir, _ = realistic_run
+    wake = [message for _, _, message in read_messages(run_dir / "bag", ("/wake_vortices",))]
+    assert len(wake) >= 30   # every 0.1 s of the 4 s maneuver (sim_node's wake.vortices_period_s)
+    last = wake[-1]
+    positions = np.column_stack([last.x_m, last.y_m])
+    circulations = np.asarray(last.circulations_m2_s)
+    assert last.vortex_count == len(positions) == len(circulations) > 0   # under MAX_VORTEX_COUNT
+    assert np.all(np.isfinite(positions)) and np.all(np.isfinite(circulations))
+    # shed into the tank by a foil on a 0.43 m lane
+    assert np.all(np.hypot(positions[:, 0], positions[:, 1]) < 0.5 * load_rig().tank_diameter_m)
+    assert (run_dir / "wake.png").stat().st_size > 10_000
