@@ -12,7 +12,7 @@ from swim_bringup.system import PIPELINES, config_dir
 SOURCE_CONFIG = Path(__file__).resolve().parents[1] / "config"
 FILES = ("sim.yaml", "planner.yaml", "tracker.yaml", "bridge.yaml")
 #: what each pipeline sets to tell itself from the other (every other parameter is the same in both)
-PIPELINE_PARAMETERS = {("sim_node", "flow"), ("planner_node", "flow_model")}
+PIPELINE_PARAMETERS = {("sim_node", "flow"), ("planner_node", "flow_model"), ("bridge_node", "flow")}
 
 
 def flat_parameters(path: Path) -> dict[str, dict[str, object]]:

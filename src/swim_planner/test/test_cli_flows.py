@@ -8,6 +8,7 @@ from scipy.integrate import simpson
 
 from swim_model.vehicle import coriolis_from_mass
 from swim_planner.cli import main
+from swim_planner.library import PrimitiveLibrary
 from swim_planner.primitives import cruise_mean_speed_m_s
 
 CRUISE = "constrained/cruise/E0.05"
@@ -57,12 +58,15 @@ def test_the_json_numbers_are_the_library_arrays(library, circulatory_library, m
     assert report["ideal"]["mean_circulatory_thrust_n"] == 0.0
 
 
-def test_an_id_missing_from_one_library_is_a_clear_error(tmp_path, capsys):
+def test_an_id_missing_from_one_library_is_a_clear_error(tmp_path, capsys, rig, circulatory_library):
     output = tmp_path / "x.png"
     assert main(["flows", "constrained/cruise/E0.20", "--output", str(output)]) == 2
     assert "'constrained/cruise/E0.20' is not in the ideal library" in capsys.readouterr().err
-    assert main(["flows", "free/decelerate/R0.43/E0.05", "--output", str(output)]) == 2
-    assert "'free/decelerate/R0.43/E0.05' is not in the circulatory library" in capsys.readouterr().err
+    cruise_only = PrimitiveLibrary.create_or_open(tmp_path / "cruise_only", rig, flow_model="circulatory")
+    cruise_only.add(circulatory_library.get(CRUISE))
+    accelerate = "constrained/accelerate/E0.05"
+    assert main(["flows", accelerate, "--circulatory-library", str(cruise_only.path), "--output", str(output)]) == 2
+    assert f"'{accelerate}' is not in the circulatory library" in capsys.readouterr().err
     assert not output.exists()
 
 
