@@ -41,7 +41,8 @@ def plan_cdr(store, lane_radius_m):
     message = plan_type(header=header, interface_version=plan_type.INTERFACE_VERSION, constrained=True,
                         lane_radius_m=lane_radius_m, flow_model="ideal", joint_names=JOINTS, time_from_start_s=empty,
                         positions=empty, velocities=empty, foil_accelerations=empty, feedforward_torques=empty,
-                        lag_states=empty, disturbance_bounds_n_m=empty, lqr_gains=empty, sliding_gains=empty, segments=[], library_digest="")
+                        lag_states=empty, disturbance_bounds_n_m=empty, lqr_gains=empty, sliding_gains=empty,
+                        segments=[], library_digest="")
     return bytes(store.serialize_cdr(message, "swim_interfaces/msg/PlannedTrajectory"))
 
 
