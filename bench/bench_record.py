@@ -48,7 +48,7 @@ def run_goal(client: RunClient) -> tuple[float, float]:
 
 
 def in_process(work: Path) -> float:
-    with System(closed_loop_specs(config_dir()), work / "logs_in_process"), \
+    with System(closed_loop_specs(config_dir("paper")), work / "logs_in_process"), \
             RunClient(work / "bag_in_process") as client:
         duration_s, speed = run_goal(client)
         client.drain(duration_s)
@@ -73,7 +73,7 @@ def recorded_counts(log_path: Path) -> dict[str, int]:
 def swim_record(work: Path) -> tuple[float, dict[str, int], int]:
     """(speed, messages per loop topic in the bag, tracked periods missing from any loop topic)."""
     bag, log_path = work / "bag_swim_record", work / "swim_record.log"
-    with System(closed_loop_specs(config_dir()), work / "logs_swim_record"), open(log_path, "w") as log:
+    with System(closed_loop_specs(config_dir("paper")), work / "logs_swim_record"), open(log_path, "w") as log:
         recorder = subprocess.Popen(["ros2", "run", "swim_bringup", "swim-record", "-o", str(bag), *RUN_TOPICS],
                                     stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
         try:

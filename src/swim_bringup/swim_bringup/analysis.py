@@ -7,12 +7,13 @@ From the tracking_state topic (reference and measured q each control period) and
   periods with a saturated motor, and the energy used, int (|tau_h phidot| + |tau_p thetadot|) dt in J (motors
   do not take energy back, so negative power is counted as spent too).
 
-Any rosbag2 bag opens (swim-demo's, swim-record's, one recorded by `ros2 bag record`; MCAP or sqlite3): its topics
-are listed with their types and message counts; from joint_states alone, each joint's range and peak speed and the
-messages' rate; the measures above when the bag has what they need (tracking_state, and for the constrained
-vehicle the plan). A topic is found under its full name (/joint_states: swim-demo's, swim-record's and
-rosbag2's), a relative one (joint_states, as other recorders may give it) or one namespace (/test/joint_states).
-What a bag lacks is named, with why.
+Any rosbag2 bag opens (swim-demo's, swim-record's, one recorded by `ros2 bag record`, Humble's included; MCAP or
+sqlite3): its topics are listed with their types and message counts, and those whose messages cannot be decoded (a
+type neither the bag defines nor this environment knows: rosbag2 records no definition of a type it could not find)
+named with why; from joint_states alone, each joint's range and peak speed and the messages' rate; the measures
+above when the bag has what they need (tracking_state, and for the constrained vehicle the plan). A topic is found
+under its full name (/joint_states: swim-demo's, swim-record's and rosbag2's), a relative one (joint_states, as
+other recorders may give it) or one namespace (/test/joint_states). What a bag lacks is named, with why.
 
 Exit status: 0 every bag analysed in full; 1 some bag lacked what the run's measures need (what it holds is
 analysed, what it lacks named); 2 some bag could not be read (no bag at the path, a corrupt file) or the output
@@ -29,7 +30,8 @@ from typing import Any, Mapping, Optional
 
 import numpy as np
 
-from swim_bringup.bag import RUN_TOPICS, BagError, BagInfo, bag_info, read_messages, swim_typestore
+from swim_bringup.bag import (RUN_TOPICS, BagError, BagInfo, bag_info, read_messages, swim_typestore,
+                               undecodable_topics)
 from swim_bringup.reports import BridgeMeasures, RunAnalysis, RunMeasures
 from swim_controller.measures import two_norm
 
@@ -250,16 +252,20 @@ class BagAnalysis:
     """What swim-analyze makes of one bag: its topics, the joint motion when it has joint_states, the run's measures
     when it has what they need, and what it lacks, each with why."""
     info: BagInfo
-    unknown_types: tuple[str, ...]           # the bag's message types this environment cannot decode
+    unknown_types: tuple[str, ...]           # the bag's message types this environment does not know (ours and
+    #                                          ROS 2 Jazzy's); the bag's own definitions may still decode them
     joint_states: Optional[JointStatesSummary]
     run: Optional[RunAnalysis]
     missing: tuple[str, ...]                 # "what: why (what is not reported for it)"
+    undecodable: tuple[tuple[str, str], ...] = ()   # (topic, why) for each topic whose messages cannot be decoded
 
     def to_json(self) -> dict[str, Any]:
-        """bag_summary.json: the bag, its topics, the joint motion, the run's measures (report.json's keys), what
-        is missing."""
+        """bag_summary.json: the bag, its topics (each with whether its type is known here and, when its messages
+        cannot be decoded, why), the joint motion, the run's measures (report.json's keys), what is missing."""
+        undecodable = dict(self.undecodable)
         return {"bag": str(self.info.path), "storage": self.info.storage, "complete": self.info.complete,
-                "topics": [{**dataclasses.asdict(topic), "type_known": topic.msgtype not in self.unknown_types}
+                "topics": [{**dataclasses.asdict(topic), "type_known": topic.msgtype not in self.unknown_types,
+                            "undecodable": undecodable.get(topic.name)}
                            for topic in self.info.topics],
                 "joint_states": dataclasses.asdict(self.joint_states) if self.joint_states else None,
                 "run_measures": self.run.to_json() if self.run else None,
@@ -289,7 +295,7 @@ def analyze_bag(bag_path: Path) -> BagAnalysis:
     except (ValueError, BagError) as err:   # ValueError: tracking_state messages that do not make a run
         missing.append(f"run measures: {err}")
     return BagAnalysis(info, tuple(sorted({t.msgtype for t in info.topics if t.msgtype not in known_types})),
-                       joints, run, tuple(missing))
+                       joints, run, tuple(missing), tuple(sorted(undecodable_topics(bag_path).items())))
 
 
 def bag_section(label: str, analysis: BagAnalysis) -> str:
@@ -300,9 +306,14 @@ def bag_section(label: str, analysis: BagAnalysis) -> str:
     width = max([len(t.name) for t in info.topics] + [5])
     type_width = max([len(t.msgtype) for t in info.topics] + [4])
     lines.append(f"  {'topic':<{width}}  {'type':<{type_width}}  {'messages':>8}")
+    undecodable = dict(analysis.undecodable)
     for topic in info.topics:
-        note = "  type unknown here: not decoded" if topic.msgtype in analysis.unknown_types else ""
+        note = ("  not decodable" if topic.name in undecodable else
+                "  type unknown here, defined in the bag" if topic.msgtype in analysis.unknown_types else "")
         lines.append(f"  {topic.name:<{width}}  {topic.msgtype:<{type_width}}  {topic.message_count:>8}{note}")
+    if undecodable:
+        lines.append("not decodable:")
+        lines.extend(f"  {topic}: {why}" for topic, why in analysis.undecodable)
     motion = analysis.joint_states
     if motion is not None:
         rate = f"{motion.mean_rate_hz:.4g} Hz mean" if motion.mean_rate_hz is not None else "no rate"

@@ -13,7 +13,15 @@ analysis.find_topic finds too. Messages are decoded by the definition of their t
 they were recorded with), and by the installed one only where the bag has none:
 a bag recorded with an older version of our messages (swim_interfaces v2's PlannedTrajectory, before the flow
 model's fields) reads as it was written. What cannot be read (no bag at the path, a corrupt file, a message whose
-type neither the bag defines nor this environment knows) is a BagError that says which and why.
+type neither the bag defines nor this environment knows) is a BagError that says which and why; undecodable_topics
+names, before reading, the topics whose messages cannot be decoded, with why.
+
+An MCAP bag that rosbags cannot open is read with the mcap library (Foxglove's reader) instead: rosbag2 (Humble)
+writes a schema of encoding 'unknown', with no definition, for a type whose definition it could not find (an
+action's feedback message, say), and rosbags has no format for that encoding. Such a bag lists every topic from its
+MCAP summary; the messages of a type without a definition decode when this environment knows the type, and are
+named undecodable otherwise. The mcap library reads one file: a bag folder of several MCAP files (a split bag)
+rosbags cannot open is a BagError that says to give one of them.
 """
 from __future__ import annotations
 
@@ -129,35 +137,129 @@ def _is_cut_bag(path: Path) -> bool:
     return path.is_dir() and not (path / "metadata.yaml").is_file()
 
 
-def _open_reader(path: Path) -> Reader:
-    """An open rosbags Reader of the bag folder or storage file at path; BagError if it is not a readable bag."""
+#: the bytes an MCAP file starts and, once closed, ends with
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+
+
+def _open_reader(path: Path) -> Reader | None:
+    """An open rosbags Reader of the bag folder or storage file at path; None for an MCAP bag that rosbags cannot
+    open, which the mcap library reads instead (_mcap_file gives its file): one with a schema encoding rosbags has no
+    format for (rosbag2's 'unknown'), or one MCAP file cut short (no summary, no closing magic: its recorder was
+    killed). BagError if it is not a readable bag."""
     if not path.exists():
         raise BagError(f"{path}: no such file or folder")
     try:
         reader = Reader(path)
         reader.open()
     except (ReaderError, OSError) as err:
+        if path.is_file() and path.suffix == ".mcap" and _cut_short(path):
+            return None
         raise BagError(f"{path}: not a readable rosbag2 bag: {err}") from err
+    except KeyError as err:   # rosbags' MCAP storage: a schema encoding it has no format for
+        _mcap_file(path, f"rosbags cannot open it (an MCAP schema of encoding {err})")
+        return None
     return reader
+
+
+def _cut_short(file: Path) -> bool:
+    """Whether the MCAP file at file starts as one but does not end as a closed one does."""
+    with open(file, "rb") as stream:
+        start = stream.read(len(MCAP_MAGIC))
+        stream.seek(max(file.stat().st_size - len(MCAP_MAGIC), 0))
+        return start == MCAP_MAGIC and stream.read() != MCAP_MAGIC
+
+
+def _mcap_summary(file: Path) -> Any:
+    """The summary of the MCAP file (the mcap library's Summary); None for a file without one (cut short, or
+    closed without it). BagError if it does not read."""
+    from mcap.exceptions import McapError
+    from mcap.reader import make_reader
+    if _cut_short(file):
+        return None
+    with open(file, "rb") as stream:
+        try:
+            return make_reader(stream).get_summary()
+        except (McapError, ValueError) as err:   # ValueError: a summary that does not parse
+            raise BagError(f"{file}: not a readable MCAP file: {type(err).__name__}: {err}") from err
+
+
+def _mcap_file(path: Path, why: str) -> Path:
+    """The one MCAP file of the bag at path (path itself, or the one its folder holds), for the mcap library to read
+    where rosbags cannot (why); BagError if there is not exactly one."""
+    files = [path] if path.is_file() else sorted(path.glob("*.mcap"))
+    if len(files) != 1 or files[0].suffix != ".mcap":
+        raise BagError(f"{path}: {why}, and the mcap library reads one MCAP file: "
+                       + (f"give one of its {len(files)} MCAP files" if len(files) > 1 else "it holds none"))
+    return files[0]
+
+
+def _bag_topics(path: Path) -> tuple[BagInfo, dict[str, tuple[str, MessageDefinition]]]:
+    """bag_info of the bag at path, and each topic's type and the definition of it the bag carries."""
+    path = Path(path)
+    if _is_cut_bag(path):
+        return _linear_topics(path, _cut_bag_records(path))
+    reader = _open_reader(path)
+    if reader is None:
+        return _mcap_topics(path)
+    try:
+        storage = "sqlite3" if path.suffix == ".db3" or any(path.glob("*.db3")) else "mcap"
+        return (BagInfo(path, storage, True, tuple(TopicInfo(c.topic, c.msgtype, c.msgcount)
+                                                   for c in reader.connections)),
+                {c.topic: (c.msgtype, c.msgdef) for c in reader.connections})
+    finally:
+        reader.close()
+
+
+def _linear_topics(path: Path, records: Iterator[tuple[str, str, int, bytes | None, MessageDefinition]]
+                   ) -> tuple[BagInfo, dict[str, tuple[str, MessageDefinition]]]:
+    """_bag_topics of an MCAP bag without summary (its recorder was cut off), from a linear read of its records."""
+    counts: dict[tuple[str, str], int] = {}
+    definitions: dict[str, tuple[str, MessageDefinition]] = {}
+    for topic, msgtype, _, raw, definition in records:
+        counts[topic, msgtype] = counts.get((topic, msgtype), 0) + (raw is not None)
+        definitions[topic] = (msgtype, definition)
+    topics = tuple(TopicInfo(topic, msgtype, count) for (topic, msgtype), count in counts.items())
+    return BagInfo(path, "mcap", False, topics), definitions
+
+
+def _mcap_topics(path: Path) -> tuple[BagInfo, dict[str, tuple[str, MessageDefinition]]]:
+    """_bag_topics of an MCAP bag rosbags cannot open, with the mcap library: every channel of its summary, its
+    schema's name as type; without summary or statistics, from a linear read."""
+    file = _mcap_file(path, "rosbags cannot open it")
+    summary = _mcap_summary(file)
+    if summary is None or summary.statistics is None:
+        return _linear_topics(path, _mcap_records(file))
+    counts = summary.statistics.channel_message_counts
+    channels = {c.id: (c.topic, *_schema_definition(summary.schemas.get(c.schema_id)))
+                for c in summary.channels.values()}
+    topics = tuple(TopicInfo(topic, msgtype, counts.get(channel_id, 0))
+                   for channel_id, (topic, msgtype, _) in channels.items())
+    return (BagInfo(path, "mcap", True, topics),
+            {topic: (msgtype, definition) for topic, msgtype, definition in channels.values()})
+
+
+def _schema_definition(schema: Any) -> tuple[str, MessageDefinition]:
+    """The type name and the definition an MCAP schema (the mcap library's record; None: a channel without schema)
+    carries; a definition of an encoding rosbags has no format for (rosbag2's 'unknown') is no definition."""
+    if schema is None:
+        return "", MessageDefinition(MessageDefinitionFormat.NONE, "")
+    return schema.name, MessageDefinition(SCHEMA_FORMATS.get(schema.encoding, MessageDefinitionFormat.NONE),
+                                          schema.data.decode(errors="replace"))
 
 
 def bag_info(path: Path) -> BagInfo:
     """The topics of the bag at path (a folder, or one .mcap or .db3 file) with their types and message counts.
     BagError if there is no readable bag there."""
-    path = Path(path)
-    if _is_cut_bag(path):
-        counts: dict[tuple[str, str], int] = {}
-        for topic, msgtype, _, raw in read_cut_bag(path):
-            counts[topic, msgtype] = counts.get((topic, msgtype), 0) + (raw is not None)
-        topics = tuple(TopicInfo(topic, msgtype, count) for (topic, msgtype), count in counts.items())
-        return BagInfo(path, "mcap", False, topics)
-    reader = _open_reader(path)
-    try:
-        storage = "sqlite3" if path.suffix == ".db3" or any(path.glob("*.db3")) else "mcap"
-        return BagInfo(path, storage, True, tuple(TopicInfo(c.topic, c.msgtype, c.msgcount)
-                                                  for c in reader.connections))
-    finally:
-        reader.close()
+    return _bag_topics(path)[0]
+
+
+def undecodable_topics(path: Path) -> dict[str, str]:
+    """The topics of the bag at path whose messages cannot be decoded, each with why: of a type that neither the bag
+    defines (in a definition that parses) nor this environment knows. BagError if there is no readable bag there."""
+    _, definitions = _bag_topics(path)
+    decoder = BagDecoder(Path(path))
+    return {topic: why for topic, (msgtype, definition) in definitions.items()
+            if (why := decoder.why_undecodable(msgtype, definition))}
 
 
 #: MCAP schema encodings (rosbag2's) as rosbags names the formats of message definitions
@@ -186,6 +288,15 @@ def definition_types(msgtype: str, definition: MessageDefinition) -> dict[str, A
     return {}
 
 
+def _no_definition(msgtype: str, definition: MessageDefinition) -> str:
+    """How the bag fails to define msgtype (definition_types found no type of that name in its definition)."""
+    if not msgtype:
+        return "its channel has no schema: no type to decode its messages by"
+    if definition.format == MessageDefinitionFormat.NONE or not definition.data.strip():
+        return f"the bag carries no definition of {msgtype}"
+    return f"the bag's definition of {msgtype} ({definition.format.name}) does not parse"
+
+
 class BagDecoder:
     """Decodes the messages of one bag: each by its own type's definition in the bag (the one it was recorded with),
     or by the installed one (swim_typestore) where the bag has none."""
@@ -209,9 +320,21 @@ class BagDecoder:
                 store = self._installed
                 if msgtype not in store.fielddefs:
                     raise BagError(f"{self.path}: {topic} is of type {msgtype}, which neither the bag defines nor "
-                                   f"this environment knows (ROS 2 Jazzy's types and swim_interfaces')")
+                                   f"this environment knows (ROS 2 Jazzy's types and swim_interfaces'): "
+                                   f"{_no_definition(msgtype, definition)}")
             self._stores[key] = store
         return self._stores[key]
+
+    def why_undecodable(self, msgtype: str, definition: MessageDefinition) -> str:
+        """Why messages of msgtype, of which the bag carries definition, cannot be decoded; '' when they can."""
+        try:
+            self.store("", msgtype, definition)
+        except BagError:
+            if not msgtype:
+                return _no_definition(msgtype, definition)
+            return (f"{_no_definition(msgtype, definition)}, and this environment does not know the type (ROS 2 "
+                    f"Jazzy's types and swim_interfaces' are known)")
+        return ""
 
     def decode(self, topic: str, timestamp: int, msgtype: str, definition: MessageDefinition, raw: bytes) -> Any:
         store = self.store(topic, msgtype, definition)
@@ -236,6 +359,9 @@ def read_messages(path: Path, topics: tuple[str, ...]) -> Iterator[tuple[str, in
                 yield topic, timestamp, decoder.decode(topic, timestamp, msgtype, definition, raw)
         return
     reader = _open_reader(path)
+    if reader is None:
+        yield from _mcap_messages(path, topics, decoder)
+        return
     try:
         connections = [c for c in reader.connections if c.topic in topics]
         if not connections:   # rosbags reads every message when given no connection
@@ -252,6 +378,32 @@ def read_messages(path: Path, topics: tuple[str, ...]) -> Iterator[tuple[str, in
         reader.close()
 
 
+def _mcap_messages(path: Path, topics: tuple[str, ...], decoder: BagDecoder) -> Iterator[tuple[str, int, Any]]:
+    """read_messages of an MCAP bag rosbags cannot open, with the mcap library: by its index in log-time order;
+    without summary, linearly in the order written."""
+    from mcap.exceptions import McapError
+    from mcap.reader import make_reader
+    file = _mcap_file(path, "rosbags cannot open it")
+    summary = _mcap_summary(file)
+    if summary is None or not summary.chunk_indexes:
+        for topic, msgtype, timestamp, raw, definition in _mcap_records(file):
+            if raw is not None and topic in topics:
+                yield topic, timestamp, decoder.decode(topic, timestamp, msgtype, definition, raw)
+        return
+    for channel in summary.channels.values():   # every topic asked decodes, before any message is read
+        if channel.topic in topics:
+            decoder.store(channel.topic, *_schema_definition(summary.schemas.get(channel.schema_id)))
+    with open(file, "rb") as stream:
+        try:
+            for schema, channel, message in make_reader(stream).iter_messages(topics=list(topics),
+                                                                             log_time_order=True):
+                msgtype, definition = _schema_definition(schema)
+                yield channel.topic, message.log_time, decoder.decode(channel.topic, message.log_time, msgtype,
+                                                                      definition, message.data)
+        except (McapError, ValueError) as err:
+            raise BagError(f"{file}: cannot read its messages: {type(err).__name__}: {err}") from err
+
+
 def read_cut_bag(path: Path) -> Iterator[tuple[str, str, int, bytes | None]]:
     """(topic, type name, log time ns, CDR bytes) of every message in the complete chunks of a bag folder's MCAP
     file that has no summary (its recorder was killed), in the order written, read linearly with the mcap library
@@ -263,9 +415,6 @@ def read_cut_bag(path: Path) -> Iterator[tuple[str, str, int, bytes | None]]:
 
 def _cut_bag_records(path: Path) -> Iterator[tuple[str, str, int, bytes | None, MessageDefinition]]:
     """read_cut_bag's records, each with the definition of its type the bag carries (its channel's schema)."""
-    from mcap.exceptions import EndOfFile, McapError
-    from mcap.records import Channel, Message, Schema
-    from mcap.stream_reader import StreamReader
     files = sorted(Path(path).glob("*.mcap"))
     databases = sorted(p.name for p in Path(path).glob("*.db3"))
     if databases and not files:
@@ -274,17 +423,25 @@ def _cut_bag_records(path: Path) -> Iterator[tuple[str, str, int, bytes | None, 
     if len(files) != 1:
         raise BagError(f"{path}: not a rosbag2 bag: no metadata.yaml, and "
                        + (f"{len(files)} MCAP files (give one of them)" if files else "no .mcap or .db3 file"))
+    yield from _mcap_records(files[0])
+
+
+def _mcap_records(file: Path) -> Iterator[tuple[str, str, int, bytes | None, MessageDefinition]]:
+    """(topic, type name, log time ns, CDR bytes, the definition of its type the file carries) of every message of
+    the MCAP file, read linearly in the order written up to the first incomplete record (a file cut short); and
+    (topic, type name, 0, None, definition) for each channel as it is declared. BagError if it is not MCAP."""
+    from mcap.exceptions import EndOfFile, McapError
+    from mcap.records import Channel, Message, Schema
+    from mcap.stream_reader import StreamReader
     schemas: dict[int, tuple[str, MessageDefinition]] = {}
     channels: dict[int, tuple[str, str, MessageDefinition]] = {}
-    with open(files[0], "rb") as stream:
+    with open(file, "rb") as stream:
         try:
             for record in StreamReader(stream, skip_magic=False, validate_crcs=False).records:
                 if isinstance(record, Schema):
-                    definition_format = SCHEMA_FORMATS.get(record.encoding, MessageDefinitionFormat.NONE)
-                    schemas[record.id] = (record.name, MessageDefinition(definition_format,
-                                                                         record.data.decode(errors="replace")))
+                    schemas[record.id] = _schema_definition(record)
                 elif isinstance(record, Channel):
-                    msgtype, definition = schemas[record.schema_id]
+                    msgtype, definition = schemas[record.schema_id] if record.schema_id else _schema_definition(None)
                     channels[record.id] = (record.topic, msgtype, definition)
                     yield record.topic, msgtype, 0, None, definition
                 elif isinstance(record, Message):
@@ -293,4 +450,4 @@ def _cut_bag_records(path: Path) -> Iterator[tuple[str, str, int, bytes | None, 
         except EndOfFile:
             return
         except (McapError, KeyError) as err:   # not MCAP, or a record naming a schema or channel never declared
-            raise BagError(f"{files[0]}: not a readable MCAP file: {type(err).__name__}: {err}") from err
+            raise BagError(f"{file}: not a readable MCAP file: {type(err).__name__}: {err}") from err

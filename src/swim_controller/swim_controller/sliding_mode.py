@@ -54,10 +54,14 @@ class SlidingMode:
             raise ValueError(f"disturbance bound margin must be finite and >= 1, got {self.disturbance_bound_margin!r}")
 
     def term(self, sliding_variable: Array, plan_bound_n_m: Optional[float] = None) -> Array:
-        """eps (N m, heave and pitch) for the sliding variable s, with D = disturbance_bound_margin plan_bound_n_m
-        (the plan's D(t) at this instant, N m) or, when the plan has none (None), the constant
+        """eps (N m, heave and pitch) for the sliding variable s (2,), with D = disturbance_bound_margin
+        plan_bound_n_m (the plan's D(t) at this instant, N m) or, when the plan has none (None), the constant
         disturbance_bound_n_m."""
+        return sliding_variable * self.term_factor(math.hypot(sliding_variable[0], sliding_variable[1]),
+                                                   plan_bound_n_m)
+
+    def term_factor(self, sliding_norm: float, plan_bound_n_m: Optional[float] = None) -> float:
+        """-D / max(||s||, phi), N m per unit of s: eps = term_factor s, for ||s|| = sliding_norm (D as in term)."""
         bound = self.disturbance_bound_n_m if plan_bound_n_m is None else \
             self.disturbance_bound_margin * plan_bound_n_m
-        norm = math.hypot(sliding_variable[0], sliding_variable[1])
-        return sliding_variable * (-bound / max(norm, self.boundary_layer))
+        return -bound / max(sliding_norm, self.boundary_layer)

@@ -26,10 +26,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import TYPE_CHECKING, Callable, Optional
+from typing import TYPE_CHECKING, Callable, Optional, Sequence
 
 import numpy as np
 import numpy.typing as npt
+from numpy.linalg import _umath_linalg
 
 from swim_controller.errors import PlanError
 from swim_controller.sliding_mode import SlidingMode
@@ -158,7 +159,7 @@ class CascadeTracker:
         self.sliding_mode = sliding_mode
         self.sliding_mode_enabled = sliding_mode_enabled
         self.trajectory: Optional[Trajectory] = None
-        self._integral = np.zeros(0)
+        self._integral: list[float] = []   # int (y - y_des) dt (ny,), rad s or m s
         self._last_time_s: Optional[float] = None
 
     @property
@@ -178,7 +179,7 @@ class CascadeTracker:
             raise PlanError(f"the plan was made with the {trajectory.flow_model} flow model, this tracker runs the "
                             f"{self.flow_model} one")
         self.trajectory = trajectory
-        self._integral = np.zeros(trajectory.ny)
+        self._integral = [0.0] * trajectory.ny
         self._last_time_s = None
         if self._lag_rate is not None:
             assert trajectory.lag is not None   # a circulatory Trajectory has its lag states
@@ -186,41 +187,47 @@ class CascadeTracker:
             self.lag_estimator.reset(trajectory.lag[0] if initial_lag is None else initial_lag)
 
     def step(self, plan_time_s: float, q: Array, qdot: Array) -> ControlOutput:
-        """The torque for the period starting at plan_time_s, from the measured q and qdot."""
+        """The torque for the period starting at plan_time_s, from the measured q and qdot (nq,)."""
         trajectory = self.trajectory
         if trajectory is None:
             raise PlanError("no plan: call start() first")
         ref = trajectory.sample(plan_time_s)
         holding = plan_time_s > trajectory.duration_s
-        ny, nq = trajectory.ny, trajectory.nq
-        error_q = q - ref.q
+        # the vectors of the law on Python floats: a handful of scalars each, where numpy's per-call overhead would
+        # be most of the step; the products with matrices stay numpy's (its BLAS sums in an order of its own)
+        error_q = [measured - planned for measured, planned in zip(q.tolist(), ref.q.tolist())]
         elapsed_s = 0.0 if self._last_time_s is None else plan_time_s - self._last_time_s
         if self._last_time_s is not None and not holding:
-            self._integral = self._integral + error_q[:ny] * max(elapsed_s, 0.0)
+            integrated_s = max(elapsed_s, 0.0)
+            self._integral = [total + error * integrated_s for total, error in zip(self._integral, error_q)]
         self._last_time_s = plan_time_s
-        if self.lag_estimator is None:
-            lag = NO_LAG
-            error_state = np.concatenate([self._integral, error_q, qdot - ref.qdot])
-        else:
+        errors = self._integral + error_q + [measured - planned for measured, planned
+                                             in zip(qdot.tolist(), ref.qdot.tolist())]
+        lag = NO_LAG
+        if self.lag_estimator is not None:
             lag = self.lag_estimator.update(elapsed_s, q, qdot)
-            error_state = np.concatenate([self._integral, error_q, qdot - ref.qdot, lag - ref.lag])
+            errors += [estimated - planned for estimated, planned in zip(lag.tolist(), ref.lag.tolist())]
+        error_state = np.array(errors)
         mio, cio_qdot = self._io(q, qdot, lag)
         if holding:
+            nq = trajectory.nq
             u = hold_acceleration(q[nq - 2:], qdot[nq - 2:], trajectory.q[-1, nq - 2:])
         else:
             # the torque is held for one period: feed forward u_des at the period's midpoint
-            u_des = trajectory.sample(plan_time_s + 0.5 * self.sample_period_s).foil_acceleration
-            u = u_des - ref.lqr_gain @ error_state
-        torque = mio @ u + cio_qdot
-        sliding = np.zeros(2)
+            heave_des, pitch_des = trajectory.foil_acceleration_at(plan_time_s + 0.5 * self.sample_period_s)
+            heave_feedback, pitch_feedback = (ref.lqr_gain @ error_state).tolist()
+            u = np.array([heave_des - heave_feedback, pitch_des - pitch_feedback])
+        torque = [inertial + rest for inertial, rest in zip((mio @ u).tolist(), cio_qdot.tolist())]
+        sliding = [0.0, 0.0]
         if self.sliding_mode_enabled and not holding:
-            sliding = self.sliding_mode.term(np.linalg.solve(mio, ref.riccati_input_gain @ error_state),
-                                             ref.disturbance_bound_n_m)
-            torque = torque + sliding
+            s_heave, s_pitch = solve(mio, ref.riccati_input_gain @ error_state).tolist()
+            factor = self.sliding_mode.term_factor(math.hypot(s_heave, s_pitch), ref.disturbance_bound_n_m)
+            sliding = [s_heave * factor, s_pitch * factor]
+            torque = [law + term for law, term in zip(torque, sliding)]
         command, saturated = saturate(torque, self.torque_limits_n_m)
-        return ControlOutput(torque=command, saturated=saturated, unsaturated_torque=torque,
-                             sliding_torque=sliding, error_state=error_state, reference=ref, holding=holding,
-                             lag_estimate=lag)
+        return ControlOutput(torque=command, saturated=saturated, unsaturated_torque=np.array(torque),
+                             sliding_torque=np.array(sliding), error_state=error_state, reference=ref,
+                             holding=holding, lag_estimate=lag)
 
     def hold(self, q: Array, qdot: Array, psi_target: Array) -> tuple[Array, tuple[bool, bool]]:
         """The torque that holds the foil still at psi_target (heave, pitch), with no plan involved. A state comes
@@ -278,9 +285,21 @@ def hold_acceleration(psi: Array, psi_rate: Array, psi_target: Array) -> Array:
     return -HOLD_STIFFNESS_PER_S2 * (psi - psi_target) - HOLD_DAMPING_PER_S * psi_rate
 
 
-def saturate(torque: Array, limits: Array) -> tuple[Array, tuple[bool, bool]]:
-    """Clip to +-limits; a non-finite torque becomes zero and counts as saturated."""
-    if not (math.isfinite(torque[0]) and math.isfinite(torque[1])):
+def saturate(torque: Sequence[float] | Array, limits: Array) -> tuple[Array, tuple[bool, bool]]:
+    """Clip the (heave, pitch) torque (N m) to +-limits (2,); a non-finite torque becomes zero and counts as
+    saturated."""
+    heave, pitch = float(torque[0]), float(torque[1])
+    heave_limit, pitch_limit = float(limits[0]), float(limits[1])
+    if not (math.isfinite(heave) and math.isfinite(pitch)):
         return np.zeros(2), (True, True)
-    command = np.clip(torque, -limits, limits)
-    return command, (bool(abs(torque[0]) > limits[0]), bool(abs(torque[1]) > limits[1]))
+    command = np.array([min(max(heave, -heave_limit), heave_limit), min(max(pitch, -pitch_limit), pitch_limit)])
+    return command, (abs(heave) > heave_limit, abs(pitch) > pitch_limit)
+
+
+def solve(matrix: Array, rhs: Array) -> Array:
+    """matrix^-1 rhs for a square matrix (n, n) and rhs (n,): numpy.linalg.solve's own LAPACK kernel (gesv),
+    the same numbers, without the argument checks and floating-point error state it sets up per call (most of the
+    ~8 us it takes for a 2 x 2). For a matrix that cannot be singular, as Mio (an inertia, positive definite at
+    every finite state): a singular one gives non-finite entries and a RuntimeWarning, not LinAlgError."""
+    solution: Array = _umath_linalg.solve1(matrix, rhs, signature="dd->d")
+    return solution

@@ -20,11 +20,12 @@ velocity filter.
 
 Plans of either flow model (PlannedTrajectory's flow_model) run on the vehicle model of that flow, one per vehicle
 and lane. The ideal flow's models of the rig's two vehicles on its default lane are built at start, not by the
-first goal (about half a second of model setup and compilation); another lane's ideal model is built by its first
-goal (about 2 s with the loop held up). A circulatory model is built by the first goal that needs it on a thread
-of its own (ModelBuilder), while this node's one thread keeps serving states, commands, cancels and the goal under
-way; that goal starts once it is built. Its C code takes about 7 s to compile the first time on a 2-core host
-(cached on disk after: 0.2-0.5 s to load); meanwhile the node answered each state of a lock-step plant within
+first goal (about half a second of model setup and compilation). Any other model (another lane's, a circulatory
+one) is built by the first goal that needs it on a thread of its own (ModelBuilder), while this node's one thread
+keeps serving states, commands, cancels and the goal under way; the new goal starts, preempting that one, once its
+model is built, and a goal canceled or preempted while it waits ends at once (the build goes on, for the next goal
+that needs it). A model's C code takes about 2 s (ideal) to 7 s (circulatory) to compile the first time on a 2-core
+host (cached on disk after: 0.2-0.5 s to load); meanwhile the node answered each state of a lock-step plant within
 28 ms (the compilation runs in the C compiler's process, the model's symbolic setup holds the interpreter a few
 ms at a time).
 
@@ -154,15 +155,18 @@ class ModelBuilder:
 
 class _Awaited:
     """A concurrent.futures.Future awaited in an rclpy coroutine: yields (the executor resumes the coroutine on its
-    next wake-up) until the future is done, then gives its result."""
+    next wake-up) until the future is done, giving True, or until give_up() holds, giving False."""
 
-    def __init__(self, future: concurrent.futures.Future) -> None:
+    def __init__(self, future: concurrent.futures.Future, give_up: Callable[[], bool]) -> None:
         self.future = future
+        self.give_up = give_up
 
-    def __await__(self) -> Generator[None, None, VehicleModel]:
+    def __await__(self) -> Generator[None, None, bool]:
         while not self.future.done():
+            if self.give_up():
+                return False
             yield
-        return self.future.result()
+        return True
 
 
 class ActiveGoal:
@@ -245,29 +249,26 @@ class TrackerNode(Node):
         is a coordinate, the model the same for every starting lane)."""
         return ModelKey(constrained, lane_radius_m if constrained else self.rig.constrained_lane_radius_m, flow_model)
 
-    async def _model(self, key: ModelKey) -> VehicleModel:
-        """The vehicle a plan runs on, built once: the ideal flow's here (a new lane's: about 2 s with the loop
-        held up); the circulatory flow's off this thread (ModelBuilder): awaiting it lets the executor serve
-        everything else meanwhile."""
+    async def _model(self, key: ModelKey, give_up: Callable[[], bool]) -> Optional[VehicleModel]:
+        """The vehicle a plan runs on, built once, off this thread (ModelBuilder): awaiting it lets the executor
+        serve everything else meanwhile. None if give_up() holds first (the build goes on for the next goal)."""
         model = self._models.get(key)
         if model is not None:
             return model
-        if key.flow_model == "ideal":
-            model = self._models[key] = build_model(self.rig, key)
-            return model
-        if key not in self._building:
+        future = self._building.get(key)
+        if future is None:
             self.get_logger().info(f"building the {key.flow_model} flow's "
                                    f"{'constrained' if key.constrained else 'free'} vehicle model "
                                    f"(lane {key.lane_radius_m} m) for this plan")
-            self._building[key] = self._builder.submit(key)
-        future = self._building[key]
+            future = self._building[key] = self._builder.submit(key)
+        if not await _Awaited(future, give_up):
+            return None
+        if self._building.get(key) is future:
+            del self._building[key]
         try:
-            model = await _Awaited(future)
+            model = future.result()
         except Exception as err:  # noqa: BLE001 - the goal is refused with the reason, the node keeps running
             raise PlanError(f"the {key.flow_model} flow's vehicle model could not be built: {err!r}") from err
-        finally:
-            if self._building.get(key) is future:
-                del self._building[key]
         self._models[key] = model
         return model
 
@@ -416,11 +417,13 @@ class TrackerNode(Node):
             self._waiting_for_model.append(handle)
             try:
                 model = await self._model(self._model_key(trajectory.constrained, trajectory.lane_radius_m,
-                                                          trajectory.flow_model))
+                                                          trajectory.flow_model),
+                                          lambda: handle.is_cancel_requested or arrival != self._goals_received)
             finally:
                 self._waiting_for_model.remove(handle)
             time_scale = self.get_parameter("time_scale").value
-            if time_scale != 1.0:   # refused past the motor limits, with the largest feasible time scale named
+            # refused past the motor limits, with the largest feasible time scale named
+            if model is not None and time_scale != 1.0:
                 trajectory = trajectory.time_scaled(time_scale, model.torque_limits())
         except (PlanError, ValueError, SwimModelError) as err:
             handle.abort()
@@ -434,6 +437,7 @@ class TrackerNode(Node):
             handle.abort()
             return ExecutePlan.Result(error_code=ExecutePlan.Result.PREEMPTED,
                                       error_string="preempted by a new goal while its vehicle model was built")
+        assert model is not None   # give_up held only for a cancel or a newer goal, both answered above
         if self._goal is not None:
             self._goal.finish(Outcome.PREEMPTED, "preempted by a new goal")
         goal = ActiveGoal(handle, Supervisor(self._make_tracker(model)), trajectory.duration_s)

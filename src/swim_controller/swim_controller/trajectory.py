@@ -23,6 +23,7 @@ Without a stored bound (an ideal-flow plan, a library without one) the tracker's
 """
 from __future__ import annotations
 
+import bisect
 import dataclasses
 import math
 from typing import Optional
@@ -40,8 +41,9 @@ Array = npt.NDArray[np.float64]
 
 #: the largest trajectory the tracker accepts, in samples. Assumed from memory: a free-vehicle sample is 53 float64
 #: (t, q, qdot, u, tau and two 2 x 10 gains: 424 B), so 1e6 samples are ~0.4 GB, held about three times over by
-#: the tracker (the message's arrays, the interpolation rows and their slopes); a 1000-cruise plan (0.8 M samples)
-#: fits. The planner serves no larger plan by default (swim_planner.maneuver.PlanBounds.max_samples).
+#: the tracker (the message's arrays, the interpolation rows and their slopes; q's Hermite terms and the times as
+#: Python floats add 80-96 B a sample); a 1000-cruise plan (0.8 M samples) fits. The planner serves no larger plan by
+#: default (swim_planner.maneuver.PlanBounds.max_samples).
 MAX_TRACKED_SAMPLES = 1_000_000
 
 
@@ -111,6 +113,12 @@ class Trajectory:
     _segment_start_s: Array = dataclasses.field(init=False, repr=False)   # (segments,) their start times, s
     _rows: Array = dataclasses.field(init=False, repr=False)     # (N, m) every sampled quantity, one row a sample
     _slopes: Array = dataclasses.field(init=False, repr=False)   # (N - 1, m) the rows' slopes between samples
+    #: (N - 1, 2 nq) per interval k, qdot_k - s_k and qdot_(k+1) - s_k with s_k the secant slope of q: the Hermite
+    #: correction's terms (sample)
+    _hermite: Array = dataclasses.field(init=False, repr=False)
+    #: time_s as Python floats (N,), s: bisect finds a sample interval in a fraction of numpy's per-call overhead
+    _times: list[float] = dataclasses.field(init=False, repr=False)
+    _sizes: tuple[int, int, int] = dataclasses.field(init=False, repr=False)   # (nq, n_lag, n), read per sample
 
     def __post_init__(self) -> None:
         set_field = object.__setattr__   # frozen: fields are set here once, checked
@@ -163,6 +171,10 @@ class Trajectory:
                               axis=1)
         set_field(self, "_rows", rows)
         set_field(self, "_slopes", np.diff(rows, axis=0) / np.diff(self.time_s)[:, None])
+        secant = self._slopes[:, :nq]
+        set_field(self, "_hermite", np.concatenate([self.qdot[:-1] - secant, self.qdot[1:] - secant], axis=1))
+        set_field(self, "_times", self.time_s.tolist())
+        set_field(self, "_sizes", (nq, n_lag, n))
 
     def _check_segments(self, samples: int) -> None:
         if not self.segments:
@@ -204,7 +216,7 @@ class Trajectory:
 
     @property
     def duration_s(self) -> float:
-        return float(self.time_s[-1])
+        return self._times[-1]
 
     def segment_index(self, time_s: float) -> int:
         """Index of the segment running at time_s."""
@@ -216,18 +228,18 @@ class Trajectory:
 
     def sample(self, time_s: float) -> TrajectoryPoint:
         """The trajectory at time_s (clamped to [0, T]): linear in every row, cubic Hermite in q (uses qdot)."""
-        rows, slopes = self._rows, self._slopes
-        t = min(max(time_s, 0.0), self.duration_s)
-        k = min(int(np.searchsorted(self.time_s, t, side="right")) - 1, len(self.time_s) - 2)
-        offset = t - self.time_s[k]
-        row = rows[k] + offset * slopes[k]
-        nq, n, n_lag = self.nq, self.lqr_gain.shape[2], self.n_lag
-        q = row[:nq]
-        # the Hermite correction to linear interpolation of q: h^2 w (1 - w) ((qdot0 - slope) (1 - w) - ...)
-        step = self.time_s[k + 1] - self.time_s[k]
+        t, k, offset = self._interval(time_s)
+        row = self._rows[k] + offset * self._slopes[k]
+        nq, n_lag, n = self._sizes
+        # the Hermite correction to linear interpolation of q, on Python floats (a few scalars: numpy's per-call
+        # overhead would dominate): h w (1 - w) ((qdot0 - slope) (1 - w) - (qdot1 - slope) w) with w = offset / h
+        times = self._times
+        step = times[k + 1] - times[k]
         w = offset / step
-        secant = slopes[k, :nq]
-        q = q + step * w * (1.0 - w) * ((self.qdot[k] - secant) * (1.0 - w) - (self.qdot[k + 1] - secant) * w)
+        hermite_scale = step * w * (1.0 - w)
+        hermite = self._hermite[k].tolist()
+        q = np.array([linear + hermite_scale * (before * (1.0 - w) - after * w)
+                      for linear, before, after in zip(row[:nq].tolist(), hermite[:nq], hermite[nq:])])
         bound = None if self.disturbance_bound is None else float(row[2 * nq + 4 + n_lag])
         gains = row[2 * nq + 4 + n_lag + (bound is not None):]
         return TrajectoryPoint(
@@ -235,6 +247,23 @@ class Trajectory:
             torque=row[2 * nq + 2:2 * nq + 4], lqr_gain=gains[:2 * n].reshape(2, n),
             riccati_input_gain=gains[2 * n:].reshape(2, n), lag=row[2 * nq + 4:2 * nq + 4 + n_lag],
             disturbance_bound_n_m=bound)
+
+    def foil_acceleration_at(self, time_s: float) -> tuple[float, float]:
+        """u_des = psiddot (heave, pitch), rad/s^2, at time_s: sample(time_s).foil_acceleration, the same numbers,
+        without interpolating the rest of the row (the tracker's mid-period feed-forward)."""
+        _, k, offset = self._interval(time_s)
+        first = 2 * self._sizes[0]
+        heave, pitch = self._rows[k, first:first + 2].tolist()
+        heave_slope, pitch_slope = self._slopes[k, first:first + 2].tolist()
+        return heave + offset * heave_slope, pitch + offset * pitch_slope
+
+    def _interval(self, time_s: float) -> tuple[float, int, float]:
+        """(t, k, t - t_k): time_s clamped to [0, T] as t, and the sample interval [t_k, t_(k+1)] holding it
+        (k in 0..N-2: the last interval holds T, the first a time before the first sample)."""
+        times = self._times
+        t = min(max(time_s, 0.0), times[-1])
+        k = max(min(bisect.bisect_right(times, t) - 1, len(times) - 2), 0)
+        return t, k, t - times[k]
 
     def time_scaled(self, time_scale: float, torque_limits_n_m: npt.ArrayLike) -> Trajectory:
         """This trajectory run time_scale (lambda) times faster: P3 and Theorem 1 (module docstring).

@@ -9,12 +9,13 @@ package above this one): swim_model's sinusoidal gait faded in from rest, the un
 """
 import dataclasses
 import math
+import os
 import time
 
 import numpy as np
 import pytest
 
-from swim_ros.calls import RetryPolicy, spin_until
+from swim_ros.calls import RetryPolicy, cancel_goal, spin_until
 from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, running_node
 
 PERIOD_S = 0.008
@@ -49,10 +50,32 @@ HOLD_PERIODS, HELD_STILL_RATE_RAD_S = 100, 0.05
 
 @pytest.fixture(scope="module")
 def tracker(ros_domain, tmp_path_factory):
+    """The node, its compiled models cached in a folder of its own holding a copy of the user's cache: the models
+    it builds for NEW_LANES_M are compiled from nothing (seconds), and left behind in no one's cache."""
+    import shutil
+
+    from swim_model.codegen import cache_dir
     log = tmp_path_factory.mktemp("tracker_node") / "log.txt"
-    with running_node("swim_controller", "tracker_node", log, "-p", f"stale_after_periods:={STALE_AFTER_PERIODS}",
-                      "-p", "feedback_rate_hz:=20.0"):
-        yield log   # the node's output, for failure messages
+    node_cache = tmp_path_factory.mktemp("tracker_node_cache")
+    if cache_dir().is_dir():
+        shutil.copytree(cache_dir(), node_cache, dirs_exist_ok=True)
+    user_cache = os.environ.get("SWIM_CACHE_DIR")
+    os.environ["SWIM_CACHE_DIR"] = str(node_cache)   # read by the node's process when it starts
+    try:
+        with running_node("swim_controller", "tracker_node", log, "-p", f"stale_after_periods:={STALE_AFTER_PERIODS}",
+                          "-p", "feedback_rate_hz:=20.0"):
+            restore_environment("SWIM_CACHE_DIR", user_cache)
+            yield log   # the node's output, for failure messages
+    finally:
+        restore_environment("SWIM_CACHE_DIR", user_cache)
+
+
+def restore_environment(name, value):
+    """os.environ[name] = value, or no such variable if value is None."""
+    if value is None:
+        os.environ.pop(name, None)
+    else:
+        os.environ[name] = value
 
 
 @dataclasses.dataclass(frozen=True)
@@ -241,6 +264,60 @@ def test_a_new_goal_preempts_and_cancel_holds(rig_loop, plan_message):
     assert result.error_code == ExecutePlan.Result.CANCELED
     # canceled: the foil is brought to rest where it is
     assert_held_still(plant)
+
+
+#: a state's command while the model of another lane is built: milliseconds (the build is on its own thread); on the
+#: control thread a state would wait for the whole build (seconds: NEW_LANES_M are compiled from nothing), and
+#: 0.15 s leaves room for a loaded host's scheduling
+SLOWEST_ANSWER_S = 0.15
+#: the build of another lane's ideal model: about 2-3 s compiling on a quiet 2-core host; 60 s for a loaded one
+MODEL_BUILD_TIMEOUT_S = 60.0
+#: lanes no other test of this module plans on (the rig's lanes are 0.43 and 0.48 m; the tank's radius 0.875 m), so
+#: the node has no model of them yet; a millimetre by this process's id apart from any earlier run's, so that no
+#: cache holds their compiled models either: each is compiled while the test runs (2 s or more, a cancel's retry
+#: after a lost answer comes 1 s after the request)
+NEW_LANES_M = tuple(lane_m + 1e-3 * (os.getpid() % 50) for lane_m in (0.55, 0.65))
+
+
+def on_lane(plan_message, lane_radius_m):
+    """The module's plan, said to be on another lane."""
+    import copy
+    message = copy.deepcopy(plan_message)
+    message.lane_radius_m = lane_radius_m
+    return message
+
+
+def test_a_new_lane_model_is_built_while_the_plan_under_way_is_tracked(rig_loop, plan_message):
+    """A plan on a lane the node has no model for starts once its model is built (preempting the plan under way,
+    unless that one ended first); meanwhile every state is answered within milliseconds."""
+    from swim_interfaces.action import ExecutePlan
+    plant, client = rig_loop
+    _, first = send(plant, client, plan_message)
+    plant.step_periods(20)
+    feedback = []
+    second_handle, second = send(plant, client, on_lane(plan_message, NEW_LANES_M[0]), feedback.append)
+    answers_s = []
+    deadline = time.monotonic() + MODEL_BUILD_TIMEOUT_S
+    while not feedback:   # the new lane's plan under way
+        start = time.monotonic()
+        plant.step()
+        answers_s.append(time.monotonic() - start)
+        assert start < deadline and not second.done(), "the plan on the new lane never started"
+    assert run_until(plant, first, 0).error_code in (ExecutePlan.Result.PREEMPTED, ExecutePlan.Result.SUCCESSFUL)
+    assert max(answers_s) < SLOWEST_ANSWER_S, f"a state waited {max(answers_s):.3f} s during the build"
+    cancel_goal(plant.executor, second_handle, POLICY)
+    assert run_until(plant, second, 100).error_code == ExecutePlan.Result.CANCELED
+
+
+def test_a_goal_canceled_while_its_lane_model_is_built_never_starts(rig_loop, plan_message):
+    """A goal still waiting for its vehicle model is canceled: it ends CANCELED, never started, without waiting for
+    the build (which goes on for the next goal on that lane)."""
+    from swim_interfaces.action import ExecutePlan
+    plant, client = rig_loop
+    handle, result = send(plant, client, on_lane(plan_message, NEW_LANES_M[1]))
+    cancel_goal(plant.executor, handle, POLICY)
+    result = run_until(plant, result, 100)
+    assert result.error_code == ExecutePlan.Result.CANCELED and "not started" in result.error_string
 
 
 def test_stale_state_stops_the_motors_and_aborts(rig_loop, plan_message):

@@ -34,6 +34,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import math
+import threading
 from functools import cached_property
 from typing import Sequence
 
@@ -55,6 +56,9 @@ JOINT_NAMES_CONSTRAINED = ("alpha", "phi", "theta")
 #: kinematics.py's chord direction dir(a) = (-sin a, cos a) lies at angle a + pi/2 in the tank frame: the foil pose's
 #: angle is alpha + theta + this (the convention of swim_model.wake's pose)
 FOIL_CHORD_ANGLE_OFFSET_RAD = 0.5 * math.pi
+#: step counts of integrate_rk4's compiled chunks: powers of two, so n steps take at most log2(n) + n / 512 calls, each
+#: one C call on buffers (no conversion to CasADi's DM and back: that costs as much as the arithmetic at 1000 steps)
+RK4_CHUNK_STEPS = tuple(2 ** k for k in range(10))
 
 
 def coriolis_from_mass(mass: ca.SX, q: ca.SX, qdot: ca.SX) -> ca.SX:
@@ -218,6 +222,18 @@ class VehicleModel:
         x_next = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
         return ca.Function("rk4_step", [x, tau, h], [x_next], ["x", "tau", "h"], ["x_next"])
 
+    def _rk4_chunk_functions(self, step: ca.Function) -> list[ca.Function]:
+        """``rk4_steps_<n>`` for n in RK4_CHUNK_STEPS past 1: (x, tau (2, n), h) -> the states after each of n
+        steps of ``step`` (the RK4 step, tau[:, k] held over step k), (nx, n); generated as calls of the same step
+        function, so they compute bit for bit what n calls of it do."""
+        functions = []
+        for steps in RK4_CHUNK_STEPS[1:]:
+            x, tau, h = ca.MX.sym("x", self.nx), ca.MX.sym("tau", 2, steps), ca.MX.sym("h")
+            states = step.mapaccum(steps)(x, tau, ca.repmat(h, 1, steps))
+            functions.append(ca.Function(_rk4_chunk_name(steps), [x, tau, h], [states], ["x", "tau", "h"],
+                                         ["states"]))
+        return functions
+
     def foil_pose_function(self) -> ca.Function:
         """q -> (x_F m, y_F m, chord angle alpha + theta + pi/2 rad): the foil frame's origin F and its chord's angle
         in the tank frame (the pose swim_model.wake.Wake.step takes). A CasADi SX function (map it over many q, or
@@ -253,8 +269,8 @@ class VehicleModel:
 
     def _numeric_functions(self) -> list[ca.Function]:
         functions = dict(self.symbolic.functions)
-        functions["rk4_step"] = self.rk4_step_function()
-        return list(functions.values())
+        functions["rk4_step"] = step = self.rk4_step_function()
+        return [*functions.values(), *self._rk4_chunk_functions(step)]
 
     def _codegen_tag(self) -> str:
         kind = "constrained" if self.constrained else "free"
@@ -394,7 +410,10 @@ class VehicleModel:
 
     def integrate_rk4(self, q: npt.ArrayLike, qdot: npt.ArrayLike, torques: npt.ArrayLike,
                       step_s: float, lag: npt.ArrayLike | None = None) -> tuple[Array, ...]:
-        """RK4 steps of step_s seconds, torques[k] held over step k, in one compiled call.
+        """RK4 steps of step_s seconds, torques[k] held over step k, in a few compiled calls.
+
+        The steps are the compiled ``rk4_step``'s, bit for bit (chunks of RK4_CHUNK_STEPS steps called on buffers).
+        Safe to call from several threads (the chunks' buffers are used by one call at a time).
 
         Args:
             torques: (n, 2) heave and pitch torques, N m.
@@ -407,17 +426,40 @@ class VehicleModel:
         if torque_array.ndim != 2 or torque_array.shape[1] != 2 or not np.all(np.isfinite(torque_array)):
             raise StateError(f"torques must be a finite (n, 2) array, got shape {torque_array.shape}")
         x0 = np.concatenate([self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"), *self._lag(lag)])
-        steps = self._rk4_accumulator(len(torque_array))
-        states = np.asarray(steps(x0, torque_array.T, float(step_s)), dtype=float)
-        trajectory = np.column_stack([x0, states]).T
+        steps = len(torque_array)
+        trajectory = np.empty((steps + 1, self.nx))
+        trajectory[0] = x0
+        step = float(step_s)
+        # the chunks' buffers are shared by every call on this model: one call at a time
+        with self.__dict__.setdefault("_rk4_lock", threading.Lock()):
+            chunks = self._rk4_chunks()
+            done = 0
+            while done < steps:
+                size = min(1 << ((steps - done).bit_length() - 1), RK4_CHUNK_STEPS[-1])
+                chunk = chunks[size]
+                chunk.inputs[0][:] = trajectory[done]
+                chunk.inputs[1][:] = torque_array[done:done + size].ravel()   # (2, size) column-major
+                chunk.inputs[2][0] = step
+                chunk()
+                trajectory[done + 1:done + size + 1] = chunk.outputs[0].reshape(size, self.nx)
+                done += size
         return self._split(trajectory)
 
-    def _rk4_accumulator(self, steps: int) -> ca.Function:
-        cache: dict[int, ca.Function] = self.__dict__.setdefault("_rk4_accumulators", {})
-        if steps not in cache:
-            cache[steps] = self.numeric["rk4_step"].mapaccum(steps)
-        return cache[steps]
+    def _rk4_chunks(self) -> dict[int, codegen.NativeFunction]:
+        """integrate_rk4's compiled chunks by step count, with buffers of their own (not native_function's, which
+        callers fill between their own calls)."""
+        chunks: dict[int, codegen.NativeFunction] | None = self.__dict__.get("_rk4_chunk_cache")
+        if chunks is None:
+            names = {steps: _rk4_chunk_name(steps) for steps in RK4_CHUNK_STEPS}
+            loaded = codegen.native(self._numeric_functions(), self._codegen_tag(), names=list(names.values()))
+            chunks = self.__dict__["_rk4_chunk_cache"] = {steps: loaded[name] for steps, name in names.items()}
+        return chunks
 
     def torque_limits(self) -> Array:
         """(heave, pitch) joint torque limits, N m (paper Sec. 2)."""
         return np.array(self.rig.torque_limits_n_m)
+
+
+def _rk4_chunk_name(steps: int) -> str:
+    """The compiled function of ``steps`` RK4 steps: the step itself for one."""
+    return "rk4_step" if steps == 1 else f"rk4_steps_{steps}"
