@@ -1,6 +1,6 @@
 """swim-record over DDS: rig_state_publisher's latched robot_description and /tf_static and the joint_states
 this test publishes, recorded by a swim-record process started after them under their full names (as rosbag2
-records them); SIGINT closes the bag (metadata.yaml
+records them), a burst faster than its polling whole; SIGINT closes the bag (metadata.yaml
 as rosbag2 writes it, the publishers' QoS in it), SIGKILL leaves a bag that reads up to its last flush."""
 import contextlib
 import os
@@ -56,12 +56,12 @@ def publisher(rclpy_context, tmp_path):
         node = rclpy.create_node("joint_state_source", context=rclpy_context)
         publisher = node.create_publisher(JointState, "joint_states", RECORDABLE_QOS)
 
-        def publish(count, start=0):
+        def publish(count, start=0, pause_s=0.002):
             for k in range(start, start + count):
                 message = JointState(name=["alpha", "phi", "theta"], position=[1e-3 * k, 0.1, -0.1])
                 message.header.stamp.sec, message.header.stamp.nanosec = 1 + k // 125, (k % 125) * 8_000_000
                 publisher.publish(message)
-                time.sleep(0.002)
+                time.sleep(pause_s)
         yield node, publisher, publish
         node.destroy_node()
 
@@ -103,6 +103,24 @@ def test_sigint_closes_the_bag_with_rosbag2_metadata(publisher, tmp_path):
     assert info["message_count"] == sum(t["message_count"] for t in topics.values())
     positions = [m.position[0] for _, _, m in read_messages(bag, ("/joint_states",))]
     assert positions == pytest.approx([1e-3 * k for k in range(STATES)])   # every message, in order
+
+
+def test_a_burst_between_two_polls_is_recorded_whole_and_in_order(publisher, tmp_path):
+    """Messages published faster than the recorder polls its queues (swim_bringup.record.POLL_PERIOD_S), up to the
+    publisher's history (RECORDABLE_QOS), wait in the subscription's queue and are all written, in order."""
+    from swim_bringup.bag import read_messages
+    from swim_ros.qos import RECORDABLE_QOS
+    burst = RECORDABLE_QOS.depth - 100   # a reliable writer keeps this many for a reader behind it
+    bag, log_path = tmp_path / "bag", tmp_path / "record.log"
+    _, _, publish = publisher
+    with recording_all_published(bag, log_path, publisher, "joint_states", "robot_description", "/tf_static") \
+            as recorder:
+        publish(burst, start=STATES, pause_s=0.0)
+        wait_for_line(log_path, f"/joint_states {STATES + burst}", MESSAGE_TIMEOUT_S)
+        os.killpg(recorder.pid, signal.SIGINT)
+        assert recorder.wait(MESSAGE_TIMEOUT_S) == 0, log_path.read_text()
+    positions = [m.position[0] for _, _, m in read_messages(bag, ("/joint_states",))]
+    assert positions == pytest.approx([1e-3 * k for k in range(STATES + burst)])
 
 
 def test_a_killed_recorder_leaves_a_bag_that_reads_up_to_its_last_flush(publisher, tmp_path):

@@ -6,11 +6,13 @@ here).
 
 Each topic is recorded with the QoS its publishers offer (recorder.recording_qos: the latched plan,
 robot_description and /tf_static with transient local, so their last message arrives however late the recorder
-starts), as the CDR bytes received, stamped with the wall time of receipt, its publishers' QoS profiles in the
-bag's metadata.yaml (rosbag2's format, version 9: `ros2 bag info` reads it). Any ROS 2 Jazzy message type and ours
-can be recorded. A line on stderr counts the messages per topic. Ctrl-C (SIGINT) or SIGTERM closes the bag (summary
-and metadata.yaml); the bag is flushed every --flush-period s, so a recorder killed outright (SIGKILL, power loss)
-leaves a bag whose messages up to the last flush read back (swim_bringup.bag.read_messages, Foxglove).
+starts), as the CDR bytes received, stamped with the wall time they are taken from the subscription's queue
+(within POLL_PERIOD_S of their receipt: the queues are polled, no executor wakes per message), its publishers'
+QoS profiles in the bag's metadata.yaml (rosbag2's format, version 9: `ros2 bag info` reads it). Any ROS 2 Jazzy
+message type and ours can be recorded. A line on stderr counts the messages per topic. Ctrl-C (SIGINT) or SIGTERM
+closes the bag (summary and metadata.yaml); the bag is flushed every --flush-period s, so a recorder killed outright
+(SIGKILL, power loss) leaves a bag whose messages up to the last flush read back (swim_bringup.bag.read_messages,
+Foxglove).
 """
 from __future__ import annotations
 
@@ -31,6 +33,9 @@ DISCOVERY_PERIOD_S = 0.5
 FLUSH_PERIOD_S = 1.0
 #: how often the line of counts is rewritten
 STATUS_PERIOD_S = 1.0
+#: how often the subscriptions' queues are emptied into the bag: messages are stamped this late at most, and queue
+#: up to recorder.RECORD_DEPTH a topic meanwhile (a 125 Hz topic fills 3 slots)
+POLL_PERIOD_S = 0.02
 
 
 def hidden(topic: str) -> bool:
@@ -44,13 +49,11 @@ class Recording:
     def __init__(self, bag_path: Path, topics: list[str], all_topics: bool, include_hidden: bool,
                  status: TextIO) -> None:
         import rclpy
-        from rclpy.executors import SingleThreadedExecutor
         self.wanted, self.all_topics, self.include_hidden, self.status = topics, all_topics, include_hidden, status
         self.context = rclpy.Context()
         rclpy.init(context=self.context, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-        self.node = rclpy.create_node("swim_record", context=self.context)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
+        # never spun (TopicRecorder.take_queued polls the subscriptions), so it offers no parameter services
+        self.node = rclpy.create_node("swim_record", context=self.context, start_parameter_services=False)
         self.bag: Optional[BagWriter] = BagWriter(bag_path, {})
         self.recorder = TopicRecorder(self.node, self.bag)
         self.skipped: set[str] = set()
@@ -112,7 +115,7 @@ def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
 
 
 class StopRequest:
-    """Set by SIGINT or SIGTERM; the recording loop ends at its next turn (within a spin's 50 ms), never in the
+    """Set by SIGINT or SIGTERM; the recording loop ends at its next turn (within POLL_PERIOD_S), never in the
     middle of writing a message."""
 
     def __init__(self) -> None:
@@ -149,7 +152,9 @@ def main(argv: Optional[list[str]] = None) -> int:
                 print(("\r" if live else "") + recording.status_line(), end="" if live else "\n", file=sys.stderr,
                       flush=True)
                 next_status = now + STATUS_PERIOD_S
-            recording.executor.spin_once(timeout_sec=0.05)
+            recording.recorder.take_queued()
+            time.sleep(POLL_PERIOD_S)
+        recording.recorder.take_queued()   # what arrived since the last turn
     finally:
         line = recording.status_line()
         recording.close()

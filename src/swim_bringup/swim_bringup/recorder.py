@@ -59,6 +59,23 @@ class TopicRecorder:
         self.subscriptions[topic] = self.node.create_subscription(message_class(type_name), topic, write, qos,
                                                                   raw=True)
 
+    def take_queued(self) -> int:
+        """Write the messages queued now on every subscription into the bag (at most RECORD_DEPTH a topic), each
+        stamped with the wall time it is taken; returns how many. Polled by a process that only records, in place
+        of an executor: an executor wakes and builds its wait set for each arriving message, which cost a
+        recorder beside the lock-step loop several times the writing itself."""
+        written = 0
+        for topic, subscription in self.subscriptions.items():
+            with subscription.handle:
+                for _ in range(RECORD_DEPTH):
+                    taken = subscription.handle.take_message(subscription.msg_type, True)
+                    if taken is None:
+                        break
+                    self.bag.write(topic, self.clock_ns(), taken[0])
+                    self.latest_cdr[topic] = taken[0]
+                    written += 1
+        return written
+
 
 def recording_qos(publishers: Sequence[Any]) -> "QoSProfile":
     """The subscription that receives what every publisher (rclpy TopicEndpointInfo) sends: reliable if all of

@@ -1,8 +1,9 @@
 """The recorder's stamp reader against rclpy's own serialization of the loop's message types; the environment the
-run client leaves to the nodes it starts; the run's topic names, fully qualified as rosbag2 records them."""
+run client leaves to the nodes it starts; a closed client leaves the ROS graph at once; the run's topic names, fully
+qualified as rosbag2 records them."""
 import pytest
 
-from swim_ros.testing.fixtures import ros_domain  # noqa: F401
+from swim_ros.testing.fixtures import new_rclpy_context, ros_domain  # noqa: F401
 
 
 @pytest.mark.parametrize("sec, nanosec", [(0, 0), (63, 184_000_000), (1_795_444_603, 86_991_424), (-5, 999_999_999)])
@@ -35,6 +36,46 @@ def test_the_run_client_leaves_the_nodes_it_starts_fast_dds_defaults(tmp_path, m
         assert not any(os.environ.get(variable) for variable in PROFILE_VARIABLES)
     finally:
         client.close()
+
+
+@pytest.mark.usefixtures("ros_domain")
+def test_a_closed_run_client_leaves_the_graph_at_once(tmp_path):
+    """Closing a client takes its recording subscriptions out of the ROS graph, without waiting for the garbage
+    collector: a reader left matched is sent every message of the next run's loop. The client is kept
+    referenced here, as a caller holding it would."""
+    import rclpy
+    with new_rclpy_context() as context:
+        probe = rclpy.create_node("run_client_probe", context=context)
+        try:
+            _closed_clients_leave(tmp_path, probe)
+        finally:
+            probe.destroy_node()
+
+
+def _closed_clients_leave(tmp_path, probe) -> None:
+    import time
+    from swim_bringup.run_client import RunClient
+
+    def readers() -> list[str]:
+        return [info.node_name for info in probe.get_subscriptions_info_by_topic("/joint_states")]
+
+    def wait_until(condition, timeout_s: float = 10.0) -> bool:
+        deadline = time.monotonic() + timeout_s
+        while not condition() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        return condition()
+    clients: list[RunClient] = []
+    try:
+        clients += [RunClient(tmp_path / f"bag_{k}") for k in range(2)]
+        assert wait_until(lambda: readers().count("swim_run_client") == 2), readers()
+        clients[0].close()
+        clients[0].close()   # twice: nothing more happens
+        assert wait_until(lambda: readers().count("swim_run_client") == 1), readers()
+        clients[1].close()
+        assert wait_until(lambda: "swim_run_client" not in readers()), readers()
+    finally:
+        for client in clients:
+            client.close()
 
 
 def test_the_run_topics_are_fully_qualified_and_the_client_records_none_other(tmp_path):
