@@ -41,6 +41,11 @@ CIRCULATORY_FREE_DECELERATE_CONTINUATION_RAD = tuple(math.radians(a) for a in (4
 # circulatory flow, the free decelerates (PrimitiveSpec.angle_of_attack_continuation_rad, assumed): from the
 # still-foil guess IPOPT finds each infeasible with the bound at 20 deg; solved first without the bound, the
 # bound then tightened in these steps (each warm-starting the next) reaches 20 deg (docs/circulatory_primitives.md)
+CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S = 40
+# circulatory flow, the free decelerates' collocation intervals per second (assumed: twice INTERVALS_PER_S, the
+# least tried that ends the paper's lane keeping within 1 mrad of its plan). A free decelerate ends at rest, where
+# the tracker can no longer take a hub-angle error out, so what its plan's discretization leaves in its last
+# intervals stays; an accelerate's is taken out by the cruise after it (docs/circulatory_primitives.md)
 CIRCULATORY_LONGER_S = {"free/decelerate/R0.43/E0.10": 6.0, "free/decelerate/R0.43/E0.20": 6.0,
                         "free/cruise_to_cruise/R0.43/E0.10-E0.05": 3.0}
 # circulatory flow: transitions given more than the durations above (assumed, each the shortest tried that solves).
@@ -142,8 +147,8 @@ def circulatory_specs(rig: RigParameters) -> list[PrimitiveSpec]:
     """The circulatory flow's library: the paper's graph at CIRCULATORY_ENERGY_LEVELS_J, ids and durations as in
     ``default_specs`` except the free accelerate's (CIRCULATORY_FREE_ACCELERATE_S), the free decelerate's
     (CIRCULATORY_FREE_DECELERATE_S, solved by continuation in the angle-of-attack bound and ending at rest with the
-    lag states its braking leaves: PrimitiveSpec.end_lag_free) and those of CIRCULATORY_LONGER_S (which take
-    precedence)."""
+    lag states its braking leaves: PrimitiveSpec.end_lag_free; CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S) and
+    those of CIRCULATORY_LONGER_S (which take precedence)."""
     specs = constrained_specs(rig, CIRCULATORY_ENERGY_LEVELS_J) + free_specs(rig, CIRCULATORY_ENERGY_LEVELS_J)
     unknown = set(CIRCULATORY_LONGER_S) - {s.primitive_id for s in specs}
     assert not unknown, f"CIRCULATORY_LONGER_S names no spec of the set: {sorted(unknown)}"
@@ -156,6 +161,9 @@ def circulatory_specs(rig: RigParameters) -> list[PrimitiveSpec]:
                                        angle_of_attack_continuation_rad=CIRCULATORY_FREE_DECELERATE_CONTINUATION_RAD)
         if spec.primitive_id in CIRCULATORY_LONGER_S:
             spec = _lasting(spec, CIRCULATORY_LONGER_S[spec.primitive_id])
+        if not spec.constrained and spec.primitive_type is PrimitiveType.DECELERATE:
+            spec = dataclasses.replace(spec, intervals=int(round(CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S
+                                                                 * spec.duration_s)))
         return spec
     return [circulatory(s) for s in specs]
 

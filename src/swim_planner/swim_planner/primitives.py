@@ -55,7 +55,7 @@ class PlanningLimits:
     # Pitching it there is a turn about the pitch axis, broadside to its own motion: about 60 deg takes at least
     # 2 sqrt(1.05 rad / 300 rad/s^2) = 0.12 s at foil_acceleration_limit_rad_s2. With 0.15 s the constrained
     # E = 0.05 accelerate is infeasible, with 0.2 s it solves. The window holds 7 of the 161 samples of a 4 s
-    # accelerate or decelerate (4.3 %) and 9 of the 201 of a free 5 s decelerate (4.5 %); the angle is unbounded
+    # accelerate or decelerate (4.3 %) and 17 of the 401 of a free 5 s decelerate (4.2 %); the angle is unbounded
     # only there. A speed floor at every time, U tan(a) + c >= |V| with c = 1 cm/s, instead lets the accelerate
     # crawl at any angle for its first second (95th percentile 73 deg over its samples)
 

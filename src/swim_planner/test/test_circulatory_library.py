@@ -196,16 +196,8 @@ def _closed_loop(library, model_for, rig, maneuver):
     return _CLOSED_LOOP_RUNS[key]
 
 
-ENDS_IN_A_FREE_DECELERATE = pytest.mark.xfail(
-    strict=True, raises=Exception,
-    reason="measured with the free decelerates solved by continuation: the lane keeping and the lane change end "
-    "1.2-1.3 mrad of hub angle (0.5-0.6 mm along the lane) from their plans, the error growing in the decelerate")
-
-
-@pytest.mark.parametrize("maneuver", [PAPER_CONSTRAINED,
-                                      pytest.param(PAPER_LANE_KEEPING, marks=ENDS_IN_A_FREE_DECELERATE),
-                                      (PAPER_LANE_KEEPING[0][:2], PAPER_LANE_KEEPING[1][:2]),
-                                      pytest.param(LANE_CHANGE, marks=ENDS_IN_A_FREE_DECELERATE)],
+@pytest.mark.parametrize("maneuver", [PAPER_CONSTRAINED, PAPER_LANE_KEEPING,
+                                      (PAPER_LANE_KEEPING[0][:2], PAPER_LANE_KEEPING[1][:2]), LANE_CHANGE],
                          ids=["constrained", "lane_keeping", "lane_keeping_to_its_last_cruise", "lane_change"])
 def test_closed_loop_on_the_circulatory_model_ends_on_the_plan(circulatory_library, model_for, rig, maneuver):
     reference, run = _closed_loop(circulatory_library, model_for, rig, maneuver)
