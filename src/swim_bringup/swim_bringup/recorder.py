@@ -62,8 +62,8 @@ class TopicRecorder:
     def take_queued(self) -> int:
         """Write the messages queued now on every subscription into the bag (at most RECORD_DEPTH a topic), each
         stamped with the wall time it is taken; returns how many. Polled by a process that only records, in place
-        of an executor: an executor wakes and builds its wait set for each arriving message, which cost a
-        recorder beside the lock-step loop several times the writing itself."""
+        of an executor, which wakes and builds its wait set for each arriving message: several times the cost of
+        writing it."""
         written = 0
         for topic, subscription in self.subscriptions.items():
             with subscription.handle:

@@ -96,10 +96,9 @@ class RunClient:
         self.close()
 
     def close(self) -> None:
-        """Finish the bag and leave DDS; safe to call twice. The node goes with its subscriptions and its
-        participant at once: left to the garbage collector, a closed client's readers stay matched, and every
-        publisher of the next run on the domain keeps sending them each period (a process of several runs,
-        like the benchmarks, ran its third to sixth runs at a third of the speed)."""
+        """Finish the bag and leave DDS; safe to call twice. The node and its subscriptions are destroyed here,
+        not left to the garbage collector: a closed client's readers would stay matched, and every publisher of
+        the next run on the domain would keep sending them each period (docs/benchmarks.md, bench_record)."""
         import rclpy
         if self.bag is not None:
             self.bag.close()

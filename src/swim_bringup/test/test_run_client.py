@@ -1,6 +1,6 @@
 """The recorder's stamp reader against rclpy's own serialization of the loop's message types; the environment the
-run client leaves to the nodes it starts; a closed client leaves the ROS graph at once; the run's topic names, fully
-qualified as rosbag2 records them."""
+run client leaves to the nodes it starts; a closed client's subscriptions leave the ROS graph at once; the run's topic
+names, fully qualified as rosbag2 records them."""
 import pytest
 
 from swim_ros.testing.fixtures import new_rclpy_context, ros_domain  # noqa: F401
