@@ -39,23 +39,13 @@ class TopicRecorder:
 
     def record(self, topic: str, type_name: str, qos: "QoSProfile | int") -> None:
         """Subscribe to topic (a type bag already has a connection for) and write what comes into the bag."""
-        bag = self.bag
 
         def write(cdr: bytes) -> None:
             # the executor hands over one message per subscription per wait, at ~0.2 ms of Python each: slower
             # than a lock-step loop on 2 busy cores. So take every message queued now, in one callback.
             # At most a queue's depth per callback: the rest stays queued, and the other topics get their turn.
-            subscription = self.subscriptions[topic]
-            with subscription.handle:
-                for written in range(1, RECORD_DEPTH + 1):
-                    bag.write(topic, self.clock_ns(), cdr)
-                    self.latest_cdr[topic] = cdr
-                    if written == RECORD_DEPTH:
-                        break
-                    taken = subscription.handle.take_message(subscription.msg_type, True)
-                    if taken is None:
-                        break
-                    cdr = taken[0]
+            self._write(topic, cdr)
+            self._take(topic, RECORD_DEPTH - 1)
         self.subscriptions[topic] = self.node.create_subscription(message_class(type_name), topic, write, qos,
                                                                   raw=True)
 
@@ -64,17 +54,22 @@ class TopicRecorder:
         stamped with the wall time it is taken; returns how many. Polled by a process that only records, in place
         of an executor, which wakes and builds its wait set for each arriving message: several times the cost of
         writing it."""
-        written = 0
-        for topic, subscription in self.subscriptions.items():
-            with subscription.handle:
-                for _ in range(RECORD_DEPTH):
-                    taken = subscription.handle.take_message(subscription.msg_type, True)
-                    if taken is None:
-                        break
-                    self.bag.write(topic, self.clock_ns(), taken[0])
-                    self.latest_cdr[topic] = taken[0]
-                    written += 1
-        return written
+        return sum(self._take(topic, RECORD_DEPTH) for topic in self.subscriptions)
+
+    def _take(self, topic: str, most: int) -> int:
+        """Write up to ``most`` of the messages queued on topic's subscription; returns how many."""
+        subscription = self.subscriptions[topic]
+        with subscription.handle:
+            for written in range(most):
+                taken = subscription.handle.take_message(subscription.msg_type, True)
+                if taken is None:
+                    return written
+                self._write(topic, taken[0])
+        return most
+
+    def _write(self, topic: str, cdr: bytes) -> None:
+        self.bag.write(topic, self.clock_ns(), cdr)
+        self.latest_cdr[topic] = cdr
 
 
 def recording_qos(publishers: Sequence[Any]) -> "QoSProfile":
