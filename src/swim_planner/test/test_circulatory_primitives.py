@@ -238,9 +238,7 @@ def test_the_circulatory_set_is_the_papers_graph_with_a_third_level_joined_to_it
             spec = dataclasses.replace(spec, duration_s=CIRCULATORY_FREE_ACCELERATE_S,
                                        intervals=int(round(CIRCULATORY_FREE_ACCELERATE_S * INTERVALS_PER_S)))
         if not spec.constrained and spec.primitive_type is PrimitiveType.DECELERATE:
-            spec = dataclasses.replace(spec, duration_s=CIRCULATORY_FREE_DECELERATE_S,
-                                       intervals=int(round(CIRCULATORY_FREE_DECELERATE_S * INTERVALS_PER_S)),
-                                       end_lag_free=True,
+            spec = dataclasses.replace(spec, duration_s=CIRCULATORY_FREE_DECELERATE_S, end_lag_free=True,
                                        angle_of_attack_continuation_rad=CIRCULATORY_FREE_DECELERATE_CONTINUATION_RAD)
         if spec.primitive_id in CIRCULATORY_LONGER_S:
             longer_s = CIRCULATORY_LONGER_S[spec.primitive_id]
