@@ -18,6 +18,7 @@ from swim_controller.testing.closed_loop import simulate
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.tracker import CascadeTracker, model_io_linearization
 from swim_model import VehicleModel, load_rig
+from swim_model.wake import compile_kernels
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.maneuver import concatenate, expand_sequence
 from swim_planner.paths import default_library_path
@@ -72,6 +73,7 @@ def main() -> None:
     reference = concatenate(library, rig, expand_sequence(*PAPER_CONSTRAINED), 1.0)
     model = VehicleModel(rig, constrained=True, lane_radius_m=library.spec(PAPER_CONSTRAINED[0][0]).lane_radius_m)
     closed_loop(model, reference, False, True)   # compile and warm up
+    compile_kernels()                            # the wake's kernels: compiled, or loaded from their cache
     wake_on, timed, loop_wall_s = closed_loop(model, reference, True, True)
     wake = timed.plant.wake
     simulated_s = timed.plant.time_s

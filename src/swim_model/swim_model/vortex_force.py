@@ -69,8 +69,11 @@ For a steady Kutta flow this split puts the circulatory lift ``rho U Gamma`` at 
 """
 from __future__ import annotations
 
+import cmath
 import math
+from typing import Callable, TypeVar, cast
 
+import numba
 import numpy as np
 import numpy.typing as npt
 
@@ -81,6 +84,116 @@ Complex = npt.NDArray[np.complex128]
 
 MIN_OFFSET_RATIO = 1e-6  # zeta_c / a below this: the rotation potential's two poles merge (an ellipse); refused
 
+_Function = TypeVar("_Function", bound=Callable[..., object])
+_Points = TypeVar("_Points", Complex, complex)   # an array of points in the circle plane, or one
+
+
+def compiled(function: _Function) -> _Function:
+    """The function compiled to machine code by numba (nopython mode), cached on disk beside the module: the first
+    call in a fresh environment compiles it (about a second), later processes load it."""
+    # error_model "numpy": a division by zero gives inf or nan as in numpy, not an exception (whose check would keep
+    # the loops out of SIMD lanes); the dispatcher is called as the function itself
+    return cast(_Function, numba.njit(cache=True, error_model="numpy")(function))
+
+
+@compiled
+def _blob_sums(x: npt.NDArray[np.float64], y: npt.NDArray[np.float64], source_x: npt.NDArray[np.float64],
+               source_y: npt.NDArray[np.float64], gamma: npt.NDArray[np.float64], core2: npt.NDArray[np.float64],
+               sum_x: npt.NDArray[np.float64], sum_y: npt.NDArray[np.float64]) -> None:
+    """(sum_x, sum_y)[j] = sum_k (w_jk dx_jk, w_jk dy_jk), dx_jk + i dy_jk = (x_j + i y_j) - (source_x_k + i
+    source_y_k), w_jk = gamma_k / (dx_jk^2 + dy_jk^2 + core2_k): O(N M), the cost of a wake step. Summed in index
+    order k; the loop over the points j is the inner one, so that it runs in SIMD lanes."""
+    sum_x[:] = 0.0
+    sum_y[:] = 0.0
+    for k in range(source_x.size):
+        for j in range(x.size):
+            dx = x[j] - source_x[k]
+            dy = y[j] - source_y[k]
+            weight = gamma[k] / (dx * dx + dy * dy + core2[k])
+            sum_x[j] += weight * dx
+            sum_y[j] += weight * dy
+
+
+@compiled
+def _vortex_potential_sums(points: Complex, zeta: Complex, gamma: npt.NDArray[np.float64], r_m: float,
+                           sums: Complex) -> None:
+    """sum_k Gamma_k [1/(p - zeta_k) - 1/(p - zeta_k*)] at the points p into sums; exact kernel, summed in index
+    order (1/D = conj(D)/|D|^2, the loop over the points inner, so that it runs in SIMD lanes)."""
+    r2 = r_m * r_m
+    x, y = points.real.copy(), points.imag.copy()
+    real, imag = np.zeros(points.size), np.zeros(points.size)
+    for k in range(zeta.size):
+        image = r2 / zeta[k].conjugate()
+        vortex_x, vortex_y, image_x, image_y = zeta[k].real, zeta[k].imag, image.real, image.imag
+        for j in range(x.size):
+            dx, dy = x[j] - vortex_x, y[j] - vortex_y
+            image_dx, image_dy = x[j] - image_x, y[j] - image_y
+            weight = gamma[k] / (dx * dx + dy * dy)
+            image_weight = gamma[k] / (image_dx * image_dx + image_dy * image_dy)
+            real[j] += weight * dx - image_weight * image_dx
+            imag[j] += image_weight * image_dy - weight * dy
+    for j in range(x.size):
+        sums[j] = complex(real[j], imag[j])
+
+
+@compiled
+def _to_circle(z: Complex, a_m: float, zeta_c_m: float, zeta: Complex) -> None:
+    """zeta = F^{-1}(z) into zeta, the branch outside the circle (``CirclePlane.to_circle``)."""
+    four_a2 = 4.0 * a_m * a_m
+    for k in range(z.size):
+        root = cmath.sqrt(z[k] * z[k] - four_a2)
+        s_plus, s_minus = 0.5 * (z[k] + root), 0.5 * (z[k] - root)
+        zeta[k] = (s_plus if abs(s_plus) >= abs(s_minus) else s_minus) - zeta_c_m
+
+
+@compiled
+def _vortex_velocities(zeta: Complex, gamma: npt.NDArray[np.float64], u_b: complex, omega: float,
+                       core_radius_m: float, a_m: float, zeta_c_m: float, r_m: float, pole_origin_m3: float,
+                       pole_offset_m3: float, velocities: Complex) -> None:
+    """``CirclePlane.vortex_velocities`` into velocities (N): the map's derivatives, the blob's core in the circle
+    plane and the images per vortex, the O(N^2) sums (``_blob_sums``), then the body and Routh terms."""
+    n = zeta.size
+    a2, r2 = a_m * a_m, r_m * r_m
+    x, y = np.empty(n), np.empty(n)
+    image_x, image_y = np.empty(n), np.empty(n)
+    core2, no_core = np.empty(n), np.zeros(n)
+    d1, d2 = np.empty(n, dtype=np.complex128), np.empty(n, dtype=np.complex128)
+    for k in range(n):
+        x[k], y[k] = zeta[k].real, zeta[k].imag
+        s = zeta[k] + zeta_c_m
+        a2_over_s2 = a2 / (s * s)
+        d1[k], d2[k] = 1.0 - a2_over_s2, 2.0 * a2_over_s2 / s
+        core2[k] = (core_radius_m / max(abs(d1[k]), 1e-12)) ** 2
+        image = r2 / zeta[k].conjugate()
+        image_x[k], image_y[k] = image.real, image.imag
+    sums = np.empty((4, n))
+    _blob_sums(x, y, x, y, gamma, core2, sums[0], sums[1])
+    _blob_sums(x, y, image_x, image_y, gamma, no_core, sums[2], sums[3])
+    for k in range(n):
+        mutual = complex(sums[0, k] - sums[2, k], sums[3, k] - sums[1, k])
+        s = zeta[k] + zeta_c_m
+        inv_zeta2, inv_s2 = 1.0 / (zeta[k] * zeta[k]), 1.0 / (s * s)
+        body = (u_b * r2 * inv_zeta2 - u_b.conjugate() * a2 * inv_s2
+                + 1j * omega * (pole_origin_m3 * inv_zeta2 + pole_offset_m3 * inv_s2))
+        dw_dzeta = mutual / (2j * math.pi) + body
+        conj_u = dw_dzeta / d1[k] - gamma[k] * d2[k] / (4j * math.pi * d1[k] * d1[k])
+        velocities[k] = conj_u.conjugate()
+
+
+@compiled
+def _impulse_terms_kernel(zeta: Complex, gamma: npt.NDArray[np.float64], a_m: float, zeta_c_m: float, r_m: float,
+                   pole_origin_m3: float, pole_offset_m3: float, impulse_terms: Complex,
+                   angular_terms: npt.NDArray[np.float64]) -> None:
+    """``CirclePlane.vortex_impulse_terms`` and ``vortex_angular_impulse_terms`` into the two arrays (N)."""
+    a2, r2 = a_m * a_m, r_m * r_m
+    for k in range(zeta.size):
+        image = r2 / zeta[k].conjugate()
+        impulse_terms[k] = gamma[k] * (zeta[k] - image)
+        s, image_s = zeta[k] + zeta_c_m, image + zeta_c_m
+        z_k, image_z = s + a2 / s, image_s + a2 / image_s
+        sheet = (-image_z * z_k.conjugate() + pole_origin_m3 * (1.0 / image - 1.0 / zeta[k])
+                 + pole_offset_m3 * (1.0 / image_s - 1.0 / s))
+        angular_terms[k] = gamma[k] * (z_k.real * z_k.real + z_k.imag * z_k.imag + sheet.real)
 
 class CirclePlane:
     """The Joukowski map of one foil and the closed forms of this module's docstring evaluated on it."""
@@ -113,10 +226,10 @@ class CirclePlane:
 
     def to_circle(self, z: Complex) -> Complex:
         """zeta = F^{-1}(z), the branch outside the circle (``|s| >= a``)."""
-        root: Complex = np.sqrt(z * z - 4.0 * self.a_m ** 2)
-        s_plus, s_minus = 0.5 * (z + root), 0.5 * (z - root)
-        s: Complex = np.where(np.abs(s_plus) >= np.abs(s_minus), s_plus, s_minus)
-        return s - self.zeta_c_m
+        points = np.ascontiguousarray(z, dtype=complex).reshape(-1)
+        zeta: Complex = np.empty_like(points)
+        _to_circle(points, self.a_m, self.zeta_c_m, zeta)
+        return zeta.reshape(np.shape(z))
 
     def image(self, zeta: Complex) -> Complex:
         """zeta* = r^2 / conj(zeta) (circle theorem)."""
@@ -124,7 +237,7 @@ class CirclePlane:
         return self.r_m ** 2 / conjugate
 
     # --- flow -----------------------------------------------------------------------------------------------
-    def body_potential_derivative(self, zeta: Complex, velocity: tuple[float, float, float]) -> Complex:
+    def body_potential_derivative(self, zeta: _Points, velocity: tuple[float, float, float]) -> _Points:
         """d w_body / d zeta = u_b r^2/zeta^2 - conj(u_b) a^2/s^2 + i Omega (A/zeta^2 + B/s^2)."""
         u_b = complex(velocity[0], velocity[1])
         omega = velocity[2]
@@ -141,46 +254,31 @@ class CirclePlane:
 
     def vortex_potential_derivative(self, zeta: Complex, zeta_k: Complex, gamma_k: npt.NDArray[np.float64]) -> Complex:
         """sum_k Gamma_k/(2 pi i) [1/(zeta - zeta_k) - 1/(zeta - zeta_k*)], exact kernel, at points zeta."""
-        zeta = np.atleast_1d(zeta)
-        if zeta_k.size == 0:
-            return np.zeros(zeta.shape, dtype=complex)
-        images = self.image(zeta_k)
-        kernel: Complex = 1.0 / (zeta[:, None] - zeta_k[None, :]) - 1.0 / (zeta[:, None] - images[None, :])
-        # a sum, not kernel @ gamma_k: the complex-by-real product goes to multi-threaded BLAS, which on a loaded
-        # machine spin-waits for its threads (measured 9 ms instead of 0.2 ms for 64 points and 300 vortices)
-        total: Complex = (kernel * gamma_k[None, :]).sum(axis=1)
-        return total / (2j * math.pi)
+        points = np.ascontiguousarray(np.atleast_1d(zeta), dtype=complex)
+        sums: Complex = np.zeros(points.size, dtype=complex)
+        _vortex_potential_sums(points, np.ascontiguousarray(zeta_k, dtype=complex),
+                               np.ascontiguousarray(gamma_k, dtype=float), self.r_m, sums)
+        total: Complex = sums / (2j * math.pi)
+        return total
 
     def vortex_velocities(self, zeta_k: Complex, gamma_k: npt.NDArray[np.float64],
                           velocity: tuple[float, float, float], core_radius_m: float) -> Complex:
         """Fluid velocity u + iv (foil axes) at each free vortex: blob mutual terms, exact images, Routh term."""
-        n = zeta_k.size
-        if n == 0:
-            return np.zeros(0, dtype=complex)
-        d1, d2 = self.map_derivatives(zeta_k)
-        core_zeta2 = (core_radius_m / np.maximum(np.abs(d1), 1e-12)) ** 2
-        # real arithmetic on N x N arrays (the cost of a step): sum_k Gamma_k conj(D)/(|D|^2 + delta_k^2);
-        # the diagonal (D = 0) contributes nothing, so a vortex's own blob term drops out by itself
-        dx = zeta_k.real[:, None] - zeta_k.real[None, :]
-        dy = zeta_k.imag[:, None] - zeta_k.imag[None, :]
-        weight = gamma_k / (dx * dx + dy * dy + core_zeta2[None, :])
-        mutual = (weight * dx).sum(axis=1) - 1j * (weight * dy).sum(axis=1)
-        images = self.image(zeta_k)
-        dx = zeta_k.real[:, None] - images.real[None, :]
-        dy = zeta_k.imag[:, None] - images.imag[None, :]
-        weight = gamma_k / (dx * dx + dy * dy)
-        mutual -= (weight * dx).sum(axis=1) - 1j * (weight * dy).sum(axis=1)
-        dw_dzeta = mutual / (2j * math.pi) + self.body_potential_derivative(zeta_k, velocity)
-        conj_u: Complex = dw_dzeta / d1 - gamma_k * d2 / (4j * math.pi * d1 * d1)
-        return np.conj(conj_u)
+        velocities: Complex = np.empty(zeta_k.size, dtype=complex)
+        _vortex_velocities(np.ascontiguousarray(zeta_k, dtype=complex), np.ascontiguousarray(gamma_k, dtype=float),
+                           complex(velocity[0], velocity[1]), float(velocity[2]), core_radius_m, self.a_m,
+                           self.zeta_c_m, self.r_m, self.rotation_pole_origin_m3, self.rotation_pole_offset_m3,
+                           velocities)
+        return velocities
 
     def kutta_strength(self, zeta_new: complex, zeta_k: Complex, gamma_k: npt.NDArray[np.float64],
                        velocity: tuple[float, float, float]) -> float:
         """Strength of a vortex at zeta_new that makes Im(dw/dzeta) vanish at the trailing edge."""
-        te = np.array([self.zeta_te])
-        known = self.body_potential_derivative(te, velocity)[0] + self.vortex_potential_derivative(
-            te, zeta_k, gamma_k)[0]
-        unit = self.vortex_potential_derivative(te, np.array([zeta_new]), np.ones(1))[0]
+        te = self.zeta_te
+        known = self.body_potential_derivative(te, velocity) + self.vortex_potential_derivative(
+            np.array([te]), zeta_k, gamma_k)[0]
+        image_new = self.r_m ** 2 / zeta_new.conjugate()
+        unit = (1.0 / (te - zeta_new) - 1.0 / (te - image_new)) / (2j * math.pi)  # a vortex of unit strength
         return float(-known.imag / unit.imag)
 
     def far_field_circulation(self, zeta_k: Complex, gamma_k: npt.NDArray[np.float64],
@@ -198,20 +296,24 @@ class CirclePlane:
     # --- impulse ----------------------------------------------------------------------------------------------
     def vortex_impulse(self, zeta_k: Complex, gamma_k: npt.NDArray[np.float64], rho_kg_m3: float) -> complex:
         """I_v = -i rho sum_k Gamma_k (zeta_k - zeta_k*), foil axes, kg/s per metre of span."""
-        return complex(-1j * rho_kg_m3 * np.sum(gamma_k * (zeta_k - self.image(zeta_k))))
+        return complex(-1j * rho_kg_m3 * np.sum(self.impulse_terms(zeta_k, gamma_k)[0]))
 
     def vortex_angular_impulse(self, zeta_k: Complex, gamma_k: npt.NDArray[np.float64], rho_kg_m3: float) -> float:
         """L_v about the frame origin (module docstring), kg m/s per metre of span."""
-        if zeta_k.size == 0:
-            return 0.0
-        images = self.image(zeta_k)
-        z_k = self.to_foil(zeta_k)
-        zc = self.zeta_c_m
-        sheet = (-self.to_foil(images) * np.conj(z_k)
-                 + self.rotation_pole_origin_m3 * (1.0 / images - 1.0 / zeta_k)
-                 + self.rotation_pole_offset_m3 * (1.0 / (images + zc) - 1.0 / (zeta_k + zc)))
-        return float(-0.5 * rho_kg_m3 * np.sum(gamma_k * (np.abs(z_k) ** 2 + sheet.real)))
+        return float(-0.5 * rho_kg_m3 * np.sum(self.impulse_terms(zeta_k, gamma_k)[1]))
 
+    def impulse_terms(self, zeta_k: Complex,
+                      gamma_k: npt.NDArray[np.float64]) -> tuple[Complex, npt.NDArray[np.float64]]:
+        """Each vortex's terms of the impulse sums: (Gamma_k (zeta_k - zeta_k*), m^3/s: I_v = -i rho times their
+        sum; Gamma_k [|z_k|^2 + Re(...)], m^4/s, the bracket of L_v in the module docstring: L_v = -rho/2 times
+        their sum)."""
+        zeta = np.ascontiguousarray(np.atleast_1d(zeta_k), dtype=complex)
+        impulse: Complex = np.empty_like(zeta)
+        angular: npt.NDArray[np.float64] = np.empty(zeta.size)
+        _impulse_terms_kernel(zeta, np.ascontiguousarray(np.atleast_1d(gamma_k), dtype=float), self.a_m,
+                              self.zeta_c_m, self.r_m, self.rotation_pole_origin_m3, self.rotation_pole_offset_m3,
+                              impulse, angular)
+        return impulse, angular
 
 def steady_kutta_circulation(plane: CirclePlane, speed_m_s: float, angle_of_attack_rad: float) -> float:
     """Gamma = 4 pi r U sin(alpha): the steady Kutta circulation of the foil moving at U, angle of attack alpha.

@@ -58,6 +58,7 @@ circling the hub meets its own wake.
 """
 from __future__ import annotations
 
+import cmath
 import dataclasses
 import math
 
@@ -66,10 +67,40 @@ import numpy.typing as npt
 
 from swim_model.errors import StateError
 from swim_model.joukowski import JoukowskiFoil
-from swim_model.vortex_force import CirclePlane
+from swim_model.vortex_force import CirclePlane, compiled
 
 Pose = tuple[float, float, float]        # x_m, y_m (frame origin in the tank frame), theta_rad (chord angle)
 Velocity = tuple[float, float, float]    # U_m_s, V_m_s (origin velocity along the foil axes), Omega_rad_s
+
+
+@compiled
+def _merge_pair(positions_m: npt.NDArray[np.complex128], circulations_m2_s: npt.NDArray[np.float64],
+                origin_m: complex, candidates: int, chord_m: float, opposite_sign_penalty: float) -> int:
+    """i of the pair (i, i + 1), i + 1 < candidates, of least cost: separation / (distance from the foil frame's
+    origin of the nearer one + chord), times opposite_sign_penalty for opposite signs (the first of equal costs)."""
+    best, best_cost = 0, math.inf
+    for i in range(candidates - 1):
+        separation = abs(positions_m[i + 1] - positions_m[i])
+        distance = min(abs(positions_m[i + 1] - origin_m), abs(positions_m[i] - origin_m))
+        cost = separation / (distance + chord_m)
+        if circulations_m2_s[i + 1] * circulations_m2_s[i] < 0.0:
+            cost *= opposite_sign_penalty
+        if cost < best_cost:
+            best, best_cost = i, cost
+    return best
+
+
+def compile_kernels() -> None:
+    """Compile the wake's numba kernels into their on-disk cache, or load them from it, by stepping a small wake
+    through shedding, merging and the Kelvin statistics, so that a process stepping a wake afterwards starts at full
+    speed. Compiling takes seconds (7 to 19 s on this 2-core host, by its load); loading the cache well under one.
+    For an install step."""
+    # any foil, motion and bound do: the kernels are compiled for the argument types only
+    foil = JoukowskiFoil(chord_m=0.06, thickness_m=0.008, span_m=0.2)
+    wake = Wake(foil, WakeParameters(max_vortex_count=4, protected_vortex_count=2))
+    for n in range(1, 8):
+        wake.step(0.008, (0.4, 0.001 * n, 1.6), (0.1, 0.01, 0.2))
+    wake.total_circulation(8)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -142,6 +173,12 @@ class Wake:
         self._velocity: Velocity = (0.0, 0.0, 0.0)
         self._impulse = 0j          # tank frame, per metre of span
         self._angular_impulse = 0.0  # about the tank origin, per metre of span
+        # at the current pose, for the current vortices (None: to be computed): their circle-plane positions and
+        # their terms of the impulse sums (CirclePlane.impulse_terms), so that a step maps the vortices once and a
+        # merge updates one term
+        self._zeta: npt.NDArray[np.complex128] | None = None
+        self._impulse_terms = np.zeros(0, dtype=complex)
+        self._angular_terms = np.zeros(0)
         self.reflected_count = 0
         self.merged_count = 0
         self.absorbed_count = 0
@@ -165,7 +202,7 @@ class Wake:
         ``samples`` points of the trapezoidal rule on a circle twice the farthest vortex's radius: the error falls
         as 2^-samples (CirclePlane.far_field_circulation), so 64 already reach round-off.
         """
-        zeta, _ = self._circle_plane_positions()
+        zeta = self._current_circle_plane_positions()
         return self.plane.far_field_circulation(zeta, self.circulations_m2_s, self._velocity, samples)
 
     def vortices_in_foil_frame(self) -> npt.NDArray[np.complex128]:
@@ -198,6 +235,7 @@ class Wake:
         self.circulations_m2_s = np.append(self.circulations_m2_s, gamma)
         self._previous_velocities = np.append(self._previous_velocities, 0j)
         self._has_previous_velocity = np.append(self._has_previous_velocity, False)
+        self._map_vortices(self._circle_plane_positions()[0])
         self._impulse, self._angular_impulse = self._impulses()
 
     # --- the step ----------------------------------------------------------------------------------------------
@@ -221,15 +259,14 @@ class Wake:
         self._convect(dt_s)
         self._pose, self._velocity = new_pose, new_velocity
         self.time_s += dt_s
-        self._absorb_at_surface(self._reflect_inside_foil())
-        self._shed(dt_s)
+        self._shed(dt_s, self._absorb_at_surface(self._reflect_inside_foil()))
 
         impulse, angular_impulse = self._impulses()
         force_tank = -(impulse - self._impulse) / dt_s
         origin_mid = 0.5 * (complex(old_pose[0], old_pose[1]) + complex(new_pose[0], new_pose[1]))
         moment_origin = -(angular_impulse - self._angular_impulse) / dt_s
-        moment = moment_origin - float(np.imag(np.conj(origin_mid) * force_tank))
-        force_foil = force_tank * np.exp(-1j * 0.5 * (old_pose[2] + new_pose[2]))
+        moment = moment_origin - (origin_mid.conjugate() * force_tank).imag
+        force_foil = force_tank * cmath.exp(-1j * 0.5 * (old_pose[2] + new_pose[2]))
 
         self._merge()
         self._impulse, self._angular_impulse = self._impulses()
@@ -239,7 +276,7 @@ class Wake:
 
     # --- internals ---------------------------------------------------------------------------------------------
     def _circle_plane_positions(self) -> tuple[npt.NDArray[np.complex128], complex]:
-        """(zeta_k, rotation e^{i theta}) of the free vortices at the current pose."""
+        """(zeta_k, rotation e^{i theta}) of the free vortices at the current pose, mapped anew."""
         if self._pose is None:
             return np.zeros(0, dtype=complex), 1.0 + 0j
         x, y, theta = self._pose
@@ -247,18 +284,35 @@ class Wake:
         z = (self.positions_m - complex(x, y)) / rotation
         return self.plane.to_circle(z), rotation
 
+    def _current_circle_plane_positions(self) -> npt.NDArray[np.complex128]:
+        """zeta_k at the current pose: the step's, or mapped anew when there is none."""
+        if self._zeta is None:
+            return self._circle_plane_positions()[0]
+        return self._zeta
+
+    def _map_vortices(self, zeta: npt.NDArray[np.complex128]) -> None:
+        """Keep zeta (the vortices' circle-plane positions at the current pose) and their impulse terms."""
+        self._zeta = zeta
+        self._impulse_terms, self._angular_terms = self.plane.impulse_terms(zeta, self.circulations_m2_s)
+
+    def _rotation(self) -> complex:
+        """e^{i theta} of the current pose."""
+        theta = self._pose[2] if self._pose is not None else 0.0
+        return complex(math.cos(theta), math.sin(theta))
+
     def _convect(self, dt_s: float) -> None:
         if self.positions_m.size == 0:
             return
-        zeta, rotation = self._circle_plane_positions()
-        velocities = rotation * self.plane.vortex_velocities(zeta, self.circulations_m2_s, self._velocity,
-                                                             self.params.core_radius_m)
+        zeta = self._current_circle_plane_positions()
+        velocities = self._rotation() * self.plane.vortex_velocities(zeta, self.circulations_m2_s, self._velocity,
+                                                                     self.params.core_radius_m)
         increment = velocities.copy()
         if self._previous_dt_s > 0.0:
             ratio = dt_s / (2.0 * self._previous_dt_s)
             has = self._has_previous_velocity
             increment[has] += ratio * (velocities[has] - self._previous_velocities[has])
         self.positions_m = self.positions_m + dt_s * increment
+        self._zeta = None   # the vortices moved
         self._previous_velocities = velocities
         self._has_previous_velocity = np.ones(velocities.size, dtype=bool)
         self._previous_dt_s = dt_s
@@ -276,27 +330,31 @@ class Wake:
         zeta[inside] = mirrored
         return zeta
 
-    def _absorb_at_surface(self, zeta: npt.NDArray[np.complex128]) -> None:
-        """Remove the vortices (circle-plane positions zeta) closer to the circle than surface_absorption_gap_m."""
+    def _absorb_at_surface(self, zeta: npt.NDArray[np.complex128]) -> npt.NDArray[np.complex128]:
+        """Remove the vortices (circle-plane positions zeta) closer to the circle than surface_absorption_gap_m;
+        the circle-plane positions of those kept."""
         gap_m = self.params.surface_absorption_gap_m
         if gap_m == 0.0 or zeta.size == 0:
-            return
+            return zeta
         absorbed = np.abs(zeta) - self.plane.r_m < gap_m
         if not np.any(absorbed):
-            return
+            return zeta
         self.absorbed_count += int(np.count_nonzero(absorbed))
         self.absorbed_circulation_m2_s += float(np.sum(self.circulations_m2_s[absorbed]))
         keep = ~absorbed
         self.positions_m, self.circulations_m2_s = self.positions_m[keep], self.circulations_m2_s[keep]
         self._previous_velocities = self._previous_velocities[keep]
         self._has_previous_velocity = self._has_previous_velocity[keep]
+        return zeta[keep]
 
-    def _shed(self, dt_s: float) -> None:
+    def _shed(self, dt_s: float, zeta: npt.NDArray[np.complex128]) -> None:
+        """Shed the step's vortex (Kutta condition against the vortices at zeta, their circle-plane positions at the
+        current pose); keeps the circle-plane positions and impulse terms of all (``_map_vortices``)."""
         u, v, omega = self._velocity
         te_speed = abs(complex(u, v) + 1j * omega * self.plane.z_te)
         distance = max(self.params.shed_distance_fraction * te_speed * dt_s, self.params.min_shed_distance_m)
         zeta_new = complex(self.plane.to_circle(np.array([self.plane.z_te - distance]))[0])
-        zeta, rotation = self._circle_plane_positions()
+        rotation = self._rotation()
         gamma = self.plane.kutta_strength(zeta_new, zeta, self.circulations_m2_s, self._velocity)
         x, y, _ = self._pose  # type: ignore[misc]
         position = complex(x, y) + rotation * (self.plane.z_te - distance)
@@ -304,16 +362,17 @@ class Wake:
         self.circulations_m2_s = np.append(self.circulations_m2_s, gamma)
         self._previous_velocities = np.append(self._previous_velocities, 0j)
         self._has_previous_velocity = np.append(self._has_previous_velocity, False)
+        # the new vortex mapped back from its tank-frame position, as every vortex is
+        new = self.plane.to_circle((self.positions_m[-1:] - complex(x, y)) / rotation)
+        self._map_vortices(np.append(zeta, new))
 
     def _impulses(self) -> tuple[complex, float]:
-        """(I_v in the tank frame, L_v about the tank origin), per metre of span."""
-        zeta, rotation = self._circle_plane_positions()
+        """(I_v in the tank frame, L_v about the tank origin), per metre of span, from the kept impulse terms."""
         rho = self.params.rho_kg_m3
-        impulse = rotation * self.plane.vortex_impulse(zeta, self.circulations_m2_s, rho)
+        impulse = self._rotation() * (-1j * rho * complex(self._impulse_terms.sum()))
         x, y, _ = self._pose  # type: ignore[misc]
-        angular = (self.plane.vortex_angular_impulse(zeta, self.circulations_m2_s, rho)
-                   + float(np.imag(np.conj(complex(x, y)) * impulse)))
-        return complex(impulse), angular
+        angular = -0.5 * rho * float(self._angular_terms.sum()) + (complex(x, -y) * impulse).imag
+        return impulse, angular
 
     def _merge(self) -> None:
         limit = self.params.max_vortex_count
@@ -326,12 +385,8 @@ class Wake:
         z, gamma = self.positions_m, self.circulations_m2_s
         candidates = z.size - self.params.protected_vortex_count  # pairs (i, i+1) with i + 1 < candidates
         x, y, _ = self._pose  # type: ignore[misc]
-        separation = np.abs(z[1:candidates] - z[:candidates - 1])
-        distance = np.minimum(np.abs(z[1:candidates] - complex(x, y)), np.abs(z[:candidates - 1] - complex(x, y)))
-        cost = separation / (distance + self.foil.chord_m)
-        opposite = gamma[1:candidates] * gamma[:candidates - 1] < 0.0
-        cost[opposite] *= self.params.opposite_sign_merge_penalty
-        i = int(np.argmin(cost))
+        i = int(_merge_pair(z, gamma, complex(x, y), candidates, self.foil.chord_m,
+                            self.params.opposite_sign_merge_penalty))
         weights = np.abs(gamma[i:i + 2])
         total_weight = float(np.sum(weights))
         share = weights / total_weight if total_weight > 0.0 else np.array([0.5, 0.5])
@@ -346,3 +401,11 @@ class Wake:
         self._previous_velocities = self._previous_velocities[keep]
         self._has_previous_velocity = self._has_previous_velocity[keep]
         self.merged_count += 1
+        # the merged vortex's circle-plane position and impulse terms; the others' are unchanged
+        zeta = self._current_circle_plane_positions()[keep]
+        merged = self.plane.to_circle((self.positions_m[i:i + 1] - complex(x, y)) / self._rotation())
+        zeta[i] = merged[0]
+        impulse_terms, angular_terms = self._impulse_terms[keep], self._angular_terms[keep]
+        impulse_term, angular_term = self.plane.impulse_terms(merged, self.circulations_m2_s[i:i + 1])
+        impulse_terms[i], angular_terms[i] = impulse_term[0], angular_term[0]
+        self._zeta, self._impulse_terms, self._angular_terms = zeta, impulse_terms, angular_terms

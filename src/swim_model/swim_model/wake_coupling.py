@@ -52,6 +52,7 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
+from swim_model import codegen
 from swim_model.errors import StateError
 from swim_model.vehicle import VehicleModel
 from swim_model.wake import Wake, WakeParameters
@@ -72,6 +73,8 @@ MOMENT_LIMIT_N_M = 1.2       # assumed: FORCE_LIMIT_N times half the 6 cm chord
 # Kelvin's total circulation in the statistics, measured each period: the contour rule converges as 2^-samples,
 # so 64 points reach round-off at a quarter of the default's cost (the default 256 cost more than the wake's step)
 KELVIN_SAMPLES = 64
+#: the compiled function of the foil's pose and Q2, and its library's name (codegen adds the source's hash)
+FOIL_KINEMATICS_NAME = "wake_foil_kinematics"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -127,7 +130,12 @@ class WakeCoupling:
     def __init__(self, model: VehicleModel, params: WakeCouplingParameters = WakeCouplingParameters()) -> None:
         self.model, self.params = model, params
         self._wake_params = dataclasses.replace(params.wake, rho_kg_m3=model.rig.water_density_kg_m3)
-        self._pose = model.foil_pose_function()
+        # the foil's pose and Q2 in one call of compiled C (codegen.native: ~1 us where CasADi's Python call costs
+        # ~45 us a function), once per period
+        q = model.symbolic.q
+        kinematics = ca.Function(FOIL_KINEMATICS_NAME, [q], [model.foil_pose_function()(q),
+                                                              ca.densify(model.symbolic.functions["foil_velocity_map"](q))])
+        self._kinematics = codegen.native([kinematics], tag=FOIL_KINEMATICS_NAME)[FOIL_KINEMATICS_NAME]
         self.reset()
 
     def reset(self) -> None:
@@ -140,26 +148,32 @@ class WakeCoupling:
 
     def foil_pose(self, q: Array) -> tuple[float, float, float]:
         """(x_m, y_m, chord angle rad) of the foil frame in the tank frame (the wake's pose)."""
-        pose = np.asarray(self._pose(q), dtype=float).reshape(-1)
-        return float(pose[0]), float(pose[1]), float(pose[2])
+        return self._foil_kinematics(q)[0]
+
+    def _foil_kinematics(self, q: Array) -> tuple[tuple[float, float, float], Array]:
+        """(the foil's pose as foil_pose gives it, Q2(q) 3 x nq as VehicleModel.foil_velocity_map gives it)."""
+        self._kinematics.inputs[0][:] = np.asarray(q, dtype=float).reshape(-1)
+        self._kinematics()
+        x_m, y_m, angle_rad = (float(value) for value in self._kinematics.outputs[0])
+        q2: Array = self._kinematics.outputs[1].reshape((3, self.model.nq), order="F").copy()
+        return (x_m, y_m, angle_rad), q2
 
     def step(self, q: Array, qdot: Array, period_s: float) -> Array:
         """Step the wake to the state (q, qdot) at the start of a period; the generalized force to hold over it.
 
         Q = Q2(q)' clip(fx, fy, M_z): the vortical force of the period that just ended (module docstring: timing).
         """
-        pose = np.asarray(self._pose(q), dtype=float).reshape(-1)
-        q2 = self.model.foil_velocity_map(q)
+        pose, q2 = self._foil_kinematics(q)
         velocity = q2 @ np.asarray(qdot, dtype=float)
-        force = self.wake.step(period_s, (pose[0], pose[1], pose[2]), (velocity[0], velocity[1], velocity[2]))
+        force = self.wake.step(period_s, pose, (velocity[0], velocity[1], velocity[2]))
         self.foil_force = self._clipped(np.array([force.fx_n, force.fy_n, force.moment_n_m]))
         self.generalized_force = q2.T @ self.foil_force   # virtual work: Q . qdot = foil_force . (U, V, Omega)
-        self._pose_now = (float(pose[0]), float(pose[1]), float(pose[2]))
+        self._pose_now = pose
         return self.generalized_force
 
     def to_generalized(self, q: Array, foil_force: Array) -> Array:
         """Q = Q2(q)' (fx, fy, M_z): a force in foil axes at F and a moment about F as a generalized force."""
-        generalized: Array = self.model.foil_velocity_map(q).T @ np.asarray(foil_force, dtype=float)
+        generalized: Array = self._foil_kinematics(q)[1].T @ np.asarray(foil_force, dtype=float)
         return generalized
 
     def _clipped(self, force: Array) -> Array:
