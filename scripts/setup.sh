@@ -82,6 +82,11 @@ if [ "$(cat "$stamp" 2>/dev/null)" != "$sources" ]; then
       --cmake-args "-DPython3_EXECUTABLE=$venv/bin/python" \
       --event-handlers console_cohesion- summary+ status- >"$root/log/setup-build.txt" 2>&1) \
     || { tail -n 40 "$root/log/setup-build.txt" >&2; fail "colcon build failed (full output: log/setup-build.txt)"; }
+  # the vortex wake's numba kernels, compiled into their cache beside the installed module, so that the first
+  # process to step a wake does not spend seconds compiling them
+  note "compiling the vortex wake's kernels"
+  (source "$root/scripts/env.sh" && python -c 'from swim_model.wake import compile_kernels; compile_kernels()') \
+    || fail "compiling the vortex wake's kernels failed"
   echo "$sources" > "$stamp"
 fi
 note "ready ($venv, $root/install)"

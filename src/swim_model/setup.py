@@ -12,7 +12,7 @@ setup(
         ('share/' + package_name + '/config', ['swim_model/config/rig.yaml']),
     ],
     package_data={package_name: ['config/*.yaml']},
-    install_requires=['setuptools', 'numpy', 'scipy', 'casadi', 'pyyaml', 'matplotlib'],
+    install_requires=['setuptools', 'numpy', 'scipy', 'casadi', 'numba', 'pyyaml', 'matplotlib'],
     zip_safe=True,
     maintainer='swim maintainers',
     maintainer_email='swim@example.com',

@@ -71,9 +71,9 @@ from __future__ import annotations
 
 import cmath
 import math
-from typing import Callable, TypeVar, cast
+import sys
+from typing import Any, Callable, TypeVar, cast
 
-import numba
 import numpy as np
 import numpy.typing as npt
 
@@ -88,12 +88,41 @@ _Function = TypeVar("_Function", bound=Callable[..., object])
 _Points = TypeVar("_Points", Complex, complex)   # an array of points in the circle plane, or one
 
 
+class _Kernel:
+    """A function of this package's that numba compiles, numba imported only when a kernel is first called (so a
+    process that never steps a wake does not pay numba's import, about 0.6 s)."""
+
+    registered: list["_Kernel"] = []
+
+    def __init__(self, function: Callable[..., Any]) -> None:
+        self.function = function
+        self.dispatcher: Callable[..., Any] | None = None
+        _Kernel.registered.append(self)
+
+    def __call__(self, *args: Any) -> Any:
+        if self.dispatcher is None:
+            _Kernel.load_all()
+        return cast(Callable[..., Any], self.dispatcher)(*args)
+
+    @staticmethod
+    def load_all() -> None:
+        """Wrap every registered kernel in numba's dispatcher and put it in its module's namespace in place of this
+        object, so that a kernel calling another compiles against the other's dispatcher and module code calls the
+        dispatcher directly. numba compiles a kernel at its first call for the argument types."""
+        import numba   # here, not at the module top: the point of the lazy load
+        for kernel in _Kernel.registered:
+            if kernel.dispatcher is None:
+                # error_model "numpy": a division by zero gives inf or nan as in numpy, not an exception (whose
+                # check would keep the loops out of SIMD lanes)
+                kernel.dispatcher = numba.njit(cache=True, error_model="numpy")(kernel.function)
+                setattr(sys.modules[kernel.function.__module__], kernel.function.__name__, kernel.dispatcher)
+
+
 def compiled(function: _Function) -> _Function:
-    """The function compiled to machine code by numba (nopython mode), cached on disk beside the module: the first
-    call in a fresh environment compiles it (about a second), later processes load it."""
-    # error_model "numpy": a division by zero gives inf or nan as in numpy, not an exception (whose check would keep
-    # the loops out of SIMD lanes); the dispatcher is called as the function itself
-    return cast(_Function, numba.njit(cache=True, error_model="numpy")(function))
+    """The function compiled to machine code by numba (nopython mode) at its first call, cached on disk beside the
+    module: the first call in a fresh environment compiles it (about a second), later processes load it. numba
+    itself is imported at the first call of any such function (``_Kernel``)."""
+    return cast(_Function, _Kernel(function))
 
 
 @compiled
