@@ -34,7 +34,7 @@ from swim_controller.tracker import CascadeTracker, model_io_linearization, mode
 IDS = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05"]
 COUNTS = [1, 1]
 ACCELERATE_END_S = 4.0   # the accelerate's duration: the cruise follows
-#: a sliding term that reverses more often than this on the cruise chatters (the constant bound's: 118 per second)
+#: a sliding term that reverses more often than this on the cruise chatters (the constant bound's: 124 per second)
 CHATTER_REVERSALS_PER_S = 20.0
 #: the plan's pitch two-norm may exceed the constant bound's by this fraction: the constant bound's moved by 18 %
 #: with the summation order of the wake's kernels (module docstring)
