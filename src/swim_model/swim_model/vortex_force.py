@@ -35,9 +35,10 @@ Velocity of free vortex j (Routh's rule, the self-induced term a point vortex ha
     conj(u_j) = W_j'(zeta_j) / F'(zeta_j) - Gamma_j F''(zeta_j) / (4 pi i F'(zeta_j)^2),
 
 ``W_j'`` being ``dw/dzeta`` without vortex j's own singular term (its image kept). Vortex-vortex terms use a
-Krasny (1986) blob, ``1/Delta -> conj(Delta)/(|Delta|^2 + delta_k^2)``, with the physical core radius delta
-scaled to the circle plane by ``delta_k = delta/|F'(zeta_k)|``; the image and body terms stay exact so that the
-foil stays impermeable.
+Krasny (1986) blob, ``1/Delta -> conj(Delta)/(|Delta|^2 + delta_k^2)``, with the source vortex's physical core
+radius (one for all, or each vortex its own: a viscous wake's grow with their age, wake.py) scaled to the circle
+plane by ``delta_k = delta/|F'(zeta_k)|``; the image and body terms stay exact so that the foil stays
+impermeable.
 
 Kutta condition at the cusp: ``dw/dzeta(zeta_TE) = 0``. Its real part (normal velocity in the circle plane,
 ``|F'|`` times the foil's normal velocity) vanishes identically at the cusp; the imaginary part (tangential) fixes
@@ -177,10 +178,10 @@ def _to_circle(z: Complex, a_m: float, zeta_c_m: float, zeta: Complex) -> None:
 
 @compiled
 def _vortex_velocities(zeta: Complex, gamma: npt.NDArray[np.float64], u_b: complex, omega: float,
-                       core_radius_m: float, a_m: float, zeta_c_m: float, r_m: float, pole_origin_m3: float,
-                       pole_offset_m3: float, velocities: Complex) -> None:
-    """``CirclePlane.vortex_velocities`` into velocities (N): the map's derivatives, the blob's core in the circle
-    plane and the images per vortex, the O(N^2) sums (``_blob_sums``), then the body and Routh terms."""
+                       core_radii_m: npt.NDArray[np.float64], a_m: float, zeta_c_m: float, r_m: float,
+                       pole_origin_m3: float, pole_offset_m3: float, velocities: Complex) -> None:
+    """``CirclePlane.vortex_velocities`` into velocities (N): the map's derivatives, each blob's core (N) in the
+    circle plane and the images per vortex, the O(N^2) sums (``_blob_sums``), then the body and Routh terms."""
     n = zeta.size
     a2, r2 = a_m * a_m, r_m * r_m
     x, y = np.empty(n), np.empty(n)
@@ -192,7 +193,7 @@ def _vortex_velocities(zeta: Complex, gamma: npt.NDArray[np.float64], u_b: compl
         s = zeta[k] + zeta_c_m
         a2_over_s2 = a2 / (s * s)
         d1[k], d2[k] = 1.0 - a2_over_s2, 2.0 * a2_over_s2 / s
-        core2[k] = (core_radius_m / max(abs(d1[k]), 1e-12)) ** 2
+        core2[k] = (core_radii_m[k] / max(abs(d1[k]), 1e-12)) ** 2
         image = r2 / zeta[k].conjugate()
         image_x[k], image_y[k] = image.real, image.imag
     sums = np.empty((4, n))
@@ -291,11 +292,16 @@ class CirclePlane:
         return total
 
     def vortex_velocities(self, zeta_k: Complex, gamma_k: npt.NDArray[np.float64],
-                          velocity: tuple[float, float, float], core_radius_m: float) -> Complex:
-        """Fluid velocity u + iv (foil axes) at each free vortex: blob mutual terms, exact images, Routh term."""
+                          velocity: tuple[float, float, float],
+                          core_radius_m: float | npt.NDArray[np.float64]) -> Complex:
+        """Fluid velocity u + iv (foil axes) at each free vortex: blob mutual terms, exact images, Routh term.
+
+        core_radius_m: the blobs' core radius in the physical plane, m: one for all, or one per vortex (N,), the
+        source vortex's core desingularizing each pair's term."""
         velocities: Complex = np.empty(zeta_k.size, dtype=complex)
+        cores = np.ascontiguousarray(np.broadcast_to(np.asarray(core_radius_m, dtype=float), np.shape(zeta_k)))
         _vortex_velocities(np.ascontiguousarray(zeta_k, dtype=complex), np.ascontiguousarray(gamma_k, dtype=float),
-                           complex(velocity[0], velocity[1]), float(velocity[2]), core_radius_m, self.a_m,
+                           complex(velocity[0], velocity[1]), float(velocity[2]), cores, self.a_m,
                            self.zeta_c_m, self.r_m, self.rotation_pole_origin_m3, self.rotation_pole_offset_m3,
                            velocities)
         return velocities

@@ -51,6 +51,17 @@ Force split (the integration rule): the total fluid force on the foil is ``F_Kir
 with ``M_A`` of ``added_mass.py``; ``WakeForce`` is ``F_v`` only -- the circulatory (vortical) part, with no
 added-mass term. In particular the foil's own motion enters F_v only through the vortices it sheds.
 
+Viscous core growth (``kinematic_viscosity_m2_s`` > 0). In an inviscid wake a vortex keeps its core
+``core_radius_m`` for as long as it lives, so a foil circling the hub meets the vortices it shed a turn earlier as
+concentrated as they were shed (docs/disturbances.md measures what that does to the closed loop). In water a
+vortex's vorticity diffuses: the Lamb-Oseen vortex ``v(r) = Gamma/(2 pi r) (1 - exp(-r^2/(4 nu t)))`` has its
+largest speed ``Gamma (1 - e^-x)/(2 pi r_max)`` at ``r_max^2 = 4 x nu t``, x = 1.2564 (Saffman, "Vortex Dynamics",
+1992). The blob's largest speed is ``Gamma/(4 pi delta)``, at ``r = delta``. With viscosity each
+vortex's core grows so that the two agree for the time the vortex has diffused:
+``delta^2 = core_radius_m^2 + x/(1 - e^-x)^2 nu t`` (2.4554 nu t; ``viscous_core_radius``, once per step). The
+far field and the circulation are unchanged. Amalgamating two vortices keeps the circulation-weighted mean of
+their squared cores. The image and body terms stay exact (``vortex_force.py``).
+
 Assumptions: unbounded fluid (the tank wall and free surface are ignored), 2-D strips (forces are per metre of
 span times the span, no tip vortices), no viscous drag, shedding only from the trailing edge (no leading-edge
 separation: valid for small effective angles of attack). Vortices live in the tank frame, so a foil
@@ -71,6 +82,21 @@ from swim_model.vortex_force import CirclePlane, compiled
 
 Pose = tuple[float, float, float]        # x_m, y_m (frame origin in the tank frame), theta_rad (chord angle)
 Velocity = tuple[float, float, float]    # U_m_s, V_m_s (origin velocity along the foil axes), Omega_rad_s
+
+#: x = r_max^2 / (4 nu t) at the Lamb-Oseen vortex's largest speed: the root of (1 + 2 x) e^-x = 1
+LAMB_OSEEN_PEAK_RADIUS2 = 1.2564312086261696
+#: d(delta^2)/d(nu t) of a blob whose largest speed Gamma/(4 pi delta) is the Lamb-Oseen vortex's,
+#: Gamma (1 - e^-x) / (2 pi r_max): delta^2 = x nu t / (1 - e^-x)^2 (module docstring)
+LAMB_OSEEN_CORE_GROWTH = LAMB_OSEEN_PEAK_RADIUS2 / (1.0 - math.exp(-LAMB_OSEEN_PEAK_RADIUS2)) ** 2
+
+
+def viscous_core_radius(core_radius_m: npt.NDArray[np.float64], kinematic_viscosity_m2_s: float,
+                        dt_s: float) -> npt.NDArray[np.float64]:
+    """The blob cores (m, any shape) after dt_s (s) of viscous diffusion at kinematic_viscosity_m2_s (m^2/s):
+    ``delta^2 + LAMB_OSEEN_CORE_GROWTH nu dt``, so that a vortex's largest speed stays a Lamb-Oseen vortex's."""
+    grown: npt.NDArray[np.float64] = np.sqrt(core_radius_m ** 2
+                                             + LAMB_OSEEN_CORE_GROWTH * kinematic_viscosity_m2_s * dt_s)
+    return grown
 
 
 @compiled
@@ -128,12 +154,19 @@ class WakeParameters:
     # wall: its vorticity is in the boundary layer and it is absorbed into the bound circulation (module
     # docstring). Smaller than the gap of a vortex just shed at min_shed_distance_m behind the cusp (1.8 mm on the
     # rig's foil). 0: never absorb
+    kinematic_viscosity_m2_s: float = 0.0
+    # the fluid's kinematic viscosity, by which each vortex's core grows with its age (viscous core growth, module
+    # docstring); water at 20 C: 1.0e-6. Assumed 0 by default: the inviscid wake, every core core_radius_m for
+    # as long as the vortex lives, as the wake's checks against theory and the tank were made
 
     def __post_init__(self) -> None:
         for name in ("rho_kg_m3", "core_radius_m", "shed_distance_fraction", "min_shed_distance_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise StateError(f"WakeParameters.{name} must be positive and finite, got {value!r}")
+        if not (math.isfinite(self.kinematic_viscosity_m2_s) and self.kinematic_viscosity_m2_s >= 0.0):
+            raise StateError("WakeParameters.kinematic_viscosity_m2_s must be finite and >= 0, "
+                             f"got {self.kinematic_viscosity_m2_s!r}")
         if not (math.isfinite(self.surface_absorption_gap_m) and self.surface_absorption_gap_m >= 0.0):
             raise StateError("WakeParameters.surface_absorption_gap_m must be finite and >= 0, "
                              f"got {self.surface_absorption_gap_m!r}")
@@ -166,6 +199,7 @@ class Wake:
         self.time_s = 0.0
         self.positions_m = np.zeros(0, dtype=complex)          # tank frame, X + iY
         self.circulations_m2_s = np.zeros(0)                   # counter-clockwise positive
+        self.core_radii_m = np.zeros(0)                        # each vortex's blob core (viscous_core_radius)
         self._previous_velocities = np.zeros(0, dtype=complex)  # tank frame, at the previous step
         self._has_previous_velocity = np.zeros(0, dtype=bool)
         self._previous_dt_s = 0.0
@@ -233,6 +267,7 @@ class Wake:
             raise StateError(f"Wake.add_vortex: {position_m!r} is inside the foil")
         self.positions_m = np.append(self.positions_m, position)
         self.circulations_m2_s = np.append(self.circulations_m2_s, gamma)
+        self.core_radii_m = np.append(self.core_radii_m, self.params.core_radius_m)
         self._previous_velocities = np.append(self._previous_velocities, 0j)
         self._has_previous_velocity = np.append(self._has_previous_velocity, False)
         self._map_vortices(self._circle_plane_positions()[0])
@@ -305,13 +340,15 @@ class Wake:
             return
         zeta = self._current_circle_plane_positions()
         velocities = self._rotation() * self.plane.vortex_velocities(zeta, self.circulations_m2_s, self._velocity,
-                                                                     self.params.core_radius_m)
+                                                                     self.core_radii_m)
         increment = velocities.copy()
         if self._previous_dt_s > 0.0:
             ratio = dt_s / (2.0 * self._previous_dt_s)
             has = self._has_previous_velocity
             increment[has] += ratio * (velocities[has] - self._previous_velocities[has])
         self.positions_m = self.positions_m + dt_s * increment
+        if self.params.kinematic_viscosity_m2_s > 0.0:
+            self.core_radii_m = viscous_core_radius(self.core_radii_m, self.params.kinematic_viscosity_m2_s, dt_s)
         self._zeta = None   # the vortices moved
         self._previous_velocities = velocities
         self._has_previous_velocity = np.ones(velocities.size, dtype=bool)
@@ -343,6 +380,7 @@ class Wake:
         self.absorbed_circulation_m2_s += float(np.sum(self.circulations_m2_s[absorbed]))
         keep = ~absorbed
         self.positions_m, self.circulations_m2_s = self.positions_m[keep], self.circulations_m2_s[keep]
+        self.core_radii_m = self.core_radii_m[keep]
         self._previous_velocities = self._previous_velocities[keep]
         self._has_previous_velocity = self._has_previous_velocity[keep]
         return zeta[keep]
@@ -360,6 +398,7 @@ class Wake:
         position = complex(x, y) + rotation * (self.plane.z_te - distance)
         self.positions_m = np.append(self.positions_m, position)
         self.circulations_m2_s = np.append(self.circulations_m2_s, gamma)
+        self.core_radii_m = np.append(self.core_radii_m, self.params.core_radius_m)
         self._previous_velocities = np.append(self._previous_velocities, 0j)
         self._has_previous_velocity = np.append(self._has_previous_velocity, False)
         # the new vortex mapped back from its tank-frame position, as every vortex is
@@ -395,9 +434,12 @@ class Wake:
                                         + share[1] * self._previous_velocities[i + 1])
         self._has_previous_velocity[i] = self._has_previous_velocity[i] and self._has_previous_velocity[i + 1]
         gamma[i] = gamma[i] + gamma[i + 1]
+        cores = self.core_radii_m
+        if cores[i] != cores[i + 1]:   # the circulation-weighted mean of the squared cores (equal ones kept)
+            cores[i] = math.sqrt(share[0] * cores[i] ** 2 + share[1] * cores[i + 1] ** 2)
         keep = np.ones(z.size, dtype=bool)
         keep[i + 1] = False
-        self.positions_m, self.circulations_m2_s = z[keep], gamma[keep]
+        self.positions_m, self.circulations_m2_s, self.core_radii_m = z[keep], gamma[keep], cores[keep]
         self._previous_velocities = self._previous_velocities[keep]
         self._has_previous_velocity = self._has_previous_velocity[keep]
         self.merged_count += 1

@@ -22,7 +22,7 @@ from swim_model import JoukowskiFoil
 from swim_model.errors import FoilGeometryError, StateError
 from swim_model.joukowski import ellipse_map
 from swim_model.vortex_force import CirclePlane, steady_kutta_circulation
-from swim_model.wake import Wake, WakeParameters
+from swim_model.wake import LAMB_OSEEN_CORE_GROWTH, Wake, WakeParameters
 
 RHO = 998.2
 CHORD_M = 0.06
@@ -99,6 +99,9 @@ def test_ellipse_and_bad_parameters_are_refused():
         CirclePlane(ellipse_map(0.03, 0.004))
     with pytest.raises(StateError):
         WakeParameters(core_radius_m=0.0)
+    for viscosity in (-1e-6, float("nan")):
+        with pytest.raises(StateError, match="kinematic_viscosity_m2_s"):
+            WakeParameters(kinematic_viscosity_m2_s=viscosity)
     wake = Wake(JoukowskiFoil(CHORD_M, RIG_THICKNESS_M))
     with pytest.raises(StateError):
         wake.step(0.008, (0.0, 0.0, float("nan")), (0.1, 0.0, 0.0))
@@ -128,6 +131,64 @@ def test_kelvin_total_circulation_stays_zero():
     # every vortex shed is still free, merged into another or absorbed at the surface
     assert wake.vortex_count() == 120 and wake.merged_count + wake.absorbed_count == 600 - 120
     assert wake.absorbed_count > 0
+
+
+# --- viscous core growth -------------------------------------------------------------------------------------------
+WATER_VISCOSITY_M2_S = 1.0e-6   # water at 20 C
+
+
+def test_the_core_growth_gives_the_lamb_oseen_vortexs_largest_speed():
+    """The blob (speed Gamma r / (2 pi (r^2 + delta^2))) with delta^2 = LAMB_OSEEN_CORE_GROWTH nu t has the largest
+    speed of the Lamb-Oseen vortex (Gamma / (2 pi r) (1 - exp(-r^2 / (4 nu t)))), both maximized on a dense grid."""
+    for age_s in (0.5, 13.0):
+        diffusion_m2 = 4.0 * WATER_VISCOSITY_M2_S * age_s
+        r = np.linspace(1e-5, 0.05, 2_000_001)
+        lamb_oseen = np.max((1.0 - np.exp(-r * r / diffusion_m2)) / r)
+        delta2 = LAMB_OSEEN_CORE_GROWTH * WATER_VISCOSITY_M2_S * age_s
+        blob = np.max(r / (r * r + delta2))
+        assert blob == pytest.approx(lamb_oseen, rel=1e-6)
+
+
+def towed_wake(params: WakeParameters, steps: int, dt_s: float = 0.008) -> Wake:
+    """A foil towed at SPEED_M_S and 4 degrees for steps steps of dt_s."""
+    wake = Wake(JoukowskiFoil(CHORD_M, RIG_THICKNESS_M), params)
+    alpha = math.radians(4.0)
+    velocity = (SPEED_M_S * math.cos(alpha), -SPEED_M_S * math.sin(alpha), 0.0)
+    for n in range(1, steps + 1):
+        position = SPEED_M_S * n * dt_s * complex(math.cos(alpha), -math.sin(alpha))
+        wake.step(dt_s, (position.real, position.imag, 0.0), velocity)
+    return wake
+
+
+def test_each_vortex_core_grows_with_its_age():
+    core_m, dt_s, steps = 1.5e-3, 0.008, 200
+    viscous = towed_wake(WakeParameters(core_radius_m=core_m, kinematic_viscosity_m2_s=WATER_VISCOSITY_M2_S,
+                                        max_vortex_count=None), steps, dt_s)
+    assert viscous.absorbed_count == 0 and viscous.vortex_count() == steps
+    # the vortex shed in step n (1..steps) has been convected steps - n times since
+    ages_s = dt_s * np.arange(steps - 1, -1, -1)
+    expected = np.sqrt(core_m ** 2 + LAMB_OSEEN_CORE_GROWTH * WATER_VISCOSITY_M2_S * ages_s)
+    np.testing.assert_allclose(viscous.core_radii_m, expected, rtol=1e-12)
+    assert viscous.core_radii_m[0] > 1.6 * core_m   # 1.6 s of diffusion: 2.5 mm
+    inviscid = towed_wake(WakeParameters(core_radius_m=core_m, max_vortex_count=None), steps, dt_s)
+    assert np.all(inviscid.core_radii_m == core_m)
+    # the far wake's vortices then move apart, the near wake (the newest, cores within 0.3 mm) about alike
+    assert np.max(np.abs(viscous.positions_m[-10:] - inviscid.positions_m[-10:])) < 1e-4
+
+
+def test_amalgamation_keeps_the_circulation_weighted_mean_of_the_squared_cores():
+    viscous = towed_wake(WakeParameters(kinematic_viscosity_m2_s=WATER_VISCOSITY_M2_S, max_vortex_count=None), 120)
+    gamma, cores = viscous.circulations_m2_s.copy(), viscous.core_radii_m.copy()
+    viscous.params = WakeParameters(kinematic_viscosity_m2_s=WATER_VISCOSITY_M2_S, max_vortex_count=119,
+                                    protected_vortex_count=60)
+    viscous._merge()   # one pair of the oldest 60: the wake's own choice of pair
+    assert viscous.vortex_count() == 119 and viscous.merged_count == 1
+    merged = next(i for i in range(119) if viscous.circulations_m2_s[i] != gamma[i])
+    pair = slice(merged, merged + 2)
+    weights = np.abs(gamma[pair]) / np.sum(np.abs(gamma[pair]))
+    assert viscous.circulations_m2_s[merged] == pytest.approx(gamma[pair].sum(), rel=1e-15)
+    assert viscous.core_radii_m[merged] ** 2 == pytest.approx(np.sum(weights * cores[pair] ** 2), rel=1e-12)
+    np.testing.assert_array_equal(np.delete(viscous.core_radii_m, merged), np.delete(cores, pair))
 
 
 # --- Wagner --------------------------------------------------------------------------------------------------------

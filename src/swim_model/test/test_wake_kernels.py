@@ -36,11 +36,12 @@ def scattered_vortices(plane: CirclePlane, count: int, seed: int = 4) -> tuple[n
 
 
 def dense_velocities(plane: CirclePlane, zeta: np.ndarray, gamma: np.ndarray,
-                     velocity: tuple[float, float, float]) -> np.ndarray:
-    """u + iv at each vortex from the module docstring's formulas, as N x N numpy arrays."""
+                     velocity: tuple[float, float, float], core_radius_m=CORE_RADIUS_M) -> np.ndarray:
+    """u + iv at each vortex from the module docstring's formulas, as N x N numpy arrays; core_radius_m: one for
+    all, or the source vortex's own (N,)."""
     s = zeta + plane.zeta_c_m
     d1, d2 = 1.0 - plane.a_m ** 2 / s ** 2, 2.0 * plane.a_m ** 2 / s ** 3
-    core2 = (CORE_RADIUS_M / np.abs(d1)) ** 2
+    core2 = (core_radius_m / np.abs(d1)) ** 2
     difference = zeta[:, None] - zeta[None, :]
     blob = np.conj(difference) / (np.abs(difference) ** 2 + core2[None, :])
     images = plane.r_m ** 2 / np.conj(zeta)
@@ -61,6 +62,16 @@ def test_vortex_velocities_are_the_dense_sums(plane, count):
     velocity = (0.12, -0.03, 0.8)
     assert relative_error(plane.vortex_velocities(zeta, gamma, velocity, CORE_RADIUS_M),
                           dense_velocities(plane, zeta, gamma, velocity)) < ROUND_OFF
+
+
+def test_each_vortex_desingularizes_with_its_own_core(plane):
+    zeta, gamma = scattered_vortices(plane, VORTEX_COUNT)
+    cores = np.random.default_rng(5).uniform(1.0e-3, 9.0e-3, VORTEX_COUNT)
+    velocity = (0.12, -0.03, 0.8)
+    own = plane.vortex_velocities(zeta, gamma, velocity, cores)
+    assert relative_error(own, dense_velocities(plane, zeta, gamma, velocity, cores)) < ROUND_OFF
+    # and not the common core's: the cores matter at these separations
+    assert relative_error(own, dense_velocities(plane, zeta, gamma, velocity)) > 1e3 * ROUND_OFF
 
 
 def test_a_lone_vortex_moves_only_with_its_image_the_body_and_the_routh_term(plane):

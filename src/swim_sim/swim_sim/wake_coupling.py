@@ -22,6 +22,7 @@ def parameter_defaults() -> dict[str, int | float]:
             "max_vortex_count": wake.max_vortex_count or 0, "protected_vortex_count": wake.protected_vortex_count,
             "opposite_sign_merge_penalty": wake.opposite_sign_merge_penalty,
             "surface_absorption_gap_m": wake.surface_absorption_gap_m,
+            "kinematic_viscosity_m2_s": wake.kinematic_viscosity_m2_s,
             "force_limit_n": FORCE_LIMIT_N, "moment_limit_n_m": MOMENT_LIMIT_N_M}
 
 
@@ -33,6 +34,7 @@ def parameters_from_values(values: dict[str, int | float]) -> WakeCouplingParame
                           max_vortex_count=int(values["max_vortex_count"]) or None,
                           protected_vortex_count=int(values["protected_vortex_count"]),
                           opposite_sign_merge_penalty=float(values["opposite_sign_merge_penalty"]),
-                          surface_absorption_gap_m=float(values["surface_absorption_gap_m"]))
+                          surface_absorption_gap_m=float(values["surface_absorption_gap_m"]),
+                          kinematic_viscosity_m2_s=float(values["kinematic_viscosity_m2_s"]))
     return WakeCouplingParameters(wake=wake, force_limit_n=float(values["force_limit_n"]),
                                   moment_limit_n_m=float(values["moment_limit_n_m"]))
