@@ -39,15 +39,23 @@ def solve_job(rig: RigParameters, spec: PrimitiveSpec, limits: PlanningLimits, s
     seeds the initial guess of an accelerate or decelerate).
     flow_model: swim_model's flow model the primitive is solved with ("ideal" or "circulatory")."""
     model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m, flow=flow_model)
+    primitive = solve_from_guess_or_blend(model, spec, limits, start, end, guess, settings)
+    return gains_job(rig, primitive, lqr_weights)
+
+
+def solve_from_guess_or_blend(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits, start, end,
+                              guess: Optional[Primitive] = None,
+                              settings: SolverSettings = SolverSettings()) -> Primitive:
+    """solve_primitive from guess, and if IPOPT gives up there, once more from the plain blend of the boundary
+    states (guess None) before the PrimitiveSolveError: IPOPT's infeasibility verdicts depend on where it starts,
+    and where a start leads it depends on the round-off of the machine's linear algebra. What a library build
+    solves each primitive with."""
     try:
-        primitive = solve_primitive(model, spec, limits, start=start, end=end, guess=guess, settings=settings)
+        return solve_primitive(model, spec, limits, start=start, end=end, guess=guess, settings=settings)
     except PrimitiveSolveError:
         if guess is None:
             raise
-        # IPOPT's infeasibility verdicts depend on where it starts: try the plain blend of the boundary
-        # states before giving up
-        primitive = solve_primitive(model, spec, limits, start=start, end=end, guess=None, settings=settings)
-    return gains_job(rig, primitive, lqr_weights)
+        return solve_primitive(model, spec, limits, start=start, end=end, guess=None, settings=settings)
 
 
 def dependencies(spec: PrimitiveSpec) -> list[str]:

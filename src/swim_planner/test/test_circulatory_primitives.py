@@ -22,6 +22,7 @@ from swim_planner.catalog import (CIRCULATORY_ENERGY_LEVELS_J, CIRCULATORY_FREE_
                                   CIRCULATORY_FREE_DECELERATE_CONTINUATION_RAD,
                                   CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S, CIRCULATORY_FREE_DECELERATE_S,
                                   CIRCULATORY_LONGER_S, INTERVALS_PER_S, circulatory_specs, cruise_id, default_specs)
+from swim_planner.build import solve_from_guess_or_blend
 from swim_planner.primitive_solver import solve_primitive
 from swim_planner.primitives import (PlanningLimits, Primitive, PrimitiveType, cruise_mean_speed_m_s,
                                      cruise_strouhal_number, rest_boundary_state)
@@ -64,8 +65,7 @@ def solved(rig):
         end = out[spec.end_at][1].start_boundary_state if spec.end_at else None
         joined = spec.start_from or spec.end_at
         guess = out[joined][1] if joined else None
-        out[primitive_id] = models[key], solve_primitive(models[key], spec, LIMITS, start=start, end=end,
-                                                         guess=guess)
+        out[primitive_id] = models[key], solve_from_guess_or_blend(models[key], spec, LIMITS, start, end, guess)
     return out
 
 
