@@ -281,6 +281,7 @@ class Plant:
         self._wave_state = 0.0
         if self.wake is not None:
             self.wake.reset()   # the fluid at rest again
+        self._prepared_force: Optional[Array] = None   # the next period's, if prepare_period made it
 
     @property
     def state(self) -> PlantState:
@@ -302,9 +303,8 @@ class Plant:
             command = np.zeros(2)
         applied = np.clip(command, -self._limits, self._limits)
         self.saturated = (bool(abs(command[0]) > self._limits[0]), bool(abs(command[1]) > self._limits[1]))
-        wave = self._wave_force()
-        if self.wake is not None:
-            wave = wave + self.wake.step(self.q, self.qdot, self.sample_period_s)
+        wave = self._prepared_force if self._prepared_force is not None else self._period_force()
+        self._prepared_force = None
         x = np.concatenate([self.q, self.qdot, self.lag])
         x_next = None if any(self.at_stop.values()) else self._fast_period(x, applied, wave)
         if x_next is None:
@@ -317,6 +317,24 @@ class Plant:
         self.torque = applied
         self.time_s += self.sample_period_s
         return self.state
+
+    def prepare_period(self) -> None:
+        """Compute the next period's held disturbance forces now, ahead of its torque, for ``step`` to use.
+
+        The waves' and the vortex wake's forces of a period depend on the state at its start and on the noise,
+        never on its torque; a caller that waits for the torque (sim_node in lock-step, after publishing the state)
+        can step the wake while the controller computes. ``step`` then gives the same numbers bit for bit as
+        without it (the same computations in the same order, the noise drawn in the same sequence); ``reset``
+        discards a prepared period. Once per period: a second call before ``step`` does nothing."""
+        if self._prepared_force is None:
+            self._prepared_force = self._period_force()
+
+    def _period_force(self) -> Array:
+        """The generalized force held over the period from the current state: the waves', plus the wake's."""
+        force = self._wave_force()
+        if self.wake is not None:
+            force = force + self.wake.step(self.q, self.qdot, self.sample_period_s)
+        return force
 
     def _wave_force(self) -> Array:
         """The surface-wave generalized force for this period: std ~ |v_foil|^2, first-order filtered noise."""

@@ -235,6 +235,7 @@ class SimNode(Node):
             if self._hold_enabled:
                 self.create_timer(self.plant.sample_period_s, self._republish_held_state)
         self._publish_state()
+        self._prepare_period()
         self.get_logger().info(f"simulating the {'constrained' if model.constrained else 'free'} vehicle, "
                                f"flow {flow}, {self.mode}, period {self.plant.sample_period_s * 1e3:g} ms")
 
@@ -303,14 +304,26 @@ class SimNode(Node):
         try:
             self.plant.step(torque)
         except (SimulationError, SwimModelError) as err:   # SwimModelError: the wake met a non-finite value
-            self.failed = str(err)
-            self.get_logger().error(f"simulation stopped: {err} (call reset or set_state to restart)")
+            self._fail(err)
             return
         self._publish_state()
         if self.wake_publisher is not None:
             self._publish_wake(self.plant.time_s - self.plant.sample_period_s)
             if self.plant.time_s >= self._vortices_due_s:
                 self._publish_vortices()
+        self._prepare_period()
+
+    def _prepare_period(self) -> None:
+        """The next period's wake and waves, computed while the controller computes its torque (they do not depend
+        on it: Plant.prepare_period)."""
+        try:
+            self.plant.prepare_period()
+        except SwimModelError as err:   # the wake met a non-finite value
+            self._fail(err)
+
+    def _fail(self, err: Exception) -> None:
+        self.failed = str(err)
+        self.get_logger().error(f"simulation stopped: {err} (call reset or set_state to restart)")
 
     def _publish_state(self, advance: bool = True) -> None:
         plant = self.plant
@@ -398,6 +411,7 @@ class SimNode(Node):
         self.holding, self._held_state_answered = self._hold_enabled, False
         self._vortices_due_s = -math.inf   # the fresh wake's first vortices are sent at once
         self._publish_state()
+        self._prepare_period()
 
 
 def main(args: list[str] | None = None) -> None:

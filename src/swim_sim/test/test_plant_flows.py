@@ -179,3 +179,36 @@ def test_reset_puts_the_flow_at_rest_unless_given(rig):
     np.testing.assert_array_equal(plant.q, np.zeros(3))   # refused: nothing changed
     with pytest.raises(StateError, match="lag"):
         Plant(VehicleModel(rig, constrained=True), Disturbances.none()).reset(np.zeros(3), np.zeros(3), lag=[0.1])
+
+
+@pytest.mark.parametrize("constrained", [True, False], ids=["constrained", "free"])
+def test_a_period_prepared_ahead_of_its_torque_steps_bit_for_bit_as_one_computed_with_it(rig, constrained):
+    """Plant.prepare_period (sim_node's, while the controller computes): the wake and the waves of a period from its
+    start state, the noise drawn in the same sequence, interleaved with the sensors' draws as sim_node makes them."""
+    model = vehicle_model("wake", rig, constrained=constrained)
+    runs = []
+    for prepared in (False, True):
+        plant = Plant(model, Disturbances(), seed=3, wake=WakeCoupling(model))
+        q, qdot, _ = swinging_state(model)
+        plant.reset(q, qdot)
+        states, noise = [], []
+        if prepared:
+            plant.prepare_period()
+        for k, torque in enumerate(torques(PERIODS)):
+            if k == 100:   # a reset discards a prepared period
+                plant.reset(q, qdot, time_s=plant.time_s)
+                if prepared:
+                    plant.prepare_period()
+            state = plant.step(torque)
+            noise.append(plant.rng.standard_normal())   # the sensors' draw after each period, as sim_node's
+            if prepared:
+                plant.prepare_period()
+                plant.prepare_period()   # once per period: a second call does nothing
+            states.append(np.concatenate([state.q, state.qdot]))
+        runs.append((np.array(states), np.array(noise), plant.wake.vortices().positions_m))
+    (states, noise, vortices), (prepared_states, prepared_noise, prepared_vortices) = runs
+    np.testing.assert_array_equal(prepared_states, states)
+    np.testing.assert_array_equal(prepared_noise, noise)
+    # the prepared run has stepped its wake once more, into the period after the last
+    assert prepared_vortices.size >= vortices.size > 0
+    assert np.abs(states[:, model.nq - 2:model.nq]).max() > 0.1   # the foil moved: the wake's force mattered
