@@ -331,11 +331,11 @@ class CirclePlane:
     # --- impulse ----------------------------------------------------------------------------------------------
     def vortex_impulse(self, zeta_k: Complex, gamma_k: npt.NDArray[np.float64], rho_kg_m3: float) -> complex:
         """I_v = -i rho sum_k Gamma_k (zeta_k - zeta_k*), foil axes, kg/s per metre of span."""
-        return complex(-1j * rho_kg_m3 * np.sum(self.impulse_terms(zeta_k, gamma_k)[0]))
+        return impulse_from_terms(self.impulse_terms(zeta_k, gamma_k)[0], rho_kg_m3)
 
     def vortex_angular_impulse(self, zeta_k: Complex, gamma_k: npt.NDArray[np.float64], rho_kg_m3: float) -> float:
         """L_v about the frame origin (module docstring), kg m/s per metre of span."""
-        return float(-0.5 * rho_kg_m3 * np.sum(self.impulse_terms(zeta_k, gamma_k)[1]))
+        return angular_impulse_from_terms(self.impulse_terms(zeta_k, gamma_k)[1], rho_kg_m3)
 
     def impulse_terms(self, zeta_k: Complex,
                       gamma_k: npt.NDArray[np.float64]) -> tuple[Complex, npt.NDArray[np.float64]]:
@@ -349,6 +349,18 @@ class CirclePlane:
                               self.zeta_c_m, self.r_m, self.rotation_pole_origin_m3, self.rotation_pole_offset_m3,
                               impulse, angular)
         return impulse, angular
+
+def impulse_from_terms(impulse_terms: Complex, rho_kg_m3: float) -> complex:
+    """I_v = -i rho times the sum of the vortices' impulse terms (``CirclePlane.impulse_terms``), in the axes of the
+    terms (foil axes), kg/s per metre of span."""
+    return -1j * rho_kg_m3 * complex(np.sum(impulse_terms))
+
+
+def angular_impulse_from_terms(angular_terms: npt.NDArray[np.float64], rho_kg_m3: float) -> float:
+    """L_v about the foil frame's origin = -rho/2 times the sum of the vortices' angular terms
+    (``CirclePlane.impulse_terms``), kg m/s per metre of span."""
+    return -0.5 * rho_kg_m3 * float(np.sum(angular_terms))
+
 
 def steady_kutta_circulation(plane: CirclePlane, speed_m_s: float, angle_of_attack_rad: float) -> float:
     """Gamma = 4 pi r U sin(alpha): the steady Kutta circulation of the foil moving at U, angle of attack alpha.

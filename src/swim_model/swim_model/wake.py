@@ -78,7 +78,7 @@ import numpy.typing as npt
 
 from swim_model.errors import StateError
 from swim_model.joukowski import JoukowskiFoil
-from swim_model.vortex_force import CirclePlane, compiled
+from swim_model.vortex_force import CirclePlane, angular_impulse_from_terms, compiled, impulse_from_terms
 
 Pose = tuple[float, float, float]        # x_m, y_m (frame origin in the tank frame), theta_rad (chord angle)
 Velocity = tuple[float, float, float]    # U_m_s, V_m_s (origin velocity along the foil axes), Omega_rad_s
@@ -408,9 +408,9 @@ class Wake:
     def _impulses(self) -> tuple[complex, float]:
         """(I_v in the tank frame, L_v about the tank origin), per metre of span, from the kept impulse terms."""
         rho = self.params.rho_kg_m3
-        impulse = self._rotation() * (-1j * rho * complex(self._impulse_terms.sum()))
+        impulse = self._rotation() * impulse_from_terms(self._impulse_terms, rho)
         x, y, _ = self._pose  # type: ignore[misc]
-        angular = -0.5 * rho * float(self._angular_terms.sum()) + (complex(x, -y) * impulse).imag
+        angular = angular_impulse_from_terms(self._angular_terms, rho) + (complex(x, -y) * impulse).imag
         return impulse, angular
 
     def _merge(self) -> None:
