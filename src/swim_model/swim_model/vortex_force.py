@@ -350,6 +350,7 @@ class CirclePlane:
                               impulse, angular)
         return impulse, angular
 
+
 def impulse_from_terms(impulse_terms: Complex, rho_kg_m3: float) -> complex:
     """I_v = -i rho times the sum of the vortices' impulse terms (``CirclePlane.impulse_terms``), in the axes of the
     terms (foil axes), kg/s per metre of span."""

@@ -59,8 +59,8 @@ largest speed ``Gamma (1 - e^-x)/(2 pi r_max)`` at ``r_max^2 = 4 x nu t``, x = 1
 1992). The blob's largest speed is ``Gamma/(4 pi delta)``, at ``r = delta``. With viscosity each
 vortex's core grows so that the two agree for the time the vortex has diffused:
 ``delta^2 = core_radius_m^2 + x/(1 - e^-x)^2 nu t`` (2.4554 nu t; ``viscous_core_radius``, once per step). The
-far field and the circulation are unchanged. Amalgamating two vortices keeps the circulation-weighted mean of
-their squared cores. The image and body terms stay exact (``vortex_force.py``).
+far field and the circulation are unchanged. Amalgamating two vortices keeps the mean of their squared cores
+weighted by their |Gamma| (the weights of the centroid). The image and body terms stay exact (``vortex_force.py``).
 
 Assumptions: unbounded fluid (the tank wall and free surface are ignored), 2-D strips (forces are per metre of
 span times the span, no tip vortices), no viscous drag, shedding only from the trailing edge (no leading-edge
@@ -435,7 +435,7 @@ class Wake:
         self._has_previous_velocity[i] = self._has_previous_velocity[i] and self._has_previous_velocity[i + 1]
         gamma[i] = gamma[i] + gamma[i + 1]
         cores = self.core_radii_m
-        if cores[i] != cores[i + 1]:   # the circulation-weighted mean of the squared cores (equal ones kept)
+        if cores[i] != cores[i + 1]:   # the squared cores' mean by the centroid's weights (equal ones kept)
             cores[i] = math.sqrt(share[0] * cores[i] ** 2 + share[1] * cores[i + 1] ** 2)
         keep = np.ones(z.size, dtype=bool)
         keep[i + 1] = False

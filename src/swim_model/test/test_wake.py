@@ -176,7 +176,7 @@ def test_each_vortex_core_grows_with_its_age():
     assert np.max(np.abs(viscous.positions_m[-10:] - inviscid.positions_m[-10:])) < 1e-4
 
 
-def test_amalgamation_keeps_the_circulation_weighted_mean_of_the_squared_cores():
+def test_amalgamation_keeps_the_mean_of_the_squared_cores_by_the_centroids_weights():
     viscous = towed_wake(WakeParameters(kinematic_viscosity_m2_s=WATER_VISCOSITY_M2_S, max_vortex_count=None), 120)
     gamma, cores = viscous.circulations_m2_s.copy(), viscous.core_radii_m.copy()
     viscous.params = WakeParameters(kinematic_viscosity_m2_s=WATER_VISCOSITY_M2_S, max_vortex_count=119,
