@@ -45,7 +45,9 @@ CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S = 40
 # circulatory flow, the free decelerates' collocation intervals per second (assumed: twice INTERVALS_PER_S, the
 # least tried that ends the paper's lane keeping within 1 mrad of its plan). A free decelerate ends at rest, where
 # the tracker can no longer take a hub-angle error out, so what its plan's discretization leaves in its last
-# intervals stays; an accelerate's is taken out by the cruise after it (docs/circulatory_primitives.md)
+# intervals stays; an accelerate's is taken out by the cruise after it (docs/circulatory_primitives.md). Each is
+# solved first on INTERVALS_PER_S, its continuation included, then on this grid from that solution (mesh refinement,
+# PrimitiveSpec.coarse_intervals): the continuation's iterations cost a third as much on the coarser grid
 CIRCULATORY_LONGER_S = {"free/decelerate/R0.43/E0.10": 6.0, "free/decelerate/R0.43/E0.20": 6.0,
                         "free/cruise_to_cruise/R0.43/E0.10-E0.05": 3.0}
 # circulatory flow: transitions given more than the durations above (assumed, each the shortest tried that solves).
@@ -147,7 +149,8 @@ def circulatory_specs(rig: RigParameters) -> list[PrimitiveSpec]:
     """The circulatory flow's library: the paper's graph at CIRCULATORY_ENERGY_LEVELS_J, ids and durations as in
     ``default_specs`` except the free accelerate's (CIRCULATORY_FREE_ACCELERATE_S), the free decelerate's
     (CIRCULATORY_FREE_DECELERATE_S, solved by continuation in the angle-of-attack bound and ending at rest with the
-    lag states its braking leaves: PrimitiveSpec.end_lag_free; CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S) and
+    lag states its braking leaves: PrimitiveSpec.end_lag_free; CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S, refined
+    from INTERVALS_PER_S: PrimitiveSpec.coarse_intervals) and
     those of CIRCULATORY_LONGER_S (which take precedence)."""
     specs = constrained_specs(rig, CIRCULATORY_ENERGY_LEVELS_J) + free_specs(rig, CIRCULATORY_ENERGY_LEVELS_J)
     unknown = set(CIRCULATORY_LONGER_S) - {s.primitive_id for s in specs}
@@ -163,7 +166,8 @@ def circulatory_specs(rig: RigParameters) -> list[PrimitiveSpec]:
             spec = _lasting(spec, CIRCULATORY_LONGER_S[spec.primitive_id])
         if not spec.constrained and spec.primitive_type is PrimitiveType.DECELERATE:
             spec = dataclasses.replace(spec, intervals=int(round(CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S
-                                                                 * spec.duration_s)))
+                                                                 * spec.duration_s)),
+                                       coarse_intervals=_intervals(spec.duration_s))
         return spec
     return [circulatory(s) for s in specs]
 

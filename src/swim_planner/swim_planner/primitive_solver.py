@@ -57,6 +57,10 @@ states (swim_model.flow), collocated with their own dynamics zdot = g(Q2 qdot, z
       solved without the bound first, then with looser bounds down to the limit, each step from the last solution
       (``solve_primitive``, ``continuation_bounds``). From the still-foil guess the free decelerates are infeasible
       with the bound at 20 deg; from the unbounded solution the tightened bounds converge.
+    - a spec may name a coarser grid (PrimitiveSpec.coarse_intervals): the NLP, its continuation included, is
+      solved on that many intervals first, to SolverSettings.coarse_grid_tolerance, then once on its own grid from
+      that solution interpolated, with the bound of ``limits`` (mesh refinement: the coarse grid's iterations are
+      cheaper, and from its solution the fine grid's converge in a few).
 
 Energy level of a cruise: the paper fixes E = T(q(Tf), qdot(Tf)), the kinetic energy at the cycle's end.
 Over a periodic cycle the kinetic energy oscillates, so that end-point value only selects where the cycle is
@@ -71,7 +75,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from typing import Optional, TypeVar
+from typing import Optional, TypeVar, cast
 
 import casadi as ca
 import numpy as np
@@ -177,8 +181,10 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
     (``PrimitiveSpec.angle_of_attack_continuation_rad``), the NLP is solved in steps (``continuation_bounds``): first
     without the angle-of-attack bound, then with each looser bound of the spec, then with the bound of ``limits``,
     each step from the last converged step's solution (the first from the guess). A step that does not converge is
-    passed over (the next starts from the last converged one); the last must converge. The primitive's iterations
-    and solve time are the sums over the steps. Without a continuation: one solve.
+    passed over (the next starts from the last converged one); the last must converge. With a coarser grid
+    (``PrimitiveSpec.coarse_intervals``) all that is solved on it to ``settings.coarse_grid_tolerance``, and then the
+    spec's own grid once, from the coarse solution interpolated. The primitive's iterations and solve time are the
+    sums over the steps. Without either: one solve.
 
     Args:
         start: (q, qdot) the primitive starts from (required for decelerate, cruise-to-cruise, lane change;
@@ -192,6 +198,8 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
         ValueError: a continuation with the ideal flow, or one that is not descending from below 90 deg to above
             the bound of ``limits``.
     """
+    if spec.coarse_intervals is not None:
+        return _solve_refined(model, spec, limits, start, end, guess, settings)
     ipopt_options = {"print_level": settings.print_level, "tol": settings.tolerance,
                      "max_iter": settings.max_iterations, "mu_strategy": settings.barrier_strategy, "sb": "yes"}
     bounds = continuation_bounds(model, spec, limits)
@@ -236,6 +244,33 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
                      torque=torque_values, index_j=float(spec.index_sign() * q[-1, 0] - effort_value),
                      effort=effort_value, solver_status=result.status, solve_time_s=elapsed,
                      iterations=iterations, lag=lag)
+
+
+def _solve_refined(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits, start, end,
+                   guess: Optional[Primitive], settings: SolverSettings) -> Primitive:
+    """solve_primitive of a spec with a coarser grid: on spec.coarse_intervals (continuation included) to
+    settings.coarse_grid_tolerance, then on spec.intervals from the coarse solution interpolated, with the bound of
+    ``limits`` alone."""
+    coarse_spec = dataclasses.replace(spec, intervals=cast(int, spec.coarse_intervals), coarse_intervals=None)
+    coarse_settings = dataclasses.replace(settings, tolerance=max(settings.tolerance, settings.coarse_grid_tolerance))
+    coarse = solve_primitive(model, coarse_spec, limits, start, end, guess, coarse_settings)
+    fine_spec = dataclasses.replace(spec, coarse_intervals=None, angle_of_attack_continuation_rad=())
+    fine = solve_primitive(model, fine_spec, limits, start, end, _resampled(coarse, fine_spec), settings)
+    return dataclasses.replace(fine, spec=spec, iterations=coarse.iterations + fine.iterations,
+                               solve_time_s=coarse.solve_time_s + fine.solve_time_s)
+
+
+def _resampled(primitive: Primitive, spec: PrimitiveSpec) -> Primitive:
+    """The primitive interpolated (linearly, per column) onto the fine grid of spec: an initial guess."""
+    time_s = fine_grid_times(spec.solved_duration_s, spec.intervals)
+
+    def on_grid(values: Array) -> Array:
+        return np.column_stack([np.interp(time_s, primitive.time_s, column) for column in values.T])
+
+    return dataclasses.replace(primitive, spec=spec, time_s=time_s, q=on_grid(primitive.q),
+                               qdot=on_grid(primitive.qdot), foil_acceleration=on_grid(primitive.foil_acceleration),
+                               torque=on_grid(primitive.torque),
+                               lag=None if primitive.lag is None else on_grid(primitive.lag), gains=None)
 
 
 def continuation_bounds(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits) -> list[Optional[float]]:

@@ -85,11 +85,20 @@ class PrimitiveSpec:
     # circulatory flow: the looser angle-of-attack bounds, descending, solved in turn before
     # PlanningLimits.angle_of_attack_limit_rad, after a first solve without the bound, each from the last converged
     # solution (primitive_solver.solve_primitive); empty: one solve with the bound
+    coarse_intervals: Optional[int] = None
+    # collocation intervals of a coarser grid the primitive (its continuation included) is solved on first; its
+    # solution, interpolated, starts the solve on ``intervals`` (primitive_solver.solve_primitive); None: none
 
     def __post_init__(self) -> None:
         # a library's manifest stores the continuation as a JSON list: the spec read back equals the one written
         object.__setattr__(self, "angle_of_attack_continuation_rad",
                            tuple(float(a) for a in self.angle_of_attack_continuation_rad))
+        if self.coarse_intervals is not None and not 0 < self.coarse_intervals < self.intervals:
+            raise ValueError(f"{self.primitive_id}: coarse_intervals must be positive and below intervals "
+                             f"({self.intervals}), got {self.coarse_intervals}")
+        if self.coarse_intervals is not None and self.cycles > 1:
+            raise ValueError(f"{self.primitive_id}: a coarser grid is for a primitive solved whole, not a cruise's "
+                             f"repeated cycle (cycles {self.cycles})")
 
     @property
     def solved_duration_s(self) -> float:
@@ -158,6 +167,11 @@ class SolverSettings:
     SX graph, whose Hessian is fast to evaluate (30 ms) but took 9 s to build: 13.7 s in all."""
 
     tolerance: float = 1e-8
+    coarse_grid_tolerance: float = 1e-6
+    # IPOPT's tol on a coarser grid solved first (PrimitiveSpec.coarse_intervals; at least ``tolerance``): its
+    # solution only starts the solve on the spec's own grid, which stops at ``tolerance``. Measured on the free
+    # decelerates' continuations on 20 intervals per second (docs/circulatory_primitives.md): R = 0.43 m, E = 0.20
+    # took 3396 iterations (105 s) at 1e-8; with its steps before the last at 1e-6, 2567 (66 s)
     max_iterations: int = 3000
     print_level: int = 0
     barrier_strategy: str = "adaptive"   # IPOPT's mu_strategy: "adaptive" or "monotone"

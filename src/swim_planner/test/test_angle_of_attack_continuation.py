@@ -1,7 +1,8 @@
 """The solver's angle-of-attack continuation (primitive_solver.solve_primitive with
 PrimitiveSpec.angle_of_attack_continuation_rad) and a decelerate that ends at rest with its lag states free
 (PrimitiveSpec.end_lag_free): the steps it solves, the bad settings it refuses, the same solution as a direct solve
-where the direct solve succeeds, and a free end lag that is the only thing freed at rest.
+where the direct solve succeeds, and a free end lag that is the only thing freed at rest; and the coarser grid solved
+first (PrimitiveSpec.coarse_intervals), which ends where the direct solve on the fine grid does.
 
 The transitions are solved between the shipped circulatory library's cruises (their boundary states, lag included),
 as a library build joins them.
@@ -132,3 +133,35 @@ def test_a_free_end_lag_frees_only_the_lag_and_rest_is_exact_in_motion(rig, circ
         [flow.params.wagner_slow_rate, flow.params.wagner_fast_rate])
     np.testing.assert_allclose(model.lag_rate(q_end, np.zeros(model.nq), lag_end), -rest_speed_rates * lag_end,
                                rtol=1e-6, atol=1e-15)
+
+
+def test_a_coarser_grid_first_ends_at_the_direct_solution_on_the_fine_grid(rig, circulatory_library):
+    """Mesh refinement (PrimitiveSpec.coarse_intervals): the continuation on half the intervals, then the spec's
+    grid once from that solution interpolated, ends where the direct solve on the spec's grid does."""
+    spec = _spec(rig, BOUND_ACTIVE)
+    direct = _solved(rig, circulatory_library, spec)
+    refined_spec = dataclasses.replace(spec, coarse_intervals=spec.intervals // 2,
+                                       angle_of_attack_continuation_rad=(math.radians(30.0),))
+    refined = _solved(rig, circulatory_library, refined_spec)
+    assert refined.spec == refined_spec
+    assert len(refined.time_s) == 2 * spec.intervals + 1
+    np.testing.assert_allclose(refined.time_s, direct.time_s, atol=1e-12)
+    assert refined.index_j == pytest.approx(direct.index_j, abs=SAME_INDEX_J)
+    for ours, theirs in ((refined.q, direct.q), (refined.qdot, direct.qdot), (refined.lag, direct.lag)):
+        np.testing.assert_allclose(ours, theirs, atol=SAME_STATE)
+    np.testing.assert_allclose(refined.foil_acceleration, direct.foil_acceleration, atol=SAME_INPUT_RAD_S2)
+
+
+@pytest.mark.parametrize("coarse", [0, -4, 40, 41], ids=["zero", "negative", "equal", "finer"])
+def test_a_coarser_grid_that_is_not_coarser_is_refused(rig, coarse):
+    spec = _spec(rig, BOUND_ACTIVE)
+    assert spec.intervals == 40
+    with pytest.raises(ValueError, match="coarse_intervals"):
+        dataclasses.replace(spec, coarse_intervals=coarse)
+
+
+def test_a_coarser_grid_for_a_repeated_cruise_cycle_is_refused(rig):
+    spec = _spec(rig, "constrained/cruise/E0.05")
+    assert spec.cycles > 1
+    with pytest.raises(ValueError, match="cruise's repeated cycle"):
+        dataclasses.replace(spec, coarse_intervals=spec.intervals // 2)

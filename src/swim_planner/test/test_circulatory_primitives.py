@@ -243,9 +243,11 @@ def test_the_circulatory_set_is_the_papers_graph_with_a_third_level_joined_to_it
         if spec.primitive_id in CIRCULATORY_LONGER_S:
             longer_s = CIRCULATORY_LONGER_S[spec.primitive_id]
             spec = dataclasses.replace(spec, duration_s=longer_s, intervals=int(round(longer_s * INTERVALS_PER_S)))
-        if not spec.constrained and spec.primitive_type is PrimitiveType.DECELERATE:   # its finer grid, at any duration
+        if not spec.constrained and spec.primitive_type is PrimitiveType.DECELERATE:
+            # its finer grid at any duration, refined from the coarse one
             spec = dataclasses.replace(spec, intervals=int(round(spec.duration_s
-                                                                 * CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S)))
+                                                                 * CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S)),
+                                       coarse_intervals=int(round(spec.duration_s * INTERVALS_PER_S)))
         assert specs[spec.primitive_id] == spec
     assert CIRCULATORY_ENERGY_LEVELS_J[:2] == (0.05, 0.1) and CIRCULATORY_ENERGY_LEVELS_J[2] > 0.1
     def primitive_id(kind, lane, tags):
