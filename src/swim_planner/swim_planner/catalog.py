@@ -47,7 +47,7 @@ CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S = 40
 # the tracker can no longer take a hub-angle error out, so what its plan's discretization leaves in its last
 # intervals stays; an accelerate's is taken out by the cruise after it (docs/circulatory_primitives.md). Each is
 # solved first on INTERVALS_PER_S, its continuation included, then on this grid from that solution (mesh refinement,
-# PrimitiveSpec.coarse_intervals): the continuation's iterations cost a third as much on the coarser grid
+# PrimitiveSpec.coarse_intervals): on the coarser grid the continuation's iterations cost less than half as much
 CIRCULATORY_LONGER_S = {"free/decelerate/R0.43/E0.10": 6.0, "free/decelerate/R0.43/E0.20": 6.0,
                         "free/cruise_to_cruise/R0.43/E0.10-E0.05": 3.0}
 # circulatory flow: transitions given more than the durations above (assumed, each the shortest tried that solves).

@@ -169,9 +169,9 @@ class SolverSettings:
     tolerance: float = 1e-8
     coarse_grid_tolerance: float = 1e-6
     # IPOPT's tol on a coarser grid solved first (PrimitiveSpec.coarse_intervals; at least ``tolerance``): its
-    # solution only starts the solve on the spec's own grid, which stops at ``tolerance``. Measured on the free
-    # decelerates' continuations on 20 intervals per second (docs/circulatory_primitives.md): R = 0.43 m, E = 0.20
-    # took 3396 iterations (105 s) at 1e-8; with its steps before the last at 1e-6, 2567 (66 s)
+    # solution only starts the solve on the spec's own grid, which stops at ``tolerance``. Measured on
+    # free/decelerate/R0.43/E0.20 (docs/circulatory_primitives.md): its continuation on 20 intervals per second took
+    # 3396 IPOPT iterations (105 s) at 1e-8; at 1e-6, with the solve on its 40 per second after it, 2820 (79 s)
     max_iterations: int = 3000
     print_level: int = 0
     barrier_strategy: str = "adaptive"   # IPOPT's mu_strategy: "adaptive" or "monotone"
