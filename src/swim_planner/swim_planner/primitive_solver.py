@@ -60,7 +60,7 @@ states (swim_model.flow), collocated with their own dynamics zdot = g(Q2 qdot, z
     - a spec may name a coarser grid (PrimitiveSpec.coarse_intervals): the NLP, its continuation included, is
       solved on that many intervals first, to SolverSettings.coarse_grid_tolerance, then once on its own grid from
       that solution interpolated, with the bound of ``limits`` (mesh refinement: the coarse grid's iterations are
-      cheaper, and from its solution the fine grid's converge in a few).
+      cheaper, and from its solution the fine grid converges in far fewer than the continuation on it alone takes).
 
 Energy level of a cruise: the paper fixes E = T(q(Tf), qdot(Tf)), the kinetic energy at the cycle's end.
 Over a periodic cycle the kinetic energy oscillates, so that end-point value only selects where the cycle is
