@@ -265,12 +265,18 @@ def _resampled(primitive: Primitive, spec: PrimitiveSpec) -> Primitive:
     time_s = fine_grid_times(spec.solved_duration_s, spec.intervals)
 
     def on_grid(values: Array) -> Array:
-        return np.column_stack([np.interp(time_s, primitive.time_s, column) for column in values.T])
+        return _interpolated_columns(time_s, primitive.time_s, values)
 
     return dataclasses.replace(primitive, spec=spec, time_s=time_s, q=on_grid(primitive.q),
                                qdot=on_grid(primitive.qdot), foil_acceleration=on_grid(primitive.foil_acceleration),
                                torque=on_grid(primitive.torque),
                                lag=None if primitive.lag is None else on_grid(primitive.lag), gains=None)
+
+
+def _interpolated_columns(time_s: Array, sample_time_s: Array, values: Array) -> Array:
+    """Each column of ``values`` (samples at ``sample_time_s``) interpolated linearly at ``time_s``:
+    (len(time_s), columns)."""
+    return np.column_stack([np.interp(time_s, sample_time_s, column) for column in values.T])
 
 
 def continuation_bounds(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits) -> list[Optional[float]]:
@@ -610,17 +616,15 @@ def _blend_guess(model: VehicleModel, spec: PrimitiveSpec, times: Array, start, 
     one = cruise.time_s <= period + 1e-12
     # the cruise's stroke, periodic, phased so the accelerate ends (decelerate starts) at its junction
     phase = (times - times[-1]) % period if spec.primitive_type is PrimitiveType.ACCELERATE else times % period
-    stroke = np.column_stack([np.interp(phase, cruise.time_s[one], cruise.q[one, j]) for j in range(nq)])
-    rates = np.column_stack([np.interp(phase, cruise.time_s[one], cruise.qdot[one, j]) for j in range(nq)])
-    accel = np.column_stack([np.interp(phase, cruise.time_s[one], cruise.foil_acceleration[one, j]) for j in range(2)])
+    stroke, rates, accel = (_interpolated_columns(phase, cruise.time_s[one], values[one])
+                            for values in (cruise.q, cruise.qdot, cruise.foil_acceleration))
     envelope = {PrimitiveType.ACCELERATE: weight, PrimitiveType.DECELERATE: 1.0 - weight}.get(
         spec.primitive_type, np.ones_like(weight))  # between cruises: keep stroking
     x_guess[:, nq - 2:nq] = envelope * stroke[:, nq - 2:]
     x_guess[:, 2 * nq - 2:2 * nq] = envelope * rates[:, nq - 2:]
     if model.n_lag:
         lags = _lag_columns(model, cruise)[0]
-        x_guess[:, 2 * nq:] = envelope * np.column_stack([np.interp(phase, cruise.time_s[one], lags[one, j])
-                                                          for j in range(model.n_lag)])
+        x_guess[:, 2 * nq:] = envelope * _interpolated_columns(phase, cruise.time_s[one], lags[one])
     mean_rate = (cruise.q[-1, 0] - cruise.q[0, 0]) / cruise.time_s[-1]
     x_guess[:, nq] = envelope[:, 0] * mean_rate
     x_guess[:, 0] = np.concatenate([[0.0], np.cumsum(0.5 * (x_guess[1:, nq] + x_guess[:-1, nq]) * np.diff(times))])
