@@ -48,6 +48,14 @@ CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S = 40
 # intervals stays; an accelerate's is taken out by the cruise after it (docs/circulatory_primitives.md). Each is
 # solved first on INTERVALS_PER_S, its continuation included, then on this grid from that solution (mesh refinement,
 # PrimitiveSpec.coarse_intervals): on the coarser grid the continuation's iterations cost less than half as much
+CIRCULATORY_CONSTRAINED_MIN_STROUHAL = 0.35
+# circulatory flow, the constrained cruises' least Strouhal number (PrimitiveSpec.min_strouhal; assumed: inside
+# 0.2-0.4, where oscillating foils and swimming animals are most efficient: Triantafyllou, Triantafyllou &
+# Grosenbaugh, J. Fluids Struct. 7 (1993)). Without it the best cruise at a fixed mean kinetic energy folds the heave
+# link to its planning limit and strokes only enough for the foil's profile drag (St about 0.015). The mean thrust
+# grows with the square of the stroke, so about a stroke this small the tracker can change it little, and nothing
+# else drives the hub: a 0.1 degree tilt of the platform loses the plan. With the stroke the maneuver is tracked,
+# in the vortex wake too (docs/circulatory_primitives.md measures both, and the floors tried)
 CIRCULATORY_LONGER_S = {"free/decelerate/R0.43/E0.10": 6.0, "free/decelerate/R0.43/E0.20": 6.0,
                         "free/cruise_to_cruise/R0.43/E0.10-E0.05": 3.0}
 # circulatory flow: transitions given more than the durations above (assumed, each the shortest tried that solves).
@@ -151,7 +159,8 @@ def circulatory_specs(rig: RigParameters) -> list[PrimitiveSpec]:
     (CIRCULATORY_FREE_DECELERATE_S, solved by continuation in the angle-of-attack bound and ending at rest with the
     lag states its braking leaves: PrimitiveSpec.end_lag_free; CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S, refined
     from INTERVALS_PER_S: PrimitiveSpec.coarse_intervals) and
-    those of CIRCULATORY_LONGER_S (which take precedence)."""
+    those of CIRCULATORY_LONGER_S (which take precedence); the constrained cruises stroke at a Strouhal number of at
+    least CIRCULATORY_CONSTRAINED_MIN_STROUHAL."""
     specs = constrained_specs(rig, CIRCULATORY_ENERGY_LEVELS_J) + free_specs(rig, CIRCULATORY_ENERGY_LEVELS_J)
     unknown = set(CIRCULATORY_LONGER_S) - {s.primitive_id for s in specs}
     assert not unknown, f"CIRCULATORY_LONGER_S names no spec of the set: {sorted(unknown)}"
@@ -168,6 +177,8 @@ def circulatory_specs(rig: RigParameters) -> list[PrimitiveSpec]:
             spec = dataclasses.replace(spec, intervals=int(round(CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S
                                                                  * spec.duration_s)),
                                        coarse_intervals=_intervals(spec.duration_s))
+        if spec.constrained and spec.primitive_type is PrimitiveType.CRUISE:
+            spec = dataclasses.replace(spec, min_strouhal=CIRCULATORY_CONSTRAINED_MIN_STROUHAL)
         return spec
     return [circulatory(s) for s in specs]
 

@@ -61,6 +61,11 @@ states (swim_model.flow), collocated with their own dynamics zdot = g(Q2 qdot, z
       solved on that many intervals first, to SolverSettings.coarse_grid_tolerance, then once on its own grid from
       that solution interpolated, with the bound of ``limits`` (mesh refinement: the coarse grid's iterations are
       cheaper, and from its solution the fine grid converges in far fewer than the continuation on it alone takes).
+    - a cruise's spec may name a least Strouhal number (PrimitiveSpec.min_strouhal): the pitch axis's excursion
+      across the lane, Lh sin(phi) (less R for the free vehicle, a row of the pointwise function), falls from the
+      cycle's start (a turn of the heave) to its middle by at least St_min R dalpha, which is St_min U / f for one
+      stroke per cycle. The NLP's constraints must be affine in the pointwise values, so this one takes those two
+      samples and not the cycle's peak to peak, which is at least as large.
 
 Energy level of a cruise: the paper fixes E = T(q(Tf), qdot(Tf)), the kinetic energy at the cycle's end.
 Over a periodic cycle the kinetic energy oscillates, so that end-point value only selects where the cycle is
@@ -112,6 +117,12 @@ def foil_velocity_rows(model: VehicleModel) -> slice:
     return slice(5 + model.nx, 8 + model.nx)
 
 
+def lateral_row(model: VehicleModel) -> int:
+    """Circulatory flow: the row of the pitch axis's position across the lane, m: Lh sin(phi), less R for the free
+    vehicle (primitives.cruise_strouhal_number's lateral coordinate)."""
+    return 8 + model.nx
+
+
 GUESS_TOLERANCE = 1e-6   # relative tolerance of the simulated gait that is a cruise's initial guess
 # circulatory cruise's guess (_folded_cruise_guess), assumed: a stroke small enough to leave the folded posture
 # and the steady flow about as they are, but not zero (IPOPT's first steps then have a stroke to grow or shrink)
@@ -151,8 +162,9 @@ def _circulatory_pointwise_function(model: VehicleModel) -> PointwiseFunction:
         qddot, tau = s.functions["shape_dynamics"](q, qdot, u, lag)
         lag_rate = s.functions["lag_rate"](q, qdot, lag)
         foil_velocity = s.functions["foil_velocity_map"](q) @ qdot
+        lateral_m = model.rig.heave_link_length_m * ca.sin(q[nq - 2]) - (0.0 if model.constrained else q[1])
         phi = ca.vertcat(ca.dot(theta, tau ** 2), s.functions["kinetic_energy"](q, qdot),
-                         s.functions["momentum"](q, qdot)[0], tau, qdot, qddot, lag_rate, foil_velocity)
+                         s.functions["momentum"](q, qdot)[0], tau, qdot, qddot, lag_rate, foil_velocity, lateral_m)
         _POINTWISE[key] = PointwiseFunction.compiled(phi, y, theta, tag="primitive_pointwise_circulatory")
     return _POINTWISE[key]
 
@@ -311,6 +323,8 @@ def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimi
     """
     if model.n_lag:
         _check_circulatory_states(model, spec, start, end)
+    elif spec.min_strouhal is not None:
+        raise ValueError(f"{spec.primitive_id}: min_strouhal is for a cruise with the circulatory flow")
     for name, state in (("start", start), ("end", end)) if model.n_lag == 0 else ():
         if state is not None and not (len(state) == 2 and all(np.shape(part) == (model.nq,) for part in state)
                                       and np.all(np.isfinite(state))):
@@ -358,6 +372,8 @@ def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimi
     if spec.primitive_type is PrimitiveType.DECELERATE:
         end = rest_state(model, spec.end_lane_radius_m) if model.n_lag == 0 else rest_boundary_state(
             model, spec.end_lane_radius_m)
+    if spec.min_strouhal is not None:
+        _stroke_bound(opti, model, spec, grid, phi)
     if model.n_lag and bound_angle_of_attack:
         _angle_of_attack_bound(opti, model, spec, limits, grid, phi)
     _boundary_conditions(opti, model, spec, limits, grid, phi, start, end)
@@ -398,6 +414,19 @@ def _angle_of_attack_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSp
     for across in (velocity[1, :], normal_34):
         opti.subject_to(slope * velocity[0, :] - across >= 0.0)
         opti.subject_to(slope * velocity[0, :] + across >= 0.0)
+
+
+def _stroke_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, grid, phi: ca.MX) -> None:
+    """A cruise's Strouhal number 2 A f / U (primitives.cruise_strouhal_number) at least spec.min_strouhal: the
+    pitch axis's excursion across the lane from the cycle's start (a turn of the heave) to its middle at least
+    St_min U / f = St_min R dalpha, with f one stroke per cycle and U = R dalpha / T. Affine in the NLP's
+    variables; a peak-to-peak excursion is at least this one."""
+    assert spec.min_strouhal is not None
+    lateral_m = grid.fine(phi[lateral_row(model), :])
+    middle = spec.intervals
+    alpha_advance_rad = grid.x[0, -1] - grid.x[0, 0]
+    opti.subject_to(lateral_m[0, 0] - lateral_m[0, middle]
+                    - spec.min_strouhal * spec.lane_radius_m * alpha_advance_rad >= 0.0)
 
 
 def angle_of_attack_bounded(spec: PrimitiveSpec, limits: PlanningLimits) -> npt.NDArray[np.bool_]:

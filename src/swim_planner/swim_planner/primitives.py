@@ -89,6 +89,10 @@ class PrimitiveSpec:
     # collocation intervals of a coarser grid the primitive (its continuation included) is solved on first; its
     # solution, interpolated, starts the solve on ``intervals`` (primitive_solver.solve_primitive); None: none
 
+    min_strouhal: Optional[float] = None
+    # circulatory flow, a cruise: the least Strouhal number of its stroke (cruise_strouhal_number), asked of the
+    # pitch axis's excursion across the lane from the cycle's start to its middle (primitive_solver); None: none
+
     def __post_init__(self) -> None:
         # a library's manifest stores the continuation as a JSON list: the spec read back equals the one written
         object.__setattr__(self, "angle_of_attack_continuation_rad",
@@ -99,6 +103,10 @@ class PrimitiveSpec:
         if self.coarse_intervals is not None and self.cycles > 1:
             raise ValueError(f"{self.primitive_id}: a coarser grid is for a primitive solved whole, not a cruise's "
                              f"repeated cycle (cycles {self.cycles})")
+        if self.min_strouhal is not None and not (self.primitive_type is PrimitiveType.CRUISE
+                                                  and math.isfinite(self.min_strouhal) and self.min_strouhal > 0.0):
+            raise ValueError(f"{self.primitive_id}: min_strouhal is a cruise's, finite and positive; got "
+                             f"{self.min_strouhal!r} for a {self.primitive_type.value}")
 
     @property
     def solved_duration_s(self) -> float:

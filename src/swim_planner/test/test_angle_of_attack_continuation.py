@@ -27,7 +27,7 @@ SAME_STATE = 1e-4
 SAME_INPUT_RAD_S2 = 3e-3
 #: a transition of the constrained graph whose direct solve succeeds with the bound active (its largest |AoA| is
 #: the bound): the continuation has something to tighten
-BOUND_ACTIVE = "constrained/cruise_to_cruise/E0.20-E0.10"
+BOUND_ACTIVE = "constrained/cruise_to_cruise/E0.10-E0.20"
 
 
 def _spec(rig, primitive_id, specs=circulatory_specs):
@@ -145,7 +145,7 @@ def test_a_coarser_grid_first_ends_at_the_direct_solution_on_the_fine_grid(rig, 
                                        angle_of_attack_continuation_rad=tuple(math.radians(a) for a in looser_deg))
     refined = _solved(rig, circulatory_library, refined_spec)
     assert refined.spec == refined_spec
-    assert refined.iterations > direct.iterations       # the sum over both grids (measured: 69 and 256 against 23)
+    assert refined.iterations > direct.iterations       # the sum over both grids (measured: 64 and 121 against 38)
     assert len(refined.time_s) == 2 * spec.intervals + 1
     np.testing.assert_allclose(refined.time_s, direct.time_s, atol=1e-12)
     assert refined.index_j == pytest.approx(direct.index_j, abs=SAME_INDEX_J)
