@@ -1,6 +1,7 @@
-"""The closed loop end to end over DDS: swim-demo brings up sim_node (lock-step, default disturbances),
-planner_node and tracker_node, runs a short maneuver, records and analyses it. The report is checked against
-bounds and against the bag read back with rosbags."""
+"""The closed loop end to end over DDS on the paper's pipeline (swim-demo --pipeline paper): swim-demo brings up
+sim_node (lock-step, the paper pipeline's disturbances), planner_node and tracker_node, runs a short maneuver,
+records and analyses it. The report is checked against bounds and against the bag read back with rosbags. The
+default, realistic pipeline's whole maneuver: test_realistic_demo.py."""
 import numpy as np
 import pytest
 
@@ -15,7 +16,7 @@ MANEUVER_TIMEOUT_S = 120
 @pytest.fixture(scope="module")
 def demo_run(ros_domain, tmp_path_factory):
     run_dir = tmp_path_factory.mktemp("demo") / "run"
-    return run_dir, run_demo(run_dir, "--primitives", *SHORT, "--repeats", "1", "1",
+    return run_dir, run_demo(run_dir, "--pipeline", "paper", "--primitives", *SHORT, "--repeats", "1", "1",
                              "--timeout", str(MANEUVER_TIMEOUT_S))
 
 
@@ -85,7 +86,7 @@ def test_a_run_that_misses_its_goal_tolerance_fails(ros_domain, tmp_path):
     end) turns the same kind of run into GOAL_TOLERANCE_VIOLATED, a failing exit and the reason printed."""
     from swim_bringup.reports import RunReport
     run_dir = tmp_path / "run"
-    output = run_demo(run_dir, "--primitives", SHORT[0], "--goal-tolerance-alpha", "1e-6",
+    output = run_demo(run_dir, "--pipeline", "paper", "--primitives", SHORT[0], "--goal-tolerance-alpha", "1e-6",
                       "--timeout", str(MANEUVER_TIMEOUT_S), expected_returncode=1)
     assert (run_dir / "report.json").exists(), output[-3000:]   # it failed after the run, not before
     report = RunReport.load(run_dir / "report.json")
@@ -106,8 +107,8 @@ def test_a_second_run_repeats_the_first_bit_for_bit(demo_run, tmp_path):
     from swim_bringup.reports import RunReport
     first_dir, _ = demo_run
     second_dir = tmp_path / "run"
-    output = run_demo(second_dir, "--primitives", *SHORT, "--repeats", "1", "1", "--timeout", str(MANEUVER_TIMEOUT_S),
-                      shm_mib=CONTAINER_SHM_MIB)
+    output = run_demo(second_dir, "--pipeline", "paper", "--primitives", *SHORT, "--repeats", "1", "1", "--timeout",
+                      str(MANEUVER_TIMEOUT_S), shm_mib=CONTAINER_SHM_MIB)
     # the planner's shared-memory segment fitted beside the others (swim_ros.transport)
     assert "a plan crosses in one piece" in (second_dir / "logs" / "planner_node.log").read_text(), output[-2000:]
     runs = [RunReport.load(d / "report.json").measures for d in (first_dir, second_dir)]

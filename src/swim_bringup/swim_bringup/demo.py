@@ -1,15 +1,15 @@
 """swim-demo: the paper's constrained maneuver in closed loop in simulation, recorded and analysed.
 
 Brings up sim_node (lock-step), planner_node and tracker_node as separate processes over DDS with the parameter
-files of a pipeline (swim_bringup.system.PIPELINES): "paper" by default, the ideal-flow plans in ideal flow under
-the small disturbances they survive, or "realistic", the circulatory flow model's plans in the vortex wake under the
-physical disturbances (--config: a folder of one's own). The realistic pipeline does not yet track the maneuver to
-its end (docs/disturbances.md), so the main job stays the paper's. It asks the planner for the maneuver, has the tracker
+files of a pipeline (swim_bringup.system.PIPELINES): "realistic", the circulatory flow model's plans in the vortex
+wake under the physical disturbances, or "paper", the ideal-flow plans in ideal flow under the small disturbances
+they survive (--config: a folder of one's own). It asks the planner for the maneuver, has the tracker
 execute it while every topic of the run is recorded to an MCAP bag, stops the nodes, and writes report.json,
 figures and the bag into the run folder; prints a summary naming the pipeline.
 With --plant bridge, bridge_node (emulated backend, autostart) stands in for sim_node: the emulated rig is the
-free vehicle in real time, so the default maneuver is then the paper's lane keeping. The run itself is
-recorded_run's; this module is its command line.
+free vehicle in real time, so the default maneuver is then the paper's lane keeping. The default pipeline is the
+realistic one in simulation and the paper's on the bridge, whose emulated rig loses the realistic lane keeping
+(docs/experiments.md). The run itself is recorded_run's; this module is its command line.
 """
 from __future__ import annotations
 
@@ -35,13 +35,16 @@ def parse_arguments(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--repeats", nargs="+", type=int, default=None)
     parser.add_argument("--time-scale", type=float, default=1.0)
     parser.add_argument("--sliding-mode", choices=("on", "off"), default="on")
-    parser.add_argument("--pipeline", choices=PIPELINES, default="paper",
-                        help="paper (default): ideal-flow plans and plant, the paper's small disturbances; "
-                             "realistic: circulatory plans, vortex-wake plant, physical disturbances")
+    parser.add_argument("--pipeline", choices=PIPELINES, default=None,
+                        help="realistic (the default with --plant sim): circulatory plans, vortex-wake plant, physical "
+                             "disturbances; paper (the default with --plant bridge): ideal-flow plans and plant, the "
+                             "paper's small disturbances")
     parser.add_argument("--config", type=Path, default=None,
                         help="folder of sim/planner/tracker YAML files (default: the pipeline's)")
     parser.add_argument("--timeout", type=float, default=600.0, help="wall-time limit of the maneuver, s")
     args = parse_with_tolerances(parser, argv)
+    if args.pipeline is None:
+        args.pipeline = "paper" if args.plant == "bridge" else "realistic"
     default = PAPER_LANE_KEEPING if args.plant == "bridge" else PAPER_CONSTRAINED
     if args.primitives is None:
         args.primitives, args.repeats = default[0], args.repeats or default[1]
