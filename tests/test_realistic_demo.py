@@ -54,6 +54,10 @@ def test_the_wake_is_recorded_and_drawn(realistic_run):
     circulations = np.asarray(last.circulations_m2_s)
     assert last.vortex_count == len(positions) == len(circulations) > 0   # under MAX_VORTEX_COUNT
     assert np.all(np.isfinite(positions)) and np.all(np.isfinite(circulations))
-    # shed into the tank by a foil on a 0.43 m lane
-    assert np.all(np.hypot(positions[:, 0], positions[:, 1]) < 0.5 * load_rig().tank_diameter_m)
+    # shed into the tank by a foil on a 0.43 m lane: the newest at the trailing edge, nearly all within the tank's
+    # radius (the 2-D wake has no wall, so a vortex pair can move on past it; the figure leaves those out and says how
+    # many: 12 of 300 measured)
+    edge = complex(last.trailing_edge_x_m, last.trailing_edge_y_m)
+    assert abs(complex(*positions[-1]) - edge) < load_rig().foil_chord_m
+    assert np.mean(np.hypot(positions[:, 0], positions[:, 1]) < 0.5 * load_rig().tank_diameter_m) > 0.9
     assert (run_dir / "wake.png").stat().st_size > 10_000
