@@ -208,7 +208,7 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
     Raises:
         PrimitiveSolveError: IPOPT did not converge (in the continuation's last step); the message gives its status.
         ValueError: a continuation with the ideal flow, or one that is not descending from below 90 deg to above
-            the bound of ``limits``.
+            the bound of ``limits``; a Strouhal floor (PrimitiveSpec.min_strouhal) with the ideal flow.
     """
     if spec.coarse_intervals is not None:
         return _solve_refined(model, spec, limits, start, end, guess, settings)
@@ -319,7 +319,8 @@ def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimi
 
     Raises:
         ValueError: a start or end state that is not (q, qdot) of finite numbers of the model's size
-            ((q, qdot, lag) with the circulatory flow).
+            ((q, qdot, lag) with the circulatory flow); a Strouhal floor with the ideal flow (its pointwise function
+            has no lateral row).
     """
     if model.n_lag:
         _check_circulatory_states(model, spec, start, end)
