@@ -234,6 +234,21 @@ def test_constrained_cruise_strokes_at_its_strouhal_floor(rig, circulatory):
     assert floor - 1e-6 <= cruise_strouhal_number(cruise, rig.heave_link_length_m) <= floor + 1e-3
 
 
+def test_a_free_cruise_given_a_strouhal_floor_strokes_at_it(rig, solved):
+    """The bound's free-vehicle form: the pitch axis's excursion across the lane is Lh sin(phi) - R (the carriage
+    moves too). A free cruise solved with a floor of 0.2 (the library's have none, and stroke at 0.020-0.022)
+    meets it, recomputed from its samples, and strokes at it."""
+    model, unfloored = solved["free/cruise/R0.43/E0.05"]
+    floor = 0.2
+    cruise = solve_primitive(model, dataclasses.replace(unfloored.spec, min_strouhal=floor), LIMITS)
+    lateral_m = rig.heave_link_length_m * np.sin(cruise.q[:, 2]) - cruise.q[:, 1]
+    middle = cruise.spec.intervals
+    alpha_advance_rad = cruise.q[2 * cruise.spec.intervals, 0] - cruise.q[0, 0]
+    assert lateral_m[0] - lateral_m[middle] >= floor * cruise.spec.lane_radius_m * alpha_advance_rad - 1e-7
+    assert floor - 1e-6 <= cruise_strouhal_number(cruise, rig.heave_link_length_m) <= floor + 1e-3
+    assert cruise_strouhal_number(unfloored, rig.heave_link_length_m) < 0.5 * floor
+
+
 def test_a_strouhal_floor_is_a_circulatory_cruises_only(rig, circulatory):
     _, cruise, _ = circulatory
     for bad in (0.0, -0.1, math.nan, math.inf):
