@@ -218,20 +218,28 @@ def test_cruise_strouhal_number_is_a_swimmers(rig, solved, primitive_id):
     assert low <= cruise_strouhal_number(cruise, rig.heave_link_length_m) <= high
 
 
+def _assert_strokes_at_its_floor(rig, cruise: Primitive) -> None:
+    """The pitch axis's excursion across the lane (Lh sin(phi), less R for the free vehicle), recomputed from the
+    samples, falls from the cycle's start to its middle by at least St_min R dalpha; the Strouhal number (peak to
+    peak) is the floor's."""
+    floor = cruise.spec.min_strouhal
+    heave = cruise.q[:, -2]
+    lateral_m = rig.heave_link_length_m * np.sin(heave) - (0.0 if cruise.spec.constrained else cruise.q[:, 1])
+    middle = cruise.spec.intervals
+    alpha_advance_rad = cruise.q[2 * cruise.spec.intervals, 0] - cruise.q[0, 0]
+    # the bound is active: it holds to IPOPT's tolerance (1e-8 on the constraint, m)
+    assert lateral_m[0] - lateral_m[middle] >= floor * cruise.spec.lane_radius_m * alpha_advance_rad - 1e-7
+    assert floor - 1e-6 <= cruise_strouhal_number(cruise, rig.heave_link_length_m) <= floor + 1e-3
+
+
 def test_constrained_cruise_strokes_at_its_strouhal_floor(rig, circulatory):
     """The stroke bound (PrimitiveSpec.min_strouhal): the pitch axis's excursion across the lane from the cycle's
     start to its middle, recomputed from the stored samples, is at least St_min R dalpha, so the cruise's Strouhal
     number (peak to peak) is at least the floor; and the floor is what sets the stroke (the same cruise without one
     strokes at St 0.014, the free E = 0.05 cruises at 0.020-0.022)."""
     _, cruise, _ = circulatory
-    floor = cruise.spec.min_strouhal
-    assert floor == CIRCULATORY_CONSTRAINED_MIN_STROUHAL
-    lateral_m = rig.heave_link_length_m * np.sin(cruise.q[:, 1])
-    middle = cruise.spec.intervals
-    alpha_advance_rad = cruise.q[2 * cruise.spec.intervals, 0] - cruise.q[0, 0]
-    # the bound is active: it holds to IPOPT's tolerance (1e-8 on the constraint, m)
-    assert lateral_m[0] - lateral_m[middle] >= floor * cruise.spec.lane_radius_m * alpha_advance_rad - 1e-7
-    assert floor - 1e-6 <= cruise_strouhal_number(cruise, rig.heave_link_length_m) <= floor + 1e-3
+    assert cruise.spec.min_strouhal == CIRCULATORY_CONSTRAINED_MIN_STROUHAL
+    _assert_strokes_at_its_floor(rig, cruise)
 
 
 def test_a_free_cruise_given_a_strouhal_floor_strokes_at_it(rig, solved):
@@ -241,11 +249,7 @@ def test_a_free_cruise_given_a_strouhal_floor_strokes_at_it(rig, solved):
     model, unfloored = solved["free/cruise/R0.43/E0.05"]
     floor = 0.2
     cruise = solve_primitive(model, dataclasses.replace(unfloored.spec, min_strouhal=floor), LIMITS)
-    lateral_m = rig.heave_link_length_m * np.sin(cruise.q[:, 2]) - cruise.q[:, 1]
-    middle = cruise.spec.intervals
-    alpha_advance_rad = cruise.q[2 * cruise.spec.intervals, 0] - cruise.q[0, 0]
-    assert lateral_m[0] - lateral_m[middle] >= floor * cruise.spec.lane_radius_m * alpha_advance_rad - 1e-7
-    assert floor - 1e-6 <= cruise_strouhal_number(cruise, rig.heave_link_length_m) <= floor + 1e-3
+    _assert_strokes_at_its_floor(rig, cruise)
     assert cruise_strouhal_number(unfloored, rig.heave_link_length_m) < 0.5 * floor
 
 
