@@ -4,13 +4,12 @@ Builds the 28 default primitives (constrained graph of Fig. 9, free two-lane gra
 temporary directory with two local worker processes, exactly as `swim-primitives build` does, and prints
 one JSON line.
 """
-import concurrent.futures
 import json
 import tempfile
 import time
 
 from swim_model import load_rig
-from swim_planner.build import build_library
+from swim_planner.build import build_library, local_executor
 from swim_planner.catalog import default_specs
 from swim_planner.library import PrimitiveLibrary
 
@@ -22,8 +21,8 @@ def timed_build(specs, flow_model: str = "ideal") -> tuple[float, list[str]]:
     with tempfile.TemporaryDirectory() as directory:
         library = PrimitiveLibrary.create_or_open(directory, load_rig(), flow_model=flow_model)
         start = time.perf_counter()
-        with concurrent.futures.ProcessPoolExecutor(max_workers=2) as executor:
-            failed = build_library(library, specs, executor)
+        with local_executor(2) as executor:
+            failed = build_library(library, specs, executor, workers=2)
         return time.perf_counter() - start, failed
 
 

@@ -8,8 +8,8 @@ execute it while every topic of the run is recorded to an MCAP bag, stops the no
 figures and the bag into the run folder; prints a summary naming the pipeline.
 With --plant bridge, bridge_node (emulated backend, autostart) stands in for sim_node: the emulated rig is the
 free vehicle in real time, so the default maneuver is then the paper's lane keeping. The default pipeline is the
-realistic one in simulation and the paper's on the bridge, whose emulated rig loses the realistic lane keeping
-(docs/experiments.md). The run itself is recorded_run's; this module is its command line.
+realistic one in simulation and the paper's on the bridge, where the realistic lane keeping ends outside the goal
+tolerance (docs/experiments.md). The run itself is recorded_run's; this module is its command line.
 """
 from __future__ import annotations
 

@@ -37,10 +37,11 @@ CIRCULATORY_FREE_DECELERATE_S = 5.0
 # momentum cannot be taken out in the paper's 3 s decelerate (IPOPT: all six infeasible from both guesses; with
 # p_alpha = 0 asked only at the window next to rest, 10 % of the R = 0.43 m, E = 0.05 cruise's p_alpha is left) nor
 # in 4 s (R = 0.43 m, E = 0.05: infeasible below 28 deg); in 5 s, with the continuation below, it solves
-CIRCULATORY_FREE_DECELERATE_CONTINUATION_RAD = tuple(math.radians(a) for a in (40.0, 30.0, 25.0, 22.0))
+CIRCULATORY_FREE_DECELERATE_CONTINUATION_RAD = (math.radians(30.0),)
 # circulatory flow, the free decelerates (PrimitiveSpec.angle_of_attack_continuation_rad, assumed): from the
-# still-foil guess IPOPT finds each infeasible with the bound at 20 deg; solved first without the bound, the
-# bound then tightened in these steps (each warm-starting the next) reaches 20 deg (docs/circulatory_primitives.md)
+# still-foil guess IPOPT finds each infeasible with the bound at 20 deg; solved first without the bound, then with
+# 30 deg, each step warm-starting the next, it reaches 20 deg. From the stroking cruises the finer steps 40, 30, 25
+# and 22 deg took 1.1-2.9 times the iterations, to optima of much the same J or worse (docs/circulatory_primitives.md)
 CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S = 40
 # circulatory flow, the free decelerates' collocation intervals per second (assumed: twice INTERVALS_PER_S, the
 # least tried that ends the paper's lane keeping within 1 mrad of its plan). A free decelerate ends at rest, where
@@ -56,14 +57,22 @@ CIRCULATORY_CONSTRAINED_MIN_STROUHAL = 0.35
 # grows with the square of the stroke, so about a stroke this small the tracker can change it little, and nothing
 # else drives the hub: a 0.1 degree tilt of the platform loses the plan. With the stroke the maneuver is tracked,
 # in the vortex wake too (docs/circulatory_primitives.md measures both, and the floors tried)
+CIRCULATORY_FREE_MIN_STROUHAL = 0.2
+# circulatory flow, the free cruises' least Strouhal number (assumed: the low end of the same 0.2-0.4 band). The
+# free vehicle's cruises fold as the constrained ones did (St about 0.01-0.02), and its lane change was then lost in
+# its last decelerate in most runs in the vortex wake; at this floor it is tracked (docs/circulatory_primitives.md)
 CIRCULATORY_LONGER_S = {"free/decelerate/R0.43/E0.10": 6.0, "free/decelerate/R0.43/E0.20": 6.0,
-                        "free/cruise_to_cruise/R0.43/E0.10-E0.05": 3.0}
+                        "free/decelerate/R0.48/E0.20": 6.0, "free/cruise_to_cruise/R0.43/E0.10-E0.05": 3.0,
+                        "free/accelerate/R0.43/E0.20": 5.0}
 # circulatory flow: transitions given more than the durations above (assumed, each the shortest tried that solves).
-# The inner lane's E = 0.10 and 0.20 decelerates: in 5 s the continuation fails at its last step, 22 to 20 deg
-# (IPOPT: the hub's rate in the last intervals, the lane band active), in 6 s it solves. Slowing down from E = 0.10
-# to 0.05 in the inner lane is infeasible in 2 s within the angle-of-attack bound (from both guesses, from the
-# outer lane's solution moved inward, and at the end of the continuation above: solved at 22 deg, infeasible at
-# 20), as the free decelerate is in 3 s; in 3 s it solves directly (73 iterations)
+# The inner lane's E = 0.10 and 0.20 decelerates and the outer lane's E = 0.20 one: in 5 s the continuation fails at
+# its last step, to 20 deg, from both guesses (IPOPT: the hub's rate in the last intervals, the lane band active;
+# the outer one with IPOPT's BLAS on one thread, build.local_executor's, and not on two), in 6 s it solves. Slowing
+# down from E = 0.10 to 0.05 in the inner lane is infeasible in 2 s within the angle-of-attack bound (from both
+# guesses, from the outer lane's solution moved inward, and at the end of the continuation above: solved at 22 deg,
+# infeasible at 20), as the free decelerate is in 3 s; in 3 s it solves directly (73 iterations). The inner lane's
+# E = 0.20 accelerate, to a cruise at CIRCULATORY_FREE_MIN_STROUHAL: infeasible in 4 s from both guesses, solved in
+# 5 s
 CRUISE_CYCLE_S = 1.0                   # assumed: one stroke per second, as the paper's cruise figures
 
 
@@ -159,8 +168,8 @@ def circulatory_specs(rig: RigParameters) -> list[PrimitiveSpec]:
     (CIRCULATORY_FREE_DECELERATE_S, solved by continuation in the angle-of-attack bound and ending at rest with the
     lag states its braking leaves: PrimitiveSpec.end_lag_free; CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S, refined
     from INTERVALS_PER_S: PrimitiveSpec.coarse_intervals) and
-    those of CIRCULATORY_LONGER_S (which take precedence); the constrained cruises stroke at a Strouhal number of at
-    least CIRCULATORY_CONSTRAINED_MIN_STROUHAL."""
+    those of CIRCULATORY_LONGER_S (which take precedence); the cruises stroke at a Strouhal number of at least
+    CIRCULATORY_CONSTRAINED_MIN_STROUHAL (constrained) or CIRCULATORY_FREE_MIN_STROUHAL (free)."""
     specs = constrained_specs(rig, CIRCULATORY_ENERGY_LEVELS_J) + free_specs(rig, CIRCULATORY_ENERGY_LEVELS_J)
     unknown = set(CIRCULATORY_LONGER_S) - {s.primitive_id for s in specs}
     assert not unknown, f"CIRCULATORY_LONGER_S names no spec of the set: {sorted(unknown)}"
@@ -177,8 +186,9 @@ def circulatory_specs(rig: RigParameters) -> list[PrimitiveSpec]:
             spec = dataclasses.replace(spec, intervals=int(round(CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S
                                                                  * spec.duration_s)),
                                        coarse_intervals=_intervals(spec.duration_s))
-        if spec.constrained and spec.primitive_type is PrimitiveType.CRUISE:
-            spec = dataclasses.replace(spec, min_strouhal=CIRCULATORY_CONSTRAINED_MIN_STROUHAL)
+        if spec.primitive_type is PrimitiveType.CRUISE:
+            spec = dataclasses.replace(spec, min_strouhal=CIRCULATORY_CONSTRAINED_MIN_STROUHAL if spec.constrained
+                                       else CIRCULATORY_FREE_MIN_STROUHAL)
         return spec
     return [circulatory(s) for s in specs]
 

@@ -36,7 +36,7 @@ from pathlib import Path
 
 from swim_controller.riccati import LqrWeights
 from swim_model import SwimModelError, load_rig
-from swim_planner.build import build_library, dependencies
+from swim_planner.build import build_library, dependencies, local_executor
 from swim_model.flow import FLOW_MODELS
 from swim_planner import catalog
 from swim_planner.errors import PlannerError
@@ -106,7 +106,7 @@ def _executor(args) -> concurrent.futures.Executor:
     if args.scheduler:
         from distributed import Client
         return Client(args.scheduler).get_executor()
-    return concurrent.futures.ProcessPoolExecutor(max_workers=args.workers)
+    return local_executor(args.workers)
 
 
 def _load(args, rig) -> PrimitiveLibrary:
@@ -129,7 +129,8 @@ def command_build(args, rig) -> int:
         def progress(primitive_id: str, status: str) -> None:
             bar.update(1)
             bar.write(f"{primitive_id}: {status}")
-        failed = build_library(library, specs, executor, progress=progress)
+        failed = build_library(library, specs, executor, progress=progress,
+                               workers=None if args.scheduler else args.workers)
     print(f"{library.path}: {len(library)} primitives, {library.flow_model} flow"
           + (f"; failed: {', '.join(failed)}" if failed else ""))
     return 1 if failed else 0

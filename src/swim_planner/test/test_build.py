@@ -1,10 +1,15 @@
-"""Library builds: dependency order, resumability, and a Dask cluster through the Executor interface."""
+"""Library builds: dependency order, the longest solves first, resumability, and a Dask cluster through the Executor
+interface."""
 import concurrent.futures
+import ctypes
+import dataclasses
+import threading
 
+import casadi
 import numpy as np
 import pytest
 
-from swim_planner.build import build_library
+from swim_planner.build import build_library, critical_work, expected_work, local_executor, solve_job
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.primitives import PrimitiveSpec, PrimitiveType
 
@@ -33,8 +38,96 @@ def test_build_in_order_then_resume(rig, tmp_path):
     assert sorted(events) == [("small/accelerate", "cached"), ("small/cruise", "cached")]
 
 
+class RecordingExecutor(concurrent.futures.ThreadPoolExecutor):
+    """Records the spec of every solve submitted, in order, and the most solves in flight at once."""
+
+    def __init__(self, max_workers: int) -> None:
+        super().__init__(max_workers=max_workers)
+        self.solved: list[str] = []
+        self.in_flight = self.most_in_flight = 0
+        self._lock = threading.Lock()
+
+    def submit(self, fn, /, *args, **kwargs):
+        if fn is not solve_job:
+            return super().submit(fn, *args, **kwargs)
+        with self._lock:
+            self.solved.append(args[1].primitive_id)
+            self.in_flight += 1
+            self.most_in_flight = max(self.most_in_flight, self.in_flight)
+        future = super().submit(fn, *args, **kwargs)
+        future.add_done_callback(self._ended)
+        return future
+
+    def _ended(self, _future) -> None:
+        with self._lock:
+            self.in_flight -= 1
+
+
+LONGER = PrimitiveSpec("small/accelerate_longer", PrimitiveType.ACCELERATE, True, 3.0, LANE, LANE,
+                       end_at="small/cruise", intervals=36)
+LONE_CRUISE = PrimitiveSpec("small/cruise_alone", PrimitiveType.CRUISE, True, 1.0, LANE, LANE, energy_j=0.06,
+                            intervals=20)
+
+
+@pytest.mark.parametrize("workers, order", [
+    (None, ["small/cruise", "small/cruise_alone", "small/accelerate_longer", "small/accelerate"]),
+    (1, ["small/cruise", "small/accelerate_longer", "small/accelerate", "small/cruise_alone"])])
+def test_the_longest_chain_is_submitted_first(rig, tmp_path, workers, order):
+    """The cruise two accelerates join goes before the lone cruise, though the lone one has more intervals, and the
+    accelerate with more intervals before the other, whatever the order of the specs. Told the worker count, the
+    build keeps no more solves than that in flight (and so starts the accelerates before the lone cruise); not told
+    it, it submits whatever is ready at once."""
+    library = PrimitiveLibrary.create_or_open(tmp_path / "lib", rig)
+    with RecordingExecutor(max_workers=2) as executor:
+        assert build_library(library, [LONE_CRUISE] + SMALL + [LONGER], executor, workers=workers) == []
+    assert executor.solved == order
+    if workers is None:
+        assert executor.most_in_flight >= 2
+    else:
+        assert executor.most_in_flight == workers
+
+
+def test_critical_work_is_a_specs_work_and_the_longest_chain_after_it():
+    assert critical_work([LONE_CRUISE] + SMALL + [LONGER]) == {
+        "small/cruise_alone": 20, "small/cruise": 16 + 36, "small/accelerate": 24, "small/accelerate_longer": 36}
+
+
+def test_a_worker_count_below_one_is_refused(rig, tmp_path):
+    library = PrimitiveLibrary.create_or_open(tmp_path / "lib", rig)
+    with pytest.raises(ValueError, match="workers must be at least 1"):
+        build_library(library, SMALL, concurrent.futures.ThreadPoolExecutor(1), workers=0)
+    assert library.ids() == []
+
+
+def test_expected_work_counts_every_solve_of_a_continuation_and_a_refinement():
+    """Intervals times solves: one solve; a continuation of two looser bounds is four (none, the two, the limit);
+    on a coarser grid, those four there and one on the spec's own grid."""
+    plain = SMALL[1]
+    assert expected_work(plain) == 24
+    continued = PrimitiveSpec("small/decelerate", PrimitiveType.DECELERATE, True, 2.0, LANE, LANE,
+                              start_from="small/cruise", intervals=40, angle_of_attack_continuation_rad=(0.6, 0.5))
+    assert expected_work(continued) == 4 * 40
+    assert expected_work(dataclasses.replace(continued, coarse_intervals=20)) == 4 * 20 + 40
+
+
+def _ipopt_blas_threads() -> int:
+    """The thread count of the OpenBLAS CasADi's IPOPT runs on, in this process, after a solve has loaded it."""
+    x = casadi.MX.sym("x")
+    casadi.nlpsol("s", "ipopt", {"x": x, "f": x ** 2}, {"ipopt.print_level": 0, "ipopt.sb": "yes",
+                                                        "print_time": False})(x0=1.0)
+    with open("/proc/self/maps") as maps:
+        path = next(line.split()[-1] for line in maps if "casadi-tp-openblas" in line)
+    return ctypes.CDLL(path).openblas_get_num_threads()
+
+
+def test_local_workers_run_ipopts_blas_on_one_thread():
+    """Even after this process has run IPOPT on its BLAS's default threads (one per core)."""
+    _ipopt_blas_threads()
+    with local_executor(1) as executor:
+        assert executor.submit(_ipopt_blas_threads).result() == 1
+
+
 def test_changed_spec_is_solved_again_with_what_joins_it(rig, tmp_path):
-    import dataclasses
     library = PrimitiveLibrary.create_or_open(tmp_path / "lib", rig)
     with concurrent.futures.ThreadPoolExecutor(max_workers=1) as executor:
         assert build_library(library, SMALL, executor) == []

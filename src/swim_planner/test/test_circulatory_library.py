@@ -217,16 +217,7 @@ def test_free_maneuvers_in_closed_loop_stop_on_their_lane(circulatory_library, m
     assert not run.saturated.any()
 
 
-FREE_CRUISE_BELOW_THE_BAND = pytest.mark.xfail(
-    strict=True, reason="measured St 0.014-0.046: a free cruise folds the heave link to its planning limit and strokes "
-    "only enough to balance the foil's profile drag, the one drag the model has (the hull and rails are drag-free), so "
-    "the best cruise at a fixed mean kinetic energy nearly coasts; the constrained cruises are asked for a stroke "
-    "(catalog.CIRCULATORY_CONSTRAINED_MIN_STROUHAL), the free ones are not (docs/circulatory_primitives.md)")
-
-
-@pytest.mark.parametrize("primitive_id", [
-    pytest.param(s.primitive_id, marks=() if s.constrained else FREE_CRUISE_BELOW_THE_BAND)
-    for s in SPECS if s.primitive_type is PrimitiveType.CRUISE])
+@pytest.mark.parametrize("primitive_id", [s.primitive_id for s in SPECS if s.primitive_type is PrimitiveType.CRUISE])
 def test_every_cruise_strouhal_number_is_a_swimmers(circulatory_library, rig, primitive_id):
     strouhal = cruise_strouhal_number(circulatory_library.get(primitive_id), rig.heave_link_length_m)
     assert STROUHAL_BAND[0] <= strouhal <= STROUHAL_BAND[1]

@@ -21,7 +21,8 @@ from swim_model.flow import angle_of_attack
 from swim_planner.catalog import (CIRCULATORY_ENERGY_LEVELS_J, CIRCULATORY_FREE_ACCELERATE_S,
                                   CIRCULATORY_FREE_DECELERATE_CONTINUATION_RAD,
                                   CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S, CIRCULATORY_FREE_DECELERATE_S,
-                                  CIRCULATORY_CONSTRAINED_MIN_STROUHAL, CIRCULATORY_LONGER_S, INTERVALS_PER_S,
+                                  CIRCULATORY_CONSTRAINED_MIN_STROUHAL, CIRCULATORY_FREE_MIN_STROUHAL,
+                                  CIRCULATORY_LONGER_S, INTERVALS_PER_S,
                                   circulatory_specs, cruise_id, default_specs)
 from swim_planner.build import solve_from_guess_or_blend
 from swim_planner.primitive_solver import solve_primitive
@@ -207,11 +208,7 @@ def test_cruise_heave_is_within_the_papers_range(circulatory):
     assert low <= cruise.q[:, 1].min() and cruise.q[:, 1].max() <= high
 
 
-@pytest.mark.parametrize("primitive_id", [
-    pytest.param(i, marks=() if i.startswith("constrained/") else pytest.mark.xfail(
-        strict=True, reason="measured St = 0.020-0.022 (free E = 0.05 in both lanes): a free cruise is asked for no "
-        "stroke, and its optimum heaves the pitch axis by millimetres, enough thrust for the foil's profile drag"))
-    for i in SOLVED if "/cruise/" in i])
+@pytest.mark.parametrize("primitive_id", [i for i in SOLVED if "/cruise/" in i])
 def test_cruise_strouhal_number_is_a_swimmers(rig, solved, primitive_id):
     _, cruise = solved[primitive_id]
     low, high = STROUHAL_BAND
@@ -236,21 +233,22 @@ def test_constrained_cruise_strokes_at_its_strouhal_floor(rig, circulatory):
     """The stroke bound (PrimitiveSpec.min_strouhal): the pitch axis's excursion across the lane from the cycle's
     start to its middle, recomputed from the stored samples, is at least St_min R dalpha, so the cruise's Strouhal
     number (peak to peak) is at least the floor; and the floor is what sets the stroke (the same cruise without one
-    strokes at St 0.014, the free E = 0.05 cruises at 0.020-0.022)."""
+    strokes at St 0.014)."""
     _, cruise, _ = circulatory
     assert cruise.spec.min_strouhal == CIRCULATORY_CONSTRAINED_MIN_STROUHAL
     _assert_strokes_at_its_floor(rig, cruise)
 
 
-def test_a_free_cruise_given_a_strouhal_floor_strokes_at_it(rig, solved):
+@pytest.mark.parametrize("primitive_id", ["free/cruise/R0.43/E0.05", "free/cruise/R0.48/E0.05"])
+def test_free_cruise_strokes_at_its_strouhal_floor(rig, solved, primitive_id):
     """The bound's free-vehicle form: the pitch axis's excursion across the lane is Lh sin(phi) - R (the carriage
-    moves too). A free cruise solved with a floor of 0.2 (the library's have none, and stroke at 0.020-0.022)
-    meets it, recomputed from its samples, and strokes at it."""
-    model, unfloored = solved["free/cruise/R0.43/E0.05"]
-    floor = 0.2
-    cruise = solve_primitive(model, dataclasses.replace(unfloored.spec, min_strouhal=floor), LIMITS)
+    moves too). A free cruise meets its floor, recomputed from its samples, and strokes at it; solved without the
+    floor it strokes at under half of it (measured 0.020-0.022)."""
+    model, cruise = solved[primitive_id]
+    assert cruise.spec.min_strouhal == CIRCULATORY_FREE_MIN_STROUHAL
     _assert_strokes_at_its_floor(rig, cruise)
-    assert cruise_strouhal_number(unfloored, rig.heave_link_length_m) < 0.5 * floor
+    unfloored = solve_primitive(model, dataclasses.replace(cruise.spec, min_strouhal=None), LIMITS)
+    assert cruise_strouhal_number(unfloored, rig.heave_link_length_m) < 0.5 * CIRCULATORY_FREE_MIN_STROUHAL
 
 
 def test_a_strouhal_floor_is_a_circulatory_cruises_only(rig, circulatory):
@@ -297,8 +295,9 @@ def test_the_circulatory_set_is_the_papers_graph_with_a_third_level_joined_to_it
             spec = dataclasses.replace(spec, intervals=int(round(spec.duration_s
                                                                  * CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S)),
                                        coarse_intervals=int(round(spec.duration_s * INTERVALS_PER_S)))
-        if spec.constrained and spec.primitive_type is PrimitiveType.CRUISE:
-            spec = dataclasses.replace(spec, min_strouhal=CIRCULATORY_CONSTRAINED_MIN_STROUHAL)
+        if spec.primitive_type is PrimitiveType.CRUISE:
+            spec = dataclasses.replace(spec, min_strouhal=CIRCULATORY_CONSTRAINED_MIN_STROUHAL if spec.constrained
+                                       else CIRCULATORY_FREE_MIN_STROUHAL)
         assert specs[spec.primitive_id] == spec
     assert CIRCULATORY_ENERGY_LEVELS_J[:2] == (0.05, 0.1) and CIRCULATORY_ENERGY_LEVELS_J[2] > 0.1
     def primitive_id(kind, lane, tags):
