@@ -131,7 +131,12 @@ def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], exe
 
     workers: the executor's worker count, if known. The build then keeps that many solves running and, each time
     one ends, submits the ready spec of most ``critical_work``. None (a cluster whose size may change): every spec
-    is submitted as soon as what it joins is solved, those ready together in that order."""
+    is submitted as soon as what it joins is solved, those ready together in that order.
+
+    Raises:
+        ValueError: workers below 1, or a spec that joins a primitive neither in specs nor in the library; nothing
+            is solved or stored then.
+    """
     if workers is not None and workers < 1:
         raise ValueError(f"workers must be at least 1, got {workers}")
     known = {s.primitive_id for s in specs} | set(library.ids())
