@@ -59,8 +59,8 @@ CIRCULATORY_CONSTRAINED_MIN_STROUHAL = 0.35
 # in the vortex wake too (docs/circulatory_primitives.md measures both, and the floors tried)
 CIRCULATORY_FREE_MIN_STROUHAL = 0.2
 # circulatory flow, the free cruises' least Strouhal number (assumed: the low end of the same 0.2-0.4 band). The
-# free vehicle's cruises fold as the constrained ones did (St about 0.01-0.02), and its lane change was then lost in
-# its last decelerate in most runs in the vortex wake; at this floor it is tracked (docs/circulatory_primitives.md)
+# free vehicle's cruises fold as the constrained ones did (St 0.02-0.05), and its lane change was then lost in its
+# last decelerate in most runs in the vortex wake; at this floor it is tracked in most (docs/circulatory_primitives.md)
 CIRCULATORY_LONGER_S = {"free/decelerate/R0.43/E0.10": 6.0, "free/decelerate/R0.43/E0.20": 6.0,
                         "free/decelerate/R0.48/E0.20": 6.0, "free/cruise_to_cruise/R0.43/E0.10-E0.05": 3.0,
                         "free/accelerate/R0.43/E0.20": 5.0}
