@@ -14,15 +14,16 @@ from swim_planner.catalog import default_specs
 from swim_planner.library import PrimitiveLibrary
 
 TARGET_S = 600.0
+WORKERS = 2                      # local worker processes, one per core of this machine
 
 
 def timed_build(specs, flow_model: str = "ideal") -> tuple[float, list[str]]:
-    """(wall time s, failed ids) of building specs into an empty library of flow_model on two local workers."""
+    """(wall time s, failed ids) of building specs into an empty library of flow_model on WORKERS local workers."""
     with tempfile.TemporaryDirectory() as directory:
         library = PrimitiveLibrary.create_or_open(directory, load_rig(), flow_model=flow_model)
         start = time.perf_counter()
-        with local_executor(2) as executor:
-            failed = build_library(library, specs, executor, workers=2)
+        with local_executor(WORKERS) as executor:
+            failed = build_library(library, specs, executor, workers=WORKERS)
         return time.perf_counter() - start, failed
 
 
