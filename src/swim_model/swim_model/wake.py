@@ -143,8 +143,11 @@ class WakeParameters:
     # half the distance the trailing edge moves through the fluid in that step (Katz & Plotkin, Ch. 13, use 0.2-0.3)
     min_shed_distance_m: float = 2.0e-4
     # assumed: keeps the new vortex off the cusp (F' = 0) when the trailing edge is nearly at rest
-    max_vortex_count: int | None = 300
-    # assumed: bound on the vortex count (cost grows as N^2); None: never merge
+    max_vortex_count: int | None = 600
+    # assumed: bound on the vortex count (cost grows as N^2); None: never merge. 600 (4.8 s of wake at one vortex
+    # per 8 ms period) is where the closed loop in the wake stops changing with it: merged down to 300, a foil
+    # circling the hub meets old vortices amalgamated into few strong ones, whose passes push the hub with up to
+    # 5.6 N m and lose runs that at 600 and 1200 are tracked (docs/wake_study.md, "The vortex count")
     protected_vortex_count: int = 60
     # assumed: the newest vortices (the near wake, about one cycle of the paper's gaits at 8 ms) are never merged
     opposite_sign_merge_penalty: float = 10.0
