@@ -10,7 +10,7 @@ import time
 
 from swim_model import load_rig
 from swim_planner.build import build_library, local_executor
-from swim_planner.catalog import default_specs
+from swim_planner.catalog import default_specs, lqr_weights
 from swim_planner.library import PrimitiveLibrary
 
 TARGET_S = 600.0
@@ -20,7 +20,8 @@ WORKERS = 2                      # local worker processes, one per core of this 
 def timed_build(specs, flow_model: str = "ideal") -> tuple[float, list[str]]:
     """(wall time s, failed ids) of building specs into an empty library of flow_model on WORKERS local workers."""
     with tempfile.TemporaryDirectory() as directory:
-        library = PrimitiveLibrary.create_or_open(directory, load_rig(), flow_model=flow_model)
+        library = PrimitiveLibrary.create_or_open(directory, load_rig(), lqr_weights=lqr_weights(flow_model),
+                                                  flow_model=flow_model)
         start = time.perf_counter()
         with local_executor(WORKERS) as executor:
             failed = build_library(library, specs, executor, workers=WORKERS)

@@ -89,12 +89,18 @@ class LqrWeights:
     # longest maneuver, 30 s. On the ideal model the free lane keeping at E = 0.05 then ends 6 mm from its lane
     # and 2 mrad behind (24 mm and 69 mrad with each 1 s cycle's own horizon).
     cruise_lookahead_s: float = 30.0
+    # Added to S's entry of the carriage's error e_R at the end of a free primitive that ends at rest (a decelerate:
+    # the maneuver's end, where the task is judged), 1/m^2. The carriage has no motor: once the hub stops, the
+    # foil's strokes no longer move it against the rails' breakaway friction and the tilt, so its error must be
+    # gone before then. 0 (the default) keeps the paper's S; the circulatory library's value is its catalog's.
+    rest_lateral_terminal_weight: float = 0.0
 
     def validate(self) -> None:
         """Raise ValueError unless every weight is positive and finite (the margin may be zero)."""
         for field in dataclasses.fields(self):
             value = getattr(self, field.name)
-            low_ok = value >= 0.0 if field.name in ("terminal_margin_per_s", "cruise_lookahead_s") else value > 0.0
+            low_ok = (value >= 0.0 if field.name in ("terminal_margin_per_s", "cruise_lookahead_s",
+                                                      "rest_lateral_terminal_weight") else value > 0.0)
             if not (isinstance(value, (int, float)) and np.isfinite(value) and low_ok):
                 raise ValueError(f"LQR weight {field.name} must be a positive finite number, got {value!r}")
 
@@ -126,6 +132,11 @@ class LqrWeights:
             z_map[row, ny + coordinate] = rate
             z_map[row, ny + nq + coordinate] = 1.0
         return z_map.T @ np.diag(gains) @ z_map
+
+
+#: e_R's index in the free vehicle's error state (int e_alpha, int e_R, e_alpha, e_R, ...): ny = 2, then q = (alpha, R,
+#: phi, theta)
+LATERAL_ERROR_INDEX = 3
 
 
 def error_state_size(nq: int, ny: int, n_lag: int = 0) -> int:
@@ -339,7 +350,7 @@ class TrackingGains:
 
 def primitive_gains(model: VehicleModel, time_s: Array, q: Array, qdot: Array, foil_acceleration: Array,
                     weights: Optional[LqrWeights] = None, cycle_samples: Optional[int] = None,
-                    lag: Optional[Array] = None) -> TrackingGains:
+                    lag: Optional[Array] = None, ends_at_rest: bool = False) -> TrackingGains:
     """P(t) and G'P along a planned trajectory, for the weights given (the defaults if None).
 
     lag: the plan's lag states (N, n_lag), m/s, for a circulatory model (None for the ideal one); the gains are
@@ -348,7 +359,10 @@ def primitive_gains(model: VehicleModel, time_s: Array, q: Array, qdot: Array, f
     cycle_samples: a cruise, whose first cycle_samples samples are one period of it (the rest are copies):
     P(T) is then not S but the solution of eq. 20 over ``weights.cruise_lookahead_s`` more seconds of the
     same cruise, found by carrying P back through one cycle again and again (F, G are periodic: alpha does not
-    enter them, Prop. 1)."""
+    enter them, Prop. 1).
+
+    ends_at_rest: the primitive ends the vehicle at rest (a decelerate); for the free vehicle S then gains
+    ``weights.rest_lateral_terminal_weight`` on e_R, the carriage's position error."""
     weights = weights or LqrWeights()
     weights.validate()
     linearization = linearize(model, q, qdot, foil_acceleration, lag)
@@ -359,6 +373,10 @@ def primitive_gains(model: VehicleModel, time_s: Array, q: Array, qdot: Array, f
     if cycle_samples is not None:
         terminal = continued_terminal(transitions[:cycle_samples - 1], time_s[cycle_samples - 1] - time_s[0],
                                       terminal, weights.cruise_lookahead_s)
+    if ends_at_rest and not model.constrained:
+        lateral = LATERAL_ERROR_INDEX
+        terminal = terminal.copy()
+        terminal[lateral, lateral] += weights.rest_lateral_terminal_weight
     riccati = sweep_backward(transitions, terminal)
     riccati_input_gain = np.einsum("kni,knm->kim", linearization.input_matrix, riccati)
     return TrackingGains(riccati=riccati, riccati_input_gain=riccati_input_gain)

@@ -14,6 +14,7 @@ import dataclasses
 import itertools
 import math
 
+from swim_controller.riccati import LqrWeights
 from swim_model import RigParameters
 from swim_planner.primitives import PrimitiveSpec, PrimitiveType
 
@@ -73,6 +74,12 @@ CIRCULATORY_LONGER_S = {"free/decelerate/R0.43/E0.10": 6.0, "free/decelerate/R0.
 # infeasible at 20), as the free decelerate is in 3 s; in 3 s it solves directly (73 iterations). The inner lane's
 # E = 0.20 accelerate, to a cruise at CIRCULATORY_FREE_MIN_STROUHAL: infeasible in 4 s from both guesses, solved in
 # 5 s
+CIRCULATORY_LQR_WEIGHTS = LqrWeights(rest_lateral_terminal_weight=1.0e5)
+# circulatory flow, the weights of the stored gains: the package defaults, with the carriage's error at the free
+# decelerates' end weighted (1/m^2; assumed: about 40 times e_R's entry of P in the middle of the lane keeping's
+# decelerate, 2570 /m^2). Without it the lane keeping ends 1-2 cm off its lane, the carriage held by the rails'
+# friction and the tilt where the braking strokes left it; in the vortex wake 3e4-3e5 end it within 0.5 cm, 3e3
+# does not (docs/experiments.md)
 CRUISE_CYCLE_S = 1.0                   # assumed: one stroke per second, as the paper's cruise figures
 
 
@@ -196,3 +203,8 @@ def circulatory_specs(rig: RigParameters) -> list[PrimitiveSpec]:
 def _lasting(spec: PrimitiveSpec, duration_s: float) -> PrimitiveSpec:
     """The spec with another duration, its collocation intervals at INTERVALS_PER_S."""
     return dataclasses.replace(spec, duration_s=duration_s, intervals=_intervals(duration_s))
+
+
+def lqr_weights(flow_model: str) -> LqrWeights:
+    """The LQ weights a library of this flow model ("ideal" or "circulatory") stores its gains for."""
+    return CIRCULATORY_LQR_WEIGHTS if flow_model == "circulatory" else LqrWeights()

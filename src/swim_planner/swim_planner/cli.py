@@ -34,7 +34,6 @@ import sys
 from pathlib import Path
 
 
-from swim_controller.riccati import LqrWeights
 from swim_model import SwimModelError, load_rig
 from swim_planner.build import build_library, dependencies, local_executor
 from swim_model.flow import FLOW_MODELS
@@ -60,7 +59,7 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("--scheduler", default=None, help="Dask scheduler address (tcp://host:port)")
     build.add_argument("--lqr-weights", type=Path, default=None,
                        help="YAML of swim_controller LqrWeights fields for the stored tracking gains "
-                            "(default: the package defaults); changed weights recompute the gains only")
+                            "(default: the flow's, catalog.lqr_weights); changed weights recompute the gains only")
     listing = commands.add_parser("list", help="one line per primitive", parents=[flow])
     listing.add_argument("library", type=Path, nargs="?", default=None)
     for name in ("show", "plot"):
@@ -122,7 +121,8 @@ def command_build(args, rig) -> int:
     every = specs_of_flow(rig)
     wanted = {"constrained": (True,), "free": (False,), "all": (True, False)}[args.set]
     specs = _select([s for s in every if s.constrained in wanted], args.only)
-    weights = load_lqr_weights(args.lqr_weights) if args.lqr_weights else LqrWeights()
+    flow_weights = catalog.lqr_weights(args.flow)
+    weights = load_lqr_weights(args.lqr_weights, flow_weights) if args.lqr_weights else flow_weights
     library = PrimitiveLibrary.create_or_open(args.library or default_library_path(args.flow), rig,
                                               lqr_weights=weights, flow_model=args.flow)
     with tqdm(total=len(specs), unit="primitive", file=sys.stderr) as bar, _executor(args) as executor:

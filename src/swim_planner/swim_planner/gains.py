@@ -36,21 +36,23 @@ def gains_job(rig: RigParameters, primitive: Primitive, lqr_weights: LqrWeights)
     try:
         cycle_samples = 2 * spec.intervals + 1 if spec.primitive_type is PrimitiveType.CRUISE else None
         gains = primitive_gains(model, primitive.time_s, primitive.q, primitive.qdot, primitive.foil_acceleration,
-                                lqr_weights, cycle_samples, primitive.lag)
+                                lqr_weights, cycle_samples, primitive.lag,
+                                ends_at_rest=spec.primitive_type is PrimitiveType.DECELERATE)
     except GainComputationError as err:
         raise PrimitiveSolveError(f"{spec.primitive_id}: {err}") from err
     return dataclasses.replace(primitive, gains=gains)
 
 
-def load_lqr_weights(path: str | Path) -> LqrWeights:
-    """LqrWeights from a YAML mapping of its field names (the package defaults for the others)."""
+def load_lqr_weights(path: str | Path, base: LqrWeights = LqrWeights()) -> LqrWeights:
+    """LqrWeights from a YAML mapping of its field names, the others those of base (a library's own weights, or
+    the package defaults)."""
     names = {field.name for field in dataclasses.fields(LqrWeights)}
     try:
         values = yaml.safe_load(Path(path).read_text()) or {}
         unknown = sorted(set(values) - names)
         if unknown:
             raise ValueError(f"unknown fields {unknown}; known: {sorted(names)}")
-        weights = LqrWeights(**{key: float(value) for key, value in values.items()})
+        weights = dataclasses.replace(base, **{key: float(value) for key, value in values.items()})
         weights.validate()
     except (OSError, yaml.YAMLError, TypeError, ValueError, AttributeError) as err:
         raise PlannerError(f"{path}: not a valid LQR weights file: {err}") from err

@@ -138,7 +138,13 @@ class PrimitiveLibrary:
     def needs_gains(self, primitive_id: str) -> bool:
         """True if the primitive has no stored gains for the library's LQ weights."""
         record = self.entry(primitive_id)
-        return not record.get("has_gains") or record.get("gains_lqr_weights") != dataclasses.asdict(self.lqr_weights)
+        stored = record.get("gains_lqr_weights")
+        if not record.get("has_gains") or not isinstance(stored, dict):
+            return True
+        try:    # a field the record lacks has its default: the gains were computed as with it
+            return LqrWeights(**stored) != self.lqr_weights
+        except TypeError:   # a field this version does not know
+            return True
 
     def add(self, primitive: Primitive) -> None:
         """Store one primitive (its array file first, then the manifest, each replaced atomically). A stored D(t)

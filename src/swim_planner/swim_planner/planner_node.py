@@ -140,7 +140,7 @@ class PlannerNode(Node):
         """The library plans are made from: its stored gains, or gains for the weights in lqr_weights_path."""
         if not lqr_weights_path:
             return self.library
-        return RetunedLibrary(self.library, load_lqr_weights(lqr_weights_path))
+        return RetunedLibrary(self.library, load_lqr_weights(lqr_weights_path, self.library.lqr_weights))
 
     def _bounds(self, changed: dict) -> PlanBounds:
         """PlanBounds from the parameters, with changed (name -> value) applied; ValueError if not valid."""

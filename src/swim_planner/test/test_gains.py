@@ -113,3 +113,51 @@ def test_stored_riccati_input_gain_is_g_transpose_p(library, rig):
     expected = np.einsum("kni,knm->kim", lin.input_matrix, primitive.gains.riccati)
     np.testing.assert_allclose(primitive.gains.riccati_input_gain, expected, rtol=1e-12,
                                atol=1e-12 * np.abs(expected).max())
+
+
+def test_stored_gains_of_weights_without_a_later_field_are_those_of_its_default(library, tmp_path):
+    """A record of gains computed before a weight field existed is read with that field at its default (the gains
+    were computed as with it): the shipped ideal library needs no gains; another value of the field asks for them."""
+    assert not any(library.needs_gains(primitive_id) for primitive_id in library.ids())
+    record = dict(library.entry(library.ids()[0]))
+    stored = dict(record["gains_lqr_weights"])
+    stored.pop("rest_lateral_terminal_weight", None)
+    assert LqrWeights(**stored) == LqrWeights() == library.lqr_weights
+    other = dataclasses.replace(library.lqr_weights, rest_lateral_terminal_weight=1.0)
+    library.lqr_weights, kept = other, library.lqr_weights
+    try:
+        assert all(library.needs_gains(primitive_id) for primitive_id in library.ids())
+    finally:
+        library.lqr_weights = kept
+
+
+def test_the_circulatory_library_weights_its_free_decelerates_carriage_at_rest(circulatory_library, rig):
+    """The circulatory library's gains are for its catalog weights; a free decelerate's P at its end has the rest
+    weight on e_R beyond the gains without it, a constrained one's and a cruise's do not."""
+    from swim_controller.riccati import LATERAL_ERROR_INDEX
+    from swim_planner.catalog import CIRCULATORY_LQR_WEIGHTS
+    assert circulatory_library.lqr_weights == CIRCULATORY_LQR_WEIGHTS
+    assert CIRCULATORY_LQR_WEIGHTS.rest_lateral_terminal_weight > 0.0
+    assert not any(circulatory_library.needs_gains(primitive_id) for primitive_id in circulatory_library.ids())
+    without = RetunedLibrary(circulatory_library, dataclasses.replace(CIRCULATORY_LQR_WEIGHTS,
+                                                                     rest_lateral_terminal_weight=0.0))
+    i = LATERAL_ERROR_INDEX
+    for primitive_id in ("free/decelerate/R0.43/E0.05", "constrained/decelerate/E0.10", "free/cruise/R0.43/E0.05"):
+        stored = circulatory_library.get(primitive_id).gains.riccati[-1]
+        plain = without.get(primitive_id).gains.riccati[-1]
+        added = stored - plain
+        expected = np.zeros_like(added)
+        if primitive_id.startswith("free/decelerate"):
+            expected[i, i] = CIRCULATORY_LQR_WEIGHTS.rest_lateral_terminal_weight
+        np.testing.assert_allclose(added, expected, atol=1e-6 * CIRCULATORY_LQR_WEIGHTS.rest_lateral_terminal_weight)
+
+
+def test_a_weights_file_leaves_the_fields_it_does_not_name_at_the_base(tmp_path):
+    """The planner reads a weights file over its library's weights: the circulatory library's rest weight stays
+    unless the file names it."""
+    from swim_planner.catalog import CIRCULATORY_LQR_WEIGHTS
+    path = tmp_path / "weights.yaml"
+    path.write_text("heave_input_weight: 0.04\n")
+    weights = load_lqr_weights(path, CIRCULATORY_LQR_WEIGHTS)
+    assert weights == dataclasses.replace(CIRCULATORY_LQR_WEIGHTS, heave_input_weight=0.04)
+    assert load_lqr_weights(path) == LqrWeights(heave_input_weight=0.04)
