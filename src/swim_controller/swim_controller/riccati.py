@@ -374,9 +374,8 @@ def primitive_gains(model: VehicleModel, time_s: Array, q: Array, qdot: Array, f
         terminal = continued_terminal(transitions[:cycle_samples - 1], time_s[cycle_samples - 1] - time_s[0],
                                       terminal, weights.cruise_lookahead_s)
     if ends_at_rest and not model.constrained:
-        lateral = LATERAL_ERROR_INDEX
         terminal = terminal.copy()
-        terminal[lateral, lateral] += weights.rest_lateral_terminal_weight
+        terminal[LATERAL_ERROR_INDEX, LATERAL_ERROR_INDEX] += weights.rest_lateral_terminal_weight
     riccati = sweep_backward(transitions, terminal)
     riccati_input_gain = np.einsum("kni,knm->kim", linearization.input_matrix, riccati)
     return TrackingGains(riccati=riccati, riccati_input_gain=riccati_input_gain)

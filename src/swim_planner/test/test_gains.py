@@ -115,7 +115,7 @@ def test_stored_riccati_input_gain_is_g_transpose_p(library, rig):
                                atol=1e-12 * np.abs(expected).max())
 
 
-def test_stored_gains_of_weights_without_a_later_field_are_those_of_its_default(library, tmp_path):
+def test_stored_gains_of_weights_without_a_later_field_are_those_of_its_default(library):
     """A record of gains computed before a weight field existed is read with that field at its default (the gains
     were computed as with it): the shipped ideal library needs no gains; another value of the field asks for them."""
     assert not any(library.needs_gains(primitive_id) for primitive_id in library.ids())
