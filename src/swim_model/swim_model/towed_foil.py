@@ -185,7 +185,8 @@ def oscillating_foil(foil: JoukowskiFoil, speed_m_s: float, heave_amplitude_m: f
         averaged_cycles: the last cycles, averaged.
         steps_per_cycle: time steps per cycle (default: see the module constants).
         water_density_kg_m3: rho.
-        flow_parameters: the reduced model's coefficients (the wake uses its profile drag coefficient).
+        flow_parameters: the reduced model's coefficients (the wake uses its profile drag coefficient and its
+            leading edge's critical suction).
         wake_parameters: the wake's numerical parameters (default: WakeParameters with room for one cycle of
             unmerged vortices).
     """
@@ -232,9 +233,12 @@ def oscillating_foil(foil: JoukowskiFoil, speed_m_s: float, heave_amplitude_m: f
     averaged_steps = averaged_cycles * steps_per_cycle
 
     if wake_model:
-        params = wake_parameters or WakeParameters(rho_kg_m3=rho,
-                                                   max_vortex_count=max(300, steps_per_cycle + 100),
-                                                   protected_vortex_count=steps_per_cycle + 50)
+        params = wake_parameters or WakeParameters(
+            rho_kg_m3=rho, max_vortex_count=max(300, steps_per_cycle + 100),
+            protected_vortex_count=steps_per_cycle + 50,
+            critical_leading_edge_suction=flow.params.critical_leading_edge_suction,
+            suction_cap_exponent=flow.params.suction_cap_exponent,
+            speed_regularization_m_s=flow.params.speed_regularization_m_s)
         wake = Wake(foil, params)
         steps = np.arange(1, total_steps + 1, dtype=float)
         x, y, theta = kinematics.pose(steps * dt)

@@ -236,6 +236,7 @@ class CirclePlane:
         self.zeta_c_m = conformal_map.zeta_c_m
         self.r_m = conformal_map.r_c_m
         self.zeta_te = complex(-self.r_m)
+        self.zeta_le = complex(self.r_m)
         self.z_te = complex(-2.0 * self.a_m)
         a2, r2, zc = self.a_m ** 2, self.r_m ** 2, self.zeta_c_m
         self.rotation_pole_origin_m3 = r2 * (zc + a2 / zc)                       # A = r^2 F(0)
@@ -315,6 +316,32 @@ class CirclePlane:
         image_new = self.r_m ** 2 / zeta_new.conjugate()
         unit = (1.0 / (te - zeta_new) - 1.0 / (te - image_new)) / (2j * math.pi)  # a vortex of unit strength
         return float(-known.imag / unit.imag)
+
+    def unit_vortex_potential_derivative(self, point: complex, zeta_new: complex) -> complex:
+        """dw/dzeta at point of a vortex of unit strength at zeta_new with its image (1/(2 pi i) per m^2/s)."""
+        image_new = self.r_m ** 2 / zeta_new.conjugate()
+        return (1.0 / (point - zeta_new) - 1.0 / (point - image_new)) / (2j * math.pi)
+
+    def edge_potential_derivatives(self, zeta_k: Complex, gamma_k: npt.NDArray[np.float64],
+                                   velocity: tuple[float, float, float]) -> tuple[complex, complex]:
+        """dw/dzeta (body and free vortices with their images) at the trailing edge and at the leading edge."""
+        edges = np.array([self.zeta_te, self.zeta_le])
+        total = self.body_potential_derivative(edges, velocity) + self.vortex_potential_derivative(edges, zeta_k,
+                                                                                                   gamma_k)
+        return complex(total[0]), complex(total[1])
+
+    def leading_edge_suction_parameter(self, leading_edge_derivative: complex,
+                                       velocity: tuple[float, float, float], speed_m_s: float) -> float:
+        """LESP = q_LE / (4 |u|): the flow's tangential velocity relative to the foil at the circle's leading-edge
+        point (circle plane, counter-clockwise positive) over four times the foil's speed |u|, m/s. The relative
+        derivative is dw/dzeta - conj(u_LE) F'(zeta_LE), u_LE the leading edge's own velocity. In the steady Kutta
+        flow at angle of attack alpha it is sin(alpha) for every thickness, the thin aerofoil's A0 (swim_model.flow:
+        the suction 4 pi rho r (LESP |u|)^2)."""
+        u, v, omega = velocity
+        leading_edge_velocity = complex(u, v) + 1j * omega * complex(self.to_foil(self.zeta_le))
+        map_derivative = complex(self.map_derivatives(self.zeta_le)[0])
+        relative = leading_edge_derivative - leading_edge_velocity.conjugate() * map_derivative
+        return -relative.imag / (4.0 * speed_m_s)
 
     def far_field_circulation(self, zeta_k: Complex, gamma_k: npt.NDArray[np.float64],
                               velocity: tuple[float, float, float], samples: int = 256) -> float:

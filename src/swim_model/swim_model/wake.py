@@ -157,6 +157,14 @@ class WakeParameters:
     # wall: its vorticity is in the boundary layer and it is absorbed into the bound circulation (module
     # docstring). Smaller than the gap of a vortex just shed at min_shed_distance_m behind the cusp (1.8 mm on the
     # rig's foil). 0: never absorb
+    critical_leading_edge_suction: float | None = 0.18
+    # the leading edge holds suction up to this leading-edge suction parameter, beyond it the suction is lost
+    # (module docstring, "Leading-edge suction"); swim_model.flow's FlowParameters value, the same edge (Ramesh
+    # et al., JFM 751, 2014, rounded-nose section at Re ~ 1e4). None: the attached flow's whole suction
+    suction_cap_exponent: int = 8
+    # assumed: as FlowParameters.suction_cap_exponent, the smooth cap LESP / (1 + (LESP/LESP_crit)^n)^(1/n)
+    speed_regularization_m_s: float = 1.0e-7
+    # assumed: as FlowParameters.speed_regularization_m_s, the speed |u| = sqrt(U^2 + V^2 + eps^2)
     kinematic_viscosity_m2_s: float = 0.0
     # the fluid's kinematic viscosity, by which each vortex's core grows with its age (viscous core growth, module
     # docstring); water at 20 C: 1.0e-6. Assumed 0 by default: the inviscid wake, every core core_radius_m for
@@ -173,6 +181,13 @@ class WakeParameters:
         if not (math.isfinite(self.surface_absorption_gap_m) and self.surface_absorption_gap_m >= 0.0):
             raise StateError("WakeParameters.surface_absorption_gap_m must be finite and >= 0, "
                              f"got {self.surface_absorption_gap_m!r}")
+        critical = self.critical_leading_edge_suction
+        if critical is not None and not (math.isfinite(critical) and critical > 0.0):
+            raise StateError(f"WakeParameters.critical_leading_edge_suction must be positive or None, got {critical!r}")
+        if self.suction_cap_exponent < 2 or self.suction_cap_exponent % 2:
+            raise StateError("WakeParameters.suction_cap_exponent must be an even integer >= 2")
+        if not (math.isfinite(self.speed_regularization_m_s) and self.speed_regularization_m_s > 0.0):
+            raise StateError("WakeParameters.speed_regularization_m_s must be positive and finite")
         if self.max_vortex_count is not None and self.max_vortex_count <= self.protected_vortex_count + 1:
             raise StateError("WakeParameters.max_vortex_count must exceed protected_vortex_count + 1")
 
@@ -306,6 +321,7 @@ class Wake:
         moment = moment_origin - (origin_mid.conjugate() * force_tank).imag
         force_foil = force_tank * cmath.exp(-1j * 0.5 * (old_pose[2] + new_pose[2]))
 
+        force_foil -= self._lost_suction()
         self._merge()
         self._impulse, self._angular_impulse = self._impulses()
         span = self.foil.span_m
@@ -407,6 +423,22 @@ class Wake:
         # the new vortex mapped back from its tank-frame position, as every vortex is
         new = self.plane.to_circle((self.positions_m[-1:] - complex(x, y)) / rotation)
         self._map_vortices(np.append(zeta, new))
+
+    def _lost_suction(self) -> float:
+        """The leading-edge suction the edge cannot hold, per metre of span along the chord, N/m: the attached
+        flow's 4 pi rho r (LESP |u|)^2 less the same with LESP capped at critical_leading_edge_suction as
+        swim_model.flow caps it (0 when the parameter is None)."""
+        critical = self.params.critical_leading_edge_suction
+        if critical is None:
+            return 0.0
+        plane = self.plane
+        _, known_le = plane.edge_potential_derivatives(self._zeta, self.circulations_m2_s, self._velocity)
+        u, v, _ = self._velocity
+        speed = math.sqrt(u * u + v * v + self.params.speed_regularization_m_s ** 2)
+        lesp = plane.leading_edge_suction_parameter(known_le, self._velocity, speed)
+        n = self.params.suction_cap_exponent
+        capped = lesp / (1.0 + (lesp / critical) ** n) ** (1.0 / n)
+        return 4.0 * math.pi * self.params.rho_kg_m3 * plane.r_m * speed * speed * (lesp * lesp - capped * capped)
 
     def _impulses(self) -> tuple[complex, float]:
         """(I_v in the tank frame, L_v about the tank origin), per metre of span, from the kept impulse terms."""
