@@ -237,6 +237,9 @@ class CirclePlane:
         self.r_m = conformal_map.r_c_m
         self.zeta_te = complex(-self.r_m)
         self.zeta_le = complex(self.r_m)
+        leading = self.r_m + self.zeta_c_m                                       # s at the leading edge
+        self.z_le = complex(leading + self.a_m ** 2 / leading)
+        self.map_derivative_le = 1.0 - self.a_m ** 2 / leading ** 2              # F'(zeta_le), real
         self.z_te = complex(-2.0 * self.a_m)
         a2, r2, zc = self.a_m ** 2, self.r_m ** 2, self.zeta_c_m
         self.rotation_pole_origin_m3 = r2 * (zc + a2 / zc)                       # A = r^2 F(0)
@@ -338,9 +341,8 @@ class CirclePlane:
         flow at angle of attack alpha it is sin(alpha) for every thickness, the thin aerofoil's A0 (swim_model.flow:
         the suction 4 pi rho r (LESP |u|)^2)."""
         u, v, omega = velocity
-        leading_edge_velocity = complex(u, v) + 1j * omega * complex(self.to_foil(self.zeta_le))
-        map_derivative = complex(self.map_derivatives(self.zeta_le)[0])
-        relative = leading_edge_derivative - leading_edge_velocity.conjugate() * map_derivative
+        leading_edge_velocity = complex(u, v) + 1j * omega * self.z_le
+        relative = leading_edge_derivative - leading_edge_velocity.conjugate() * self.map_derivative_le
         return -relative.imag / (4.0 * speed_m_s)
 
     def far_field_circulation(self, zeta_k: Complex, gamma_k: npt.NDArray[np.float64],

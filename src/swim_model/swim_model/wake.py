@@ -46,6 +46,17 @@ books. The absorption is done before the step's impulse is evaluated, so the imp
 to the foil in that step: momentum is conserved, and the force it adds is at most ``2 rho |Gamma_k| gap / dt``
 per metre of span.
 
+Leading-edge suction (``critical_leading_edge_suction``). The wake's flow stays attached at the leading edge, so its
+force holds the whole suction of the attached flow there: the thin aerofoil's ``4 pi rho r (A0 |u|)^2`` per metre
+of span (swim_model.flow). A rounded edge holds suction only up to a critical leading-edge suction parameter;
+beyond it the flow separates there (Ramesh et al., JFM 751, 2014). The step computes the parameter of its flow,
+``A0 = q_LE / (4 |u|)`` (``CirclePlane.leading_edge_suction_parameter``: the tangential velocity relative to the
+foil at the circle's leading-edge point; sin(alpha) in the steady Kutta flow, for every thickness), caps it as
+swim_model.flow caps its suction (``A0 / (1 + (A0 / A0_crit)^n)^(1/n)``, the same parameters), and takes the
+suction the edge cannot hold, ``4 pi rho r |u|^2 (A0^2 - capped^2)``, off the chordwise force. The vortices, the
+normal force and the moment are unchanged: it is a force on the foil, not a separated flow (no vortex is shed at
+the leading edge).
+
 Force split (the integration rule): the total fluid force on the foil is ``F_Kirchhoff + F_v``, where
 ``F_Kirchhoff`` is the added-mass (ideal-flow) force of eq. 46 that swim_model's ideal model already applies
 with ``M_A`` of ``added_mass.py``; ``WakeForce`` is ``F_v`` only -- the circulatory (vortical) part, with no
@@ -64,8 +75,8 @@ weighted by their |Gamma| (the weights of the centroid). The image and body term
 
 Assumptions: unbounded fluid (the tank wall and free surface are ignored), 2-D strips (forces are per metre of
 span times the span, no tip vortices), no viscous drag, shedding only from the trailing edge (no leading-edge
-separation: valid for small effective angles of attack). Vortices live in the tank frame, so a foil
-circling the hub meets its own wake.
+vortex: beyond the critical suction parameter only the suction is taken off, above). Vortices live in the tank
+frame, so a foil circling the hub meets its own wake.
 """
 from __future__ import annotations
 
@@ -432,13 +443,15 @@ class Wake:
         if critical is None:
             return 0.0
         plane = self.plane
-        _, known_le = plane.edge_potential_derivatives(self._zeta, self.circulations_m2_s, self._velocity)
+        _, known_le = plane.edge_potential_derivatives(self._current_circle_plane_positions(), self.circulations_m2_s,
+                                                       self._velocity)
         u, v, _ = self._velocity
         speed = math.sqrt(u * u + v * v + self.params.speed_regularization_m_s ** 2)
         lesp = plane.leading_edge_suction_parameter(known_le, self._velocity, speed)
         n = self.params.suction_cap_exponent
         capped = lesp / (1.0 + (lesp / critical) ** n) ** (1.0 / n)
-        return 4.0 * math.pi * self.params.rho_kg_m3 * plane.r_m * speed * speed * (lesp * lesp - capped * capped)
+        lost_squared = lesp * lesp - capped * capped
+        return float(4.0 * math.pi * self.params.rho_kg_m3 * plane.r_m * speed * speed * lost_squared)
 
     def _impulses(self) -> tuple[complex, float]:
         """(I_v in the tank frame, L_v about the tank origin), per metre of span, from the kept impulse terms."""
