@@ -7,12 +7,12 @@ heave, pitch in rad s^0.5 over 0-9 s; the sliding term's total variation sum ||e
 reversals per second over the cruise, 4-9 s):
 
     bound          two-norms                  TV 0-4 s   TV 4-9 s   reversals/s on the cruise
-    constant       0.0136 0.0684 0.0337       14.0       24.5       124 (of 125 periods a second)
-    plan's D(t)    0.0154 0.0645 0.0426       75.7       6.1        64
+    constant       0.0105 0.0509 0.0447       13.7       24.7       125 (of 125 periods a second)
+    plan's D(t)    0.0077 0.0459 0.0447       66.5       2.0        30
 
-On the cruise, which strokes at St 0.35, D(t) is 0.0045 N m on average, a quarter of the constant 0.02: there its
-term reverses half as often and varies a quarter as much. Both track without a saturated period, to two-norms
-within 26 % of each other (alpha and pitch better with the constant bound, heave with D(t)). On the accelerate D(t)
+On the cruise, which strokes at St 0.35, D(t) is 0.0024 N m on average, an eighth of the constant 0.02: there its
+term reverses a quarter as often and varies a twelfth as much. Both track without a saturated period, to two-norms
+within 27 % of each other (alpha and heave better with D(t), pitch the same). On the accelerate D(t)
 reaches 0.18 N m (0.27 with the margin) and its term varies more than the constant one: it is on at the peaks it
 was measured for (docs/circulatory_primitives.md).
 
@@ -32,9 +32,9 @@ from swim_controller.tracker import CascadeTracker, model_io_linearization, mode
 IDS = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05"]
 COUNTS = [1, 1]
 ACCELERATE_END_S = 4.0   # the accelerate's duration: the cruise follows
-#: the plan's two-norms may differ from the constant bound's by this fraction (measured: up to 26 %; a two-norm moved
+#: the plan's two-norms may differ from the constant bound's by this fraction (measured: up to 27 %; a two-norm moved
 #: by 18 % with the summation order of the wake's kernels: module docstring)
-TRACKING_SPREAD = 0.35
+TRACKING_SPREAD = 0.5
 
 
 class RecordingTracker(CascadeTracker):

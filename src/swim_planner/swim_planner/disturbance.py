@@ -175,6 +175,17 @@ def _motion(lead_in: Sequence[Primitive], primitive: Primitive) -> tuple[Array, 
     return np.concatenate(times), q_all, np.concatenate(velocities), np.concatenate(lags)
 
 
+def measuring_wake(rig: RigParameters) -> WakeParameters:
+    """The wake D(t) is measured in: the default WakeParameters at the rig's water density."""
+    return dataclasses.replace(WakeParameters(), rho_kg_m3=rig.water_density_kg_m3)
+
+
+def wake_record(rig: RigParameters) -> dict:
+    """measuring_wake's parameters as the manifest records them (JSON values): a D(t) measured in another wake
+    is measured again (PrimitiveLibrary.needs_disturbance_bound)."""
+    return dataclasses.asdict(measuring_wake(rig))
+
+
 def flow_force_mismatch(model: VehicleModel, primitive: Primitive, *, lead_in: Sequence[Primitive] = (),
                         wake_parameters: WakeParameters | None = None, max_wake_step_s: float = MAX_WAKE_STEP_S,
                         margin: float = DISTURBANCE_MARGIN) -> DisturbanceProfile:
@@ -196,7 +207,8 @@ def flow_force_mismatch(model: VehicleModel, primitive: Primitive, *, lead_in: S
         raise ValueError(f"flow_force_mismatch: margin must be finite and >= 1, got {margin!r}")
     if not (math.isfinite(max_wake_step_s) and max_wake_step_s > 0.0):
         raise ValueError(f"flow_force_mismatch: max_wake_step_s must be positive, got {max_wake_step_s!r}")
-    params = dataclasses.replace(wake_parameters or WakeParameters(), rho_kg_m3=model.rig.water_density_kg_m3)
+    params = (measuring_wake(model.rig) if wake_parameters is None
+              else dataclasses.replace(wake_parameters, rho_kg_m3=model.rig.water_density_kg_m3))
     time_s, q, qdot, lag = _motion(lead_in, primitive)
 
     # the motion between samples: cubic Hermite of q (slopes qdot), cubic spline of qdot
@@ -269,5 +281,5 @@ def disturbance_job(rig: RigParameters, primitive: Primitive, lead_in: Sequence[
     stats = profile.statistics()
     record = {"lead_in": [p.spec.primitive_id for p in lead_in], "envelope_half_width_s": float(half_width_s),
               "margin": profile.margin, "wake_step_s": profile.wake_step_s, "measured_max_n_m": stats.max_n_m,
-              "measured_p95_n_m": stats.p95_n_m, "measured_mean_n_m": stats.mean_n_m}
+              "measured_p95_n_m": stats.p95_n_m, "measured_mean_n_m": stats.mean_n_m, "wake": wake_record(rig)}
     return spec.primitive_id, envelope, record

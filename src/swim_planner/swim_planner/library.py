@@ -40,6 +40,7 @@ import numpy as np
 from swim_controller.riccati import LqrWeights, TrackingGains
 from swim_model import MODEL_VERSION, RigParameters
 from swim_model.flow import FLOW_MODELS
+from swim_planner.disturbance import wake_record
 from swim_planner.errors import LibraryError
 from swim_planner.primitives import (Primitive, PrimitiveSpec, PrimitiveType, SolverSettings,
                                      cruise_mean_speed_m_s)
@@ -176,8 +177,12 @@ class PrimitiveLibrary:
         self._write_manifest()
 
     def needs_disturbance_bound(self, primitive_id: str) -> bool:
-        """True for a circulatory-flow primitive without a stored D(t) (ideal-flow ones have none)."""
-        return self.flow_model == "circulatory" and DISTURBANCE_RECORD not in self.entry(primitive_id)
+        """True for a circulatory-flow primitive without a stored D(t), or with one measured in another wake than
+        swim_planner.disturbance's (ideal-flow ones have none)."""
+        if self.flow_model != "circulatory":
+            return False
+        record = self.entry(primitive_id).get(DISTURBANCE_RECORD)
+        return record is None or record.get("wake") != wake_record(self.rig)
 
     def add_disturbance_bound(self, primitive_id: str, bound_n_m: np.ndarray, measurement: dict) -> None:
         """Store D(t) of a stored circulatory primitive: bound_n_m (N,), N m, finite and >= 0, on its N samples;

@@ -13,7 +13,7 @@ import pytest
 
 from swim_planner.build import build_library
 from swim_planner.disturbance import (ENVELOPE_HALF_WIDTH_S, MAX_WAKE_STEP_S, bound_envelope, flow_force_mismatch,
-                                      lead_in_ids)
+                                      lead_in_ids, measuring_wake, wake_record)
 from swim_planner.errors import LibraryError
 from swim_planner.library import FORMAT_VERSION, MANIFEST, PrimitiveLibrary
 from swim_planner.maneuver import concatenate, expand_sequence
@@ -92,6 +92,19 @@ def test_new_gains_keep_the_bound_and_a_new_motion_drops_it(bounded, rig, tmp_pa
     moved[:, 1] += 1e-9
     library.add(dataclasses.replace(primitive, q=moved))
     assert library.disturbance_bound(ACCELERATE) is None and library.needs_disturbance_bound(ACCELERATE)
+
+
+def test_a_bound_measured_in_another_wake_is_measured_again(bounded, rig, circulatory_library, tmp_path):
+    library = _copy(bounded[0], tmp_path / "lib", rig, IDS, "circulatory")
+    stored = bounded[0].disturbance_bound(ACCELERATE)
+    assert bounded[0].entry(ACCELERATE)["disturbance_bound"]["wake"] == wake_record(rig)
+    library.add_disturbance_bound(ACCELERATE, stored, {"wake": wake_record(rig)})
+    assert not library.needs_disturbance_bound(ACCELERATE)
+    attached = dataclasses.asdict(dataclasses.replace(measuring_wake(rig), critical_leading_edge_suction=None))
+    library.add_disturbance_bound(ACCELERATE, stored, {"wake": attached})
+    assert library.needs_disturbance_bound(ACCELERATE)
+    # the shipped library's bounds were measured in today's wake
+    assert not any(circulatory_library.needs_disturbance_bound(i) for i in circulatory_library.ids())
 
 
 def test_a_corrupt_or_malformed_bound_is_refused(bounded, rig, tmp_path):

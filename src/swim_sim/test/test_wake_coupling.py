@@ -118,10 +118,13 @@ def test_heaving_foil_on_its_lane_pushes_the_hub_forward_as_garrick(constrained,
     within 20 % of Garrick's C_T = 4 pi k^2 (h0/c)^2 |C(k)|^2 (measured: 81 %, 85 %, 85 % of it at k = 0.5, 1, 2:
     the rig's foil is 13 % thick and its path curved, where Garrick's plate is thin and straight), and the hub
     torque is that thrust at the foil's radius (within 10 %: the heave swings the radius and the chord's angle to
-    the tangent; measured 6 %, 0.2 %, 0.7 %): the vehicle is pushed toward increasing alpha.
+    the tangent; measured 6 %, 0.2 %, 0.7 %): the vehicle is pushed toward increasing alpha. Garrick's flow is
+    attached at the leading edge, so the wake here keeps its whole suction (at k = 2 the suction parameter passes
+    the critical one).
     """
     rig = constrained.rig
-    coupling = WakeCoupling(constrained)
+    attached = WakeParameters(critical_leading_edge_suction=None)
+    coupling = WakeCoupling(constrained, WakeCouplingParameters(wake=attached))
     pitch_rad = brentq(lambda theta: (constrained.foil_velocity_map([0.0, 0.0, theta]) @ [1.0, 0.0, 0.0])[1], -1, 1)
     radius_m = math.hypot(*coupling.foil_pose(np.array([0.0, 0.0, pitch_rad]))[:2])
     hub_rate = TOWING_SPEED_M_S / radius_m
