@@ -14,7 +14,8 @@ __all__ = ["FORCE_LIMIT_N", "MOMENT_LIMIT_N_M", "WakeCoupling", "WakeCouplingPar
 def parameter_defaults() -> dict[str, int | float]:
     """sim_node's ``wake.*`` numerical parameters and their defaults (the wake is on with sim_node's flow "wake").
 
-    ``max_vortex_count`` 0 means never merge; the water density is the rig's.
+    ``max_vortex_count`` 0 means never merge; ``critical_leading_edge_suction`` 0 means the attached flow's whole
+    leading-edge suction; the water density is the rig's.
     """
     wake = WakeParameters()
     return {"core_radius_m": wake.core_radius_m,
@@ -23,6 +24,7 @@ def parameter_defaults() -> dict[str, int | float]:
             "opposite_sign_merge_penalty": wake.opposite_sign_merge_penalty,
             "surface_absorption_gap_m": wake.surface_absorption_gap_m,
             "kinematic_viscosity_m2_s": wake.kinematic_viscosity_m2_s,
+            "critical_leading_edge_suction": wake.critical_leading_edge_suction or 0.0,
             "force_limit_n": FORCE_LIMIT_N, "moment_limit_n_m": MOMENT_LIMIT_N_M}
 
 
@@ -35,6 +37,7 @@ def parameters_from_values(values: dict[str, int | float]) -> WakeCouplingParame
                           protected_vortex_count=int(values["protected_vortex_count"]),
                           opposite_sign_merge_penalty=float(values["opposite_sign_merge_penalty"]),
                           surface_absorption_gap_m=float(values["surface_absorption_gap_m"]),
-                          kinematic_viscosity_m2_s=float(values["kinematic_viscosity_m2_s"]))
+                          kinematic_viscosity_m2_s=float(values["kinematic_viscosity_m2_s"]),
+                          critical_leading_edge_suction=float(values["critical_leading_edge_suction"]) or None)
     return WakeCouplingParameters(wake=wake, force_limit_n=float(values["force_limit_n"]),
                                   moment_limit_n_m=float(values["moment_limit_n_m"]))

@@ -21,7 +21,7 @@ from swim_model import StateError, VehicleModel
 from swim_model.wake import WakeParameters
 from swim_sim.disturbances import Disturbances
 from swim_sim.plant import Plant
-from swim_sim.wake_coupling import WakeCoupling, WakeCouplingParameters
+from swim_sim.wake_coupling import WakeCoupling, WakeCouplingParameters, parameter_defaults, parameters_from_values
 from test_plant import swinging_start
 
 
@@ -239,3 +239,12 @@ def test_the_clip_keeps_the_direction_and_counts(constrained):
     assert plant.wake.statistics().clipped_count == 20
     with pytest.raises(StateError):
         WakeCouplingParameters(force_limit_n=math.nan)
+
+
+def test_sim_nodes_wake_parameters_default_to_the_wakes_and_zero_turns_the_cap_off():
+    defaults = parameter_defaults()
+    assert parameters_from_values(defaults) == WakeCouplingParameters()
+    whole = parameters_from_values({**defaults, "critical_leading_edge_suction": 0.0})
+    assert whole.wake.critical_leading_edge_suction is None
+    with pytest.raises(StateError, match="critical_leading_edge_suction"):
+        parameters_from_values({**defaults, "critical_leading_edge_suction": -0.1})
