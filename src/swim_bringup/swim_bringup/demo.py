@@ -8,8 +8,7 @@ execute it while every topic of the run is recorded to an MCAP bag, stops the no
 figures and the bag into the run folder; prints a summary naming the pipeline.
 With --plant bridge, bridge_node (emulated backend, autostart) stands in for sim_node: the emulated rig is the
 free vehicle in real time, so the default maneuver is then the paper's lane keeping. The default pipeline is the
-realistic one in simulation and the paper's on the bridge, where the realistic lane keeping ends outside the goal
-tolerance (docs/experiments.md). The run itself is recorded_run's; this module is its command line.
+realistic one on either plant. The run itself is recorded_run's; this module is its command line.
 """
 from __future__ import annotations
 
@@ -35,16 +34,13 @@ def parse_arguments(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--repeats", nargs="+", type=int, default=None)
     parser.add_argument("--time-scale", type=float, default=1.0)
     parser.add_argument("--sliding-mode", choices=("on", "off"), default="on")
-    parser.add_argument("--pipeline", choices=PIPELINES, default=None,
-                        help="realistic (the default with --plant sim): circulatory plans, vortex-wake plant, physical "
-                             "disturbances; paper (the default with --plant bridge): ideal-flow plans and plant, the "
-                             "paper's small disturbances")
+    parser.add_argument("--pipeline", choices=PIPELINES, default="realistic",
+                        help="realistic (the default): circulatory plans, vortex-wake plant, physical disturbances; "
+                             "paper: ideal-flow plans and plant, the paper's small disturbances")
     parser.add_argument("--config", type=Path, default=None,
                         help="folder of sim/planner/tracker YAML files (default: the pipeline's)")
     parser.add_argument("--timeout", type=float, default=600.0, help="wall-time limit of the maneuver, s")
     args = parse_with_tolerances(parser, argv)
-    if args.pipeline is None:
-        args.pipeline = "paper" if args.plant == "bridge" else "realistic"
     default = PAPER_LANE_KEEPING if args.plant == "bridge" else PAPER_CONSTRAINED
     if args.primitives is None:
         args.primitives, args.repeats = default[0], args.repeats or default[1]

@@ -93,14 +93,14 @@ def test_the_pipelines_differ_only_in_the_flow_and_the_disturbance_sizes():
             assert shared(realistic[node]) == shared(paper[node]), f"{name}: {node}"
 
 
-def test_swim_demo_runs_the_realistic_pipeline_in_simulation_and_the_papers_on_the_bridge_unless_told():
+def test_swim_demo_runs_the_realistic_pipeline_on_either_plant_unless_told():
     from swim_bringup.demo import parameter_folder, parse_arguments
     assert parse_arguments([]).pipeline == "realistic"
     assert parameter_folder(parse_arguments([])) == config_dir("realistic")
     assert parameter_folder(parse_arguments(["--pipeline", "paper"])) == config_dir("paper")
     assert parameter_folder(parse_arguments(["--pipeline", "paper", "--config", "/x"])) == Path("/x")
-    assert parse_arguments(["--plant", "bridge"]).pipeline == "paper"
-    assert parse_arguments(["--plant", "bridge", "--pipeline", "realistic", "--primitives",
-                            "free/cruise/R0.43/E0.05"]).pipeline == "realistic"
+    assert parse_arguments(["--plant", "bridge"]).pipeline == "realistic"
+    assert parse_arguments(["--plant", "bridge", "--pipeline", "paper", "--primitives",
+                            "free/cruise/R0.43/E0.05"]).pipeline == "paper"
     with pytest.raises(SystemExit):
         parse_arguments(["--pipeline", "ideal"])
