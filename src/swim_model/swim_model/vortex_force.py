@@ -316,9 +316,7 @@ class CirclePlane:
         te = self.zeta_te
         known = self.body_potential_derivative(te, velocity) + self.vortex_potential_derivative(
             np.array([te]), zeta_k, gamma_k)[0]
-        image_new = self.r_m ** 2 / zeta_new.conjugate()
-        unit = (1.0 / (te - zeta_new) - 1.0 / (te - image_new)) / (2j * math.pi)  # a vortex of unit strength
-        return float(-known.imag / unit.imag)
+        return float(-known.imag / self.unit_vortex_potential_derivative(te, zeta_new).imag)
 
     def unit_vortex_potential_derivative(self, point: complex, zeta_new: complex) -> complex:
         """dw/dzeta at point of a vortex of unit strength at zeta_new with its image (1/(2 pi i) per m^2/s)."""

@@ -35,9 +35,9 @@ No random numbers: a run with the wake repeats bit for bit.
 
 Separation drag. The wake sheds from the trailing edge only: the flow stays attached at the leading edge (which
 loses only the suction it cannot hold, swim_model.wake), so the wake alone carries no separated (post-stall)
-force. A simulated vehicle in the wake's water adds it as the
-quadratic drag ``F = -1/2 rho Cd A |v| v`` on the foil's chordwise (U) and normal (V) velocities
-(``separation_drag``; a flat plate broadside has Cd 1.2, Hoerner), mapped to q by Q2(q)'.
+force. A simulated vehicle in the wake's water adds it as the quadratic drag ``F = -1/2 rho Cd A |v| v`` on the
+foil's chordwise (U) and normal (V) velocities (``separation_drag``; a flat plate broadside has Cd 1.2, Hoerner),
+mapped to q by Q2(q)'.
 
 Flows (``FLOWS``): the water a simulated vehicle swims in, the same choice for swim_sim's plant and the emulated
 rig: "ideal" (the paper's added mass only), "circulatory" (``VehicleModel(flow="circulatory")``, swim_model.flow)
