@@ -103,7 +103,7 @@ def test_a_bound_measured_in_another_wake_is_measured_again(bounded, rig, circul
     attached = dataclasses.asdict(dataclasses.replace(measuring_wake(rig), critical_leading_edge_suction=None))
     library.add_disturbance_bound(ACCELERATE, stored, {"wake": attached})
     assert library.needs_disturbance_bound(ACCELERATE)
-    # the shipped library's bounds were measured in today's wake
+    # the shipped library's bounds were measured in the default wake
     assert not any(circulatory_library.needs_disturbance_bound(i) for i in circulatory_library.ids())
 
 
