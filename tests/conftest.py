@@ -52,3 +52,25 @@ def run_demo(run_dir: Path, *arguments: str, timeout_s: float = DEMO_TIMEOUT_S, 
     result = subprocess.run(argv, cwd=WORKSPACE, capture_output=True, text=True, timeout=timeout_s)
     assert result.returncode == expected_returncode, result.stdout[-2000:] + result.stderr[-2000:]
     return result.stdout + result.stderr
+
+
+def track_free_plan(library, sequence: tuple[list[str], list[int]], time_scale: float, plant):
+    """The free circulatory plan of sequence (primitive ids, repeats) at time_scale from library, tracked in one
+    process (no DDS) by the circulatory tracker without sliding mode on plant (swim_sim's Plant, on the rig's home
+    lane); the run (swim_controller.testing.closed_loop.Run), checked to have been tracked: never a radian of alpha
+    off its plan."""
+    from swim_controller.sliding_mode import SlidingMode
+    from swim_controller.testing.closed_loop import simulate
+    from swim_controller.tracker import CascadeTracker, model_io_linearization, model_lag_rate
+    from swim_model import load_rig
+    from swim_planner.maneuver import concatenate, expand_sequence
+    from swim_sim.plant import vehicle_model
+    rig = load_rig()
+    plan = concatenate(library, rig, expand_sequence(*sequence), time_scale)
+    model = vehicle_model("circulatory", rig, False, rig.lane_1_radius_m)
+    tracker = CascadeTracker(model_io_linearization(model), model.torque_limits(), SlidingMode(),
+                             sliding_mode_enabled=False, sample_period_s=rig.sample_period_s,
+                             lag_rate=model_lag_rate(model))
+    run = simulate(model, tracker, plan, rig.sample_period_s, plant=plant)
+    assert abs(run.error[:, 0]).max() < 1.0
+    return run

@@ -8,16 +8,13 @@ the suction beyond the same parameter (WakeParameters' default) the lane change 
 with the attached flow's whole suction, 15.4 mm.
 """
 import pytest
+from conftest import track_free_plan
 
-from swim_controller.sliding_mode import SlidingMode
-from swim_controller.testing.closed_loop import simulate
-from swim_controller.tracker import CascadeTracker, model_io_linearization, model_lag_rate
 from swim_hw_bridge.conversions import load_bridge_config
 from swim_model import load_rig
 from swim_model.wake import WakeParameters
 from swim_model.wake_coupling import WakeCouplingParameters
 from swim_planner.library import PrimitiveLibrary
-from swim_planner.maneuver import concatenate, expand_sequence
 from swim_planner.paths import default_library_path
 from swim_sim.disturbances import Disturbances
 from swim_sim.plant import Plant, vehicle_model
@@ -32,16 +29,10 @@ PAPERS_LANE_ERROR_M = 5e-3   # the paper's rig ended within 0.5 cm of its lane
 
 def lane_change_end_offset_m(library, wake: WakeParameters) -> float:
     rig = load_rig()
-    plan = concatenate(library, rig, expand_sequence(*LANE_CHANGE), TIME_SCALE)
-    model = vehicle_model("circulatory", rig, False, rig.lane_1_radius_m)
-    tracker = CascadeTracker(model_io_linearization(model), model.torque_limits(), SlidingMode(),
-                             sliding_mode_enabled=False, sample_period_s=rig.sample_period_s,
-                             lag_rate=model_lag_rate(model))
     water = vehicle_model("wake", rig, False, rig.lane_1_radius_m)
     plant = Plant(water, Disturbances(), seed=3, wake=WakeCoupling(water, WakeCouplingParameters(wake=wake)),
                   hard_limits_rad=hard_limits_rad(load_bridge_config(None)))
-    run = simulate(model, tracker, plan, rig.sample_period_s, plant=plant)
-    assert abs(run.error[:, 0]).max() < 1.0           # tracked: never a radian of alpha off the plan
+    run = track_free_plan(library, LANE_CHANGE, TIME_SCALE, plant)
     return abs(run.q[-1, 1] - rig.lane_2_radius_m)
 
 

@@ -10,16 +10,13 @@ lane; without it 19.3 mm.
 import dataclasses
 
 import pytest
+from conftest import track_free_plan
 
-from swim_controller.sliding_mode import SlidingMode
-from swim_controller.testing.closed_loop import simulate
-from swim_controller.tracker import CascadeTracker, model_io_linearization, model_lag_rate
 from swim_hw_bridge.conversions import load_bridge_config
 from swim_model import load_rig
 from swim_planner.catalog import CIRCULATORY_LQR_WEIGHTS
 from swim_planner.gains import RetunedLibrary
 from swim_planner.library import PrimitiveLibrary
-from swim_planner.maneuver import concatenate, expand_sequence
 from swim_planner.paths import default_library_path
 from swim_sim.disturbances import Disturbances
 from swim_sim.plant import Plant, vehicle_model
@@ -32,15 +29,9 @@ PAPERS_LANE_ERROR_M = 5e-3   # the paper's rig ended within 0.5 cm of its lane
 
 def lane_keeping_end_offset_m(library) -> float:
     rig = load_rig()
-    plan = concatenate(library, rig, expand_sequence(*LANE_KEEPING), 1.0)
-    model = vehicle_model("circulatory", rig, False, rig.lane_1_radius_m)
-    tracker = CascadeTracker(model_io_linearization(model), model.torque_limits(), SlidingMode(),
-                             sliding_mode_enabled=False, sample_period_s=rig.sample_period_s,
-                             lag_rate=model_lag_rate(model))
     plant = Plant(vehicle_model("circulatory", rig, False, rig.lane_1_radius_m), Disturbances(), seed=1,
                   hard_limits_rad=hard_limits_rad(load_bridge_config(None)))
-    run = simulate(model, tracker, plan, rig.sample_period_s, plant=plant)
-    assert abs(run.error[:, 0]).max() < 1.0           # tracked: never a radian of alpha off the plan
+    run = track_free_plan(library, LANE_KEEPING, 1.0, plant)
     return abs(run.q[-1, 1] - rig.lane_1_radius_m)
 
 
