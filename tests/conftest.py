@@ -54,11 +54,11 @@ def run_demo(run_dir: Path, *arguments: str, timeout_s: float = DEMO_TIMEOUT_S, 
     return result.stdout + result.stderr
 
 
-def track_free_plan(library, sequence: tuple[list[str], list[int]], time_scale: float, plant):
-    """The free circulatory plan of sequence (primitive ids, repeats) at time_scale from library, tracked in one
-    process (no DDS) by the circulatory tracker without sliding mode on plant (swim_sim's Plant, on the rig's home
-    lane); the run (swim_controller.testing.closed_loop.Run), checked to have been tracked: never a radian of alpha
-    off its plan."""
+def track_plan(library, sequence: tuple[list[str], list[int]], time_scale: float, plant, constrained: bool = False):
+    """The circulatory plan of sequence (primitive ids, repeats) at time_scale from library, tracked in one process
+    (no DDS) by the circulatory tracker without sliding mode on plant (swim_sim's Plant of the free vehicle, or of
+    the constrained one if constrained, on the rig's home lane); the run (swim_controller.testing.closed_loop.Run),
+    checked to have been tracked: never a radian of alpha off its plan."""
     from swim_controller.sliding_mode import SlidingMode
     from swim_controller.testing.closed_loop import simulate
     from swim_controller.tracker import CascadeTracker, model_io_linearization, model_lag_rate
@@ -67,7 +67,7 @@ def track_free_plan(library, sequence: tuple[list[str], list[int]], time_scale: 
     from swim_sim.plant import vehicle_model
     rig = load_rig()
     plan = concatenate(library, rig, expand_sequence(*sequence), time_scale)
-    model = vehicle_model("circulatory", rig, False, rig.lane_1_radius_m)
+    model = vehicle_model("circulatory", rig, constrained, rig.lane_1_radius_m)
     tracker = CascadeTracker(model_io_linearization(model), model.torque_limits(), SlidingMode(),
                              sliding_mode_enabled=False, sample_period_s=rig.sample_period_s,
                              lag_rate=model_lag_rate(model))

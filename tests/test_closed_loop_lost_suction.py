@@ -8,7 +8,7 @@ the suction beyond the same parameter (WakeParameters' default) the lane change 
 with the attached flow's whole suction, 15.4 mm.
 """
 import pytest
-from conftest import track_free_plan
+from conftest import track_plan
 
 from swim_hw_bridge.conversions import load_bridge_config
 from swim_model import load_rig
@@ -32,7 +32,7 @@ def lane_change_end_offset_m(library, wake: WakeParameters) -> float:
     water = vehicle_model("wake", rig, False, rig.lane_1_radius_m)
     plant = Plant(water, Disturbances(), seed=3, wake=WakeCoupling(water, WakeCouplingParameters(wake=wake)),
                   hard_limits_rad=hard_limits_rad(load_bridge_config(None)))
-    run = track_free_plan(library, LANE_CHANGE, TIME_SCALE, plant)
+    run = track_plan(library, LANE_CHANGE, TIME_SCALE, plant)
     return abs(run.q[-1, 1] - rig.lane_2_radius_m)
 
 

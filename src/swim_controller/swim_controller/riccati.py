@@ -94,13 +94,20 @@ class LqrWeights:
     # foil's strokes no longer move it against the rails' breakaway friction and the tilt, so its error must be
     # gone before then. 0 (the default) keeps the paper's S; the circulatory library's value is its catalog's.
     rest_lateral_terminal_weight: float = 0.0
+    # Added to S's entry of the hub's error e_alpha at the end of a constrained primitive that ends at rest, 1/rad^2:
+    # the same reasoning for the hub, whose angle is the constrained task. As the hub comes to rest the strokes'
+    # forces fade with its speed, and the water its braking strokes threw forward meets the foil; an error left for
+    # those last moments stays. 0 (the default) keeps the paper's S. The free vehicle's end is judged by its lane,
+    # and S's e_R entry serves it (a weight on its e_alpha too pulled the carriage off its lane).
+    rest_alpha_terminal_weight: float = 0.0
 
     def validate(self) -> None:
         """Raise ValueError unless every weight is positive and finite (the margin may be zero)."""
         for field in dataclasses.fields(self):
             value = getattr(self, field.name)
             low_ok = (value >= 0.0 if field.name in ("terminal_margin_per_s", "cruise_lookahead_s",
-                                                      "rest_lateral_terminal_weight") else value > 0.0)
+                                                      "rest_lateral_terminal_weight",
+                                                      "rest_alpha_terminal_weight") else value > 0.0)
             if not (isinstance(value, (int, float)) and np.isfinite(value) and low_ok):
                 raise ValueError(f"LQR weight {field.name} must be a positive finite number, got {value!r}")
 
@@ -137,6 +144,8 @@ class LqrWeights:
 #: e_R's index in the free vehicle's error state (int e_alpha, int e_R, e_alpha, e_R, ...): ny = 2, then q = (alpha, R,
 #: phi, theta)
 LATERAL_ERROR_INDEX = 3
+#: e_alpha's index in the constrained vehicle's error state (int e_alpha, e_alpha, e_phi, e_theta, ...): ny = 1
+HUB_ERROR_INDEX_CONSTRAINED = 1
 
 
 def error_state_size(nq: int, ny: int, n_lag: int = 0) -> int:
@@ -361,8 +370,9 @@ def primitive_gains(model: VehicleModel, time_s: Array, q: Array, qdot: Array, f
     same cruise, found by carrying P back through one cycle again and again (F, G are periodic: alpha does not
     enter them, Prop. 1).
 
-    ends_at_rest: the primitive ends the vehicle at rest (a decelerate); for the free vehicle S then gains
-    ``weights.rest_lateral_terminal_weight`` on e_R, the carriage's position error."""
+    ends_at_rest: the primitive ends the vehicle at rest (a decelerate); S then gains
+    ``weights.rest_lateral_terminal_weight`` on e_R, the carriage's position error, for the free vehicle, and
+    ``weights.rest_alpha_terminal_weight`` on e_alpha, the hub's, for the constrained one."""
     weights = weights or LqrWeights()
     weights.validate()
     linearization = linearize(model, q, qdot, foil_acceleration, lag)
@@ -373,9 +383,12 @@ def primitive_gains(model: VehicleModel, time_s: Array, q: Array, qdot: Array, f
     if cycle_samples is not None:
         terminal = continued_terminal(transitions[:cycle_samples - 1], time_s[cycle_samples - 1] - time_s[0],
                                       terminal, weights.cruise_lookahead_s)
-    if ends_at_rest and not model.constrained:
+    if ends_at_rest:
         terminal = terminal.copy()
-        terminal[LATERAL_ERROR_INDEX, LATERAL_ERROR_INDEX] += weights.rest_lateral_terminal_weight
+        if model.constrained:
+            terminal[HUB_ERROR_INDEX_CONSTRAINED, HUB_ERROR_INDEX_CONSTRAINED] += weights.rest_alpha_terminal_weight
+        else:
+            terminal[LATERAL_ERROR_INDEX, LATERAL_ERROR_INDEX] += weights.rest_lateral_terminal_weight
     riccati = sweep_backward(transitions, terminal)
     riccati_input_gain = np.einsum("kni,knm->kim", linearization.input_matrix, riccati)
     return TrackingGains(riccati=riccati, riccati_input_gain=riccati_input_gain)

@@ -199,34 +199,41 @@ def test_cruise_gains_are_periodic_with_the_lookahead(model_for):
 
 
 @pytest.mark.parametrize("constrained", [False, True])
-def test_a_primitive_ending_at_rest_weights_the_carriages_end(model_for, constrained):
-    """ends_at_rest adds rest_lateral_terminal_weight to S's e_R entry, and nothing else, for the free vehicle; the
-    constrained vehicle has no carriage, and its S is unchanged. Without the flag the weight does nothing."""
+def test_a_primitive_ending_at_rest_weights_the_task_at_its_end(model_for, constrained):
+    """ends_at_rest adds rest_lateral_terminal_weight to S's e_R entry for the free vehicle and
+    rest_alpha_terminal_weight to S's e_alpha entry for the constrained one, and nothing else (the other weight does
+    nothing to either). Without the flag the weights do nothing."""
     from conftest import StrokeSpec, make_stroke
-    from swim_controller.riccati import LATERAL_ERROR_INDEX, error_state_size, primitive_gains
+    from swim_controller.riccati import (HUB_ERROR_INDEX_CONSTRAINED, LATERAL_ERROR_INDEX, error_state_size,
+                                         primitive_gains)
     spec = StrokeSpec("free stroke" if not constrained else "constrained stroke", constrained, 0.43, 40)
     model = model_for(spec)
     stroke = make_stroke(model, spec, cycles=1)
     args = (model, stroke.time_s, stroke.q, stroke.qdot, stroke.foil_acceleration)
-    weight = 1234.5
+    lateral_weight, alpha_weight = 1234.5, 678.9
+    weights = LqrWeights(rest_lateral_terminal_weight=lateral_weight, rest_alpha_terminal_weight=alpha_weight)
     plain = primitive_gains(*args, LqrWeights()).riccati
-    unflagged = primitive_gains(*args, LqrWeights(rest_lateral_terminal_weight=weight)).riccati
-    at_rest = primitive_gains(*args, LqrWeights(rest_lateral_terminal_weight=weight), ends_at_rest=True).riccati
+    unflagged = primitive_gains(*args, weights).riccati
+    at_rest = primitive_gains(*args, weights, ends_at_rest=True).riccati
     np.testing.assert_array_equal(unflagged, plain)
     added = at_rest[-1] - plain[-1]
     expected = np.zeros_like(added)
-    if not constrained:
+    if constrained:
+        assert error_state_size(3, 1) == plain.shape[1] and HUB_ERROR_INDEX_CONSTRAINED == 1   # ny, then alpha
+        index, weight = HUB_ERROR_INDEX_CONSTRAINED, alpha_weight
+    else:
         assert error_state_size(4, 2) == plain.shape[1] and LATERAL_ERROR_INDEX == 2 + 1   # ny, then (alpha, R)
-        expected[LATERAL_ERROR_INDEX, LATERAL_ERROR_INDEX] = weight
-        # the weight reaches back: the gains on e_R grow before the end, most near it
-        assert at_rest[-2, LATERAL_ERROR_INDEX, LATERAL_ERROR_INDEX] > plain[-2, LATERAL_ERROR_INDEX,
-                                                                            LATERAL_ERROR_INDEX]
+        index, weight = LATERAL_ERROR_INDEX, lateral_weight
+    expected[index, index] = weight
+    # the weight reaches back: the gains on the task's error grow before the end, most near it
+    assert at_rest[-2, index, index] > plain[-2, index, index]
     np.testing.assert_allclose(added, expected, atol=1e-9 * weight)
 
 
-def test_the_rest_weight_is_validated():
-    LqrWeights(rest_lateral_terminal_weight=0.0).validate()
-    with pytest.raises(ValueError, match="rest_lateral_terminal_weight"):
-        LqrWeights(rest_lateral_terminal_weight=-1.0).validate()
-    with pytest.raises(ValueError, match="rest_lateral_terminal_weight"):
-        LqrWeights(rest_lateral_terminal_weight=float("inf")).validate()
+@pytest.mark.parametrize("name", ["rest_lateral_terminal_weight", "rest_alpha_terminal_weight"])
+def test_the_rest_weights_are_validated(name):
+    LqrWeights(**{name: 0.0}).validate()
+    with pytest.raises(ValueError, match=name):
+        LqrWeights(**{name: -1.0}).validate()
+    with pytest.raises(ValueError, match=name):
+        LqrWeights(**{name: float("inf")}).validate()

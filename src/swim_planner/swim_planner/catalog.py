@@ -74,12 +74,15 @@ CIRCULATORY_LONGER_S = {"free/decelerate/R0.43/E0.10": 6.0, "free/decelerate/R0.
 # infeasible at 20), as the free decelerate is in 3 s; in 3 s it solves directly (73 iterations). The inner lane's
 # E = 0.20 accelerate, to a cruise at CIRCULATORY_FREE_MIN_STROUHAL: infeasible in 4 s from both guesses, solved in
 # 5 s
-CIRCULATORY_LQR_WEIGHTS = LqrWeights(rest_lateral_terminal_weight=1.0e5)
-# circulatory flow, the weights of the stored gains: the package defaults, with the carriage's error at the free
-# decelerates' end weighted (1/m^2; assumed: about 40 times e_R's entry of P in the middle of the lane keeping's
-# decelerate, 2570 /m^2). Without it the lane keeping ends 1-2 cm off its lane, the carriage held by the rails'
-# friction and the tilt where the braking strokes left it; in the vortex wake 3e4-3e5 end it within 0.5 cm, 3e3
-# does not (docs/experiments.md)
+CIRCULATORY_LQR_WEIGHTS = LqrWeights(rest_lateral_terminal_weight=1.0e5, rest_alpha_terminal_weight=1.0e5)
+# circulatory flow, the weights of the stored gains: the package defaults, with the task's error at the
+# decelerates' end weighted. The carriage's at the free ones' (1/m^2; assumed: about 40 times e_R's entry of P in
+# the middle of the lane keeping's decelerate, 2570 /m^2): without it the lane keeping ends 1-2 cm off its lane, the
+# carriage held by the rails' friction and the tilt where the braking strokes left it; in the vortex wake 3e4-3e5 end
+# it within 0.5 cm, 3e3 does not. The hub's at the constrained ones' (1/rad^2; assumed: about 240 times e_alpha's
+# entry of P in the middle of the E = 0.10 decelerate, 424 /rad^2): without it the constrained runs end 17-37 mrad
+# behind their plan on average in the vortex wake, with it 0.4-0.6 mrad; 3e4-3e5 do as well, 1e3 halves the lag
+# (docs/experiments.md)
 CRUISE_CYCLE_S = 1.0                   # assumed: one stroke per second, as the paper's cruise figures
 
 

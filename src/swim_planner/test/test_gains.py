@@ -122,6 +122,7 @@ def test_stored_gains_of_weights_without_a_later_field_are_those_of_its_default(
     record = dict(library.entry(library.ids()[0]))
     stored = dict(record["gains_lqr_weights"])
     stored.pop("rest_lateral_terminal_weight", None)
+    stored.pop("rest_alpha_terminal_weight", None)
     assert LqrWeights(**stored) == LqrWeights() == library.lqr_weights
     other = dataclasses.replace(library.lqr_weights, rest_lateral_terminal_weight=1.0)
     library.lqr_weights, kept = other, library.lqr_weights
@@ -131,25 +132,34 @@ def test_stored_gains_of_weights_without_a_later_field_are_those_of_its_default(
         library.lqr_weights = kept
 
 
-def test_the_circulatory_library_weights_its_free_decelerates_carriage_at_rest(circulatory_library, rig):
-    """The circulatory library's gains are for its catalog weights; a free decelerate's P at its end has the rest
-    weight on e_R beyond the gains without it, a constrained one's and a cruise's do not."""
-    from swim_controller.riccati import LATERAL_ERROR_INDEX
+def test_the_circulatory_library_weights_its_decelerates_task_at_rest(circulatory_library, rig):
+    """The circulatory library's gains are for its catalog weights; a decelerate's P at its end has the rest weight
+    beyond the gains without the rest weights, on e_R for a free one and on e_alpha for a constrained one; a
+    cruise's does not."""
+    from swim_controller.riccati import HUB_ERROR_INDEX_CONSTRAINED, LATERAL_ERROR_INDEX
     from swim_planner.catalog import CIRCULATORY_LQR_WEIGHTS
     assert circulatory_library.lqr_weights == CIRCULATORY_LQR_WEIGHTS
     assert CIRCULATORY_LQR_WEIGHTS.rest_lateral_terminal_weight > 0.0
+    assert CIRCULATORY_LQR_WEIGHTS.rest_alpha_terminal_weight > 0.0
     assert not any(circulatory_library.needs_gains(primitive_id) for primitive_id in circulatory_library.ids())
-    without = RetunedLibrary(circulatory_library, dataclasses.replace(CIRCULATORY_LQR_WEIGHTS,
-                                                                     rest_lateral_terminal_weight=0.0))
-    i = LATERAL_ERROR_INDEX
-    for primitive_id in ("free/decelerate/R0.43/E0.05", "constrained/decelerate/E0.10", "free/cruise/R0.43/E0.05"):
+    without = RetunedLibrary(circulatory_library, dataclasses.replace(
+        CIRCULATORY_LQR_WEIGHTS, rest_lateral_terminal_weight=0.0, rest_alpha_terminal_weight=0.0))
+    rest = {"free/decelerate/R0.43/E0.05": (LATERAL_ERROR_INDEX,
+                                            CIRCULATORY_LQR_WEIGHTS.rest_lateral_terminal_weight),
+            "constrained/decelerate/E0.10": (HUB_ERROR_INDEX_CONSTRAINED,
+                                             CIRCULATORY_LQR_WEIGHTS.rest_alpha_terminal_weight),
+            "free/cruise/R0.43/E0.05": None, "constrained/cruise/E0.10": None}
+    tolerance = 1e-6 * max(CIRCULATORY_LQR_WEIGHTS.rest_lateral_terminal_weight,
+                           CIRCULATORY_LQR_WEIGHTS.rest_alpha_terminal_weight)
+    for primitive_id, weighted in rest.items():
         stored = circulatory_library.get(primitive_id).gains.riccati[-1]
         plain = without.get(primitive_id).gains.riccati[-1]
         added = stored - plain
         expected = np.zeros_like(added)
-        if primitive_id.startswith("free/decelerate"):
-            expected[i, i] = CIRCULATORY_LQR_WEIGHTS.rest_lateral_terminal_weight
-        np.testing.assert_allclose(added, expected, atol=1e-6 * CIRCULATORY_LQR_WEIGHTS.rest_lateral_terminal_weight)
+        if weighted is not None:
+            index, weight = weighted
+            expected[index, index] = weight
+        np.testing.assert_allclose(added, expected, atol=tolerance)
 
 
 def test_a_weights_file_leaves_the_fields_it_does_not_name_at_the_base(tmp_path):
