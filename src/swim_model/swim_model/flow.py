@@ -69,6 +69,8 @@ import numpy.typing as npt
 
 from swim_model.errors import FlowModelError
 from swim_model.joukowski import AddedMass, JoukowskiFoil
+from swim_model.leading_edge import (CRITICAL_LEADING_EDGE_SUCTION, SPEED_REGULARIZATION_M_S, SUCTION_CAP_EXPONENT,
+                                     smooth_cap)
 
 Array = npt.NDArray[np.float64]
 
@@ -102,12 +104,10 @@ class FlowParameters:
     wagner_fast_gain: float = 0.335
     wagner_fast_rate: float = 0.3
     # R. T. Jones, NACA Report 681 (1940): phi(s) = 1 - 0.165 e^{-0.0455 s} - 0.335 e^{-0.3 s}, s in semichords
-    critical_leading_edge_suction: float = 0.18
-    # Ramesh, Gopalarathnam, Granlund, Ol & Edwards, J. Fluid Mech. 751 (2014): LESP_crit of a rounded-nose section
-    # at chord Reynolds numbers of order 1e4 (0.18 for their SD7003; 0.11 for a flat plate with a sharp nose)
-    suction_cap_exponent: int = 8
-    # assumed: the order of the smooth saturation; 8 keeps the suction within 0.05 % of uncapped below half the
-    # critical value and reaches the cap within 9 % of it (an even integer keeps it smooth through zero)
+    critical_leading_edge_suction: float = CRITICAL_LEADING_EDGE_SUCTION
+    # the edge's critical leading-edge suction parameter (swim_model.leading_edge: Ramesh et al., JFM 751, 2014)
+    suction_cap_exponent: int = SUCTION_CAP_EXPONENT
+    # assumed: the order of the smooth saturation (swim_model.leading_edge)
     stall_angle_rad: float = math.radians(25.0)
     # assumed: angle of the lagged effective incidence where attached and separated flow weigh equally; of the order
     # of the dynamic-stall lift peak of oscillating NACA 0012 sections (McCroskey, AGARD-CP-227, 1981: 20-25 deg
@@ -121,9 +121,8 @@ class FlowParameters:
     profile_drag_coefficient: float = 0.031
     # laminar_profile_drag_coefficient at the rig's chord Reynolds number 1.2e4 (0.2 m/s, 6 cm, 1.0e-6 m^2/s)
     # and thickness ratio 0.133: 0.0312
-    speed_regularization_m_s: float = 1.0e-7
-    # assumed: eps in sqrt(speed^2 + eps^2); makes every term smooth at rest and changes forces by (eps/|u|)^2
-    # (1e-12 at 0.1 m/s); the forces' second derivatives stay bounded as eps -> 0 (they are homogeneous of degree 2)
+    speed_regularization_m_s: float = SPEED_REGULARIZATION_M_S
+    # assumed: eps in sqrt(speed^2 + eps^2), smooth at rest (swim_model.leading_edge)
 
     def __post_init__(self) -> None:
         positive = ("wagner_slow_rate", "wagner_fast_rate", "critical_leading_edge_suction", "stall_angle_rad",
@@ -238,9 +237,7 @@ class CirculatoryFlow:
         moment_attached = (self.vortical_lift_x_m * normal_attached
                            + 4.0 * math.pi * rho_s * a2 * u * (effective - normal))
         suction_velocity = effective - omega * (self.mid_chord_x_m - self.three_quarter_chord_x_m)
-        suction_limit = p.critical_leading_edge_suction * speed
-        n = p.suction_cap_exponent
-        capped = suction_velocity / (1.0 + (suction_velocity / suction_limit) ** n) ** (1.0 / n)
+        capped = smooth_cap(suction_velocity, p.critical_leading_edge_suction * speed, p.suction_cap_exponent)
         suction = 4.0 * math.pi * rho_s * r * capped * capped
 
         # separated flow: the flat plate

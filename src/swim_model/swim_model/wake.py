@@ -47,15 +47,15 @@ to the foil in that step: momentum is conserved, and the force it adds is at mos
 per metre of span.
 
 Leading-edge suction (``critical_leading_edge_suction``). The wake's flow stays attached at the leading edge, so its
-force holds the whole suction of the attached flow there: the thin aerofoil's ``4 pi rho r (A0 |u|)^2`` per metre
-of span (swim_model.flow). A rounded edge holds suction only up to a critical leading-edge suction parameter;
-beyond it the flow separates there (Ramesh et al., JFM 751, 2014). The step computes the parameter of its flow,
-``A0 = q_LE / (4 |u|)`` (``CirclePlane.leading_edge_suction_parameter``: the tangential velocity relative to the
-foil at the circle's leading-edge point; sin(alpha) in the steady Kutta flow, for every thickness), caps it as
-swim_model.flow caps its suction (``A0 / (1 + (A0 / A0_crit)^n)^(1/n)``, the same parameters), and takes the
+force holds the whole suction of the attached flow there: the thin aerofoil's ``4 pi rho r (A0 |u|)^2`` per metre of
+span (swim_model.flow). A rounded edge holds suction only up to a critical leading-edge suction parameter; beyond it
+the flow separates there (Ramesh et al., JFM 751, 2014). The step computes the parameter of its flow, ``A0 = q_LE /
+(4 |u|)`` (``CirclePlane.leading_edge_suction_parameter``: the tangential velocity relative to the foil at the
+circle's leading-edge point; sin(alpha) in the steady Kutta flow, for every thickness), caps it as swim_model.flow
+caps its suction (``A0 / (1 + (A0 / A0_crit)^n)^(1/n)``, swim_model.leading_edge, the same parameters), and takes the
 suction the edge cannot hold, ``4 pi rho r |u|^2 (A0^2 - capped^2)``, off the chordwise force. The vortices, the
-normal force and the moment are unchanged: it is a force on the foil, not a separated flow (no vortex is shed at
-the leading edge).
+normal force and the moment are unchanged: it is a force on the foil, not a separated flow (no vortex is shed at the
+leading edge).
 
 Force split (the integration rule): the total fluid force on the foil is ``F_Kirchhoff + F_v``, where
 ``F_Kirchhoff`` is the added-mass (ideal-flow) force of eq. 46 that swim_model's ideal model already applies
@@ -89,6 +89,8 @@ import numpy.typing as npt
 
 from swim_model.errors import StateError
 from swim_model.joukowski import JoukowskiFoil
+from swim_model.leading_edge import (CRITICAL_LEADING_EDGE_SUCTION, SPEED_REGULARIZATION_M_S, SUCTION_CAP_EXPONENT,
+                                     smooth_cap)
 from swim_model.vortex_force import CirclePlane, angular_impulse_from_terms, compiled, impulse_from_terms
 
 Pose = tuple[float, float, float]        # x_m, y_m (frame origin in the tank frame), theta_rad (chord angle)
@@ -168,14 +170,14 @@ class WakeParameters:
     # wall: its vorticity is in the boundary layer and it is absorbed into the bound circulation (module
     # docstring). Smaller than the gap of a vortex just shed at min_shed_distance_m behind the cusp (1.8 mm on the
     # rig's foil). 0: never absorb
-    critical_leading_edge_suction: float | None = 0.18
+    critical_leading_edge_suction: float | None = CRITICAL_LEADING_EDGE_SUCTION
     # the leading edge holds suction up to this leading-edge suction parameter, beyond it the suction is lost
-    # (module docstring, "Leading-edge suction"); swim_model.flow's FlowParameters value, the same edge (Ramesh
-    # et al., JFM 751, 2014, rounded-nose section at Re ~ 1e4). None: the attached flow's whole suction
-    suction_cap_exponent: int = 8
-    # assumed: as FlowParameters.suction_cap_exponent, the smooth cap LESP / (1 + (LESP/LESP_crit)^n)^(1/n)
-    speed_regularization_m_s: float = 1.0e-7
-    # assumed: as FlowParameters.speed_regularization_m_s, the speed |u| = sqrt(U^2 + V^2 + eps^2)
+    # (module docstring, "Leading-edge suction"); the reduced model's edge (swim_model.leading_edge). None: the
+    # attached flow's whole suction
+    suction_cap_exponent: int = SUCTION_CAP_EXPONENT
+    # assumed: the order of the smooth cap LESP / (1 + (LESP/LESP_crit)^n)^(1/n) (swim_model.leading_edge)
+    speed_regularization_m_s: float = SPEED_REGULARIZATION_M_S
+    # assumed: eps in the speed |u| = sqrt(U^2 + V^2 + eps^2) (swim_model.leading_edge)
     kinematic_viscosity_m2_s: float = 0.0
     # the fluid's kinematic viscosity, by which each vortex's core grows with its age (viscous core growth, module
     # docstring); water at 20 C: 1.0e-6. Assumed 0 by default: the inviscid wake, every core core_radius_m for
@@ -448,8 +450,7 @@ class Wake:
         u, v, _ = self._velocity
         speed = math.sqrt(u * u + v * v + self.params.speed_regularization_m_s ** 2)
         lesp = plane.leading_edge_suction_parameter(known_le, self._velocity, speed)
-        n = self.params.suction_cap_exponent
-        capped = lesp / (1.0 + (lesp / critical) ** n) ** (1.0 / n)
+        capped = smooth_cap(lesp, critical, self.params.suction_cap_exponent)
         lost_squared = lesp * lesp - capped * capped
         return float(4.0 * math.pi * self.params.rho_kg_m3 * plane.r_m * speed * speed * lost_squared)
 

@@ -20,7 +20,6 @@ from scipy.special import hankel2
 
 from swim_model import JoukowskiFoil
 from swim_model.errors import FoilGeometryError, StateError
-from swim_model.flow import FlowParameters
 from swim_model.joukowski import ellipse_map
 from swim_model.vortex_force import CirclePlane, steady_kutta_circulation
 from swim_model.wake import LAMB_OSEEN_CORE_GROWTH, Wake, WakeParameters
@@ -294,11 +293,7 @@ def test_below_the_critical_parameter_the_suction_is_whole():
         assert (c.fx_n, c.fy_n, c.moment_n_m) == pytest.approx((a.fx_n, a.fy_n, a.moment_n_m), rel=1e-6, abs=1e-9)
 
 
-def test_the_wake_and_the_reduced_model_share_the_leading_edges_cap():
-    flow, wake = FlowParameters(), WakeParameters()
-    assert wake.critical_leading_edge_suction == flow.critical_leading_edge_suction
-    assert wake.suction_cap_exponent == flow.suction_cap_exponent
-    assert wake.speed_regularization_m_s == flow.speed_regularization_m_s
+def test_the_leading_edges_cap_is_validated():
     for critical in (0.0, -0.1, float("nan")):
         with pytest.raises(StateError, match="critical_leading_edge_suction"):
             WakeParameters(critical_leading_edge_suction=critical)
