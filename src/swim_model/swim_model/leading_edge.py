@@ -6,8 +6,8 @@ separates there (Ramesh, Gopalarathnam, Granlund, Ol & Edwards, J. Fluid Mech. 7
 suction smoothly, x / (1 + (x / limit)^n)^(1/n), so that the optimizer has derivatives everywhere: flow caps the
 suction velocity at CRITICAL_LEADING_EDGE_SUCTION |u|, the wake its LESP at CRITICAL_LEADING_EDGE_SUCTION.
 
-Pure arithmetic: smooth_cap works on floats and on CasADi expressions alike, and this module sits below
-both models (flow imports the towed foil, which imports the wake).
+Pure arithmetic: smooth_cap works on floats and on CasADi expressions alike, and this module sits below both models
+(flow imports the towed foil, which imports the wake).
 """
 from __future__ import annotations
 
@@ -23,6 +23,7 @@ SUCTION_CAP_EXPONENT = 8
 #: (eps/|u|)^2 (1e-12 at 0.1 m/s); the forces' second derivatives stay bounded as eps -> 0 (they are homogeneous of
 #: degree 2)
 SPEED_REGULARIZATION_M_S = 1.0e-7
+
 
 def smooth_cap(value: Any, limit: Any, exponent: int) -> Any:
     """value / (1 + (value / limit)^exponent)^(1/exponent): value where |value| << limit, limit in size where

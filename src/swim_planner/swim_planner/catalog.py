@@ -80,9 +80,9 @@ CIRCULATORY_LQR_WEIGHTS = LqrWeights(rest_lateral_terminal_weight=1.0e5, rest_al
 # the middle of the lane keeping's decelerate, 2570 /m^2): without it the lane keeping ends 1-2 cm off its lane, the
 # carriage held by the rails' friction and the tilt where the braking strokes left it; in the vortex wake 3e4-3e5 end
 # it within 0.5 cm, 3e3 does not. The hub's at the constrained ones' (1/rad^2; assumed: about 240 times e_alpha's
-# entry of P in the middle of the E = 0.10 decelerate, 424 /rad^2): without it the constrained runs end 17-37 mrad
-# behind their plan on average in the vortex wake, with it 0.4-0.6 mrad; 3e4-3e5 do as well, 1e3 halves the lag
-# (docs/experiments.md)
+# entry of P in the middle of the E = 0.10 decelerate, 424 /rad^2): without it the constrained runs in the vortex
+# wake end 19-39 mrad behind their plan at the median of each time scale (seeds 1-10), with it 0.4-0.6 mrad; 3e4
+# and 3e5 do as well, 1e3 (with 300 vortices) halves the lag (docs/experiments.md)
 CRUISE_CYCLE_S = 1.0                   # assumed: one stroke per second, as the paper's cruise figures
 
 
