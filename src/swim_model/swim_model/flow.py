@@ -70,7 +70,7 @@ import numpy.typing as npt
 from swim_model.errors import FlowModelError
 from swim_model.joukowski import AddedMass, JoukowskiFoil
 from swim_model.leading_edge import (CRITICAL_LEADING_EDGE_SUCTION, SPEED_REGULARIZATION_M_S, SUCTION_CAP_EXPONENT,
-                                     smooth_cap)
+                                     is_cap_exponent, smooth_cap)
 
 Array = npt.NDArray[np.float64]
 
@@ -139,7 +139,7 @@ class FlowParameters:
             raise FlowModelError("FlowParameters: the Wagner gains must sum to less than 1 (phi(0) > 0)")
         if not self.stall_angle_rad + 2.0 * self.stall_width_rad < math.pi / 2:
             raise FlowModelError("FlowParameters: stall_angle_rad + 2 stall_width_rad must stay below 90 deg")
-        if self.suction_cap_exponent < 2 or self.suction_cap_exponent % 2:
+        if not is_cap_exponent(self.suction_cap_exponent):
             raise FlowModelError("FlowParameters.suction_cap_exponent must be an even integer >= 2")
 
     def digest(self) -> str:

@@ -90,7 +90,7 @@ import numpy.typing as npt
 from swim_model.errors import StateError
 from swim_model.joukowski import JoukowskiFoil
 from swim_model.leading_edge import (CRITICAL_LEADING_EDGE_SUCTION, SPEED_REGULARIZATION_M_S, SUCTION_CAP_EXPONENT,
-                                     smooth_cap)
+                                     is_cap_exponent, smooth_cap)
 from swim_model.vortex_force import CirclePlane, angular_impulse_from_terms, compiled, impulse_from_terms
 
 Pose = tuple[float, float, float]        # x_m, y_m (frame origin in the tank frame), theta_rad (chord angle)
@@ -197,7 +197,7 @@ class WakeParameters:
         critical = self.critical_leading_edge_suction
         if critical is not None and not (math.isfinite(critical) and critical > 0.0):
             raise StateError(f"WakeParameters.critical_leading_edge_suction must be positive or None, got {critical!r}")
-        if self.suction_cap_exponent < 2 or self.suction_cap_exponent % 2:
+        if not is_cap_exponent(self.suction_cap_exponent):
             raise StateError("WakeParameters.suction_cap_exponent must be an even integer >= 2")
         if not (math.isfinite(self.speed_regularization_m_s) and self.speed_regularization_m_s > 0.0):
             raise StateError("WakeParameters.speed_regularization_m_s must be positive and finite")

@@ -6,8 +6,9 @@ import casadi as ca
 import pytest
 
 from swim_model.flow import FlowParameters
+from swim_model.errors import FlowModelError, StateError
 from swim_model.leading_edge import (CRITICAL_LEADING_EDGE_SUCTION, SPEED_REGULARIZATION_M_S, SUCTION_CAP_EXPONENT,
-                                     smooth_cap)
+                                     is_cap_exponent, smooth_cap)
 from swim_model.wake import WakeParameters
 
 LIMIT = CRITICAL_LEADING_EDGE_SUCTION
@@ -50,3 +51,21 @@ def test_both_models_default_to_the_shared_edge():
     assert flow.critical_leading_edge_suction == wake.critical_leading_edge_suction == CRITICAL_LEADING_EDGE_SUCTION
     assert flow.suction_cap_exponent == wake.suction_cap_exponent == SUCTION_CAP_EXPONENT
     assert flow.speed_regularization_m_s == wake.speed_regularization_m_s == SPEED_REGULARIZATION_M_S
+
+
+@pytest.mark.parametrize("exponent", [2, 4, 8, 16])
+def test_even_integers_from_two_are_cap_exponents(exponent):
+    assert is_cap_exponent(exponent)
+    assert FlowParameters(suction_cap_exponent=exponent).suction_cap_exponent == exponent
+    assert WakeParameters(suction_cap_exponent=exponent).suction_cap_exponent == exponent
+
+
+@pytest.mark.parametrize("exponent", [0, -2, 1, 3, 4.0, True, "8", None])
+def test_both_models_refuse_what_is_not_a_cap_exponent(exponent):
+    """An odd exponent leaves the cap undefined for suction below -limit; a float, a bool or a string is not the
+    integer the field is."""
+    assert not is_cap_exponent(exponent)
+    with pytest.raises(FlowModelError, match="suction_cap_exponent"):
+        FlowParameters(suction_cap_exponent=exponent)
+    with pytest.raises(StateError, match="suction_cap_exponent"):
+        WakeParameters(suction_cap_exponent=exponent)
