@@ -4,7 +4,9 @@ From the tracking_state topic (reference and measured q each control period) and
 - two-norms of the errors, ||e||_2 = sqrt(int e(t)^2 dt): longitudinal R_d (alpha - alpha_d) in m, lateral
   R - R_d in m, Cartesian |p - p_d| of the platform's position p = R (cos alpha, sin alpha) in m;
 - the final lateral offset and final alpha error, the duration, peak |torque| per motor, the fraction of
-  periods with a saturated motor, and the energy used, int (|tau_h phidot| + |tau_p thetadot|) dt in J (motors
+  periods with a saturated motor, the periods with the heave or the pitch at a hard limit (at the rig's stop: by
+  default the shipped bridge file's limits, which sim_node's stops also take; --bridge-config for another rig's),
+  and the energy used, int (|tau_h phidot| + |tau_p thetadot|) dt in J (motors
   do not take energy back, so negative power is counted as spent too).
 
 Any rosbag2 bag opens (swim-demo's, swim-record's, one recorded by `ros2 bag record`, Humble's included; MCAP or
@@ -34,6 +36,7 @@ from swim_bringup.bag import (RUN_TOPICS, BagError, BagInfo, bag_info, read_mess
                                undecodable_topics)
 from swim_bringup.reports import BridgeMeasures, RunAnalysis, RunMeasures
 from swim_controller.measures import two_norm
+from swim_hw_bridge.conversions import BridgeConfigError, HardLimits, load_bridge_config
 
 
 @dataclasses.dataclass
@@ -48,6 +51,10 @@ class Run:
     lane_radius_m: float
     sliding_mode_enabled: bool
 
+
+#: a foil joint within this of a hard limit is at its stop: about one encoder count there (the heave's 512 lines, x4,
+#: through 43:1: 7.1e-5 rad; the pitch's through 25:1: 1.2e-4 rad); the simulator's stops hold a joint at the limit
+HARD_STOP_TOLERANCE_RAD = 1.0e-4
 
 #: swim-analyze's exit status: every bag analysed in full (the run's measures) ...
 EXIT_FULL_REPORT = 0
@@ -126,7 +133,20 @@ def _radius(run: Run, q: np.ndarray) -> np.ndarray:
     return q[:, run.joint_names.index("R")] if "R" in run.joint_names else np.full(len(q), run.lane_radius_m)
 
 
-def measures(run: Run) -> RunMeasures:
+def hard_stop_periods(run: Run, hard_limits_rad: HardLimits) -> int:
+    """The periods in which the heave or the pitch (the run's last two joints) is at or past one of its hard limits
+    ((heave lower, upper), (pitch lower, upper), rad), to within HARD_STOP_TOLERANCE_RAD."""
+    (heave_lower, heave_upper), (pitch_lower, pitch_upper) = hard_limits_rad
+    foil = run.q[:, -2:]
+    at_stop = ((foil <= np.array([heave_lower, pitch_lower]) + HARD_STOP_TOLERANCE_RAD)
+               | (foil >= np.array([heave_upper, pitch_upper]) - HARD_STOP_TOLERANCE_RAD))
+    return int(at_stop.any(axis=1).sum())
+
+
+def measures(run: Run, hard_limits_rad: Optional[HardLimits] = None) -> RunMeasures:
+    """The run's measures; its hard stops are hard_limits_rad's, by default the shipped bridge file's."""
+    if hard_limits_rad is None:
+        hard_limits_rad = load_bridge_config().hard_limits_rad
     alpha = run.joint_names.index("alpha")
     radius, radius_reference = _radius(run, run.q), _radius(run, run.q_reference)
     alpha_error = run.q[:, alpha] - run.q_reference[:, alpha]
@@ -144,6 +164,7 @@ def measures(run: Run) -> RunMeasures:
         peak_heave_torque_n_m=float(np.abs(run.torque[:, 0]).max()),
         peak_pitch_torque_n_m=float(np.abs(run.torque[:, 1]).max()),
         saturated_fraction=float(run.saturated.any(axis=1).mean()),
+        hard_stop_periods=hard_stop_periods(run, hard_limits_rad),
         energy_used_j=float(np.trapezoid(power, run.time_s)),
         sliding_mode_enabled=run.sliding_mode_enabled,
         periods=int(len(run.time_s)),
@@ -171,9 +192,10 @@ def bridge_measures(bag_path: Path) -> Optional[BridgeMeasures]:
     return BridgeMeasures(bridge_faults="|".join(sorted(faults)) or "NONE", bridge_overruns=overruns)
 
 
-def analyze(bag_path: Path) -> RunAnalysis:
-    """The measures of the last plan tracked in the bag, and the bridge's if a bridge ran."""
-    return RunAnalysis(measures(load_run(bag_path)), bridge_measures(bag_path))
+def analyze(bag_path: Path, hard_limits_rad: Optional[HardLimits] = None) -> RunAnalysis:
+    """The measures of the last plan tracked in the bag (hard_limits_rad: as measures'), and the bridge's if a
+    bridge ran."""
+    return RunAnalysis(measures(load_run(bag_path), hard_limits_rad), bridge_measures(bag_path))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -272,9 +294,10 @@ class BagAnalysis:
                 "missing": list(self.missing)}
 
 
-def analyze_bag(bag_path: Path) -> BagAnalysis:
-    """All that swim-analyze can tell of the bag at bag_path (a bag folder, or one .mcap or .db3 file). BagError if
-    there is no readable bag there; anything else the bag lacks or holds unreadably is named in `missing`."""
+def analyze_bag(bag_path: Path, hard_limits_rad: Optional[HardLimits] = None) -> BagAnalysis:
+    """All that swim-analyze can tell of the bag at bag_path (a bag folder, or one .mcap or .db3 file; hard_limits_rad:
+    as measures'). BagError if there is no readable bag there; anything else the bag lacks or holds unreadably is
+    named in `missing`."""
     info = bag_info(bag_path)
     known_types = swim_typestore().fielddefs
     missing = []
@@ -288,7 +311,7 @@ def analyze_bag(bag_path: Path) -> BagAnalysis:
         missing.append(f"/joint_states: {err} (no joint motion)")
     run = None
     try:
-        run = analyze(bag_path)
+        run = analyze(bag_path, hard_limits_rad)
     except MissingTopic as err:
         hint = ": the tracker publishes it while it executes a plan" if err.topic == "/tracking_state" else ""
         missing.append(f"{err.topic}: {err.reason} (no run measures{hint})")
@@ -453,12 +476,20 @@ def main(argv: list[str] | None = None) -> int:
                         help="rosbag2 bags: folders, or single .mcap or .db3 files (several: a side-by-side table)")
     parser.add_argument("--output", type=Path, default=None,
                         help="folder for bag_summary.json, report.json and figures (one bag)")
+    parser.add_argument("--bridge-config", type=Path, default=None,
+                        help="the rig's bridge file, whose hard limits hard_stop_periods counts (default: the shipped "
+                             "one, which sim_node's stops also take)")
     args = parser.parse_args(argv)
+    try:
+        hard_limits_rad = load_bridge_config(args.bridge_config).hard_limits_rad
+    except BridgeConfigError as err:
+        print(f"swim-analyze: --bridge-config: {err}", file=sys.stderr)
+        return EXIT_UNREADABLE
     status = EXIT_FULL_REPORT
     analyses: dict[str, BagAnalysis] = {}
     for bag in args.bags:
         try:
-            analyses[_label(bag)] = analysis = analyze_bag(bag)
+            analyses[_label(bag)] = analysis = analyze_bag(bag, hard_limits_rad)
         except BagError as err:
             print(f"swim-analyze: {err}", file=sys.stderr)
             status = max(status, EXIT_UNREADABLE)

@@ -27,7 +27,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Mapping, Optional, Sequence, Union
+from typing import Any, Mapping, Optional, Sequence, Union
 
 from swim_bringup.parallel import Outcome, run_all
 from swim_bringup.recorded_run import (PAPER_CONSTRAINED, PAPER_LANE_KEEPING, RUN_TOLERANCES,
@@ -143,14 +143,15 @@ def compare(experiment: Experiment, runs: Mapping[int, SlidingModePair[SeedRun]]
     if not paired:
         return None
 
-    def per_seed(value: str, sliding_mode: bool) -> list[Optional[float]]:   # value: a field of RunMeasures
+    # value: a field of RunMeasures, a float or (hard_stop_periods) an int
+    def per_seed(value: str, sliding_mode: bool) -> list[Optional[Any]]:
         reports = [runs[seed].sliding_on if sliding_mode else runs[seed].sliding_off for seed in seeds]
         return [getattr(r.measures, value) if isinstance(r, RunReport) else None for r in reports]
 
-    def values(value: str) -> SlidingModePair[list[Optional[float]]]:
+    def values(value: str) -> SlidingModePair[list[Optional[Any]]]:
         return SlidingModePair(per_seed(value, True), per_seed(value, False))
 
-    def largest(pair: SlidingModePair[list[Optional[float]]]) -> SlidingModePair[float]:
+    def largest(pair: SlidingModePair[list[Optional[Any]]]) -> SlidingModePair[Any]:
         return SlidingModePair(*(largest_magnitude([v for v in side if v is not None])
                                  for side in (pair.sliding_on, pair.sliding_off)))
 
@@ -161,7 +162,7 @@ def compare(experiment: Experiment, runs: Mapping[int, SlidingModePair[SeedRun]]
     outcomes = SlidingModePair([run_outcome(runs[seed].sliding_on) for seed in seeds],
                                [run_outcome(runs[seed].sliding_off) for seed in seeds])
     by_seed = SeedRuns(seeds, outcomes, values("duration_s"), values("final_lateral_offset_m"),
-                       values("final_alpha_error_rad"), values("saturated_fraction"),
+                       values("final_alpha_error_rad"), values("saturated_fraction"), values("hard_stop_periods"),
                        {name: values(name) for name in NORMS})
     statistics = {name: NormStatistics.of(paired_values(by_seed.two_norms[name], True),
                                           paired_values(by_seed.two_norms[name], False),
@@ -184,6 +185,7 @@ def compare(experiment: Experiment, runs: Mapping[int, SlidingModePair[SeedRun]]
         final_lateral_offset_m=largest(by_seed.final_lateral_offset_m),
         final_alpha_error_rad=largest(by_seed.final_alpha_error_rad),
         saturated_fraction=largest(by_seed.saturated_fraction),
+        hard_stop_periods=largest(by_seed.hard_stop_periods),
         two_norms={name: norm(name) for name in NORMS},
         succeeded=outcome.sliding_on == outcome.sliding_off == "ok",
         outcome=outcome,
@@ -215,14 +217,15 @@ def results_table(rows: Sequence[ExperimentRow], pipeline: str) -> str:
     seeds = sorted({seed for row in rows for seed in row.per_seed.seeds})
     lines = [f"## Pipeline {pipeline}: seeds {', '.join(map(str, seeds))}", "",
              "| experiment | outcome (on/off) | duration s (paper) | final lateral offset cm, largest (on/off) "
-             "| final alpha error mrad, largest (on/off) |",
-             "|---|---|---|---|---|"]
+             "| final alpha error mrad, largest (on/off) | periods at a hard stop, most (on/off) |",
+             "|---|---|---|---|---|---|"]
     for row in rows:
-        offset, alpha = row.final_lateral_offset_m, row.final_alpha_error_rad
+        offset, alpha, stops = row.final_lateral_offset_m, row.final_alpha_error_rad, row.hard_stop_periods
         lines.append(f"| {row.experiment} | {row.outcome.sliding_on}/{row.outcome.sliding_off} "
                      f"| {row.duration_s:.2f} ({row.paper_duration_s:.2f}) "
                      f"| {100 * offset.sliding_on:+.2f}/{100 * offset.sliding_off:+.2f} "
-                     f"| {1000 * alpha.sliding_on:+.1f}/{1000 * alpha.sliding_off:+.1f} |")
+                     f"| {1000 * alpha.sliding_on:+.1f}/{1000 * alpha.sliding_off:+.1f} "
+                     f"| {stops.sliding_on}/{stops.sliding_off} |")
     lines += ["", "Two-norms, m s^0.5: mean ± sample standard deviation over the paired seeds; sliding mode's change "
               "(on - off) / off per seed, its mean and the paired 95 % t interval of the mean (n - 1 degrees of "
               "freedom); the paper's change beside it.", "",

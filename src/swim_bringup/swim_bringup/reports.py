@@ -44,6 +44,7 @@ class RunMeasures:
     peak_heave_torque_n_m: float
     peak_pitch_torque_n_m: float
     saturated_fraction: float                     # of the periods, with either motor saturated
+    hard_stop_periods: int                        # periods with the heave or the pitch at a hard limit (its stop)
     energy_used_j: float
     sliding_mode_enabled: bool
     periods: int
@@ -151,6 +152,7 @@ class SeedRuns:
     final_lateral_offset_m: SlidingModePair[list[Optional[float]]]
     final_alpha_error_rad: SlidingModePair[list[Optional[float]]]
     saturated_fraction: SlidingModePair[list[Optional[float]]]
+    hard_stop_periods: SlidingModePair[list[Optional[int]]]
     two_norms: dict[str, SlidingModePair[list[Optional[float]]]]   # m s^0.5, by measure
 
     @classmethod
@@ -158,7 +160,8 @@ class SeedRuns:
         _checked_keys(data, _field_names(cls), "an experiment's runs by seed")
         return cls(data["seeds"], _pair(data["outcome"]), _pair(data["duration_s"]),
                    _pair(data["final_lateral_offset_m"]), _pair(data["final_alpha_error_rad"]),
-                   _pair(data["saturated_fraction"]), {name: _pair(value) for name, value in data["two_norms"].items()})
+                   _pair(data["saturated_fraction"]), _pair(data["hard_stop_periods"]),
+                   {name: _pair(value) for name, value in data["two_norms"].items()})
 
 
 def _pair(value: Mapping[str, Any]) -> SlidingModePair[Any]:
@@ -192,6 +195,7 @@ class ExperimentRow:
     final_lateral_offset_m: SlidingModePair[float]
     final_alpha_error_rad: SlidingModePair[float]
     saturated_fraction: SlidingModePair[float]
+    hard_stop_periods: SlidingModePair[int]   # periods with the heave or the pitch at its stop
     two_norms: dict[str, NormComparison]
     succeeded: bool                  # every run of every seed
     outcome: SlidingModePair[str]    # "ok", or why runs failed ("seed k: why; ...")
@@ -211,7 +215,8 @@ class ExperimentRow:
             return NormComparison(**value)
         return cls(data["experiment"], data["time_scale"], data["duration_s"], data["paper_duration_s"],
                    _pair(data["final_lateral_offset_m"]), _pair(data["final_alpha_error_rad"]),
-                   _pair(data["saturated_fraction"]), {name: norm(v) for name, v in data["two_norms"].items()},
+                   _pair(data["saturated_fraction"]), _pair(data["hard_stop_periods"]),
+                   {name: norm(v) for name, v in data["two_norms"].items()},
                    data["succeeded"], _pair(data["outcome"]), SeedRuns.from_json(data["per_seed"]),
                    data["paired_seeds"], {name: _norm_statistics(v) for name, v in data["statistics"].items()})
 

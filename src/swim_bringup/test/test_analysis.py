@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from conftest import tracking_state_cdr
 
-from swim_bringup.analysis import Run, measures, summary_table
+from swim_bringup.analysis import HARD_STOP_TOLERANCE_RAD, Run, measures, summary_table
 from swim_bringup.reports import RunAnalysis
 from swim_ros.processes import NodeSpec
 
@@ -30,6 +30,31 @@ def test_an_alpha_offset_is_a_chord_of_the_lane():
     assert report.longitudinal_error_two_norm_m_s05 == pytest.approx(0.43 * 0.1 * 2.0)
     assert report.cartesian_error_two_norm_m_s05 == pytest.approx(2 * 0.43 * math.sin(0.05) * 2.0)
     assert report.lateral_error_two_norm_m_s05 == 0.0 and report.final_alpha_error_rad == pytest.approx(0.1)
+
+
+def test_a_heave_held_at_its_stop_counts_the_periods_there():
+    """A heave 1.2 sin t clamped at the shipped stops (+-60 degrees, the bridge file's) sits at one where
+    |sin t| >= (pi / 3) / 1.2: over [0, 4] s, pi - 2 asin((pi / 3) / 1.2) s of the 1 ms periods."""
+    run = synthetic_run(constrained=True)
+    assert measures(run).hard_stop_periods == 0          # sin t and cos t stay inside both joints' stops
+    limit_rad = math.pi / 3
+    run.q[:, 1] = np.clip(1.2 * np.sin(run.time_s), -limit_rad, limit_rad)
+    expected_s = math.pi - 2.0 * math.asin(limit_rad / 1.2)
+    assert measures(run).hard_stop_periods == pytest.approx(expected_s / 1e-3, abs=2)
+
+
+def test_the_stops_are_the_limits_given_to_within_the_encoders_count():
+    run = synthetic_run()                                # free: (alpha, R, phi = sin t, theta = cos t)
+    # phi = sin t with stops at +-0.5 rad: from pi/6 to 5 pi/6 and from 7 pi/6 to the run's end, 4 s
+    narrow = ((-0.5, 0.5), (-2.0, 2.0))
+    expected_s = 2.0 * math.pi / 3.0 + (4.0 - 7.0 * math.pi / 6.0)
+    assert measures(run, narrow).hard_stop_periods == pytest.approx(expected_s / 1e-3, abs=2)
+    # a joint within HARD_STOP_TOLERANCE_RAD of its limit is at its stop, twice that inside is not; past it is
+    run.q[:, 2:] = 0.0
+    run.q[10, 2] = 0.5 - 0.5 * HARD_STOP_TOLERANCE_RAD
+    run.q[20, 2] = 0.5 - 2.0 * HARD_STOP_TOLERANCE_RAD
+    run.q[30, 3] = -2.1
+    assert measures(run, narrow).hard_stop_periods == 2
 
 
 def test_a_lateral_offset_and_the_energy_used():

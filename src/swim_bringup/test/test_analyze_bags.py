@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from conftest import tracking_state_cdr
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import get_types_from_msg
@@ -16,6 +17,7 @@ from rosbags.typesys import get_types_from_msg
 from swim_bringup.analysis import (EXIT_FULL_REPORT, EXIT_PARTIAL_REPORT, EXIT_UNREADABLE, analyze, analyze_bag,
                                    main)
 from swim_bringup.bag import RUN_TOPICS, BagWriter, bag_info, read_messages, swim_typestore
+from swim_hw_bridge.conversions import default_config_path
 
 PERIOD_S, PERIODS = 0.008, 251                  # 2 s of tracking at the controller's period
 LANE_M, ALPHA_OFFSET_RAD = 0.43, 0.02
@@ -84,6 +86,26 @@ def test_a_bag_of_relative_topic_names_is_measured_as_one_of_full_names(tmp_path
     alpha = next(j for j in motion.joints if j.joint_name == "alpha")
     assert (alpha.min_position, alpha.max_position) == pytest.approx(
         (-ALPHA_OFFSET_RAD, 0.3 * (PERIODS - 1) * PERIOD_S - ALPHA_OFFSET_RAD))
+
+
+def test_another_rigs_stops_come_from_its_bridge_file(tmp_path, capsys):
+    """--bridge-config: the heave sin t (rad) of the recorded run reaches another rig's 45 degree stop from
+    t = asin(pi / 4) on (the shipped 60 degree one, never); a bridge file that cannot be read is refused, nothing
+    analysed."""
+    bag = record_constrained_run(tmp_path / "run", {t: t for t in MEASURED})
+    assert analyze(bag).measures.hard_stop_periods == 0
+    document = yaml.safe_load(default_config_path().read_text())
+    document["parameters"]["heave_upper_hard_limit"]["value"] = 45
+    other_rig = tmp_path / "other_rig.yaml"
+    other_rig.write_text(yaml.safe_dump(document))
+    assert main([str(bag), "--bridge-config", str(other_rig), "--output", str(tmp_path / "out")]) == EXIT_FULL_REPORT
+    report = json.loads((tmp_path / "out" / "report.json").read_text())
+    times_s = np.arange(PERIODS) * PERIOD_S
+    assert report["hard_stop_periods"] == np.sum(np.sin(times_s) >= math.pi / 4 - 1e-4) > 0
+    capsys.readouterr()
+    assert main([str(bag), "--bridge-config", str(tmp_path / "no_such.yaml")]) == EXIT_UNREADABLE
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.startswith("swim-analyze: --bridge-config: ")
 
 
 def test_a_namespaced_plan_of_another_type_is_named_not_read(tmp_path, capsys):

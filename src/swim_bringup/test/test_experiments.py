@@ -32,12 +32,13 @@ def test_every_experiment_lasts_the_papers_nominal_time():
 
 
 def _report(scale: float, offset_m: float, error_code: int = 0, error_string: str = "plan completed",
-            bridge_faults: str | None = None) -> RunReport:
+            bridge_faults: str | None = None, hard_stop_periods: int = 0) -> RunReport:
     """A run of 25 s whose two-norms are scale, 2 scale and 3 scale m s^0.5, ending offset_m off its lane."""
     norms = {norm: scale * (i + 1) for i, norm in enumerate(NORMS)}
     measures = RunMeasures(duration_s=25.0, final_lateral_offset_m=offset_m, final_alpha_error_rad=0.01,
                            peak_heave_torque_n_m=1.0, peak_pitch_torque_n_m=0.2, saturated_fraction=0.0,
-                           energy_used_j=10.0, sliding_mode_enabled=True, periods=3126, **norms)
+                           hard_stop_periods=hard_stop_periods, energy_used_j=10.0, sliding_mode_enabled=True,
+                           periods=3126, **norms)
     bridge = None if bridge_faults is None else BridgeMeasures(bridge_faults=bridge_faults, bridge_overruns=0)
     return RunReport(measures, bridge, TrackerResult(error_code, error_string, 0.01, 25.0), 10.0)
 
@@ -77,6 +78,18 @@ def test_each_value_is_the_seeds_of_largest_magnitude_with_its_sign():
     assert row.final_lateral_offset_m == SlidingModePair(-0.004, -0.005)
     assert row.per_seed.final_lateral_offset_m == SlidingModePair([0.002, -0.004, 0.001], [-0.001, 0.003, -0.005])
     assert row.per_seed.seeds == [1, 2, 3]
+
+
+def test_the_hard_stop_periods_are_the_seeds_most_and_shown():
+    experiment = paper_experiments()[0]
+    stops = {1: (0, 12), 2: (3, 0), 3: (0, 0)}
+    row = compare(experiment, {seed: _pair(_report(1.0, 0.0, hard_stop_periods=on),
+                                           _report(1.0, 0.0, hard_stop_periods=off))
+                               for seed, (on, off) in stops.items()})
+    assert row.hard_stop_periods == SlidingModePair(3, 12)
+    assert row.per_seed.hard_stop_periods == SlidingModePair([0, 3, 0], [12, 0, 0])
+    header, _, line = results_table([row], "paper").splitlines()[2:5]
+    assert header.endswith("| periods at a hard stop, most (on/off) |") and line.endswith("| 3/12 |")
 
 
 def test_the_outcome_is_ok_only_when_every_seeds_is():

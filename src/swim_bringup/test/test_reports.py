@@ -16,19 +16,19 @@ from swim_bringup.reports import (ExperimentsSummary, FailedRun, ReportError, Ru
 #: report.json's keys, in order, as swim-demo writes them (the file's readers and the docs rely on them)
 MEASURE_KEYS = ["duration_s", "longitudinal_error_two_norm_m_s05", "lateral_error_two_norm_m_s05",
                 "cartesian_error_two_norm_m_s05", "final_alpha_error_rad", "final_lateral_offset_m",
-                "peak_heave_torque_n_m", "peak_pitch_torque_n_m", "saturated_fraction", "energy_used_j",
-                "sliding_mode_enabled", "periods"]
+                "peak_heave_torque_n_m", "peak_pitch_torque_n_m", "saturated_fraction", "hard_stop_periods",
+                "energy_used_j", "sliding_mode_enabled", "periods"]
 BRIDGE_KEYS = ["bridge_faults", "bridge_overruns"]
 RESULT_KEYS = ["error_code", "error_string", "final_alpha_error_rad", "duration_s"]
 #: experiments.json's keys: a row (the keys of one seed's row, then the seeds'), its pairs of runs, its two-norm
 #: comparisons, its runs by seed and its statistics
 ROW_KEYS = ["experiment", "time_scale", "duration_s", "paper_duration_s", "final_lateral_offset_m",
-            "final_alpha_error_rad", "saturated_fraction", "two_norms", "succeeded", "outcome", "per_seed",
-            "paired_seeds", "statistics"]
+            "final_alpha_error_rad", "saturated_fraction", "hard_stop_periods", "two_norms", "succeeded", "outcome",
+            "per_seed", "paired_seeds", "statistics"]
 PAIR_KEYS = ["sliding_on", "sliding_off"]
 NORM_KEYS = ["sliding_on", "sliding_off", "change", "paper_change"]
 SEED_KEYS = ["seeds", "outcome", "duration_s", "final_lateral_offset_m", "final_alpha_error_rad",
-             "saturated_fraction", "two_norms"]
+             "saturated_fraction", "hard_stop_periods", "two_norms"]
 STATISTICS_KEYS = ["sliding_on", "sliding_off", "change", "paper_change"]
 SPREAD_KEYS = ["mean", "std"]
 CHANGE_KEYS = ["per_seed", "mean", "interval", "excludes_zero"]
@@ -107,7 +107,8 @@ def test_experiments_json_keeps_its_keys_and_reads_back(tmp_path):
     assert [list(failure) for failure in data["failed_runs"]] == [["run", "reason"]]
     (written,) = data["experiments"]
     assert list(written) == ROW_KEYS
-    for key in ("final_lateral_offset_m", "final_alpha_error_rad", "saturated_fraction", "outcome"):
+    for key in ("final_lateral_offset_m", "final_alpha_error_rad", "saturated_fraction", "hard_stop_periods",
+                "outcome"):
         assert list(written[key]) == PAIR_KEYS, key
         assert list(written["per_seed"][key]) == PAIR_KEYS, key
     assert list(written["two_norms"]) == NORMS and list(written["statistics"]) == NORMS

@@ -80,6 +80,10 @@ _SCHEMA: dict[str, tuple[str, str]] = {
 }
 
 
+#: ((heave lower, upper), (pitch lower, upper)) joint limits, rad
+HardLimits = tuple[tuple[float, float], tuple[float, float]]
+
+
 class BridgeConfigError(ValueError):
     """The bridge parameter file is missing an entry, names a wrong unit, or holds an impossible value."""
 
@@ -175,6 +179,12 @@ class BridgeConfig:
     @property
     def torque_limits_n_m(self) -> tuple[float, float]:
         return (self.heave_torque_limit_n_m, self.pitch_torque_limit_n_m)
+
+    @property
+    def hard_limits_rad(self) -> HardLimits:
+        """((heave lower, upper), (pitch lower, upper)): where the rig's stops hold the joints, rad."""
+        return ((self.heave_lower_hard_limit_rad, self.heave_upper_hard_limit_rad),
+                (self.pitch_lower_hard_limit_rad, self.pitch_upper_hard_limit_rad))
 
     @property
     def current_limits_a(self) -> tuple[float, float]:

@@ -53,6 +53,7 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
+from swim_hw_bridge.conversions import HardLimits
 from swim_model import RigParameters, StateError, VehicleModel, codegen
 from swim_model.wake_coupling import FLOWS, MODEL_FLOWS, WakeCoupling, separation_drag
 from swim_sim.disturbances import GRAVITY_M_S2, Disturbances
@@ -180,10 +181,6 @@ def _period(step: ca.Function, name: str, nq: int, nx: int, substeps: int) -> ca
     highest = ca.vertcat(*(ca.mmax(states[i, :]) for i in range(nq)))
     lowest = ca.vertcat(*(ca.mmin(states[i, :]) for i in range(nq)))
     return ca.Function(name, [x0, *held_inputs], [states[:, -1], crossing, highest, lowest])
-
-
-#: (lower, upper) limits of (heave, pitch), rad
-HardLimits = tuple[tuple[float, float], tuple[float, float]]
 
 
 class Plant:

@@ -72,7 +72,7 @@ from swim_ros.parameters import (ParameterSpec, ParameterValue, check_parameters
                                  one_of)
 from swim_ros.qos import per_period_publisher, per_period_subscription
 from swim_sim.disturbances import Disturbances
-from swim_sim.plant import FLOWS, HardLimits, Plant, SimulationError, vehicle_model
+from swim_sim.plant import FLOWS, Plant, SimulationError, vehicle_model
 from swim_sim.sensors import SensorNoise, Sensors
 from swim_sim.wake_coupling import WakeCoupling, parameter_defaults, parameters_from_values
 
@@ -133,12 +133,6 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
 )
 
 
-def hard_limits_rad(config: BridgeConfig) -> HardLimits:
-    """((heave lower, upper), (pitch lower, upper)) hard limits of the bridge file, rad."""
-    return ((config.heave_lower_hard_limit_rad, config.heave_upper_hard_limit_rad),
-            (config.pitch_lower_hard_limit_rad, config.pitch_upper_hard_limit_rad))
-
-
 @dataclasses.dataclass(frozen=True)
 class StateBounds:
     """What set_state accepts, per coordinate name: (lower, upper) positions and the largest speed, each with
@@ -195,7 +189,7 @@ class SimNode(Node):
         if flow == "wake":
             wake = WakeCoupling(model, parameters_from_values({n: value(f"wake.{n}") for n in parameter_defaults()}))
         self.plant = Plant(model, disturbances, value("sample_period_s"), value("substeps"), value("seed"), wake,
-                           hard_limits_rad(bridge_config), flow=flow)
+                           bridge_config.hard_limits_rad, flow=flow)
         self.state_bounds = StateBounds.of(self.plant, bridge_config)
         self.sensors = Sensors(model, self._sensor_noise({}), self.plant.sample_period_s)
         self.start_time_s = float(value("start_time_s"))

@@ -9,9 +9,8 @@ from swim_model import StateError
 from swim_sim.disturbances import Disturbances
 from swim_sim.plant import Plant
 from swim_sim.sensors import Sensors
-from swim_sim.sim_node import hard_limits_rad
 
-HARD_LIMITS = hard_limits_rad(load_bridge_config())
+HARD_LIMITS = load_bridge_config().hard_limits_rad
 #: 0.5 s of held torque: a light link at full torque crosses its whole range in about 0.2 s (measured: the heave
 #: link from mid-range reaches its stop after 0.19 s)
 HELD_PERIODS = 63

@@ -28,9 +28,8 @@ def library_run(flow, seed, torques, after_step):
     from swim_sim.disturbances import Disturbances
     from swim_sim.plant import Plant, vehicle_model
     from swim_sim.sensors import Sensors
-    from swim_sim.sim_node import hard_limits_rad
     model = vehicle_model(flow, constrained=True)
-    plant = Plant(model, Disturbances(), seed=seed, hard_limits_rad=hard_limits_rad(load_bridge_config()),
+    plant = Plant(model, Disturbances(), seed=seed, hard_limits_rad=load_bridge_config().hard_limits_rad,
                   flow=flow)
     sensors = Sensors(model, sample_period_s=plant.sample_period_s)
     plant.reset(plant.rest_positions(), np.zeros(model.nq))
