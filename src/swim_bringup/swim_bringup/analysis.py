@@ -6,8 +6,8 @@ From the tracking_state topic (reference and measured q each control period) and
 - the final lateral offset and final alpha error, the duration, peak |torque| per motor, the fraction of
   periods with a saturated motor, the periods with the heave or the pitch at a hard limit (at the rig's stop: by
   default the shipped bridge file's limits, which sim_node's stops also take; --bridge-config for another rig's),
-  and the energy used, int (|tau_h phidot| + |tau_p thetadot|) dt in J (motors
-  do not take energy back, so negative power is counted as spent too).
+  and the energy used, int (|tau_h phidot| + |tau_p thetadot|) dt in J (motors do not take energy back, so
+  negative power is counted as spent too).
 
 Any rosbag2 bag opens (swim-demo's, swim-record's, one recorded by `ros2 bag record`, Humble's included; MCAP or
 sqlite3): its topics are listed with their types and message counts, and those whose messages cannot be decoded (a
