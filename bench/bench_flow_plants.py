@@ -25,7 +25,7 @@ from swim_planner.maneuver import concatenate, expand_sequence
 from swim_planner.paths import default_library_path
 from swim_sim.disturbances import Disturbances
 from swim_sim.plant import FLOWS, Plant, vehicle_model
-from swim_sim.sim_node import DEFAULT_VORTICES_PERIOD_S, hard_limits_rad
+from swim_sim.sim_node import DEFAULT_VORTICES_PERIOD_S
 
 #: the issue's target for the wake plant in closed loop
 TARGET_WAKE_REALTIME_FACTOR = 5.0
@@ -63,7 +63,7 @@ def run(flow: str, constrained: bool, rig, library, bridge) -> dict:
     plant_model = vehicle_model(flow, rig, constrained, lane_radius_m)
     tracker = CascadeTracker(model_io_linearization(tracker_model), tracker_model.torque_limits(), SlidingMode(),
                              sample_period_s=rig.sample_period_s)
-    plant = TimedPlant(Plant(plant_model, Disturbances(), seed=SEED, hard_limits_rad=hard_limits_rad(bridge),
+    plant = TimedPlant(Plant(plant_model, Disturbances(), seed=SEED, hard_limits_rad=bridge.hard_limits_rad,
                              flow=flow))
     started = time.perf_counter()
     result = simulate(tracker_model, tracker, reference, rig.sample_period_s, plant=plant)

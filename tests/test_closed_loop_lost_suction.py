@@ -18,7 +18,6 @@ from swim_planner.library import PrimitiveLibrary
 from swim_planner.paths import default_library_path
 from swim_sim.disturbances import Disturbances
 from swim_sim.plant import Plant, vehicle_model
-from swim_sim.sim_node import hard_limits_rad
 from swim_sim.wake_coupling import WakeCoupling
 
 LANE_CHANGE = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/lane_change/R0.43-R0.48/E0.05",
@@ -31,7 +30,7 @@ def lane_change_end_offset_m(library, wake: WakeParameters) -> float:
     rig = load_rig()
     water = vehicle_model("wake", rig, False, rig.lane_1_radius_m)
     plant = Plant(water, Disturbances(), seed=3, wake=WakeCoupling(water, WakeCouplingParameters(wake=wake)),
-                  hard_limits_rad=hard_limits_rad(load_bridge_config(None)))
+                  hard_limits_rad=load_bridge_config(None).hard_limits_rad)
     run = track_plan(library, LANE_CHANGE, TIME_SCALE, plant)
     return abs(run.q[-1, 1] - rig.lane_2_radius_m)
 

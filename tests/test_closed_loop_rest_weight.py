@@ -24,7 +24,6 @@ from swim_planner.library import PrimitiveLibrary
 from swim_planner.paths import default_library_path
 from swim_sim.disturbances import Disturbances
 from swim_sim.plant import Plant, vehicle_model
-from swim_sim.sim_node import hard_limits_rad
 from swim_sim.wake_coupling import WakeCoupling
 
 LANE_KEEPING = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/decelerate/R0.43/E0.05"],
@@ -39,7 +38,7 @@ HUB_END_ERROR_RAD = 5e-3
 def lane_keeping_end_offset_m(library) -> float:
     rig = load_rig()
     plant = Plant(vehicle_model("circulatory", rig, False, rig.lane_1_radius_m), Disturbances(), seed=1,
-                  hard_limits_rad=hard_limits_rad(load_bridge_config(None)))
+                  hard_limits_rad=load_bridge_config(None).hard_limits_rad)
     run = track_plan(library, LANE_KEEPING, 1.0, plant)
     return abs(run.q[-1, 1] - rig.lane_1_radius_m)
 
@@ -51,7 +50,7 @@ def constrained_end_errors_rad(library) -> list[float]:
     for seed in CONSTRAINED_SEEDS:
         water = vehicle_model("wake", rig, True, rig.lane_1_radius_m)
         plant = Plant(water, Disturbances(), seed=seed, wake=WakeCoupling(water),
-                      hard_limits_rad=hard_limits_rad(load_bridge_config(None)))
+                      hard_limits_rad=load_bridge_config(None).hard_limits_rad)
         run = track_plan(library, PAPER_CONSTRAINED, 1.0, plant, constrained=True)
         ends.append(float(run.error[-1, 0]))
     return ends
