@@ -17,6 +17,7 @@ import itertools
 import numpy as np
 from swim_model import RigParameters, VehicleModel
 
+from swim_hw_bridge.conversions import HardLimits
 from swim_hw_bridge.safety import BRAKING_TORQUE_FRACTION, JointDynamicsBounds
 
 #: grid points per joint range when searching the largest inertia (M varies smoothly with the joint angles)
@@ -39,7 +40,7 @@ class VelocityTerms:
         return float(forward.outputs[0][2]), float(forward.outputs[0][3])
 
 
-def joint_dynamics_bounds(rig: RigParameters, hard_limits_rad: tuple[tuple[float, float], tuple[float, float]],
+def joint_dynamics_bounds(rig: RigParameters, hard_limits_rad: HardLimits,
                           torque_limits_n_m: tuple[float, float], fraction: float = BRAKING_TORQUE_FRACTION
                           ) -> JointDynamicsBounds:
     """The (heave, pitch) decelerations the motors surely give and the accelerations they give at most over the

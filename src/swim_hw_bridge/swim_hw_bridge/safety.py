@@ -45,7 +45,7 @@ import enum
 import math
 from typing import Callable
 
-from swim_hw_bridge.conversions import BridgeConfig
+from swim_hw_bridge.conversions import BridgeConfig, HardLimits
 
 class FaultCode(enum.IntFlag):
     """Latched faults, a bit each (several may be latched at once)."""
@@ -161,7 +161,7 @@ class SafetyLimits:
     torque_limits_n_m: tuple[float, float]
     current_limits_a: tuple[float, float]
     torque_gains_n_m_per_a: tuple[float, float]
-    hard_limits_rad: tuple[tuple[float, float], tuple[float, float]]
+    hard_limits_rad: HardLimits
     soft_limit_margins_rad: tuple[float, float]
     watchdog_timeout_s: float
     stale_read_limit: int

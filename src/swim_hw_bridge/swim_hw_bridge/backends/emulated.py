@@ -46,7 +46,7 @@ from swim_model import SwimModelError, VehicleModel, codegen, load_rig
 from swim_model.codegen import NativeFunction
 from swim_model.wake_coupling import FLOWS, MODEL_FLOWS, WakeCoupling, separation_drag
 
-from swim_hw_bridge.conversions import BridgeConfig
+from swim_hw_bridge.conversions import BridgeConfig, HardLimits
 from swim_hw_bridge.device import CounterSample, Device, DeviceError
 
 DEFAULT_CHARGE_PUMP_TIMEOUT_S = 0.05   # assumed: about 6 periods of 8 ms
@@ -93,11 +93,8 @@ class EmulatedDevice(Device):
         if not all(math.isfinite(c) and c >= 0.0 for c in self.drag_coefficients):
             raise ValueError(f"emulated device: drag coefficients must be finite and >= 0, got "
                              f"{self.drag_coefficients}")
-        limits = self.bridge
-        self.hard_stops_rad: tuple[tuple[float, float], tuple[float, float]] | None = (
-            ((limits.heave_lower_hard_limit_rad, limits.heave_upper_hard_limit_rad),
-             (limits.pitch_lower_hard_limit_rad, limits.pitch_upper_hard_limit_rad))
-            if bool(config.get("hard_stops", True)) else None)
+        self.hard_stops_rad: HardLimits | None = (
+            self.bridge.hard_limits_rad if bool(config.get("hard_stops", True)) else None)
         self.counts_per_unit = np.array(self.bridge.counts_per_unit)
         self.home = np.array(self.bridge.home_positions)
         self.torque_gains = np.array(self.bridge.motor_torque_gains_n_m_per_a)
