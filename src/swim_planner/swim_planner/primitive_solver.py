@@ -42,11 +42,15 @@ states (swim_model.flow), collocated with their own dynamics zdot = g(Q2 qdot, z
     - at every collocation point (knots and midpoints) |angle of attack| <= PlanningLimits.angle_of_attack_limit_rad,
       the angle atan2(-V, U) of the foil frame's velocity in foil axes (eq. 40, swim_model.flow.angle_of_attack),
       written smoothly as U tan(a) -+ V >= 0 (the same set for a < 90 deg, rest included; atan2 itself has no
-      derivative at rest). Points within PlanningLimits.angle_of_attack_free_from_rest_s of rest (an accelerate's
-      start, a decelerate's end) are left out: from rest the foil's first velocities are linear in the two foil
-      accelerations, and V = 0 with Q = 0 (below) leaves only u = 0, so no accelerate from rest is feasible with the
-      bound at every point (IPOPT: Infeasible_Problem_Detected). The foil first turns about its pitch axis to a
-      posture from which it can swim inside the bound (PlanningLimits gives the numbers).
+      derivative at rest). Points within ``rest_window_s`` of rest (an accelerate's start, a decelerate's end:
+      PlanningLimits.angle_of_attack_free_from_rest_s, or the spec's PrimitiveSpec.rest_window_s) are left out: from
+      rest the foil's first velocities are linear in the two foil accelerations, and V = 0 with Q = 0 (below) leaves
+      only u = 0, so no accelerate from rest is feasible with the bound at every point (IPOPT:
+      Infeasible_Problem_Detected). The foil first turns about its pitch axis to a posture from which it can swim
+      inside the bound (PlanningLimits gives the numbers).
+    - a spec may bound the foil's rates in that window (PrimitiveSpec.rest_window_foil_rate_limit_rad_s): |heave
+      rate| and |pitch rate| at most that at its points, so that the foil turns back to rest more slowly than the
+      bang-bang of the planning torque a decelerate makes there without it (docs/experiments.md measures both).
     - the same bound on the incidence at the three-quarter chord, U tan(a) -+ Q >= 0 with Q = -(V + Omega x_34)
       (swim_model.flow's normal velocity, whose lagged value sets the circulation and the stall transition).
       The bound at F alone admits U = V = 0, where the angle at F has no value: the optimizer then held F still
@@ -377,6 +381,12 @@ def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimi
         _stroke_bound(opti, model, spec, grid, phi)
     if model.n_lag and bound_angle_of_attack:
         _angle_of_attack_bound(opti, model, spec, limits, grid, phi)
+    if spec.rest_window_s is not None or spec.rest_window_foil_rate_limit_rad_s is not None:
+        if not model.n_lag:
+            raise ValueError(f"{spec.primitive_id}: rest_window_s and rest_window_foil_rate_limit_rad_s are for the "
+                             "circulatory flow, whose angle-of-attack bound has the window next to rest")
+        if spec.rest_window_foil_rate_limit_rad_s is not None:
+            _rest_window_rate_bound(opti, model, spec, limits, grid)
     _boundary_conditions(opti, model, spec, limits, grid, phi, start, end)
     _initial_guess(opti, model, spec, limits, grid, start, end, guess)
 
@@ -430,9 +440,27 @@ def _stroke_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, grid,
                     - spec.min_strouhal * spec.lane_radius_m * alpha_advance_rad >= 0.0)
 
 
+def _rest_window_rate_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits,
+                            grid) -> None:
+    """|heave rate| and |pitch rate| <= PrimitiveSpec.rest_window_foil_rate_limit_rad_s (rad/s) at the fine grid's
+    points inside the window next to rest, where the angle-of-attack bound is off (module docstring)."""
+    assert spec.rest_window_foil_rate_limit_rad_s is not None
+    nq = model.nq
+    inside = np.flatnonzero(~angle_of_attack_bounded(spec, limits))
+    rates = grid.all_states()[2 * nq - 2:2 * nq, :][:, inside]
+    bound = spec.rest_window_foil_rate_limit_rad_s
+    opti.subject_to(opti.bounded(-bound, rates, bound))
+
+
+def rest_window_s(spec: PrimitiveSpec, limits: PlanningLimits) -> float:
+    """The window next to rest (an accelerate's start, a decelerate's end) where the angle-of-attack bound is off,
+    s: the spec's own (PrimitiveSpec.rest_window_s) or PlanningLimits.angle_of_attack_free_from_rest_s."""
+    return limits.angle_of_attack_free_from_rest_s if spec.rest_window_s is None else spec.rest_window_s
+
+
 def angle_of_attack_bounded(spec: PrimitiveSpec, limits: PlanningLimits) -> npt.NDArray[np.bool_]:
     """Which of the fine grid's 2N + 1 points carry the angle-of-attack bound: all but those within
-    PlanningLimits.angle_of_attack_free_from_rest_s of rest (an accelerate's start, a decelerate's end)."""
+    ``rest_window_s`` of rest (an accelerate's start, a decelerate's end)."""
     times = fine_grid_times(spec.solved_duration_s, spec.intervals)
     if spec.primitive_type is PrimitiveType.ACCELERATE:
         from_rest_s = times
@@ -441,7 +469,7 @@ def angle_of_attack_bounded(spec: PrimitiveSpec, limits: PlanningLimits) -> npt.
     else:
         return np.ones(times.shape, dtype=bool)
     # a rounding margin: a point at exactly the window's end carries the bound
-    return from_rest_s >= limits.angle_of_attack_free_from_rest_s - 1e-9 * spec.solved_duration_s
+    return from_rest_s >= rest_window_s(spec, limits) - 1e-9 * spec.solved_duration_s
 
 
 def _repeat_cycle(cycles: int, time_s: Array, q: Array, qdot: Array, u: Array, tau: Array):
@@ -604,14 +632,14 @@ def _still_foil_guess(model: VehicleModel, spec: PrimitiveSpec, limits: Planning
     """A circulatory accelerate's or decelerate's guess inside the angle-of-attack bound. The foil is held still
     in the posture of ``moving`` (the cruise's boundary state it joins; its stroke dropped), so it moves with
     the hub only, along its own chord, while the hub's rate goes smoothly between 0 and the cruise's; in the
-    window next to rest where the bound is off (PlanningLimits.angle_of_attack_free_from_rest_s) the foil turns
+    window next to rest where the bound is off (``rest_window_s``) the foil turns
     between rest and that posture with the hub still. The guess neither thrusts nor brakes: IPOPT finds the
     stroke. The blend of the boundary states has the foil broadside to its motion: from the blend with the
     cruise's stroke IPOPT found the constrained E = 0.05 decelerate (also from the plain blend) and the E = 0.10
     and 0.20 accelerates infeasible."""
     nq = model.nq
     q_moving, qdot_moving = np.asarray(moving[0], dtype=float), np.asarray(moving[1], dtype=float)
-    window_s = min(limits.angle_of_attack_free_from_rest_s, 0.5 * times[-1])
+    window_s = min(rest_window_s(spec, limits), 0.5 * times[-1])
     stop_s = times[-1] - window_s
     # built as a decelerate (moving at t = 0, at rest at the end), then mirrored in time for an accelerate
     q = np.tile(q_moving, (len(times), 1))

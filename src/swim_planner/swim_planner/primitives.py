@@ -93,6 +93,13 @@ class PrimitiveSpec:
     # circulatory flow, a cruise: the least Strouhal number of its stroke (cruise_strouhal_number), asked of the
     # pitch axis's excursion across the lane from the cycle's start to its middle (primitive_solver); None: none
 
+    rest_window_s: Optional[float] = None
+    # circulatory flow, an accelerate or a decelerate: the window next to rest where the angle-of-attack bound is off
+    # (primitive_solver.rest_window_s); None: PlanningLimits.angle_of_attack_free_from_rest_s
+    rest_window_foil_rate_limit_rad_s: Optional[float] = None
+    # circulatory flow, an accelerate or a decelerate: |heave rate| and |pitch rate| at most this within that
+    # window (primitive_solver's module docstring); None: no bound but the foil accelerations'
+
     def __post_init__(self) -> None:
         # a library's manifest stores the continuation as a JSON list: the spec read back equals the one written
         object.__setattr__(self, "angle_of_attack_continuation_rad",
@@ -103,6 +110,13 @@ class PrimitiveSpec:
         if self.coarse_intervals is not None and self.cycles > 1:
             raise ValueError(f"{self.primitive_id}: a coarser grid is for a primitive solved whole, not a cruise's "
                              f"repeated cycle (cycles {self.cycles})")
+        for name in ("rest_window_s", "rest_window_foil_rate_limit_rad_s"):
+            value = getattr(self, name)
+            if value is not None and not (self.primitive_type in (PrimitiveType.ACCELERATE, PrimitiveType.DECELERATE)
+                                          and isinstance(value, (int, float)) and not isinstance(value, bool)
+                                          and math.isfinite(value) and value > 0.0):
+                raise ValueError(f"{self.primitive_id}: {name} is an accelerate's or a decelerate's, finite and "
+                                 f"positive; got {value!r} for a {self.primitive_type.value}")
         if self.min_strouhal is not None and not (self.primitive_type is PrimitiveType.CRUISE
                                                   and math.isfinite(self.min_strouhal) and self.min_strouhal > 0.0):
             raise ValueError(f"{self.primitive_id}: min_strouhal is a cruise's, finite and positive; got "

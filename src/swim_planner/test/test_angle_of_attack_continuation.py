@@ -2,7 +2,9 @@
 PrimitiveSpec.angle_of_attack_continuation_rad) and a decelerate that ends at rest with its lag states free
 (PrimitiveSpec.end_lag_free): the steps it solves, the bad settings it refuses, the same solution as a direct solve
 where the direct solve succeeds, and a free end lag that is the only thing freed at rest; and the coarser grid solved
-first (PrimitiveSpec.coarse_intervals), which ends where the direct solve on the fine grid does.
+first (PrimitiveSpec.coarse_intervals), which ends where the direct solve on the fine grid does; and a decelerate's
+own window next to rest with the foil's rates bounded in it (PrimitiveSpec.rest_window_s,
+rest_window_foil_rate_limit_rad_s).
 
 The transitions are solved between the shipped circulatory library's cruises (their boundary states, lag included),
 as a library build joins them.
@@ -15,7 +17,9 @@ import pytest
 
 from swim_model import VehicleModel
 from swim_planner.catalog import circulatory_specs, default_specs
-from swim_planner.primitive_solver import continuation_bounds, primitive_nlp, solve_primitive
+from swim_planner.library import PrimitiveLibrary
+from swim_planner.primitive_solver import (angle_of_attack_bounded, continuation_bounds, primitive_nlp,
+                                           solve_primitive)
 from swim_planner.primitives import PlanningLimits, PrimitiveType, rest_boundary_state
 
 LIMITS = PlanningLimits()
@@ -167,3 +171,61 @@ def test_a_coarser_grid_for_a_repeated_cruise_cycle_is_refused(rig):
     assert spec.cycles > 1
     with pytest.raises(ValueError, match="cruise's repeated cycle"):
         dataclasses.replace(spec, coarse_intervals=spec.intervals // 2)
+
+
+#: a window next to rest and a rate bound in it (PrimitiveSpec.rest_window_s, rest_window_foil_rate_limit_rad_s):
+#: the setting docs/experiments.md measured on the constrained decelerates
+REST_WINDOW_S = 0.5
+REST_WINDOW_RATE_RAD_S = 4.0
+
+
+def test_a_rest_window_bounds_the_foil_rates_there_and_the_angle_of_attack_before(rig, circulatory_library,
+                                                                                    tmp_path):
+    """The constrained E = 0.10 decelerate solved with a 0.5 s window next to rest and the foil's rates bounded in
+    it: the angle-of-attack bound holds at every sample 0.5 s or more from rest, the heave and pitch rates stay
+    within 4 rad/s inside (where the shipped decelerate, solved without them, turns the foil back to rest at more
+    than twice that), it ends at rest, and a library stores the spec and reads it back."""
+    shipped = circulatory_library.get("constrained/decelerate/E0.10")
+    spec = dataclasses.replace(shipped.spec, rest_window_s=REST_WINDOW_S,
+                               rest_window_foil_rate_limit_rad_s=REST_WINDOW_RATE_RAD_S)
+    primitive = _solved(rig, circulatory_library, spec)
+    model = _model(rig, spec)
+    assert shipped.spec.rest_window_s is None and primitive.spec == spec
+    inside = primitive.time_s[-1] - primitive.time_s < REST_WINDOW_S - 1e-9
+    assert inside.sum() == round(REST_WINDOW_S / (spec.duration_s / (2 * spec.intervals)))
+    np.testing.assert_array_equal(angle_of_attack_bounded(spec, LIMITS), ~inside)
+    angles = np.abs([model.angle_of_attack(a, b) for a, b in zip(primitive.q, primitive.qdot)])
+    assert angles[~inside].max() <= LIMITS.angle_of_attack_limit_rad + 1e-5
+    rates = np.abs(primitive.qdot[inside][:, model.nq - 2:])
+    assert rates.max() <= REST_WINDOW_RATE_RAD_S + 1e-6
+    assert np.abs(shipped.qdot[inside][:, model.nq - 2:]).max() > 2.0 * REST_WINDOW_RATE_RAD_S
+    rest_q, rest_qdot, _ = rest_boundary_state(model, spec.end_lane_radius_m)
+    np.testing.assert_allclose(primitive.q[-1, 1:], rest_q[1:], atol=1e-8)
+    np.testing.assert_allclose(primitive.qdot[-1], rest_qdot, atol=1e-8)
+    library = PrimitiveLibrary.create_or_open(tmp_path / "library", rig, flow_model="circulatory")
+    library.add(primitive)
+    assert PrimitiveLibrary.load(tmp_path / "library", rig, "circulatory").spec(spec.primitive_id) == spec
+
+
+@pytest.mark.parametrize("field, value", [("rest_window_s", 0.0), ("rest_window_s", -0.5),
+                                          ("rest_window_s", math.nan), ("rest_window_foil_rate_limit_rad_s", math.inf),
+                                          ("rest_window_foil_rate_limit_rad_s", True),
+                                          ("rest_window_foil_rate_limit_rad_s", "4")])
+def test_a_bad_rest_window_setting_is_refused(rig, field, value):
+    with pytest.raises(ValueError, match=field):
+        dataclasses.replace(_spec(rig, "constrained/decelerate/E0.05"), **{field: value})
+
+
+@pytest.mark.parametrize("field", ["rest_window_s", "rest_window_foil_rate_limit_rad_s"])
+def test_a_rest_window_setting_on_a_cruise_is_refused(rig, field):
+    with pytest.raises(ValueError, match="an accelerate's or a decelerate's"):
+        dataclasses.replace(_spec(rig, "constrained/cruise/E0.05"), **{field: 0.5})
+
+
+@pytest.mark.parametrize("field", ["rest_window_s", "rest_window_foil_rate_limit_rad_s"])
+def test_a_rest_window_setting_with_the_ideal_flow_is_refused(rig, circulatory_library, field):
+    spec = dataclasses.replace(_spec(rig, "constrained/decelerate/E0.05", default_specs), **{field: 0.5})
+    model = _model(rig, spec, "ideal")
+    start = tuple(circulatory_library.get(spec.start_from).end_boundary_state[:2])
+    with pytest.raises(ValueError, match="circulatory flow"):
+        primitive_nlp(model, spec, LIMITS, start, None)
