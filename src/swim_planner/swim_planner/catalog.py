@@ -62,6 +62,15 @@ CIRCULATORY_FREE_MIN_STROUHAL = 0.2
 # circulatory flow, the free cruises' least Strouhal number (assumed: the low end of the same 0.2-0.4 band). The
 # free vehicle's cruises fold as the constrained ones did (St 0.02-0.05), and its lane change was then lost in its
 # last decelerate in most runs in the vortex wake; at this floor it is tracked in most (docs/circulatory_primitives.md)
+CIRCULATORY_CONSTRAINED_DECELERATE_REST_WINDOW_S = 0.5
+CIRCULATORY_CONSTRAINED_DECELERATE_FOIL_RATE_RAD_S = 4.0
+# circulatory flow, the constrained decelerates (PrimitiveSpec.rest_window_s, rest_window_foil_rate_limit_rad_s;
+# assumed): the foil turns back to rest in their last 0.5 s, its heave and pitch at most 4 rad/s there. With
+# PlanningLimits' 0.2 s window and no rate bound that turn is a bang-bang of the planning torque, the pitch through
+# 66-70 deg at 9.5-10.6 rad/s with the hub nearly still, and the hub stops on the separated force it makes; in the
+# vortex wake 21 of 640 constrained runs then ended 0.1-1.5 rad ahead of their plan, with this end 2
+# (docs/experiments.md). The window's samples are past 30 deg of angle of attack: 9-12 % of these primitives'
+# samples, more than the 5 % the other primitives keep to
 CIRCULATORY_LONGER_S = {"free/decelerate/R0.43/E0.10": 6.0, "free/decelerate/R0.43/E0.20": 6.0,
                         "free/decelerate/R0.48/E0.20": 6.0, "free/cruise_to_cruise/R0.43/E0.10-E0.05": 3.0,
                         "free/accelerate/R0.43/E0.20": 5.0}
@@ -179,7 +188,9 @@ def circulatory_specs(rig: RigParameters) -> list[PrimitiveSpec]:
     lag states its braking leaves: PrimitiveSpec.end_lag_free; CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S, refined
     from INTERVALS_PER_S: PrimitiveSpec.coarse_intervals) and
     those of CIRCULATORY_LONGER_S (which take precedence); the cruises stroke at a Strouhal number of at least
-    CIRCULATORY_CONSTRAINED_MIN_STROUHAL (constrained) or CIRCULATORY_FREE_MIN_STROUHAL (free)."""
+    CIRCULATORY_CONSTRAINED_MIN_STROUHAL (constrained) or CIRCULATORY_FREE_MIN_STROUHAL (free); the constrained
+    decelerates turn the foil back to rest within CIRCULATORY_CONSTRAINED_DECELERATE_REST_WINDOW_S at no more than
+    CIRCULATORY_CONSTRAINED_DECELERATE_FOIL_RATE_RAD_S."""
     specs = constrained_specs(rig, CIRCULATORY_ENERGY_LEVELS_J) + free_specs(rig, CIRCULATORY_ENERGY_LEVELS_J)
     unknown = set(CIRCULATORY_LONGER_S) - {s.primitive_id for s in specs}
     assert not unknown, f"CIRCULATORY_LONGER_S names no spec of the set: {sorted(unknown)}"
@@ -196,6 +207,10 @@ def circulatory_specs(rig: RigParameters) -> list[PrimitiveSpec]:
             spec = dataclasses.replace(spec, intervals=int(round(CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S
                                                                  * spec.duration_s)),
                                        coarse_intervals=_intervals(spec.duration_s))
+        if spec.constrained and spec.primitive_type is PrimitiveType.DECELERATE:
+            spec = dataclasses.replace(
+                spec, rest_window_s=CIRCULATORY_CONSTRAINED_DECELERATE_REST_WINDOW_S,
+                rest_window_foil_rate_limit_rad_s=CIRCULATORY_CONSTRAINED_DECELERATE_FOIL_RATE_RAD_S)
         if spec.primitive_type is PrimitiveType.CRUISE:
             spec = dataclasses.replace(spec, min_strouhal=CIRCULATORY_CONSTRAINED_MIN_STROUHAL if spec.constrained
                                        else CIRCULATORY_FREE_MIN_STROUHAL)
