@@ -68,7 +68,7 @@ CIRCULATORY_CONSTRAINED_DECELERATE_FOIL_RATE_RAD_S = 4.0
 # assumed): the foil turns back to rest in their last 0.5 s, its heave and pitch at most 4 rad/s there. With
 # PlanningLimits' 0.2 s window and no rate bound that turn is a bang-bang of the planning torque, the pitch through
 # 66-70 deg at 9.5-10.6 rad/s with the hub nearly still, and the hub stops on the separated force it makes; in the
-# vortex wake 21 of 640 constrained runs then ended 0.1-1.5 rad ahead of their plan, with this end 2
+# vortex wake 21 of 640 constrained runs then ended 0.1-1.5 rad off their plan, all but one ahead; with this end 2
 # (docs/experiments.md). The window's samples are past 30 deg of angle of attack: 9-12 % of these primitives'
 # samples, more than the 5 % the other primitives keep to
 CIRCULATORY_LONGER_S = {"free/decelerate/R0.43/E0.10": 6.0, "free/decelerate/R0.43/E0.20": 6.0,
