@@ -21,6 +21,8 @@ from swim_model.flow import angle_of_attack
 from swim_planner.catalog import (CIRCULATORY_ENERGY_LEVELS_J, CIRCULATORY_FREE_ACCELERATE_S,
                                   CIRCULATORY_FREE_DECELERATE_CONTINUATION_RAD,
                                   CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S, CIRCULATORY_FREE_DECELERATE_S,
+                                  CIRCULATORY_CONSTRAINED_DECELERATE_FOIL_RATE_RAD_S,
+                                  CIRCULATORY_CONSTRAINED_DECELERATE_REST_WINDOW_S,
                                   CIRCULATORY_CONSTRAINED_MIN_STROUHAL, CIRCULATORY_FREE_MIN_STROUHAL,
                                   CIRCULATORY_LONGER_S, INTERVALS_PER_S,
                                   circulatory_specs, cruise_id, default_specs)
@@ -298,6 +300,10 @@ def test_the_circulatory_set_is_the_papers_graph_with_a_third_level_joined_to_it
         if spec.primitive_type is PrimitiveType.CRUISE:
             spec = dataclasses.replace(spec, min_strouhal=CIRCULATORY_CONSTRAINED_MIN_STROUHAL if spec.constrained
                                        else CIRCULATORY_FREE_MIN_STROUHAL)
+        if spec.constrained and spec.primitive_type is PrimitiveType.DECELERATE:
+            spec = dataclasses.replace(
+                spec, rest_window_s=CIRCULATORY_CONSTRAINED_DECELERATE_REST_WINDOW_S,
+                rest_window_foil_rate_limit_rad_s=CIRCULATORY_CONSTRAINED_DECELERATE_FOIL_RATE_RAD_S)
         assert specs[spec.primitive_id] == spec
     assert CIRCULATORY_ENERGY_LEVELS_J[:2] == (0.05, 0.1) and CIRCULATORY_ENERGY_LEVELS_J[2] > 0.1
     def primitive_id(kind, lane, tags):
