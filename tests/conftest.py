@@ -54,11 +54,12 @@ def run_demo(run_dir: Path, *arguments: str, timeout_s: float = DEMO_TIMEOUT_S, 
     return result.stdout + result.stderr
 
 
-def track_plan(library, sequence: tuple[list[str], list[int]], time_scale: float, plant, constrained: bool = False):
+def track_plan(library, sequence: tuple[list[str], list[int]], time_scale: float, plant, constrained: bool = False,
+               range_guard=None):
     """The circulatory plan of sequence (primitive ids, repeats) at time_scale from library, tracked in one process
-    (no DDS) by the circulatory tracker without sliding mode on plant (swim_sim's Plant of the free vehicle, or of
-    the constrained one if constrained, on the rig's home lane); the run (swim_controller.testing.closed_loop.Run),
-    checked to have been tracked: never a radian of alpha off its plan."""
+    (no DDS) by the circulatory tracker without sliding mode (with range_guard, a FoilRangeGuard, if given) on plant
+    (swim_sim's Plant of the free vehicle, or of the constrained one if constrained, on the rig's home lane); the run
+    (swim_controller.testing.closed_loop.Run), checked to have been tracked: never a radian of alpha off its plan."""
     from swim_controller.sliding_mode import SlidingMode
     from swim_controller.testing.closed_loop import simulate
     from swim_controller.tracker import CascadeTracker, model_io_linearization, model_lag_rate
@@ -70,7 +71,7 @@ def track_plan(library, sequence: tuple[list[str], list[int]], time_scale: float
     model = vehicle_model("circulatory", rig, constrained, rig.lane_1_radius_m)
     tracker = CascadeTracker(model_io_linearization(model), model.torque_limits(), SlidingMode(),
                              sliding_mode_enabled=False, sample_period_s=rig.sample_period_s,
-                             lag_rate=model_lag_rate(model))
+                             lag_rate=model_lag_rate(model), range_guard=range_guard)
     run = simulate(model, tracker, plan, rig.sample_period_s, plant=plant)
     assert abs(run.error[:, 0]).max() < 1.0
     return run

@@ -5,6 +5,7 @@ already time-scaled and concatenated by the planner, see time_scaling):
 
     x     = (int (y - y_des) dt, q - q_des, qdot - qdot_des[, z^ - z_des])   error state (riccati)
     u     = u_des(t + h/2) - K(t) x,    K = R_l^-1 G_l' P_l             LQ stage (eqs. 19, 33)
+            bounded near the heave's and the pitch's stops, if a FoilRangeGuard is given
     tau1  = Mio(q) u + Cio(q, qdot[, z^]) qdot                          I/O linearization (eqs. 22-23)
     s     = Mio^-1 G_l' P_l x,  eps = -D s / max(||s||, phi)            sliding mode (eqs. 24-25)
             D = margin D_plan(t) if the plan carries its disturbance bound, else the constant (sliding_mode)
@@ -58,6 +59,18 @@ LAG_PROBE_M_S = 1.0
 #: water the foil moved, and would set z^ off for seconds (the slow lag's 1/a is about 2 s)
 MAX_NORMAL_VELOCITY_M_S = 5.0
 NO_LAG = np.zeros(0)            # the ideal flow's (empty) lag states
+#: the foil's joints' hard stops, ((heave lower, upper), (pitch lower, upper)), rad (swim_hw_bridge's bridge file)
+FoilStops = tuple[tuple[float, float], tuple[float, float]]
+#: FoilRangeGuard's braking acceleration a per joint (heave, pitch), rad/s^2. Assumed: the plans' own braking with
+#: room to spare, so that the bound never binds on a plan followed exactly. Near the stops the shipped plans (both
+#: libraries, every primitive, at time scales 0.8-1.67) brake the heave at up to 62 and the pitch at up to 337
+#: (the free E = 0.10 accelerate at 1.67), faster than the motors alone surely do (21 and 258,
+#: swim_hw_bridge.braking): the water and the other joint help. A guard slower than the plans holds them back and
+#: itself makes the errors it is there to contain (docs/experiments.md)
+GUARD_BRAKING_ACCELERATION_RAD_S2 = (80.0, 450.0)
+#: FoilRangeGuard's margin short of each stop, rad. Assumed: 0.05 rad (3 deg), what a joint at 6 rad/s covers in
+#: one 8 ms period, and inside the bridge's 5 deg soft-limit margin
+GUARD_MARGIN_RAD = 0.05
 
 
 class LagEstimator:
@@ -124,6 +137,79 @@ class LagEstimator:
         return self.estimate
 
 
+@dataclasses.dataclass(frozen=True)
+class FoilRangeGuard:
+    """Keeps the law's foil acceleration from driving the heave or the pitch into its hard stop.
+
+    For each foil joint (heave, pitch) at psi (rad) moving at psidot (rad/s), with stops (lower, upper) (rad), the
+    commanded acceleration u (rad/s^2), held over the period h (s), is bounded so that at the period's end the
+    joint can still come to rest margin (rad) short of the stop braking at a (rad/s^2). Toward the upper stop,
+    with d = upper - margin - psi the room left (rad), that is
+
+        psidot + u h <= sqrt(2 a (d - psidot h - u h^2 / 2)),    the largest such u:
+        u_max h = -psidot - a h / 2 + sqrt(a^2 h^2 / 4 - a h psidot + 2 a d)
+
+    and toward the lower one the same with psi and psidot mirrored. A joint that would cover its room within the
+    period (psidot h >= 2 d) is asked to come to rest within it instead, u = -psidot / h, so it never bounces
+    off the margin; one that followed the bound passes the margin by at most a h^2 / 2 then (3 mrad for the
+    heave, 14 for the pitch). On the braking curve, psidot = sqrt(2 a d) >= a h, the bound is u = -a; far from
+    it, the bound lies far outside what a motor gives. This is the braking distance of the bridge's braking rule
+    (swim_hw_bridge.safety, rule 6) and of ros2_control's soft joint limits (joint_limits: a velocity bound set by
+    the position, an acceleration bound set by the velocity), taken exactly over one zero-order-hold period. The
+    two bounds never cross, and neither forbids accelerating away from its stop. The defaults brake as fast as
+    the plans themselves do near the stops, so a plan followed exactly never meets the bound
+    (GUARD_BRAKING_ACCELERATION_RAD_S2); feedback that drives a joint toward its stop does. A saturated motor
+    may not brake as fast as the bound asks, so the guard keeps a joint off its stop without guaranteeing it:
+    the bridge's braking rule does that.
+
+    Why: the LQ stage's feedback grows with the error, and the I/O-linearized law asks the foil for whatever
+    acceleration it gives; under a large error (a gust of the wake at a time scale whose plan already uses the
+    motors' whole torque) it drove the heave onto its stop, where the foil makes no stroke at all and the hub,
+    which only the strokes move, ran away from its plan. On the rig a stop latches the bridge's HARD_LIMIT fault.
+    """
+
+    stops_rad: FoilStops
+    braking_acceleration_rad_s2: tuple[float, float] = GUARD_BRAKING_ACCELERATION_RAD_S2
+    margin_rad: float = GUARD_MARGIN_RAD
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.margin_rad) and self.margin_rad >= 0.0):
+            raise ValueError(f"FoilRangeGuard: margin_rad must be finite and >= 0, got {self.margin_rad!r}")
+        for joint, ((lower, upper), braking) in zip(("heave", "pitch"),
+                                                   zip(self.stops_rad, self.braking_acceleration_rad_s2)):
+            if not (math.isfinite(lower) and math.isfinite(upper) and lower + 2.0 * self.margin_rad < upper):
+                raise ValueError(f"FoilRangeGuard: the {joint} stops must be finite with lower + 2 margin < upper, "
+                                 f"got ({lower!r}, {upper!r}) and margin {self.margin_rad!r}")
+            if not (math.isfinite(braking) and braking > 0.0):
+                raise ValueError(f"FoilRangeGuard: the {joint} braking acceleration must be positive and finite, "
+                                 f"got {braking!r}")
+
+    def bound(self, u: Sequence[float], psi: Sequence[float], psi_rate: Sequence[float],
+              period_s: float) -> tuple[list[float], tuple[bool, bool]]:
+        """(u bounded, whether each joint's was) for the (heave, pitch) acceleration u (rad/s^2) held over
+        period_s (s) from the measured psi (rad) and psidot (rad/s)."""
+        bounded, limited = [], []
+        for acceleration, position, rate, (lower, upper), braking in zip(
+                u, psi, psi_rate, self.stops_rad, self.braking_acceleration_rad_s2):
+            highest = _braking_bound(upper - self.margin_rad - position, rate, braking, period_s)
+            lowest = -_braking_bound(position - lower - self.margin_rad, -rate, braking, period_s)
+            value = min(max(acceleration, lowest), highest)
+            bounded.append(value)
+            limited.append(value != acceleration)
+        return bounded, (limited[0], limited[1])
+
+
+def _braking_bound(room_rad: float, rate_rad_s: float, braking_rad_s2: float, period_s: float) -> float:
+    """The largest acceleration (rad/s^2) toward a stop room_rad ahead (rad, clipped at 0) of a joint moving toward
+    it at rate_rad_s, after which, held over period_s, it can still come to rest there braking at braking_rad_s2
+    (FoilRangeGuard); -rate / period_s (at rest at the period's end) where it would cover the room within the
+    period."""
+    a, h, room = braking_rad_s2, period_s, max(room_rad, 0.0)
+    if rate_rad_s * h >= 2.0 * room:
+        return -rate_rad_s / h
+    return (-rate_rad_s - 0.5 * a * h + math.sqrt(0.25 * a * a * h * h - a * h * rate_rad_s + 2.0 * a * room)) / h
+
+
 @dataclasses.dataclass
 class ControlOutput:
     """One period's result: the command and what went into it."""
@@ -136,6 +222,7 @@ class ControlOutput:
     reference: TrajectoryPoint   # the plan at this period
     holding: bool               # the plan has ended: the hold law is in charge
     lag_estimate: Array         # z^, the flow's lag states (n_lag,) in the law, m/s; empty for the ideal flow
+    range_guarded: tuple[bool, bool] = (False, False)   # the range guard bounded the (heave, pitch) acceleration
 
 
 class CascadeTracker:
@@ -143,12 +230,16 @@ class CascadeTracker:
 
     lag_rate: the circulatory flow's lag rate (model_lag_rate) for a tracker of plans made with that model, whose
     lag states it estimates (LagEstimator); None (the ideal flow) for the paper's plans. A plan of the other flow
-    model is refused by start()."""
+    model is refused by start().
+    range_guard: bounds the law's foil acceleration near the joints' stops (FoilRangeGuard), in the tracking law,
+    the hold law and hold(); None: no bound (the paper's law)."""
 
     def __init__(self, io_linearization: IoLinearization, torque_limits_n_m: Array,
                  sliding_mode: SlidingMode = SlidingMode(), sliding_mode_enabled: bool = True,
-                 sample_period_s: float = 0.008, lag_rate: Optional[LagRate] = None) -> None:
+                 sample_period_s: float = 0.008, lag_rate: Optional[LagRate] = None,
+                 range_guard: Optional[FoilRangeGuard] = None) -> None:
         self._io = io_linearization
+        self.range_guard = range_guard
         self._lag_rate = lag_rate
         self.lag_estimator: Optional[LagEstimator] = None   # made by start() for a circulatory plan
         if not (math.isfinite(sample_period_s) and sample_period_s > 0.0):
@@ -217,6 +308,12 @@ class CascadeTracker:
             heave_des, pitch_des = trajectory.foil_acceleration_at(plan_time_s + 0.5 * self.sample_period_s)
             heave_feedback, pitch_feedback = (ref.lqr_gain @ error_state).tolist()
             u = np.array([heave_des - heave_feedback, pitch_des - pitch_feedback])
+        guarded = (False, False)
+        if self.range_guard is not None:
+            nq = trajectory.nq
+            bounded, guarded = self.range_guard.bound(u.tolist(), q[nq - 2:].tolist(), qdot[nq - 2:].tolist(),
+                                                      self.sample_period_s)
+            u = np.array(bounded)
         torque = [inertial + rest for inertial, rest in zip((mio @ u).tolist(), cio_qdot.tolist())]
         sliding = [0.0, 0.0]
         if self.sliding_mode_enabled and not holding:
@@ -227,7 +324,7 @@ class CascadeTracker:
         command, saturated = saturate(torque, self.torque_limits_n_m)
         return ControlOutput(torque=command, saturated=saturated, unsaturated_torque=np.array(torque),
                              sliding_torque=np.array(sliding), error_state=error_state, reference=ref,
-                             holding=holding, lag_estimate=lag)
+                             holding=holding, lag_estimate=lag, range_guarded=guarded)
 
     def hold(self, q: Array, qdot: Array, psi_target: Array) -> tuple[Array, tuple[bool, bool]]:
         """The torque that holds the foil still at psi_target (heave, pitch), with no plan involved. A state comes
@@ -238,7 +335,11 @@ class CascadeTracker:
         elif self._lag_rate is not None:   # no plan started yet: the flow taken at rest
             lag = np.zeros(len(LAG_STATE_NAMES))
         mio, cio_qdot = self._io(q, qdot, lag)
-        torque = mio @ hold_acceleration(q[-2:], qdot[-2:], psi_target) + cio_qdot
+        u = hold_acceleration(q[-2:], qdot[-2:], psi_target)
+        if self.range_guard is not None:
+            u = np.array(self.range_guard.bound(u.tolist(), q[-2:].tolist(), qdot[-2:].tolist(),
+                                                self.sample_period_s)[0])
+        torque = mio @ u + cio_qdot
         return saturate(torque, self.torque_limits_n_m)
 
 

@@ -15,8 +15,8 @@ names, lengths or a non-finite value is rejected, counted, never used.
 
 Parameters: the table PARAMETERS (description, range, read-only for rig_path and sample_period_s; `ros2 param
 describe` shows them), checked when set, applied after: time_scale (1.0: run plans as planned; else re-timed by
-Theorem 1 when a goal arrives), the sliding mode's switch and bounds, the stale-state limit, feedback rate and
-velocity filter.
+Theorem 1 when a goal arrives), the sliding mode's switch and bounds, the range guard's switch (the heave's and the
+pitch's stops from the bridge file, bridge_config_path), the stale-state limit, feedback rate and velocity filter.
 
 Plans of either flow model (PlannedTrajectory's flow_model) run on the vehicle model of that flow, one per vehicle
 and lane. The ideal flow's models of the rig's two vehicles on its default lane are built at start, not by the
@@ -59,7 +59,8 @@ from swim_controller.errors import PlanError, StateMessageError
 from swim_controller.messages import state_from_message, trajectory_from_message
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.supervisor import Mode, Outcome, StaleStateWatch, Step, Supervisor, Tolerances
-from swim_controller.tracker import CascadeTracker, model_io_linearization, model_lag_rate
+from swim_controller.tracker import CascadeTracker, FoilRangeGuard, model_io_linearization, model_lag_rate
+from swim_hw_bridge.conversions import BridgeConfigError, load_bridge_config
 from swim_model.velocity_filter import DEFAULT_CUTOFF_HZ, VelocityEstimator
 from swim_model import SwimModelError, VehicleModel, load_rig
 from swim_ros.codecs import ACTUATED_JOINTS, float_array
@@ -82,6 +83,10 @@ _SLIDING_DEFAULTS = SlidingMode()
 #: sensible value: they only keep a typo (an extra zero, a wrong unit) from reaching the law.
 PARAMETERS = (
     ParameterSpec("rig_path", "", "rig YAML file (empty: the shipped rig)", read_only=True),
+    ParameterSpec("bridge_config_path", "", "hardware bridge YAML file the heave's and the pitch's hard stops are read "
+                  "from, for the range guard (empty: swim_hw_bridge's shipped bridge.yaml)", read_only=True),
+    ParameterSpec("range_guard_enabled", True, "bound the law's foil acceleration so the heave and the pitch can "
+                  "still brake short of their hard stops (swim_controller.tracker.FoilRangeGuard)"),
     ParameterSpec("sample_period_s", 0.008, "control period h, s (the paper's 8 ms); the stale-state timer runs at it",
                   range=(0.001, 0.1), read_only=True),
     ParameterSpec("stale_after_periods", 5, "sample periods without a valid state before the torque is zeroed",
@@ -192,6 +197,11 @@ class TrackerNode(Node):
         super().__init__("tracker_node")
         declare_parameters(self, PARAMETERS)
         self.rig = load_rig(self.get_parameter("rig_path").value or None)
+        try:
+            stops = load_bridge_config(self.get_parameter("bridge_config_path").value or None).hard_limits_rad
+        except BridgeConfigError as err:
+            raise ValueError(f"parameter bridge_config_path: {err}") from err
+        self.range_guard = FoilRangeGuard(stops)
         self._models: dict[ModelKey, VehicleModel] = {}
         self._building: dict[ModelKey, concurrent.futures.Future] = {}
         self._goals_received = 0
@@ -241,6 +251,8 @@ class TrackerNode(Node):
             layer = values.get("boundary_layer", tracker.sliding_mode.boundary_layer)
             margin = values.get("disturbance_bound_margin", tracker.sliding_mode.disturbance_bound_margin)
             tracker.sliding_mode = SlidingMode(bound, layer, margin)
+            if "range_guard_enabled" in values:
+                tracker.range_guard = self.range_guard if values["range_guard_enabled"] else None
         if "velocity_cutoff_hz" in values:
             self._velocity = VelocityEstimator(values["velocity_cutoff_hz"])
 
@@ -288,7 +300,8 @@ class TrackerNode(Node):
                               SlidingMode(parameter("disturbance_bound_n_m").value, parameter("boundary_layer").value,
                                           parameter("disturbance_bound_margin").value),
                               parameter("sliding_mode_enabled").value, parameter("sample_period_s").value,
-                              model_lag_rate(model))
+                              model_lag_rate(model),
+                              self.range_guard if parameter("range_guard_enabled").value else None)
 
     # ----- the control period ----------------------------------------------------------------------
     def _on_state(self, message: JointState) -> None:

@@ -380,6 +380,8 @@ def test_parameters_are_validated_and_switch_sliding_mode_mid_plan(rig_loop, pla
         result = set_parameter(name, value)
         assert not result.successful and name in result.reason
     assert "type" in set_parameter("sliding_mode_enabled", 1).reason   # rclpy's own check: types are fixed
+    assert "type" in set_parameter("range_guard_enabled", 1).reason
+    assert not set_parameter("bridge_config_path", "/elsewhere.yaml").successful   # read at start only
     _, future = send(plant, client, plan_message)
     plant.step_periods(20)
     step_until(plant, lambda: tracking, TRACKING_WAIT_PERIODS)
@@ -391,8 +393,23 @@ def test_parameters_are_validated_and_switch_sliding_mode_mid_plan(rig_loop, pla
     assert tracking and not any(t.sliding_mode_enabled for t in tracking), \
         f"parameter round trips {np.round(round_trips_s, 3)} s; tracker_node: {tracker.read_text()[-2000:]}"
     assert set_parameter("sliding_mode_enabled", True).successful
+    assert set_parameter("range_guard_enabled", False).successful
+    plant.step_periods(20)
+    assert set_parameter("range_guard_enabled", True).successful
     result = run_until(plant, future, 2000)
     assert result.error_code == ExecutePlan.Result.SUCCESSFUL, result.error_string
+
+
+def test_a_bridge_file_that_does_not_load_stops_the_node_with_the_reason(ros_domain, tmp_path):
+    """The range guard's stops come from the bridge file: one that cannot be read is a usage error at start."""
+    from swim_ros.testing.fixtures import STARTUP_TIMEOUT_S, running_node
+    log_path = tmp_path / "tracker.txt"
+    missing = tmp_path / "missing.yaml"
+    with running_node("swim_controller", "tracker_node", log_path, "-p", f"bridge_config_path:={missing}") as process:
+        process.wait(timeout=STARTUP_TIMEOUT_S)
+    log = log_path.read_text()
+    assert process.returncode == 2, log[-2000:]
+    assert "bridge_config_path" in log and str(missing) in log and "Traceback" not in log
 
 
 def test_a_time_scale_past_the_motor_limits_refuses_the_goal(rig_loop, plan_message):
