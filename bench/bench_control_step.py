@@ -1,8 +1,8 @@
 """Benchmark: one control step of the tracker in Python (target median <= 100 us, 99th percentile <= 500 us).
 
 A step is what tracker_node does per state: sample the plan and its time-scaled gains, form the error
-state, the LQ feedback, the I/O linearization (eqs. 22-23, compiled CasADi), the sliding-mode term and
-the saturation. Measured on the paper's constrained maneuver at lambda = 1.2 over 20 000 steps at 1 kHz
+state, the LQ feedback, the range guard (the node's, on the bridge file's stops), the I/O linearization
+(eqs. 22-23, compiled CasADi), the sliding-mode term and the saturation. Measured on the paper's constrained maneuver at lambda = 1.2 over 20 000 steps at 1 kHz
 plan time, states from the plan plus a perturbation. Prints one JSON line.
 """
 import json
@@ -10,7 +10,8 @@ import time
 
 import numpy as np
 
-from swim_controller.tracker import CascadeTracker, model_io_linearization, model_lag_rate
+from swim_controller.tracker import CascadeTracker, FoilRangeGuard, model_io_linearization, model_lag_rate
+from swim_hw_bridge.conversions import load_bridge_config
 from swim_model import VehicleModel, load_rig
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.maneuver import concatenate, expand_sequence
@@ -29,7 +30,8 @@ def step_times_us(flow_model: str) -> tuple[float, float]:
     trajectory = concatenate(library, rig, expand_sequence(*PAPER), 1.2)
     model = VehicleModel(rig, constrained=True, flow=flow_model)
     tracker = CascadeTracker(model_io_linearization(model), model.torque_limits(), sample_period_s=0.001,
-                             lag_rate=model_lag_rate(model))
+                             lag_rate=model_lag_rate(model),
+                             range_guard=FoilRangeGuard(load_bridge_config(None).hard_limits_rad))
     tracker.start(trajectory)
     rng = np.random.default_rng(0)
     durations = []
