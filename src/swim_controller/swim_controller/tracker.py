@@ -36,6 +36,7 @@ from numpy.linalg import _umath_linalg
 from swim_controller.errors import PlanError
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.trajectory import Trajectory, TrajectoryPoint
+from swim_hw_bridge.conversions import HardLimits
 from swim_model.flow import LAG_STATE_NAMES
 
 if TYPE_CHECKING:
@@ -59,8 +60,6 @@ LAG_PROBE_M_S = 1.0
 #: water the foil moved, and would set z^ off for seconds (the slow lag's 1/a is about 2 s)
 MAX_NORMAL_VELOCITY_M_S = 5.0
 NO_LAG = np.zeros(0)            # the ideal flow's (empty) lag states
-#: the foil's joints' hard stops, ((heave lower, upper), (pitch lower, upper)), rad (swim_hw_bridge's bridge file)
-FoilStops = tuple[tuple[float, float], tuple[float, float]]
 #: FoilRangeGuard's braking acceleration a per joint (heave, pitch), rad/s^2. Assumed: the plans' own braking with
 #: room to spare, so that the bound never binds on a plan followed exactly. Near the stops the shipped plans (both
 #: libraries, every primitive, at time scales 0.8-1.67) brake the heave at up to 62 and the pitch at up to 337
@@ -168,7 +167,7 @@ class FoilRangeGuard:
     which only the strokes move, ran away from its plan. On the rig a stop latches the bridge's HARD_LIMIT fault.
     """
 
-    stops_rad: FoilStops
+    hard_limits_rad: HardLimits   # ((heave lower, upper), (pitch lower, upper)), rad: the bridge file's stops
     braking_acceleration_rad_s2: tuple[float, float] = GUARD_BRAKING_ACCELERATION_RAD_S2
     margin_rad: float = GUARD_MARGIN_RAD
 
@@ -176,7 +175,7 @@ class FoilRangeGuard:
         if not (math.isfinite(self.margin_rad) and self.margin_rad >= 0.0):
             raise ValueError(f"FoilRangeGuard: margin_rad must be finite and >= 0, got {self.margin_rad!r}")
         for joint, ((lower, upper), braking) in zip(("heave", "pitch"),
-                                                   zip(self.stops_rad, self.braking_acceleration_rad_s2)):
+                                                   zip(self.hard_limits_rad, self.braking_acceleration_rad_s2)):
             if not (math.isfinite(lower) and math.isfinite(upper) and lower + 2.0 * self.margin_rad < upper):
                 raise ValueError(f"FoilRangeGuard: the {joint} stops must be finite with lower + 2 margin < upper, "
                                  f"got ({lower!r}, {upper!r}) and margin {self.margin_rad!r}")
@@ -190,7 +189,7 @@ class FoilRangeGuard:
         period_s (s) from the measured psi (rad) and psidot (rad/s)."""
         bounded, limited = [], []
         for acceleration, position, rate, (lower, upper), braking in zip(
-                u, psi, psi_rate, self.stops_rad, self.braking_acceleration_rad_s2):
+                u, psi, psi_rate, self.hard_limits_rad, self.braking_acceleration_rad_s2):
             highest = _braking_bound(upper - self.margin_rad - position, rate, braking, period_s)
             lowest = -_braking_bound(position - lower - self.margin_rad, -rate, braking, period_s)
             value = min(max(acceleration, lowest), highest)

@@ -76,13 +76,13 @@ def test_a_joint_pushed_at_its_stop_comes_to_rest_at_the_margin(start_rad, start
 
 
 @pytest.mark.parametrize("arguments", [
-    dict(stops_rad=((1.0, -1.0), STOPS[1])),
-    dict(stops_rad=(STOPS[0], (-0.05, 0.05))),              # no room between the margins
-    dict(stops_rad=((math.nan, 1.0), STOPS[1])),
-    dict(stops_rad=STOPS, braking_acceleration_rad_s2=(0.0, 400.0)),
-    dict(stops_rad=STOPS, braking_acceleration_rad_s2=(60.0, math.inf)),
-    dict(stops_rad=STOPS, margin_rad=-0.01),
-    dict(stops_rad=STOPS, margin_rad=math.nan),
+    dict(hard_limits_rad=((1.0, -1.0), STOPS[1])),
+    dict(hard_limits_rad=(STOPS[0], (-0.05, 0.05))),              # no room between the margins
+    dict(hard_limits_rad=((math.nan, 1.0), STOPS[1])),
+    dict(hard_limits_rad=STOPS, braking_acceleration_rad_s2=(0.0, 400.0)),
+    dict(hard_limits_rad=STOPS, braking_acceleration_rad_s2=(60.0, math.inf)),
+    dict(hard_limits_rad=STOPS, margin_rad=-0.01),
+    dict(hard_limits_rad=STOPS, margin_rad=math.nan),
 ])
 def test_a_guard_that_cannot_work_is_refused(arguments):
     with pytest.raises(ValueError, match="FoilRangeGuard"):
