@@ -3,7 +3,8 @@
 A step is what tracker_node does per state: sample the plan and its time-scaled gains, form the error
 state, the LQ feedback, the range guard (the node's, on the bridge file's stops), the I/O linearization
 (eqs. 22-23, compiled CasADi), the sliding-mode term and the saturation. Measured on the paper's constrained
-maneuver at lambda = 1.2 over 20 000 steps at 1 kHz plan time, states from the plan plus a perturbation. Prints one JSON line.
+maneuver at lambda = 1.2 over 20 000 steps at 1 kHz plan time, states from the plan plus a perturbation.
+Prints one JSON line.
 """
 import json
 import time
