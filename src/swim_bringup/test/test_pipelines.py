@@ -1,6 +1,6 @@
 """The two pipelines' parameter folders: installed, each parameter one its node declares with a value it accepts,
-the paper's disturbance sizes exactly Disturbances.paper(), the two differing only in the flow and the sizes; and
-swim-demo choosing between them."""
+the paper's disturbance sizes exactly Disturbances.paper(), the two differing only in the flow, the sizes and the
+tracker's range guard (the paper's law has none); and swim-demo choosing between them."""
 import dataclasses
 from pathlib import Path
 
@@ -12,7 +12,8 @@ from swim_bringup.system import PIPELINES, config_dir
 SOURCE_CONFIG = Path(__file__).resolve().parents[1] / "config"
 FILES = ("sim.yaml", "planner.yaml", "tracker.yaml", "bridge.yaml")
 #: what each pipeline sets to tell itself from the other (every other parameter is the same in both)
-PIPELINE_PARAMETERS = {("sim_node", "flow"), ("planner_node", "flow_model"), ("bridge_node", "flow")}
+PIPELINE_PARAMETERS = {("sim_node", "flow"), ("planner_node", "flow_model"), ("bridge_node", "flow"),
+                       ("tracker_node", "range_guard_enabled")}
 
 
 def flat_parameters(path: Path) -> dict[str, dict[str, object]]:
@@ -73,6 +74,7 @@ def test_the_papers_sim_sets_exactly_the_papers_disturbance_sizes_and_ideal_flow
     assert sizes.keys() == {f.name for f in dataclasses.fields(Disturbances)}
     assert sim["flow"] == "ideal"
     assert flat_parameters(config_dir("paper") / "planner.yaml")["planner_node"]["flow_model"] == "ideal"
+    assert not flat_parameters(config_dir("paper") / "tracker.yaml")["tracker_node"]["range_guard_enabled"]
 
 
 def test_the_realistic_pipeline_flies_circulatory_plans_in_the_wake_under_the_physical_sizes():
@@ -80,9 +82,11 @@ def test_the_realistic_pipeline_flies_circulatory_plans_in_the_wake_under_the_ph
     assert sim["flow"] == "wake"
     assert not any(name.startswith("disturbances.") for name in sim)   # sim_node's defaults: the physical sizes
     assert flat_parameters(config_dir("realistic") / "planner.yaml")["planner_node"]["flow_model"] == "circulatory"
+    tracker = flat_parameters(config_dir("realistic") / "tracker.yaml")["tracker_node"]
+    assert tracker.get("range_guard_enabled", True)   # tracker_node's default: on
 
 
-def test_the_pipelines_differ_only_in_the_flow_and_the_disturbance_sizes():
+def test_the_pipelines_differ_only_in_the_flow_the_disturbance_sizes_and_the_range_guard():
     for name in FILES:
         realistic, paper = (flat_parameters(config_dir(p) / name) for p in PIPELINES)
         assert realistic.keys() == paper.keys()
