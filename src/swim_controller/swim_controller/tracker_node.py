@@ -13,10 +13,11 @@ STATE_LOST (a command a period, stamped with the last valid state's stamp, zero 
 run backwards, and a lock-step simulator never takes one as the answer to a newer state); a state with wrong
 names, lengths or a non-finite value is rejected, counted, never used.
 
-Parameters: the table PARAMETERS (description, range, read-only for rig_path and sample_period_s; `ros2 param
-describe` shows them), checked when set, applied after: time_scale (1.0: run plans as planned; else re-timed by
-Theorem 1 when a goal arrives), the sliding mode's switch and bounds, the range guard's switch (the heave's and the
-pitch's stops from the bridge file, bridge_config_path), the stale-state limit, feedback rate and velocity filter.
+Parameters: the table PARAMETERS (description, range, read-only for rig_path, bridge_config_path and
+sample_period_s; `ros2 param describe` shows them), checked when set, applied after: time_scale (1.0: run plans as
+planned; else re-timed by Theorem 1 when a goal arrives), the sliding mode's switch and bounds, the range guard's
+switch (the heave's and the pitch's stops from the bridge file, bridge_config_path), the stale-state limit,
+feedback rate and velocity filter.
 
 Plans of either flow model (PlannedTrajectory's flow_model) run on the vehicle model of that flow, one per vehicle
 and lane. The ideal flow's models of the rig's two vehicles on its default lane are built at start, not by the
