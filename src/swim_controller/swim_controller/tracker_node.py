@@ -61,7 +61,7 @@ from swim_controller.messages import state_from_message, trajectory_from_message
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.supervisor import Mode, Outcome, StaleStateWatch, Step, Supervisor, Tolerances
 from swim_controller.tracker import CascadeTracker, FoilRangeGuard, model_io_linearization, model_lag_rate
-from swim_hw_bridge.conversions import BridgeConfigError, load_bridge_config
+from swim_hw_bridge.conversions import load_bridge_config_parameter
 from swim_model.velocity_filter import DEFAULT_CUTOFF_HZ, VelocityEstimator
 from swim_model import SwimModelError, VehicleModel, load_rig
 from swim_ros.codecs import ACTUATED_JOINTS, float_array
@@ -198,10 +198,7 @@ class TrackerNode(Node):
         super().__init__("tracker_node")
         declare_parameters(self, PARAMETERS)
         self.rig = load_rig(self.get_parameter("rig_path").value or None)
-        try:
-            stops = load_bridge_config(self.get_parameter("bridge_config_path").value or None).hard_limits_rad
-        except BridgeConfigError as err:
-            raise ValueError(f"parameter bridge_config_path: {err}") from err
+        stops = load_bridge_config_parameter(self.get_parameter("bridge_config_path").value).hard_limits_rad
         self.range_guard = FoilRangeGuard(stops)
         self._models: dict[ModelKey, VehicleModel] = {}
         self._building: dict[ModelKey, concurrent.futures.Future] = {}

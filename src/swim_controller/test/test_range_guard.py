@@ -107,3 +107,22 @@ def test_the_hold_law_is_bounded_and_the_torque_follows_the_bound():
     np.testing.assert_allclose(torque, [2.0 * expected_heave, 0.5 * expected_pitch], rtol=1e-12)
     free_torque, _ = CascadeTracker(_static_io, np.array([1e6, 1e6]), sample_period_s=PERIOD_S).hold(q, qdot, target)
     assert free_torque[0] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_the_tracking_law_is_bounded_and_says_so(make_trajectory):
+    """step() on a plan at rest with no feedback (u = 0) while the heave, 0.9 rad, moves up at 4.5 rad/s: the guard
+    brakes it, reports it, and the torque is the guard's acceleration through Mio; without a guard u stays 0."""
+    t = np.linspace(0.0, 1.0, 11)
+    plan = make_trajectory(t, np.zeros((11, 3)), np.zeros((11, 3)))
+    q, qdot = np.array([0.0, 0.9, 0.0]), np.array([0.0, 4.5, 0.0])
+    (expected_heave, _), _ = FoilRangeGuard(STOPS).bound([0.0, 0.0], [0.9, 0.0], [4.5, 0.0], PERIOD_S)
+    outputs = []
+    for guard in (FoilRangeGuard(STOPS), None):
+        tracker = CascadeTracker(_static_io, np.array([1e6, 1e6]), sliding_mode_enabled=False,
+                                 sample_period_s=PERIOD_S, range_guard=guard)
+        tracker.start(plan)
+        outputs.append(tracker.step(0.5, q, qdot))
+    guarded, free = outputs
+    assert guarded.range_guarded == (True, False) and free.range_guarded == (False, False)
+    np.testing.assert_allclose(guarded.torque, [2.0 * expected_heave, 0.0], rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(free.torque, [0.0, 0.0], atol=1e-12)

@@ -206,6 +206,15 @@ def load_bridge_config(path: str | Path | None = None) -> BridgeConfig:
     return config_from_mapping(document, str(source))
 
 
+def load_bridge_config_parameter(path: str) -> BridgeConfig:
+    """load_bridge_config for a node's ``bridge_config_path`` parameter (empty: the shipped file). A file that does
+    not load is a ValueError naming the parameter: a start-up error (swim_ros.entry.run_node)."""
+    try:
+        return load_bridge_config(path or None)
+    except BridgeConfigError as err:
+        raise ValueError(f"parameter bridge_config_path: {err}") from err
+
+
 def config_from_mapping(document: Any, origin: str = "<mapping>") -> BridgeConfig:
     if not isinstance(document, Mapping) or document.get("format_version") != FORMAT_VERSION:
         raise BridgeConfigError(f"{origin}: expected a mapping with format_version: {FORMAT_VERSION}")

@@ -4,7 +4,8 @@ import math
 import pytest
 import yaml
 
-from swim_hw_bridge.conversions import BridgeConfigError, config_from_mapping, default_config_path
+from swim_hw_bridge.conversions import (BridgeConfigError, config_from_mapping, default_config_path,
+                                        load_bridge_config, load_bridge_config_parameter)
 
 INCH_M = 0.0254
 OZ_IN_N_M = 0.0283495231 * 9.80665 * 0.0254
@@ -88,3 +89,10 @@ def test_device_config_round_trips_and_carries_backend_options(config):
     values = config.device_config("emulated")
     assert values["counter_bits"] == 32
     assert BridgeConfig.from_dict(values) == config
+
+
+def test_a_nodes_bridge_config_parameter_reads_the_shipped_file_when_empty_and_names_itself_when_bad(tmp_path):
+    assert load_bridge_config_parameter("") == load_bridge_config(None)
+    missing = tmp_path / "missing.yaml"
+    with pytest.raises(ValueError, match=f"parameter bridge_config_path: {missing}"):
+        load_bridge_config_parameter(str(missing))

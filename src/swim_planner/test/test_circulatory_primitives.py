@@ -27,7 +27,7 @@ from swim_planner.catalog import (CIRCULATORY_ENERGY_LEVELS_J, CIRCULATORY_FREE_
                                   CIRCULATORY_LONGER_S, INTERVALS_PER_S,
                                   circulatory_specs, cruise_id, default_specs)
 from swim_planner.build import solve_from_guess_or_blend
-from swim_planner.primitive_solver import solve_primitive
+from swim_planner.primitive_solver import rest_window_s, solve_primitive
 from swim_planner.primitives import (PlanningLimits, Primitive, PrimitiveType, cruise_mean_speed_m_s,
                                      cruise_strouhal_number, rest_boundary_state)
 from swim_planner.testing.consistency import REPLAY_TOLERANCE, replay_open_loop
@@ -360,9 +360,8 @@ def test_angle_of_attack_95th_percentile_over_the_samples_is_at_most_30_degrees(
     times = primitive.time_s
     from_rest_s = {PrimitiveType.ACCELERATE: times,
                    PrimitiveType.DECELERATE: times[-1] - times}.get(primitive.spec.primitive_type, times + np.inf)
-    window_s = primitive.spec.rest_window_s
-    bounded = from_rest_s >= (LIMITS.angle_of_attack_free_from_rest_s if window_s is None else window_s) - 1e-9
-    counted = bounded if window_s is not None else np.ones(len(times), dtype=bool)
+    bounded = from_rest_s >= rest_window_s(primitive.spec, LIMITS) - 1e-9
+    counted = bounded if primitive.spec.rest_window_s is not None else np.ones(len(times), dtype=bool)
     assert np.percentile(angles[counted], 95) <= ANGLE_OF_ATTACK_P95_LIMIT_RAD
     assert np.abs(angles[bounded]).max() <= LIMITS.angle_of_attack_limit_rad + BOUND_TOLERANCE_RAD
 

@@ -63,7 +63,7 @@ from std_srvs.srv import Trigger
 from swim_interfaces.msg import WakeStatistics, WakeVortices
 from swim_interfaces.srv import SetVehicleState
 
-from swim_hw_bridge.conversions import BridgeConfig, BridgeConfigError, load_bridge_config
+from swim_hw_bridge.conversions import BridgeConfig, load_bridge_config_parameter
 from swim_model import StateError, SwimModelError, load_rig
 from swim_planner.maneuver import DEFAULT_BOUNDS
 from swim_ros.codecs import MessageError, float_array, joint_state_arrays, stamp_of, torque_from_command
@@ -177,10 +177,7 @@ class SimNode(Node):
         value = lambda name: self.get_parameter(name).value  # noqa: E731
         self.mode = value("mode")
         rig = load_rig(value("rig_path") or None)
-        try:
-            bridge_config = load_bridge_config(value("bridge_config_path") or None)
-        except BridgeConfigError as err:
-            raise ValueError(f"parameter bridge_config_path: {err}") from err
+        bridge_config = load_bridge_config_parameter(value("bridge_config_path"))
         flow = value("flow")
         model = vehicle_model(flow, rig, value("constrained"), value("lane_radius_m") or None)
         fields = dataclasses.fields
