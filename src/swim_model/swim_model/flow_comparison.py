@@ -38,7 +38,8 @@ def read_measurements(path: Path) -> dict[str, list[tuple[float, float]]]:
 
 def compute(strouhal: list[float],
             models: tuple[str, ...] = ("circulatory", "wake")) -> dict[str, dict[str, list[float]]]:
-    """{model: {"strouhal", "thrust_coefficient", "efficiency", "peak_angle_of_attack_deg"}} for Anderson's case."""
+    """{model: {"strouhal", "thrust_coefficient", "efficiency", "peak_angle_of_attack_deg",
+    "peak_leading_edge_suction_parameter", "min_attached_weight"}} for Anderson's case (OscillatingFoilResult)."""
     speed = REYNOLDS * KINEMATIC_VISCOSITY_WATER_M2_S / CHORD_M
     heave = HEAVE_OVER_CHORD * CHORD_M
     foil = JoukowskiFoil(CHORD_M, THICKNESS_RATIO * CHORD_M, SPAN_M)
@@ -46,7 +47,8 @@ def compute(strouhal: list[float],
     results: dict[str, dict[str, list[float]]] = {}
     for model in models:
         rows: dict[str, list[float]] = {"strouhal": [], "thrust_coefficient": [], "efficiency": [],
-                                 "peak_angle_of_attack_deg": []}
+                                 "peak_angle_of_attack_deg": [], "peak_leading_edge_suction_parameter": [],
+                                 "min_attached_weight": []}
         for st in strouhal:
             run = oscillating_foil(foil, speed_m_s=speed, heave_amplitude_m=heave,
                                    pitch_amplitude_rad=math.atan(math.pi * st) - math.radians(ALPHA0_DEG),
@@ -58,6 +60,8 @@ def compute(strouhal: list[float],
             rows["thrust_coefficient"].append(run.thrust_coefficient)
             rows["efficiency"].append(run.efficiency)
             rows["peak_angle_of_attack_deg"].append(math.degrees(run.peak_angle_of_attack_rad))
+            rows["peak_leading_edge_suction_parameter"].append(run.peak_leading_edge_suction_parameter)
+            rows["min_attached_weight"].append(run.min_attached_weight)
         results[model] = rows
     return results
 

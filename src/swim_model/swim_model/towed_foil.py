@@ -130,8 +130,11 @@ class OscillatingFoilResult:
     ``thrust_coefficient`` T / (1/2 rho U^2 c s), ``power_coefficient`` P / (1/2 rho U^3 c s), ``efficiency`` T U / P,
     ``strouhal`` 2 h0 f / U, ``reduced_frequency`` w c / (2 U), ``peak_angle_of_attack_rad`` (largest |atan2(-V, U)| at
     the foil frame's origin), ``peak_angle_of_attack_at_pivot_rad``, ``lift_amplitude_n`` (first harmonic of the
-    force along +Y), ``mean_lift_n``. Series over the averaged cycles, shape (n,): ``time_s``, ``thrust_n``,
-    ``lift_n``, ``power_w``, ``angle_of_attack_rad``.
+    force along +Y), ``mean_lift_n``, and two indicators of separation over the averaged cycles:
+    ``peak_leading_edge_suction_parameter`` (largest |A0|, the leading-edge suction parameter before its cap,
+    swim_model.leading_edge) and ``min_attached_weight`` (the reduced model's smallest attached-flow weight w: 1
+    attached, 0 stalled; 1 for the wake, whose flow never stalls). Series over the averaged cycles, shape (n,):
+    ``time_s``, ``thrust_n``, ``lift_n``, ``power_w``, ``angle_of_attack_rad``.
     """
 
     model: str
@@ -146,6 +149,8 @@ class OscillatingFoilResult:
     peak_angle_of_attack_at_pivot_rad: float
     lift_amplitude_n: float
     mean_lift_n: float
+    peak_leading_edge_suction_parameter: float
+    min_attached_weight: float
     cycles: int
     averaged_cycles: int
     steps_per_cycle: int
@@ -244,9 +249,13 @@ def oscillating_foil(foil: JoukowskiFoil, speed_m_s: float, heave_amplitude_m: f
         x, y, theta = kinematics.pose(steps * dt)
         nu_end = kinematics.velocity(steps * dt)
         vortical = np.zeros((total_steps, 3))
+        suction_parameter = np.zeros(averaged_steps)
         for i in range(total_steps):
             force = wake.step(dt, (x[i], y[i], theta[i]), (nu_end[i, 0], nu_end[i, 1], nu_end[i, 2]))
             vortical[i] = (force.fx_n, force.fy_n, force.moment_n_m)
+            if i >= total_steps - averaged_steps:
+                suction_parameter[i - total_steps + averaged_steps] = wake.leading_edge_suction_parameter()
+        attached_weight = np.ones(1)
         time = (steps - 0.5) * dt          # the wake's force belongs to the middle of its step
         window = slice(total_steps - averaged_steps, total_steps)
         time = time[window]
@@ -260,7 +269,8 @@ def oscillating_foil(foil: JoukowskiFoil, speed_m_s: float, heave_amplitude_m: f
         window = slice(total_steps - averaged_steps, total_steps)
         time = np.arange(total_steps + 1, dtype=float)[window] * dt
         velocity = velocities[0::2][window]
-        fluid = flow.evaluate(velocity, lag[window])["f"]
+        terms = flow.evaluate(velocity, lag[window])
+        fluid, suction_parameter, attached_weight = terms["f"], terms["lesp"], terms["attached_weight"]
     force = fluid + kirchhoff_force(flow.added_mass, velocity, kinematics.acceleration(time))
 
     _, _, theta = kinematics.pose(time)
@@ -283,5 +293,7 @@ def oscillating_foil(foil: JoukowskiFoil, speed_m_s: float, heave_amplitude_m: f
         peak_angle_of_attack_rad=float(np.max(np.abs(angle))),
         peak_angle_of_attack_at_pivot_rad=float(np.max(np.abs(pivot_angle))),
         lift_amplitude_n=float(abs(harmonic)), mean_lift_n=float(np.mean(lift)),
+        peak_leading_edge_suction_parameter=float(np.max(np.abs(suction_parameter))),
+        min_attached_weight=float(np.min(attached_weight)),
         cycles=int(cycles), averaged_cycles=int(averaged_cycles), steps_per_cycle=int(steps_per_cycle),
         time_s=time, thrust_n=thrust, lift_n=lift, power_w=power, angle_of_attack_rad=angle)

@@ -437,6 +437,18 @@ class Wake:
         new = self.plane.to_circle((self.positions_m[-1:] - complex(x, y)) / rotation)
         self._map_vortices(np.append(zeta, new))
 
+    def leading_edge_suction_parameter(self) -> float:
+        """The flow's leading-edge suction parameter now, before the cap: A0 = q_LE / (4 |u|)
+        (``CirclePlane.leading_edge_suction_parameter``; sin(alpha) in the steady Kutta flow), dimensionless, signed
+        as the suction velocity of swim_model.flow. NaN before the first step."""
+        if self._pose is None:
+            return math.nan
+        _, known_le = self.plane.edge_potential_derivatives(self._current_circle_plane_positions(),
+                                                            self.circulations_m2_s, self._velocity)
+        u, v, _ = self._velocity
+        speed = math.sqrt(u * u + v * v + self.params.speed_regularization_m_s ** 2)
+        return float(self.plane.leading_edge_suction_parameter(known_le, self._velocity, speed))
+
     def _lost_suction(self) -> float:
         """The leading-edge suction the edge cannot hold, per metre of span along the chord, N/m: the attached
         flow's 4 pi rho r (LESP |u|)^2 less the same with LESP capped at critical_leading_edge_suction as
@@ -444,15 +456,12 @@ class Wake:
         critical = self.params.critical_leading_edge_suction
         if critical is None:
             return 0.0
-        plane = self.plane
-        _, known_le = plane.edge_potential_derivatives(self._current_circle_plane_positions(), self.circulations_m2_s,
-                                                       self._velocity)
         u, v, _ = self._velocity
         speed = math.sqrt(u * u + v * v + self.params.speed_regularization_m_s ** 2)
-        lesp = plane.leading_edge_suction_parameter(known_le, self._velocity, speed)
+        lesp = self.leading_edge_suction_parameter()
         capped = smooth_cap(lesp, critical, self.params.suction_cap_exponent)
         lost_squared = lesp * lesp - capped * capped
-        return float(4.0 * math.pi * self.params.rho_kg_m3 * plane.r_m * speed * speed * lost_squared)
+        return float(4.0 * math.pi * self.params.rho_kg_m3 * self.plane.r_m * speed * speed * lost_squared)
 
     def _impulses(self) -> tuple[complex, float]:
         """(I_v in the tank frame, L_v about the tank origin), per metre of span, from the kept impulse terms."""

@@ -136,7 +136,8 @@ def test_thrust_and_power_definitions():
 def test_reduced_model_agrees_with_the_wake_at_small_angles(k):
     """The rig's foil heaving (path angle 8 deg) and pitching 4 deg about c/3, pitch leading by 90 deg: peak angle
     of attack 4-7 deg. Mean thrust and lift amplitude within 15 % of the vortex wake's (both inviscid: no profile
-    drag). Measured: thrust +3.1, +2.7, +8.3, +7.5 %; lift +1.7, -2.1, -1.5, -2.0 % at k = 0.5, 1, 2, 4."""
+    drag). Measured: thrust +3.1, +2.7, +8.3, +7.5 %; lift +1.7, -2.1, -1.5, -2.0 % at k = 0.5, 1, 2, 4. The peak
+    leading-edge suction parameters agree within 15 % too (+2.2, -1.0, -4.1, -13.2 %), and neither flow stalls."""
     rig = load_rig()
     foil = JoukowskiFoil(rig.foil_chord_m, rig.foil_max_thickness_m, rig.foil_span_m)
     semichord, speed = 0.5 * rig.foil_chord_m, 0.2
@@ -151,6 +152,9 @@ def test_reduced_model_agrees_with_the_wake_at_small_angles(k):
     assert reduced.mean_thrust_n > 0.0
     assert reduced.mean_thrust_n == pytest.approx(wake.mean_thrust_n, rel=0.15)
     assert reduced.lift_amplitude_n == pytest.approx(wake.lift_amplitude_n, rel=0.15)
+    assert reduced.peak_leading_edge_suction_parameter == pytest.approx(wake.peak_leading_edge_suction_parameter,
+                                                                        rel=0.15)
+    assert reduced.min_attached_weight > 0.999 and wake.min_attached_weight == 1.0
 
 
 # --- against the tank -------------------------------------------------------------------------------------------------
@@ -163,6 +167,19 @@ WAKE_STROUHAL = [0.18, 0.27, 0.36, 0.46, 0.5]  # a subset: the wake costs second
 def test_reduced_model_thrust_against_the_tank(strouhal, measured):
     """Thrust coefficient within 20 % of the tank's (measured: +10, +7, -2, +0, +6, +4, +13 % for St 0.13-0.41)."""
     assert tank_run("circulatory", strouhal).thrust_coefficient == pytest.approx(measured, rel=0.20)
+
+
+def test_leading_edge_separation_does_not_single_out_the_highest_strouhal_numbers():
+    """Why the high-St misses are not the leading edge's: the peak leading-edge suction parameter, which sets where
+    a rounded edge separates whatever the motion (Ramesh et al., JFM 751, 2014), is no higher at St 0.46 and 0.50,
+    where both models overpredict the thrust, than at St 0.13-0.18, where they agree with the tank; the reduced
+    model's stall does act there (docs/flow_model.md, "What the misses are not")."""
+    low = [tank_run("circulatory", st) for st, _ in in_range("thrust_coefficient") if st < 0.2]
+    high = [tank_run("circulatory", st) for st, _ in in_range("thrust_coefficient") if st > 0.45]
+    assert len(low) == 2 and len(high) == 2
+    assert max(r.peak_leading_edge_suction_parameter for r in high) < min(
+        r.peak_leading_edge_suction_parameter for r in low)
+    assert min(r.min_attached_weight for r in low) > 0.999 and max(r.min_attached_weight for r in high) < 0.9
 
 
 @pytest.mark.parametrize("strouhal, measured", known(in_range("efficiency"), set(), ""))
