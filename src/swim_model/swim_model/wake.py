@@ -445,9 +445,12 @@ class Wake:
             return math.nan
         _, known_le = self.plane.edge_potential_derivatives(self._current_circle_plane_positions(),
                                                             self.circulations_m2_s, self._velocity)
+        return float(self.plane.leading_edge_suction_parameter(known_le, self._velocity, self._speed_m_s()))
+
+    def _speed_m_s(self) -> float:
+        """The foil's speed |u| = sqrt(U^2 + V^2 + eps^2) now, m/s (eps: speed_regularization_m_s)."""
         u, v, _ = self._velocity
-        speed = math.sqrt(u * u + v * v + self.params.speed_regularization_m_s ** 2)
-        return float(self.plane.leading_edge_suction_parameter(known_le, self._velocity, speed))
+        return math.sqrt(u * u + v * v + self.params.speed_regularization_m_s ** 2)
 
     def _lost_suction(self) -> float:
         """The leading-edge suction the edge cannot hold, per metre of span along the chord, N/m: the attached
@@ -456,8 +459,7 @@ class Wake:
         critical = self.params.critical_leading_edge_suction
         if critical is None:
             return 0.0
-        u, v, _ = self._velocity
-        speed = math.sqrt(u * u + v * v + self.params.speed_regularization_m_s ** 2)
+        speed = self._speed_m_s()
         lesp = self.leading_edge_suction_parameter()
         capped = smooth_cap(lesp, critical, self.params.suction_cap_exponent)
         lost_squared = lesp * lesp - capped * capped
