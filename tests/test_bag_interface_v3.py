@@ -81,11 +81,11 @@ def v3_messages(store):
         yield "joint_states", stamp_ns, bytes(store.serialize_cdr(joints, TOPICS["joint_states"]))
 
 
-def test_the_installed_v4_plan_cannot_read_a_v3_one():
-    """What makes the bag's own definitions necessary: v3 bytes do not decode as v4."""
+def test_the_installed_plan_cannot_read_a_v3_one():
+    """What makes the bag's own definitions necessary: v3 bytes do not decode as the installed version."""
     (_, _, plan), = [m for m, _ in zip(v3_messages(v3_typestore()), range(1))]
     installed = swim_typestore()
-    assert installed.types[PLAN].INTERFACE_VERSION == 4
+    assert installed.types[PLAN].INTERFACE_VERSION == 5
     with pytest.raises(Exception):
         installed.deserialize_cdr(plan, PLAN)
 

@@ -130,7 +130,7 @@ def test_rosbags_reads_what_the_nodes_publish(rclpy_context, flow_model):
     np.testing.assert_array_equal(plan.lag_states, np.asarray(sent["plan"].lag_states))
     np.testing.assert_array_equal(plan.lqr_gains, np.asarray(sent["plan"].lqr_gains))
     assert plan.segments[0].alpha_offset_rad == 0.5
-    assert plan.INTERFACE_VERSION == 4
+    assert plan.INTERFACE_VERSION == 5
     state = store.deserialize_cdr(received["tracking_state"], "swim_interfaces/msg/TrackingState")
     assert state.plan_time_s == 1.5 and state.segment_index == 3
     for field in ("output_torques", "estimated_lag_states", "planned_lag_states"):

@@ -1,14 +1,17 @@
 """swim_bringup's declarative launch files name only what exists: packages, executables, parameter files, parameters.
 
 ROS 2's `launch` is not installable here, so the launch files (XML and YAML front ends of launch_ros) are read
-with xml.etree and yaml, following launch_ros' Node.parse: `arg` (default), `node` (pkg, exec, name) and its
-`param` entries (`from` a file, or `name` with a `value` or nested `param`s), substitutions $(find-pkg-share PKG)
-and $(var NAME). Each node is then started for real (its installed executable, the launch file's parameter files
-and parameters, over DDS in the test's domain) and asked for its parameters through the rcl_interfaces services:
-the names it declares, and the values it took. Every parameter name the launch files and swim_bringup's config
-YAMLs set must be one of those, and the values must be the ones set (a file keyed by another node name is
-ignored by ROS without a word; this catches it). The negative cases misspell things in a temporary copy of the
-installed share and check that each is reported.
+with xml.etree and yaml, following launch_ros' Node.parse: `arg` (default, or a value given as on the command
+line), `node` (pkg, exec, name, an `if` or `unless` condition) and its `param` entries (`from` a file, or `name`
+with a `value` or nested `param`s), substitutions $(find-pkg-share PKG) and $(var NAME). Each launch file is read
+with its default arguments and with those of ARGUMENT_VARIANTS, so every node it can start is checked, and each
+such set must be what swim-bringup starts for the same choices (swim_bringup.bringup.bringup_specs): the same
+nodes, parameter files and parameters. Each node is then started for real (its installed executable, the launch
+file's parameter files and parameters, over DDS in the test's domain) and asked for its parameters through the
+rcl_interfaces services: the names it declares, and the values it took. Every parameter name the launch files
+and swim_bringup's config YAMLs set must be one of those, and the values must be the ones set (a file keyed by
+another node name is ignored by ROS without a word; this catches it). The negative cases misspell things in a
+temporary copy of the installed share and check that each is reported.
 """
 from __future__ import annotations
 
@@ -18,7 +21,7 @@ import re
 import shutil
 import xml.etree.ElementTree as ElementTree
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Optional
 
 import pytest
 import yaml
@@ -32,6 +35,16 @@ SUBSTITUTION = re.compile(r"\$\((\S+)\s+([^)]*)\)")
 #: a launched node's start, its parameter services up and discovered: several s for a node that builds its models
 #: at start on a loaded 2-core host, all of a launch file's nodes starting at once; 60 s margin
 NODE_START_TIMEOUT_S = 60.0
+#: the arguments each launch file is also read with, besides its defaults (`ros2 launch ... name:=value`), and
+#: swim_bringup.bringup.bringup_specs' keywords for the same set; the defaults are bringup_specs(plant)
+ARGUMENT_VARIANTS: dict[str, tuple[tuple[dict[str, str], dict[str, object]], ...]] = {
+    "sim.launch.yaml": (({"realtime": "true"}, {"realtime": True}),
+                        ({"sliding_mode": "false"}, {"sliding_mode": False})),
+    "bridge.launch.xml": (({"backend": "mf624"}, {"backend": "mf624"}),
+                          ({"sliding_mode": "false"}, {"sliding_mode": False})),
+}
+#: the plant each launch file starts, as swim-bringup names it
+LAUNCH_FILE_PLANTS = {"sim.launch.yaml": "sim", "bridge.launch.xml": "bridge"}
 #: the parameter services are idempotent, so a lost answer (one CI run lost sim_node's: "failed to send response
 #: (timeout)" in its log) is asked again; a node that is up answers in milliseconds, a try waits 10 s
 POLICY = RetryPolicy(attempt_timeout_s=10.0, attempts=3, discovery_timeout_s=NODE_START_TIMEOUT_S)
@@ -54,6 +67,12 @@ class LaunchNode:
     def key(self) -> tuple:
         return (self.package, self.executable, self.name, tuple(map(str, self.params_files)),
                 tuple(sorted((k, repr(v)) for k, v in self.parameters.items())))
+
+    @property
+    def names_key(self) -> tuple:
+        """The key without the inline parameters' values: what a node started for real checks, once."""
+        return (self.package, self.executable, self.name, tuple(map(str, self.params_files)),
+                tuple(sorted(self.parameters)))
 
 
 def installed_share(package: str) -> Path:
@@ -92,9 +111,22 @@ def flatten_params(entries: list[dict], prefix: str = "") -> dict[str, object]:
     return flat
 
 
+def condition_holds(source: str, attributes: dict, arguments: dict[str, str], share: Callable[[str], Path]) -> bool:
+    """An action's `if` or `unless` as launch evaluates it: true or false (or 1 or 0) after substitution."""
+    if "if" in attributes and "unless" in attributes:
+        raise LaunchFileError(f"{source}: 'if' and 'unless' on one action")
+    for key, holds_when in (("if", True), ("unless", False)):
+        if key in attributes:
+            value = substitute(str(attributes[key]), arguments, share).strip().lower()
+            if value not in ("true", "false", "1", "0"):
+                raise LaunchFileError(f"{source}: {key} {value!r} is not a boolean")
+            return (value in ("true", "1")) == holds_when
+    return True
+
+
 def node_from_entries(source: str, attributes: dict, params: list[dict], arguments: dict[str, str],
                       share: Callable[[str], Path]) -> LaunchNode:
-    unknown = set(attributes) - {"pkg", "exec", "name", "output", "param"}
+    unknown = set(attributes) - {"pkg", "exec", "name", "output", "param", "if", "unless"}
     if unknown:
         raise LaunchFileError(f"{source}: node attributes {sorted(unknown)} are not checked by this test")
     files = [Path(substitute(p["from"], arguments, share)) for p in params if "from" in p]
@@ -116,40 +148,71 @@ def xml_params(element: ElementTree.Element) -> list[dict]:
     return entries
 
 
-def read_xml(path: Path, share: Callable[[str], Path]) -> list[LaunchNode]:
+def unknown_given(path: Path, arguments: dict[str, str], given: dict[str, str]) -> None:
+    unknown = set(given) - set(arguments)
+    if unknown:
+        raise LaunchFileError(f"{path.name}: no arg {sorted(unknown)}")
+
+
+def read_xml(path: Path, share: Callable[[str], Path], given: dict[str, str]) -> list[LaunchNode]:
     root = ElementTree.parse(path).getroot()
     if root.tag != "launch":
         raise LaunchFileError(f"{path.name}: the root element is <{root.tag}>, not <launch>")
-    arguments, nodes = {}, []
+    arguments: dict[str, str] = {}
+    nodes = []
     for element in root:
         if element.tag == "arg":
-            arguments[element.attrib["name"]] = element.attrib.get("default", "")
+            name = element.attrib["name"]
+            arguments[name] = given.get(name, element.attrib.get("default", ""))
         elif element.tag == "node":
-            nodes.append(node_from_entries(path.name, {**element.attrib, "param": None}, xml_params(element),
-                                           arguments, share))
+            if condition_holds(path.name, element.attrib, arguments, share):
+                nodes.append(node_from_entries(path.name, {**element.attrib, "param": None}, xml_params(element),
+                                               arguments, share))
         else:
             raise LaunchFileError(f"{path.name}: <{element.tag}> is not checked by this test")
+    unknown_given(path, arguments, given)
     return nodes
 
 
-def read_yaml(path: Path, share: Callable[[str], Path]) -> list[LaunchNode]:
+def read_yaml(path: Path, share: Callable[[str], Path], given: dict[str, str]) -> list[LaunchNode]:
     document = yaml.safe_load(path.read_text())
     if not isinstance(document, dict) or list(document) != ["launch"]:
         raise LaunchFileError(f"{path.name}: the document is not one 'launch' list")
-    arguments, nodes = {}, []
+    arguments: dict[str, str] = {}
+    nodes = []
     for action in document["launch"]:
         (kind, body), = action.items()
         if kind == "arg":
-            arguments[body["name"]] = str(body.get("default", ""))
+            arguments[body["name"]] = given.get(body["name"], str(body.get("default", "")))
         elif kind == "node":
-            nodes.append(node_from_entries(path.name, body, body.get("param", []), arguments, share))
+            if condition_holds(path.name, body, arguments, share):
+                nodes.append(node_from_entries(path.name, body, body.get("param", []), arguments, share))
         else:
             raise LaunchFileError(f"{path.name}: '{kind}' is not checked by this test")
+    unknown_given(path, arguments, given)
     return nodes
 
 
-def read_launch_file(path: Path, share: Callable[[str], Path] = installed_share) -> list[LaunchNode]:
-    return read_xml(path, share) if path.suffix == ".xml" else read_yaml(path, share)
+def read_launch_file(path: Path, share: Callable[[str], Path] = installed_share,
+                     given: Optional[dict[str, str]] = None) -> list[LaunchNode]:
+    """The nodes the launch file starts with the arguments given (name: value, as `name:=value` on the command
+    line), the others at their defaults."""
+    reader = read_xml if path.suffix == ".xml" else read_yaml
+    return reader(path, share, given or {})
+
+
+def argument_sets(path: Path) -> list[dict[str, str]]:
+    """The arguments a launch file is checked with: none given (its defaults), then ARGUMENT_VARIANTS'."""
+    return [{}] + [given for given, _ in ARGUMENT_VARIANTS.get(path.name, ())]
+
+
+def every_node(path: Path, share: Callable[[str], Path] = installed_share) -> list[LaunchNode]:
+    """Each node the launch file starts with any of its argument_sets, once (by LaunchNode.key)."""
+    nodes: dict[tuple, LaunchNode] = {}
+    for given in argument_sets(path):
+        for node in read_launch_file(path, share, given):
+            nodes.setdefault(node.key, node)
+    return list(nodes.values())
 
 
 def launch_files(share_dir: Path) -> list[Path]:
@@ -195,7 +258,7 @@ def problems(share_dir: Path, declared: dict[tuple[str, str], set[str]]) -> list
     nodes = []
     for path in launch_files(share_dir):
         try:
-            nodes += read_launch_file(path, lambda p: share_dir if p == "swim_bringup" else installed_share(p))
+            nodes += every_node(path, lambda p: share_dir if p == "swim_bringup" else installed_share(p))
         except (LaunchFileError, KeyError, ElementTree.ParseError, yaml.YAMLError) as err:
             found.append(f"{path.name}: cannot be read: {err!r}")
     for node in nodes:
@@ -247,7 +310,7 @@ def config_problems(share_dir: Path, nodes: list[LaunchNode], declared: dict[tup
 
 # --- the nodes themselves ---------------------------------------------------------------------------------------
 def installed_nodes() -> list[LaunchNode]:
-    return [node for path in launch_files(installed_share("swim_bringup")) for node in read_launch_file(path)]
+    return [node for path in launch_files(installed_share("swim_bringup")) for node in every_node(path)]
 
 
 def node_parameters(context, node_name: str) -> dict[str, object]:
@@ -282,8 +345,10 @@ def parameter_argument(name: str, value: object) -> str:
 
 @pytest.fixture(scope="module")
 def live_parameters(ros_domain, tmp_path_factory):
-    """{LaunchNode key: {name: value}} of every node of every installed launch file, each started as its launch
-    file says (one launch file at a time: both start a tracker_node)."""
+    """{LaunchNode key: {name: value}} of the nodes of every installed launch file and argument set, each started
+    as its launch file says (one launch file and argument set at a time: each starts a tracker_node). A node that
+    differs from one started only in an inline parameter's value (sliding_mode:=false, backend:=mf624) is not
+    started again: its names are checked, and ROS types a value the same for every node."""
     import rclpy
     from swim_bringup.system import System
     from swim_ros.processes import NodeSpec
@@ -291,16 +356,21 @@ def live_parameters(ros_domain, tmp_path_factory):
     context = rclpy.Context()
     rclpy.init(context=context)
     found = {}
+    started = set()
     try:
-        for path in launch_files(installed_share("swim_bringup")):
-            nodes = [n for n in read_launch_file(path) if n.key not in found]
+        for path, given in [(p, g) for p in launch_files(installed_share("swim_bringup")) for g in argument_sets(p)]:
+            nodes = [n for n in read_launch_file(path, given=given) if n.names_key not in started]
+            if not nodes:
+                continue
+            # launch_ros' order: the files, then the inline parameters (the later of two values of a name wins)
             specs = [NodeSpec(n.package, n.executable,
-                              parameters=tuple(parameter_argument(k, v) for k, v in n.parameters.items()),
                               ros_arguments=tuple(a for f in n.params_files for a in ("--params-file", str(f)))
+                              + tuple(a for k, v in n.parameters.items() for a in ("-p", parameter_argument(k, v)))
                               + ("-r", f"__node:={n.name}")) for n in nodes]
-            with System(specs, logs / path.name):
+            with System(specs, logs / f"{path.name}{''.join(f'-{k}-{v}' for k, v in given.items())}"):
                 for node in nodes:
                     found[node.key] = node_parameters(context, node.name)
+                    started.add(node.names_key)
     finally:
         rclpy.try_shutdown(context=context)
     return found
@@ -310,7 +380,7 @@ def live_parameters(ros_domain, tmp_path_factory):
 def declared(live_parameters) -> dict[tuple[str, str], set[str]]:
     names: dict[tuple[str, str], set[str]] = {}
     for node in installed_nodes():
-        names.setdefault((node.package, node.executable), set()).update(live_parameters[node.key])
+        names.setdefault((node.package, node.executable), set()).update(live_parameters.get(node.key, ()))
     return names
 
 
@@ -324,12 +394,43 @@ def test_every_launch_file_is_installed_as_written():
 
 
 def test_the_launch_files_start_the_closed_loop_on_either_plant():
-    started = {path.name: {(n.package, n.executable) for n in read_launch_file(path)}
-               for path in launch_files(installed_share("swim_bringup"))}
-    loop = {("swim_planner", "planner_node"), ("swim_controller", "tracker_node"),
-            ("swim_viz", "rig_state_publisher"), ("swim_viz", "marker_node")}
-    assert started == {"bridge.launch.xml": loop | {("swim_hw_bridge", "bridge_node")},
-                       "sim.launch.yaml": loop | {("swim_sim", "sim_node")}}
+    loop = [("swim_planner", "planner_node"), ("swim_controller", "tracker_node"), ("swim_bringup", "maneuver_node"),
+            ("swim_viz", "rig_state_publisher"), ("swim_viz", "marker_node")]
+    plants = {"bridge.launch.xml": ("swim_hw_bridge", "bridge_node"), "sim.launch.yaml": ("swim_sim", "sim_node")}
+    paths = launch_files(installed_share("swim_bringup"))
+    assert [path.name for path in paths] == sorted(plants)
+    for path in paths:
+        for given in argument_sets(path):
+            started = sorted((n.package, n.executable) for n in read_launch_file(path, given=given))
+            assert started == sorted([plants[path.name], *loop]), f"{path.name} {given}"
+
+
+def started_by_launch_file(nodes: list[LaunchNode]) -> set[tuple]:
+    """(package, executable, node name, parameter files, inline parameters) of each node, the files resolved."""
+    return {(n.package, n.executable, n.name, tuple(f.resolve() for f in n.params_files),
+             tuple(sorted((name, repr(value)) for name, value in n.parameters.items()))) for n in nodes}
+
+
+def started_by_swim_bringup(specs) -> set[tuple]:
+    """The same of NodeSpecs: their `name:=value` overrides typed as ROS types them (YAML), the node named for its
+    executable (swim-bringup renames none)."""
+    def typed_override(override: str) -> tuple[str, str]:
+        name, _, value = override.partition(":=")
+        return name, repr(yaml.safe_load(value))
+    assert all(not spec.ros_arguments for spec in specs)
+    return {(s.package, s.executable, s.executable, () if s.params_file is None else (s.params_file.resolve(),),
+             tuple(sorted(typed_override(o) for o in s.parameters))) for s in specs}
+
+
+def test_swim_bringup_starts_what_the_launch_files_start():
+    """Each launch file with each argument set against swim-bringup with the same choices: the same nodes with the
+    same parameter files and parameters."""
+    from swim_bringup.bringup import bringup_specs
+    for path in launch_files(installed_share("swim_bringup")):
+        plant = LAUNCH_FILE_PLANTS[path.name]
+        for given, keywords in [({}, {}), *ARGUMENT_VARIANTS.get(path.name, ())]:
+            launched = started_by_launch_file(read_launch_file(path, given=given))
+            assert launched == started_by_swim_bringup(bringup_specs(plant, **keywords)), f"{path.name} {given}"
 
 
 def test_everything_named_exists_and_every_parameter_is_declared(declared):
@@ -337,7 +438,7 @@ def test_everything_named_exists_and_every_parameter_is_declared(declared):
 
 
 def test_the_running_nodes_hold_the_values_set(live_parameters):
-    for node in installed_nodes():
+    for node in [n for n in installed_nodes() if n.key in live_parameters]:
         held = live_parameters[node.key]
         expected = expected_values(node)
         assert expected, f"{node.name}: sets no parameters"
@@ -369,6 +470,9 @@ def edit(path: Path, old: str, new: str) -> None:
      "config/bridge.yaml: parameter watchdog_period is not declared by bridge_node"),
     ("config/sim.yaml", "sim_node:", "simulator:", "sim.yaml has no parameters for a node named sim_node"),
     ("launch/sim.launch.yaml", "$(var sliding_mode)", "$(var sliding)", "$(var sliding): no such arg"),
+    ("launch/sim.launch.yaml", "if: $(var realtime)", "if: $(var realtme)", "$(var realtme): no such arg"),
+    ("config/maneuver.yaml", "rest_angular_speed_rad_s:", "rest_angular_speed:",
+     "config/maneuver.yaml: parameter rest_angular_speed is not declared by maneuver_node"),
 ])
 def test_a_misspelling_is_reported(share_copy, declared, file, old, new, report):
     assert problems(share_copy, declared) == []

@@ -28,6 +28,9 @@ setup(
             'swim-analyze = swim_bringup.analysis:main',
             'swim-experiments = swim_bringup.experiments:main',
             'swim-record = swim_bringup.record:main',
+            'swim-bringup = swim_bringup.bringup:main',
+            'swim-maneuver = swim_bringup.maneuver_cli:main',
+            'maneuver_node = swim_bringup.maneuver_node:main',
         ],
     },
 )

@@ -3,7 +3,9 @@
 run_recorded brings up the nodes (system.System), requests and executes the maneuver while the run's topics are
 recorded to a bag (run_client.RunClient), stops the nodes, and writes report.json (reports.RunReport) and the
 figures (analysis). run_failures says why a report is not a success. The tracker's tolerances of a run default to
-RUN_TOLERANCES; add_tolerance_arguments and parse_with_tolerances give a CLI the options for them.
+RUN_TOLERANCES; add_tolerance_arguments and parse_with_tolerances give a CLI the options for them (tolerances_of
+reads them from a parser of subcommands). write_run_report analyses a recorded run's bag and writes its report and
+figures: run_recorded's last step, and swim-maneuver's after a run it recorded.
 """
 from __future__ import annotations
 
@@ -71,8 +73,15 @@ def run_recorded(specs: list[NodeSpec], run_dir: Path, primitive_ids: list[str],
                 raise RunError(f"{', '.join(system.dead())} died (see {run_dir / 'logs'})")
         result = run_maneuver(run_dir / "bag", primitive_ids, repeat_counts, time_scale, timeout_s, on_progress,
                               tolerances)
+    return write_run_report(run_dir, result, started)
+
+
+def write_run_report(run_dir: Path, result: TrackerResult, started_s: float) -> RunReport:
+    """Analyse the run's bag (run_dir/bag) and write report.json and the figures into run_dir; the report, with
+    the tracker's result and the wall time from started_s (time.monotonic) to now. MissingTopic (analysis) if the
+    bag holds no tracked period."""
     analysis = analyze(run_dir / "bag")
-    report = RunReport(analysis.measures, analysis.bridge, result, time.monotonic() - started)
+    report = RunReport(analysis.measures, analysis.bridge, result, time.monotonic() - started_s)
     report.write(run_dir / "report.json")
     write_figures(run_dir / "bag", run_dir)
     return report
@@ -104,9 +113,15 @@ def parse_with_tolerances(parser: argparse.ArgumentParser, argv: Optional[list[s
     add_tolerance_arguments(parser)
     args = parser.parse_args(argv)
     try:
-        args.tolerances = Tolerances(**{field.name: getattr(args, field.name)
-                                        for field in dataclasses.fields(Tolerances)})
-        args.tolerances.validate()
+        args.tolerances = tolerances_of(args)
     except ValueError as err:
         parser.error(str(err))
     return args
+
+
+def tolerances_of(args: argparse.Namespace) -> Tolerances:
+    """The Tolerances that the options of add_tolerance_arguments name; ValueError if one is negative or not
+    finite."""
+    tolerances = Tolerances(**{field.name: getattr(args, field.name) for field in dataclasses.fields(Tolerances)})
+    tolerances.validate()
+    return tolerances

@@ -88,17 +88,26 @@ def sim_mode(params_file: Path, overrides: tuple[str, ...]) -> str:
 
 
 #: what draws a run in RViz or Foxglove (swim_viz): the rig's URDF and /tf, and the markers of its paths. They
-#: only read joint_states (best effort) and the plan, so the loop runs the same with or without them.
-VISUALIZATION_SPECS = (NodeSpec("swim_viz", "rig_state_publisher"), NodeSpec("swim_viz", "marker_node"))
+#: only read joint_states (best effort) and the plan, so the loop runs the same with or without them. Their
+#: publishing rates are the launch files' (tests/test_launch_files.py holds them equal)
+VISUALIZATION_SPECS = (NodeSpec("swim_viz", "rig_state_publisher", parameters=("publish_rate_hz:=30.0",)),
+                       NodeSpec("swim_viz", "marker_node", parameters=("publish_rate_hz:=10.0",)))
+
+
+def maneuver_spec(config: Path) -> NodeSpec:
+    """The operator's maneuver server with config's maneuver.yaml: the perform_maneuver action, which plans through
+    the planner and tracks through the tracker from where the vehicle is."""
+    return NodeSpec("swim_bringup", "maneuver_node", config / "maneuver.yaml")
 
 
 def closed_loop_specs(config: Path, sim_overrides: tuple[str, ...] = (),
                       tracker_overrides: tuple[str, ...] = (), plant: str = "sim",
-                      visualization: bool = True) -> list[NodeSpec]:
+                      visualization: bool = True, maneuver: bool = False) -> list[NodeSpec]:
     """The plant (sim_node or bridge_node, see PLANTS), planner and tracker with the parameter files in config,
-    then VISUALIZATION_SPECS if visualization; sim_overrides go to the plant node, whichever it is. With the
-    simulator in lock-step (unless overridden to real time) the tracker's stale limit is LOCKSTEP_STALE_OVERRIDE
-    unless tracker_overrides set one."""
+    then the maneuver server (maneuver_spec) if maneuver, then VISUALIZATION_SPECS if visualization; sim_overrides go
+    to the plant node, whichever it is. With the simulator in lock-step (unless overridden to real time) the
+    tracker's stale limit is LOCKSTEP_STALE_OVERRIDE unless tracker_overrides set one. A run that drives the
+    tracker itself (swim-demo, swim-experiments) leaves the maneuver server out; swim-bringup starts it."""
     if plant not in PLANTS:
         raise ValueError(f"plant must be one of {', '.join(PLANTS)}, got {plant!r}")
     if plant == "sim" and sim_mode(config / PLANTS["sim"][2], sim_overrides) == "lockstep" \
@@ -108,4 +117,5 @@ def closed_loop_specs(config: Path, sim_overrides: tuple[str, ...] = (),
     return [NodeSpec(package, executable, config / params_file, sim_overrides),
             NodeSpec("swim_planner", "planner_node", config / "planner.yaml"),
             NodeSpec("swim_controller", "tracker_node", config / "tracker.yaml", tracker_overrides),
+            *([maneuver_spec(config)] if maneuver else []),
             *(VISUALIZATION_SPECS if visualization else ())]

@@ -48,10 +48,15 @@ def plan_cdr(store, lane_radius_m):
     return bytes(store.serialize_cdr(message, "swim_interfaces/msg/PlannedTrajectory"))
 
 
-def record_constrained_run(path, names):
+def record_constrained_run(path, names, store=None):
     """A constrained run ALPHA_OFFSET_RAD behind its plan for 2 s, under the topic names given: names maps each of
-    MEASURED to the bag's name for it."""
-    writer = BagWriter(path, {names[topic]: RUN_TOPICS[topic] for topic in MEASURED})
+    MEASURED to the bag's name for it. store: the type store whose definitions the bag carries (default: the
+    installed ones)."""
+    writer = BagWriter(path, {})
+    if store is not None:
+        writer.store = store
+    for topic in MEASURED:
+        writer.add_topic(names[topic], RUN_TOPICS[topic])
     writer.write(names["/plan"], 1, plan_cdr(writer.store, LANE_M))
     for k in range(PERIODS):
         time_s = k * PERIOD_S
@@ -241,3 +246,23 @@ def test_a_corrupt_bag_beside_a_good_one_no_traceback(tmp_path):
     assert result.returncode == EXIT_UNREADABLE
     assert "Traceback" not in result.stderr and result.stderr.startswith(f"swim-analyze: {bad}")
     assert "longitudinal_error_two_norm_m_s05" in result.stdout
+
+
+def test_a_version_4_bag_analyses_as_this_versions(tmp_path):
+    """Version 5 changed no message a run records: a bag written with version 4's PlannedTrajectory definition
+    (its INTERFACE_VERSION constant 4) reads back with it and is measured as the same run written with version 5's."""
+    from ament_index_python.packages import get_package_share_directory
+    from rosbags.typesys import Stores, get_typestore
+    store = get_typestore(Stores.ROS2_JAZZY)
+    for path in sorted((Path(get_package_share_directory("swim_interfaces")) / "msg").glob("*.msg")):
+        text = path.read_text()
+        if path.stem == "PlannedTrajectory":
+            assert "uint32 INTERFACE_VERSION = 5" in text
+            text = text.replace("INTERFACE_VERSION = 5", "INTERFACE_VERSION = 4")
+        store.register(get_types_from_msg(text, f"swim_interfaces/msg/{path.stem}"))
+    names = {t: t for t in MEASURED}
+    current = record_constrained_run(tmp_path / "v5", names)
+    older = record_constrained_run(tmp_path / "v4", names, store)
+    (_, _, plan), = read_messages(older, ("/plan",))
+    assert (plan.INTERFACE_VERSION, plan.interface_version) == (4, 4)
+    assert analyze(older) == analyze(current)

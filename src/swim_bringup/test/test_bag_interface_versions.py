@@ -112,7 +112,7 @@ def test_the_installed_types_cannot_read_a_v2_message():
     store = v2_typestore()
     (_, _, plan), (_, _, tracking) = [m for m, _ in zip(v2_messages(store), range(2))]
     installed = swim_typestore()
-    assert installed.types[TOPICS["plan"]].INTERFACE_VERSION == 4
+    assert installed.types[TOPICS["plan"]].INTERFACE_VERSION == 5
     for cdr, msgtype in ((plan, TOPICS["plan"]), (tracking, TOPICS["tracking_state"])):
         with pytest.raises(Exception):
             installed.deserialize_cdr(cdr, msgtype)

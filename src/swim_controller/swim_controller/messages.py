@@ -1,7 +1,8 @@
 """Between ROS messages and the tracker's types: checked, so a bad message is refused, never used.
 
-PlannedTrajectory (swim_interfaces v4) <-> trajectory.Trajectory: ``trajectory_to_message`` (the planner's
-encoder) and ``trajectory_from_message`` (the tracker's decoder) side by side, so the layout is written once.
+PlannedTrajectory (swim_interfaces v5; v4 plans are read too) <-> trajectory.Trajectory: ``trajectory_to_message``
+(the planner's encoder) and ``trajectory_from_message`` (the tracker's decoder) side by side, so the layout is
+written once.
 """
 from __future__ import annotations
 
@@ -21,8 +22,11 @@ from swim_model.vehicle import JOINT_NAMES_CONSTRAINED, JOINT_NAMES_UNCONSTRAINE
 from swim_ros.codecs import MessageError, float_array, joint_state_arrays, seconds_of
 
 Array = npt.NDArray[np.float64]
-#: the PlannedTrajectory layout this module writes and reads (swim_interfaces' INTERFACE_VERSION)
-SUPPORTED_INTERFACE_VERSION = 4
+#: the interface version this module writes into a PlannedTrajectory (swim_interfaces' INTERFACE_VERSION)
+SUPPORTED_INTERFACE_VERSION = 5
+#: the versions whose PlannedTrajectory layout is this one's, so their plans are read as they are (version 5 added
+#: the maneuver action and the primitive list, not plan fields)
+READABLE_INTERFACE_VERSIONS = (4, SUPPORTED_INTERFACE_VERSION)
 #: what the plans of older interface versions lack (named when one is refused)
 OLDER_PLAN_VERSIONS = {
     2: "does not say which flow model it was made with nor carry the flow's lag states",
@@ -64,12 +68,13 @@ def trajectory_from_message(plan: PlannedTrajectory) -> Trajectory:
     that is not swim_model's, arrays of the wrong length (the lag states: N x n_lag, none for the ideal flow; the
     disturbance bounds: N or none), non-finite or (the disturbance bounds) negative values, times out of order or
     not from 0, values or their rates past MAX_PLAN_MAGNITUDE, segments that do not tile the samples."""
-    if plan.interface_version != SUPPORTED_INTERFACE_VERSION:
+    if plan.interface_version not in READABLE_INTERFACE_VERSIONS:
         missing = OLDER_PLAN_VERSIONS.get(plan.interface_version)
         older = f" (a version {plan.interface_version} plan {missing}: plan it again with this version's planner)" \
             if missing else ""
-        raise PlanError(f"plan interface version {plan.interface_version}, this tracker reads "
-                        f"{SUPPORTED_INTERFACE_VERSION}{older}")
+        readable = " and ".join(map(str, READABLE_INTERFACE_VERSIONS))
+        raise PlanError(f"plan interface version {plan.interface_version}, this tracker reads versions "
+                        f"{readable}{older}")
     samples = len(plan.time_from_start_s)
     if samples > MAX_TRACKED_SAMPLES:
         raise PlanError(f"the plan has {samples} samples, more than the largest plan this tracker accepts "

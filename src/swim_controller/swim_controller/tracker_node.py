@@ -7,7 +7,8 @@ Topics:
                                                     one per state received (the state source sets the rate)
     tracking_state (pub, swim_interfaces/TrackingState)  reference, feedback, error, output per period
 Action ``execute_plan`` (swim_interfaces/action/ExecutePlan): one active goal; a new goal preempts it
-(PREEMPTED); cancel holds the foil where it is (CANCELED); feedback at ``feedback_rate_hz``.
+(PREEMPTED); cancel holds the foil where it is (CANCELED); feedback at ``feedback_rate_hz`` (PHASE_TRACKING), and
+once when a goal starts to wait for its vehicle model (PHASE_WAITING_FOR_MODEL).
 Safety: no valid state for ``stale_after_periods`` sample periods -> zero torque, the goal aborts with
 STATE_LOST (a command a period, stamped with the last valid state's stamp, zero before any: command stamps never
 run backwards, and a lock-step simulator never takes one as the answer to a newer state); a state with wrong
@@ -351,7 +352,8 @@ class TrackerNode(Node):
             return
         goal.last_feedback_monotonic = now
         progress = min(goal.supervisor.elapsed_s / goal.duration_s, 1.0)
-        goal.handle.publish_feedback(ExecutePlan.Feedback(state=self._last_tracking, progress=progress))
+        goal.handle.publish_feedback(ExecutePlan.Feedback(phase=ExecutePlan.Feedback.PHASE_TRACKING,
+                                                          state=self._last_tracking, progress=progress))
 
     def _check_stale(self) -> None:
         limit = self.get_parameter("stale_after_periods").value * self.get_parameter("sample_period_s").value
@@ -425,11 +427,12 @@ class TrackerNode(Node):
             if trajectory.lane_radius_m >= tank_radius_m:   # the rig file's rule for its own lanes
                 raise PlanError(f"plan lane radius {trajectory.lane_radius_m!r} m is not inside the tank "
                                 f"(radius {tank_radius_m} m)")
+            key = self._model_key(trajectory.constrained, trajectory.lane_radius_m, trajectory.flow_model)
+            if key not in self._models:
+                handle.publish_feedback(ExecutePlan.Feedback(phase=ExecutePlan.Feedback.PHASE_WAITING_FOR_MODEL))
             self._waiting_for_model.append(handle)
             try:
-                model = await self._model(self._model_key(trajectory.constrained, trajectory.lane_radius_m,
-                                                          trajectory.flow_model),
-                                          lambda: handle.is_cancel_requested or arrival != self._goals_received)
+                model = await self._model(key, lambda: handle.is_cancel_requested or arrival != self._goals_received)
             finally:
                 self._waiting_for_model.remove(handle)
             time_scale = self.get_parameter("time_scale").value

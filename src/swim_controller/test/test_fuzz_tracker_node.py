@@ -168,9 +168,9 @@ LARGEST_FLOAT = 1.7976931348623157e308
 #: infinite end time, a value whose rates overflow, steps of 1e-300 s and a lane of 1e300 m, plans a Trajectory's
 #: own checks pass and only the decoder's range check and tracker_node's tank check refuse.
 PLAN_DEFECTS = {
-    # every version but the one the tracker reads (swim_controller.messages.SUPPORTED_INTERFACE_VERSION, 4): the
-    # older ones, the next one and the largest uint32
-    "interface version": tuple(("", v) for v in (1.0, 0.0, 2.0, 3.0, 5.0, 4294967295.0)),
+    # every version but those the tracker reads (swim_controller.messages.READABLE_INTERFACE_VERSIONS, 4 and 5):
+    # the older ones, the next one and the largest uint32
+    "interface version": tuple(("", v) for v in (1.0, 0.0, 2.0, 3.0, 6.0, 4294967295.0)),
     "too many samples": (("", 0.0),),
     "no samples": (("", 0.0),),
     "one sample": (("", 0.0),),
@@ -466,10 +466,10 @@ def test_fuzzed_valid_plans_preempt_and_are_tracked_within_the_limits(tracker, r
     check_published(tracker, plant, tracking, feedback, torque_limits)
 
 
-def test_no_interface_version_defect_is_the_supported_version():
-    """A version bump must move the defects too: a plan of the supported version is no defect."""
-    from swim_controller.messages import SUPPORTED_INTERFACE_VERSION
-    assert all(value != SUPPORTED_INTERFACE_VERSION for _, value in PLAN_DEFECTS["interface version"])
+def test_no_interface_version_defect_is_a_readable_version():
+    """A version bump must move the defects too: a plan of a version the tracker reads is no defect."""
+    from swim_controller.messages import READABLE_INTERFACE_VERSIONS
+    assert all(value not in READABLE_INTERFACE_VERSIONS for _, value in PLAN_DEFECTS["interface version"])
 
 
 @pytest.mark.parametrize("defect", PLAN_DEFECTS)

@@ -37,6 +37,13 @@ def test_the_version_written_is_the_interface_version():
     assert SUPPORTED_INTERFACE_VERSION == PlannedTrajectory.INTERFACE_VERSION
 
 
+def test_a_version_4_plan_reads_as_this_version(trajectory):
+    """Version 5 added the maneuver action and the primitive list, no plan field: a v4 plan is read as it is."""
+    message = trajectory_to_message(trajectory, Time(sec=5))
+    message.interface_version = 4
+    assert_same_trajectory(trajectory_from_message(message), trajectory)
+
+
 def test_round_trip_is_bit_for_bit(trajectory):
     message = trajectory_to_message(trajectory, Time(sec=5))
     assert message.header.stamp.sec == 5 and not message.constrained
@@ -71,7 +78,7 @@ def _corrupt(message, bad):
 
 
 @pytest.mark.parametrize("bad, reason", [
-    ("version", f"interface version {SUPPORTED_INTERFACE_VERSION + 1}, this tracker reads "
+    ("version", f"interface version {SUPPORTED_INTERFACE_VERSION + 1}, this tracker reads versions 4 and "
                 f"{SUPPORTED_INTERFACE_VERSION}"),
     ("joint names", r"plan joints \['alpha', 'R', 'phi', 'psi'\] are not the free vehicle's"),
     ("constrained flag", "are not the constrained vehicle's"),

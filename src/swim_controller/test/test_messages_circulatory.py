@@ -35,7 +35,7 @@ def circulatory_trajectory(nq: int, seed: int = 5) -> Trajectory:
 def test_a_circulatory_plan_round_trips_bit_for_bit(nq):
     sent = circulatory_trajectory(nq)
     message = trajectory_to_message(sent, Time(sec=2))
-    assert message.interface_version == PlannedTrajectory.INTERFACE_VERSION == SUPPORTED_INTERFACE_VERSION == 4
+    assert message.interface_version == PlannedTrajectory.INTERFACE_VERSION == SUPPORTED_INTERFACE_VERSION == 5
     assert message.flow_model == "circulatory"
     np.testing.assert_array_equal(np.asarray(message.lag_states), sent.lag.ravel())   # row-major N x n_lag
     got = trajectory_from_message(message)
@@ -94,9 +94,10 @@ def broken(bad: str) -> PlannedTrajectory:
 
 
 @pytest.mark.parametrize("bad, reason", [
-    ("version 2", "plan interface version 2, this tracker reads 4 \\(a version 2 plan does not say which flow model"),
-    ("version 3", "plan interface version 3, this tracker reads 4 \\(a version 3 plan does not carry the sliding "
-                  "mode's disturbance bound"),
+    ("version 2", "plan interface version 2, this tracker reads versions 4 and 5 \\(a version 2 plan does not say "
+                  "which flow model"),
+    ("version 3", "plan interface version 3, this tracker reads versions 4 and 5 \\(a version 3 plan does not "
+                  "carry the sliding mode's disturbance bound"),
     ("flow model", "plan flow model 'potential' is not one of ideal, circulatory"),
     ("no flow model", "plan flow model '' is not one of ideal, circulatory"),
     ("short lag", f"plan lag_states has {2 * SAMPLES - 1} values, expected {2 * SAMPLES} for {SAMPLES} samples"),

@@ -242,6 +242,8 @@ def test_executes_a_plan_from_a_perturbed_start_within_tolerance(rig_loop, plan_
     assert np.all(np.abs(np.array(plant.torques)) <= limits + 1e-12)
     # feedback: progress rises through [0, 1] and each carries the tracking state's own error
     progress = [f.feedback.progress for f in feedback]
+    # the ideal flow's constrained model on the default lane is built at start: no wait for it
+    assert {f.feedback.phase for f in feedback} == {ExecutePlan.Feedback.PHASE_TRACKING}
     assert len(progress) >= 3 and np.all(np.diff(progress) > 0) and 0.0 <= progress[0] and progress[-1] <= 1.0
     state = feedback[-1].feedback.state
     assert np.allclose(np.subtract(state.reference.positions, state.feedback.positions), state.error.positions)
@@ -299,13 +301,19 @@ def test_a_new_lane_model_is_built_while_the_plan_under_way_is_tracked(rig_loop,
     second_handle, second = send(plant, client, on_lane(plan_message, NEW_LANES_M[0]), feedback.append)
     answers_s = []
     deadline = time.monotonic() + MODEL_BUILD_TIMEOUT_S
-    while not feedback:   # the new lane's plan under way
+    def tracking() -> bool:
+        return any(f.feedback.phase == ExecutePlan.Feedback.PHASE_TRACKING for f in feedback)
+    while not tracking():   # the new lane's plan under way
         start = time.monotonic()
         plant.step()
         answers_s.append(time.monotonic() - start)
         assert start < deadline and not second.done(), "the plan on the new lane never started"
     assert run_until(plant, first, 0).error_code in (ExecutePlan.Result.PREEMPTED, ExecutePlan.Result.SUCCESSFUL)
     assert max(answers_s) < SLOWEST_ANSWER_S, f"a state waited {max(answers_s):.3f} s during the build"
+    # the wait was announced first, once, with no tracking state yet
+    assert feedback[0].feedback.phase == ExecutePlan.Feedback.PHASE_WAITING_FOR_MODEL
+    assert feedback[0].feedback.state.plan_time_s == 0.0 and not feedback[0].feedback.state.joint_names
+    assert [f.feedback.phase for f in feedback].count(ExecutePlan.Feedback.PHASE_WAITING_FOR_MODEL) == 1
     cancel_goal(plant.executor, second_handle, POLICY)
     assert run_until(plant, second, 100).error_code == ExecutePlan.Result.CANCELED
 

@@ -82,14 +82,19 @@ def _endpoints(library: PrimitiveLibrary, spec: PrimitiveSpec) -> tuple[str, str
     return _node_of_cruise(library, spec.start_from, spec), _node_of_cruise(library, spec.end_at, spec)
 
 
+def _advance_rad(library: PrimitiveLibrary, primitive_id: str) -> float:
+    """The primitive's longitudinal displacement alpha(end) - alpha(start), rad."""
+    q = library.get(primitive_id).q
+    return float(q[-1, 0] - q[0, 0])
+
+
 def build_graph(library: PrimitiveLibrary) -> StateGraph:
     """Edges from the library, junctions checked, dead ends pruned."""
     edges = []
     for primitive_id in library.ids():
         spec = library.spec(primitive_id)
         source, target = _endpoints(library, spec)
-        primitive = library.get(primitive_id)
-        edges.append(Edge(primitive_id, source, target, spec.duration_s, float(primitive.q[-1, 0] - primitive.q[0, 0])))
+        edges.append(Edge(primitive_id, source, target, spec.duration_s, _advance_rad(library, primitive_id)))
     mismatches, bad = [], set()
     for into in edges:
         for out in edges:
@@ -107,6 +112,41 @@ def build_graph(library: PrimitiveLibrary) -> StateGraph:
     alive = _live_nodes(kept)
     pruned = sorted(e.primitive_id for e in kept if e.source not in alive or e.target not in alive) + sorted(bad)
     return StateGraph([e for e in kept if e.source in alive and e.target in alive], mismatches, pruned)
+
+
+@dataclasses.dataclass(frozen=True)
+class PrimitiveSummary:
+    """One primitive as an operator chooses it: where it starts and ends in the graph and what it takes."""
+
+    primitive_id: str
+    primitive_type: str
+    constrained: bool
+    start_state: str
+    end_state: str
+    start_energy_j: float   # energy level E of the start state, J (0 at rest)
+    end_energy_j: float     # energy level E of the end state, J (0 at rest)
+    duration_s: float       # as stored (time scale 1), s
+    advance_rad: float      # alpha(end) - alpha(start), rad
+    in_graph: bool          # False: dropped (a junction mismatch or a dead end), still flyable in a sequence
+
+
+def summarize(library: PrimitiveLibrary, graph: StateGraph) -> list[PrimitiveSummary]:
+    """Every primitive of the library, sorted by id, with its graph states and their energy levels."""
+    energy_of_state: dict[str, float] = {}
+    for primitive_id in library.ids():
+        spec = library.spec(primitive_id)
+        if spec.primitive_type is PrimitiveType.CRUISE and spec.energy_j is not None:   # a cruise without one: raises
+            energy_of_state[_cruise_node_of(spec)] = spec.energy_j                      # in _endpoints, below
+    kept = {e.primitive_id for e in graph.edges}
+    summaries = []
+    for primitive_id in sorted(library.ids()):
+        spec = library.spec(primitive_id)
+        source, target = _endpoints(library, spec)
+        summaries.append(PrimitiveSummary(
+            primitive_id, spec.primitive_type.value, spec.constrained, source, target,
+            energy_of_state.get(source, 0.0), energy_of_state.get(target, 0.0), spec.duration_s,
+            _advance_rad(library, primitive_id), primitive_id in kept))
+    return summaries
 
 
 def _live_nodes(edges: list[Edge]) -> set[str]:
@@ -160,6 +200,9 @@ def plan_to_goal(graph: StateGraph, start: str, goal: str, min_advance_rad: floa
             counter += 1
     if path is None:
         raise ManeuverError(f"no sequence of primitives leads from '{start}' to '{goal}'")
+    if not path:
+        raise ManeuverError(f"the start is the goal '{goal}': ask for a distance to cover (goal_alpha_rad > 0) or "
+                            f"another goal state")
     sequence = [(e.primitive_id, 0) for e in path]
     advance = sum(e.advance_rad for e in path)
     if advance < min_advance_rad:

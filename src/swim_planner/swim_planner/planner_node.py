@@ -17,10 +17,15 @@ weights are computed on its first use (0.1-0.3 s each) and kept, while other req
 does not load is refused and changes nothing. ``max_plan_duration_s`` and ``max_plan_samples``
 (maneuver.PlanBounds) bound what a request may ask for: a longer plan, a non-finite start alpha or goal distance
 is refused by name before any work is done.
+
+Service ``list_primitives`` (swim_interfaces/srv/ListPrimitives): what can be asked for, the graph's states and
+every primitive with its start and end states, their energy levels, its duration and its advance (made once at
+start: the library is read-only).
 """
 from __future__ import annotations
 
 import collections
+import dataclasses
 import functools
 import threading
 
@@ -28,8 +33,8 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
-from swim_interfaces.msg import PlannedTrajectory
-from swim_interfaces.srv import RequestManeuver
+from swim_interfaces.msg import PlannedTrajectory, PrimitiveInfo
+from swim_interfaces.srv import ListPrimitives, RequestManeuver
 
 from swim_controller.messages import trajectory_to_message
 from swim_controller.trajectory import Trajectory
@@ -37,7 +42,7 @@ from swim_model import SwimModelError, load_rig
 from swim_model.flow import FLOW_MODELS
 from swim_planner.errors import PlannerError
 from swim_planner.gains import RetunedLibrary, load_lqr_weights
-from swim_planner.graph import build_graph, plan_to_goal, rest_node
+from swim_planner.graph import build_graph, plan_to_goal, rest_node, summarize
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.maneuver import (DEFAULT_BOUNDS, PlanBounds, check_plan_size, check_start_alpha, concatenate,
                                    expand_sequence)
@@ -133,6 +138,11 @@ class PlannerNode(Node):
         self.plan_publisher = self.create_publisher(PlannedTrajectory, "plan", LATCHED_QOS)
         self.create_service(RequestManeuver, "request_maneuver", self.on_request,
                             callback_group=ReentrantCallbackGroup())
+        summaries = summarize(self.library, self.graph)
+        self._primitive_list = ListPrimitives.Response(
+            flow_model=flow_model, library_digest=self.library.digest(), states=sorted(self.graph.nodes),
+            primitives=[PrimitiveInfo(**dataclasses.asdict(summary)) for summary in summaries])
+        self.create_service(ListPrimitives, "list_primitives", self.on_list, callback_group=ReentrantCallbackGroup())
         self.get_logger().info(f"serving {len(self.library)} primitives of the {flow_model} flow model from "
                                f"{self.library.path}")
 
@@ -174,6 +184,9 @@ class PlannerNode(Node):
                 self.get_logger().error(f"LQ weights not applied, those in use kept: {err}")
                 return
             self.get_logger().info(f"LQ weights for new plans: {names['lqr_weights_path'] or 'those stored'}")
+
+    def on_list(self, request: ListPrimitives.Request, response: ListPrimitives.Response) -> ListPrimitives.Response:
+        return self._primitive_list
 
     def on_request(self, request: RequestManeuver.Request,
                    response: RequestManeuver.Response) -> RequestManeuver.Response:

@@ -36,8 +36,40 @@ def test_lane_change_goal(graph, library, rig):
     assert plan.q[-1, 1] == pytest.approx(0.48, abs=1e-6)
 
 
+def test_a_goal_that_is_the_start_needs_a_distance(graph):
+    with pytest.raises(ManeuverError, match="the start is the goal 'free/rest/R0.43': ask for a distance"):
+        plan_to_goal(graph, "free/rest/R0.43", "free/rest/R0.43")
+    sequence = plan_to_goal(graph, "free/rest/R0.43", "free/rest/R0.43", min_advance_rad=0.5)
+    assert sequence[0][0].startswith("free/accelerate/R0.43") and sequence[-1][0].startswith("free/decelerate/R0.43")
+
+
 def test_unreachable_and_unknown_goals(graph):
     with pytest.raises(ManeuverError, match="unknown goal state"):
         plan_to_goal(graph, "constrained/rest", "constrained/cruise/E0.20")
     with pytest.raises(ManeuverError, match="no sequence of primitives"):
         plan_to_goal(graph, "constrained/rest", "free/rest/R0.48")
+
+
+def test_the_summary_lists_every_primitive_with_its_states_energies_and_advance(graph, library):
+    """Each primitive's summary against what its id and stored motion say: an accelerate goes from rest to the
+    cruise of its energy, a cruise-to-cruise between the two energies of its id, the advance is alpha's change."""
+    import re
+    import dataclasses
+    from swim_planner.graph import summarize
+    summaries = summarize(library, graph)
+    assert [s.primitive_id for s in summaries] == sorted(library.ids())
+    energies = re.compile(r"E(\d\.\d+)")
+    for summary in summaries:
+        primitive = library.get(summary.primitive_id)
+        assert summary.advance_rad == primitive.q[-1, 0] - primitive.q[0, 0]
+        assert summary.duration_s == library.spec(summary.primitive_id).duration_s and summary.in_graph
+        levels = [float(e) for e in energies.findall(summary.primitive_id)]
+        expected = {"accelerate": (0.0, levels[0]), "decelerate": (levels[0], 0.0), "cruise": (levels[0],) * 2,
+                    "lane_change": (levels[0],) * 2, "cruise_to_cruise": tuple(levels)}[summary.primitive_type]
+        assert (summary.start_energy_j, summary.end_energy_j) == expected, summary.primitive_id
+        assert summary.start_state.startswith("constrained/" if summary.constrained else "free/")
+        edge = next(e for e in graph.edges if e.primitive_id == summary.primitive_id)
+        assert (summary.start_state, summary.end_state) == (edge.source, edge.target)
+    # a primitive the graph dropped is still listed, and says so
+    dropped = dataclasses.replace(graph, edges=[e for e in graph.edges if e.primitive_id != summaries[0].primitive_id])
+    assert [s.in_graph for s in summarize(library, dropped)] == [False] + [True] * (len(summaries) - 1)

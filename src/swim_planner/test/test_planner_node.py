@@ -89,6 +89,35 @@ def test_goal_request(client):
     assert not reply.success and "unknown goal state" in reply.message
 
 
+def test_the_primitive_list_is_the_librarys(planner, rclpy_context, library):
+    """list_primitives: every primitive of the served library (the ideal one, the node's default) with its duration,
+    its advance from the stored motion and its energy levels; the graph's states, rests and cruises."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from swim_interfaces.srv import ListPrimitives
+    node = rclpy.create_node("planner_list_client", context=rclpy_context)
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    executor.add_node(node)
+    try:
+        reply = call_service(executor, node.create_client(ListPrimitives, "list_primitives"),
+                             ListPrimitives.Request(), POLICY)
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+    assert (reply.flow_model, reply.library_digest) == ("ideal", library.digest())
+    assert [p.primitive_id for p in reply.primitives] == sorted(library.ids())
+    for info in reply.primitives:
+        primitive = library.get(info.primitive_id)
+        assert info.duration_s == library.spec(info.primitive_id).duration_s
+        assert info.advance_rad == pytest.approx(primitive.q[-1, 0] - primitive.q[0, 0], abs=1e-12)
+        assert info.start_state in reply.states and info.end_state in reply.states and info.in_graph
+    accelerate = next(p for p in reply.primitives if p.primitive_id == "constrained/accelerate/E0.10")
+    assert (accelerate.start_state, accelerate.end_state) == ("constrained/rest", "constrained/cruise/E0.10")
+    assert (accelerate.start_energy_j, accelerate.end_energy_j, accelerate.primitive_type) == \
+        (0.0, 0.10, "accelerate")
+    assert {"constrained/rest", "free/rest/R0.43", "free/rest/R0.48"} <= set(reply.states)
+
+
 def test_concurrent_requests(client):
     executor, service = client
     from swim_interfaces.srv import RequestManeuver

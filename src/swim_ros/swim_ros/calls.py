@@ -13,7 +13,9 @@ first answer of any attempt is taken. A request is repeated as it is only when a
 - a lifecycle transition is repeated only after reading the node's current state (it may have happened).
 
 A call that finally fails raises ``CallFailed``, which says which service, how many tries and how long.
-All functions spin the given executor while they wait, so the caller's other callbacks keep running.
+All functions spin the given executor while they wait, so the caller's other callbacks keep running. A caller that
+runs inside a callback of a multi-threaded executor, whose other threads serve the answers, passes a
+``ServedElsewhere`` instead: it only waits.
 """
 from __future__ import annotations
 
@@ -21,15 +23,33 @@ import dataclasses
 import time
 import uuid
 import weakref
-from typing import Any, Callable, Optional, Sequence
+from typing import Any, Callable, Optional, Protocol, Sequence
 
 from rclpy.client import Client
-from rclpy.executors import Executor
 from rclpy.node import Node
 from rclpy.task import Future
 
 #: how long one spin of the caller's executor may block while waiting (s): short, so deadlines are kept
 SPIN_SLICE_S = 0.05
+
+
+class Spinner(Protocol):
+    """What these functions need of an executor: serve callbacks for at most timeout_sec."""
+
+    def spin_once(self, timeout_sec: Optional[float] = None) -> None: ...
+
+
+class ServedElsewhere:
+    """A Spinner for a caller inside a callback of a multi-threaded executor: the executor's other threads serve
+    the answers, so waiting is sleeping, poll_s at a time (the answer is seen at most poll_s late)."""
+
+    def __init__(self, poll_s: float = 0.001) -> None:
+        if not poll_s > 0.0:
+            raise ValueError(f"poll_s must be > 0, got {poll_s!r}")
+        self.poll_s = poll_s
+
+    def spin_once(self, timeout_sec: Optional[float] = None) -> None:
+        time.sleep(self.poll_s if timeout_sec is None else min(self.poll_s, max(timeout_sec, 0.0)))
 
 
 class CallFailed(RuntimeError):
@@ -61,7 +81,7 @@ class RetryPolicy:
 DEFAULT_POLICY = RetryPolicy()
 
 
-def spin_until(executor: Executor, done: Callable[[], bool], timeout_s: float) -> bool:
+def spin_until(executor: Spinner, done: Callable[[], bool], timeout_s: float) -> bool:
     """Spin executor until done() holds (True) or timeout_s has passed (False)."""
     deadline = time.monotonic() + timeout_s
     while not done():
@@ -72,14 +92,14 @@ def spin_until(executor: Executor, done: Callable[[], bool], timeout_s: float) -
     return True
 
 
-def wait_for_server(executor: Executor, ready: Callable[[], bool], name: str, timeout_s: float) -> None:
+def wait_for_server(executor: Spinner, ready: Callable[[], bool], name: str, timeout_s: float) -> None:
     """Spin until ready() (a service or action server is discovered); CallFailed after timeout_s."""
     start = time.monotonic()
     if not spin_until(executor, ready, timeout_s):
         raise CallFailed(name, 0, time.monotonic() - start, "the server never appeared")
 
 
-def repeat_until_answered(executor: Executor, send: Callable[[], Future], name: str,
+def repeat_until_answered(executor: Spinner, send: Callable[[], Future], name: str,
                           policy: RetryPolicy = DEFAULT_POLICY,
                           cancel: Optional[Callable[[Future], None]] = None) -> Any:
     """send() up to policy.attempts times, each time the answers so far are overdue; the first answer of any try.
@@ -99,7 +119,7 @@ def repeat_until_answered(executor: Executor, send: Callable[[], Future], name: 
                 cancel(future)
 
 
-def call_service(executor: Executor, client: Client, request: Any, policy: RetryPolicy = DEFAULT_POLICY) -> Any:
+def call_service(executor: Spinner, client: Client, request: Any, policy: RetryPolicy = DEFAULT_POLICY) -> Any:
     """The service's response to an idempotent request (or one made so by a request id)."""
     wait_for_server(executor, client.service_is_ready, client.srv_name, policy.discovery_timeout_s)
     return repeat_until_answered(executor, lambda: client.call_async(request), client.srv_name, policy,
@@ -115,7 +135,7 @@ def new_request_id() -> str:
 class ParameterCalls:
     """get, set and describe another node's parameters (all idempotent), as rcl_interfaces' services."""
 
-    def __init__(self, node: Node, executor: Executor, target_node: str,
+    def __init__(self, node: Node, executor: Spinner, target_node: str,
                  policy: RetryPolicy = DEFAULT_POLICY) -> None:
         from rcl_interfaces.srv import DescribeParameters, GetParameters, SetParameters
         prefix = target_node if target_node.startswith("/") else f"/{target_node}"
@@ -160,7 +180,7 @@ def transition_goal_state(transition_id: int) -> int:
     return goals[transition_id]
 
 
-def change_lifecycle_state(node: Node, executor: Executor, target_node: str, transition_id: int,
+def change_lifecycle_state(node: Node, executor: Spinner, target_node: str, transition_id: int,
                            policy: RetryPolicy = DEFAULT_POLICY) -> bool:
     """Ask target_node for a lifecycle transition; True when it succeeded, False if the node refused it or it
     failed.
@@ -206,7 +226,7 @@ class GoalStatusWatch:
         self.statuses = {bytes(s.goal_info.goal_id.uuid): s.status for s in message.status_list}
 
 
-def send_goal(executor: Executor, action_client: Any, goal: Any, status: GoalStatusWatch,
+def send_goal(executor: Spinner, action_client: Any, goal: Any, status: GoalStatusWatch,
               feedback_callback: Optional[Callable[[Any], None]] = None,
               policy: RetryPolicy = DEFAULT_POLICY) -> Any:
     """Send an action goal; the accepted goal's ClientGoalHandle, or the refusal's (handle.accepted False).
@@ -241,7 +261,7 @@ def send_goal(executor: Executor, action_client: Any, goal: Any, status: GoalSta
     return recovered
 
 
-def goal_result(executor: Executor, handle: Any, timeout_s: float, resend_after_s: float = 10.0) -> Any:
+def goal_result(executor: Spinner, handle: Any, timeout_s: float, resend_after_s: float = 10.0) -> Any:
     """The goal's result (the action's GetResult response), asking again every resend_after_s while none
     came (a result request is idempotent); CallFailed after timeout_s."""
     tries = max(1, int(timeout_s // resend_after_s))
@@ -249,6 +269,6 @@ def goal_result(executor: Executor, handle: Any, timeout_s: float, resend_after_
     return repeat_until_answered(executor, handle.get_result_async, "goal result", policy)
 
 
-def cancel_goal(executor: Executor, handle: Any, policy: RetryPolicy = DEFAULT_POLICY) -> Any:
+def cancel_goal(executor: Spinner, handle: Any, policy: RetryPolicy = DEFAULT_POLICY) -> Any:
     """Cancel an accepted goal (idempotent: a goal already canceling or ended is answered so)."""
     return repeat_until_answered(executor, handle.cancel_goal_async, "cancel goal", policy)

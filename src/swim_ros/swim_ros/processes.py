@@ -3,12 +3,15 @@
 Each node runs as `ros2 run <package> <executable> --ros-args --params-file <yaml>` (on a full ROS install the
 same command a user types; here `ros2 run` is our stand-in, scripts/bin/ros2) in its own process group, its
 output in a log file. Stopping sends SIGINT (a user's Ctrl-C: rclpy shuts down and leaves DDS cleanly), waits,
-and kills only what is still there after the grace period: no orphans.
+and kills only what is still there after the grace period: no orphans. A starter that dies without stopping its
+nodes (SIGKILL, a crash) takes them with it: each node is started with a parent-death signal (util-linux's setpriv
+sets it, then executes `ros2 run`), so the kernel sends it PARENT_DEATH_SIGNAL when the thread that started it ends.
 """
 from __future__ import annotations
 
 import dataclasses
 import os
+import shutil
 import signal
 import subprocess
 from pathlib import Path
@@ -17,6 +20,15 @@ from typing import Optional
 #: how long a node has to stop after SIGINT before its process group is killed: rclpy's shutdown takes well under
 #: a second; 10 s covers a loaded 2-core host
 STOP_GRACE_S = 10.0
+#: what a node gets when its starter dies: SIGTERM, which rclpy takes as a normal stop (swim_ros.entry.run_node)
+PARENT_DEATH_SIGNAL = "TERM"
+
+
+def with_parent_death_signal(command: list[str]) -> list[str]:
+    """command run with PARENT_DEATH_SIGNAL set (setpriv keeps the process: ros2 run, and the node it executes, have
+    its pid); command as it is where setpriv is missing (the starter's own stop is then the only one)."""
+    setpriv = shutil.which("setpriv")
+    return command if setpriv is None else [setpriv, f"--pdeathsig={PARENT_DEATH_SIGNAL}", "--", *command]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -43,8 +55,8 @@ class NodeProcess:
     def __init__(self, spec: NodeSpec, log_path: Path) -> None:
         self.spec, self.log_path = spec, log_path
         self._log = open(log_path, "w")
-        self.process = subprocess.Popen(spec.command(), stdout=self._log, stderr=subprocess.STDOUT,
-                                        start_new_session=True, env=dict(os.environ))
+        self.process = subprocess.Popen(with_parent_death_signal(spec.command()), stdout=self._log,
+                                        stderr=subprocess.STDOUT, start_new_session=True, env=dict(os.environ))
 
     def alive(self) -> bool:
         return self.process.poll() is None

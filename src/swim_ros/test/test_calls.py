@@ -184,3 +184,21 @@ def test_a_goal_whose_acceptance_was_lost_is_started_once_and_followed(pair):
     assert started == [bytes(handle.goal_id.uuid)]             # started once, by the first try
     action_server.destroy()
     action_client.destroy()
+
+
+def test_served_elsewhere_waits_for_another_thread_within_its_poll():
+    """A caller inside a multi-threaded executor's callback waits by sleeping: it sees an answer set by another
+    thread at most a poll late, and gives up at its deadline."""
+    import threading
+    import time
+    from swim_ros.calls import ServedElsewhere, spin_until
+    done = threading.Event()
+    threading.Timer(0.05, done.set).start()
+    start = time.monotonic()
+    assert spin_until(ServedElsewhere(poll_s=0.01), done.is_set, 5.0)
+    assert 0.05 <= time.monotonic() - start < 0.5
+    start = time.monotonic()
+    assert not spin_until(ServedElsewhere(poll_s=0.01), lambda: False, 0.1)
+    assert 0.1 <= time.monotonic() - start < 0.5
+    with pytest.raises(ValueError, match="poll_s"):
+        ServedElsewhere(poll_s=0.0)
