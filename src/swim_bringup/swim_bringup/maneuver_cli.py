@@ -9,6 +9,10 @@ simulator in real time or lock-step), and starts nothing:
     swim-maneuver run  (the same choice) [--record DIR] [tolerances]
                                                     flown by maneuver_node (perform_maneuver), with a progress bar
     swim-maneuver status                            the nodes up, the bridge's state and faults, the goals under way
+    swim-maneuver estop | reset                     the bridge's emergency stop (emergency_stop), and its reset
+                                                    with every latched fault (reset_emergency_stop)
+    swim-maneuver bridge configure|activate|deactivate|cleanup
+                                                    a lifecycle transition of bridge_node
 
 `plan` starts from the alpha of the latest joint_states (0 when no node publishes them) and, for a goal state, from
 the rest state of the vehicle that publishes them: the constrained one's, or the free one's on the lane nearest its
@@ -109,6 +113,8 @@ REFUSED_RESULTS = ("INVALID_PLAN", "INVALID_GOAL", "PLANNING_FAILED", "NODE_UNAV
 #: PerformManeuver.Feedback's phases (PHASE_PLANNING, PHASE_WAITING_FOR_MODEL, PHASE_TRACKING) as the progress bar
 #: names them
 PHASE_NAMES = {0: "planning", 1: "waiting for the model", 2: "tracking"}
+#: the lifecycle transitions an operator asks of bridge_node (lifecycle_msgs/Transition ids)
+BRIDGE_TRANSITIONS = {"configure": 1, "cleanup": 2, "activate": 3, "deactivate": 4}
 #: diagnostic_msgs/DiagnosticStatus's levels (OK, WARN, ERROR, STALE)
 DIAGNOSTIC_LEVELS = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
 
@@ -154,7 +160,8 @@ def parse_arguments(argv: Optional[Sequence[str]]) -> argparse.Namespace:
         prog=PROG, description=__doc__.splitlines()[0],
         epilog="exit status: 0 done; 1 a maneuver that failed in tracking; 2 bad input, no such nodes, a request "
                "refused; 130 a run canceled by Ctrl-C")
-    commands = parser.add_subparsers(dest="command", required=True, metavar="{list,plan,run,status}")
+    commands = parser.add_subparsers(dest="command", required=True,
+                                     metavar="{list,plan,run,status,estop,reset,bridge}")
     wait = argparse.ArgumentParser(add_help=False)
     wait.add_argument("--wait", type=non_negative_seconds, default=STARTUP_TIMEOUT_S, metavar="S",
                       help="how long to wait for the nodes, s (default %(default)s)")
@@ -178,6 +185,11 @@ def parse_arguments(argv: Optional[Sequence[str]]) -> argparse.Namespace:
                      help="wall-time limit of the maneuver, s (default %(default)s)")
     add_tolerance_arguments(run)
     commands.add_parser("status", parents=[wait], help="the nodes up, the bridge's state and faults, the goals")
+    commands.add_parser("estop", parents=[wait], help="the bridge's emergency stop: zero current, enable line stopped, "
+                        "latched until reset")
+    commands.add_parser("reset", parents=[wait], help="reset the bridge's emergency stop and every latched fault")
+    bridge = commands.add_parser("bridge", parents=[wait], help="a lifecycle transition of bridge_node")
+    bridge.add_argument("transition", choices=tuple(BRIDGE_TRANSITIONS))
     args = parser.parse_args(argv)
     if args.command in ("plan", "run"):
         subparser = plan if args.command == "plan" else run
@@ -796,7 +808,52 @@ def status_command(args: argparse.Namespace) -> int:
     return EXIT_DONE
 
 
-COMMANDS = {"list": list_command, "plan": plan_command, "run": run_command, "status": status_command}
+def trigger(service: str, wait_s: float) -> int:
+    """Call the bridge's std_srvs/Trigger service (the e-stop and its reset: asking twice does what asking once
+    does, so a lost answer is asked again); print its answer."""
+    from std_srvs.srv import Trigger
+    session = Session()
+    try:
+        client = session.node.create_client(Trigger, service)
+        response = call(session, client, Trigger.Request(), f"bridge_node ({service})", wait_s)
+    finally:
+        session.close()
+    if not response.success:
+        raise CommandError(f"{service} refused: {response.message}")
+    print(f"{PROG}: {service}: {response.message}")
+    return EXIT_DONE
+
+
+def estop_command(args: argparse.Namespace) -> int:
+    return trigger("/emergency_stop", args.wait)
+
+
+def reset_command(args: argparse.Namespace) -> int:
+    return trigger("/reset_emergency_stop", args.wait)
+
+
+def bridge_command(args: argparse.Namespace) -> int:
+    """A lifecycle transition of bridge_node (swim_ros.calls.change_lifecycle_state: asked again only after its
+    state shows it was not made)."""
+    from swim_ros.calls import CallFailed, change_lifecycle_state
+    session = Session()
+    try:
+        policy = dataclasses.replace(PLANNER_POLICY, discovery_timeout_s=args.wait)
+        try:
+            made = change_lifecycle_state(session.node, session.executor, "bridge_node",
+                                          BRIDGE_TRANSITIONS[args.transition], policy)
+        except CallFailed as err:
+            raise CommandError(f"bridge_node ({args.transition}): {err}") from err
+    finally:
+        session.close()
+    if not made:
+        raise CommandError(f"bridge_node refused {args.transition} (swim-maneuver status: its state and faults)")
+    print(f"{PROG}: bridge_node: {args.transition} done")
+    return EXIT_DONE
+
+
+COMMANDS = {"list": list_command, "plan": plan_command, "run": run_command, "status": status_command,
+            "estop": estop_command, "reset": reset_command, "bridge": bridge_command}
 
 
 def main(argv: Optional[list[str]] = None) -> int:

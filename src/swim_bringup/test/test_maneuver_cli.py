@@ -427,6 +427,14 @@ def bridge_set(ros_domain, tmp_path_factory):  # noqa: F811
         results["goal"] = swim_maneuver("run", "--goal", "free/rest/R0.48", "--goal-alpha", "6.3", "--record",
                                         str(work / "goal"), *wait)
         results["status"] = swim_maneuver("status", *wait)
+        # the e-stop and its reset, then a lifecycle round: the bridge stops and comes back without a fault
+        results["estop"] = swim_maneuver("estop", *wait)
+        results["status after estop"] = swim_maneuver("status", *wait)
+        results["reset"] = swim_maneuver("reset", *wait)
+        results["deactivate"] = swim_maneuver("bridge", "deactivate", *wait)
+        results["activate"] = swim_maneuver("bridge", "activate", *wait)
+        results["activate again"] = swim_maneuver("bridge", "activate", *wait)   # active already: refused
+        results["status after reset"] = swim_maneuver("status", *wait)
     return results, work
 
 
@@ -579,3 +587,28 @@ def test_a_plan_starts_from_the_simulators_rest(sim_set):
     start = results["plan"].stdout.splitlines()[0]
     assert start.startswith("start: alpha ") and start.endswith("(joint_states), state constrained/rest")
     assert not math.isclose(float(start.split()[2]), 0.0)   # where the canceled run left it
+
+
+def test_the_bridge_transitions_are_lifecycle_msgs_ids():
+    from lifecycle_msgs.msg import Transition
+    from swim_bringup.maneuver_cli import BRIDGE_TRANSITIONS
+    expected = {name: getattr(Transition, f"TRANSITION_{name.upper()}") for name in BRIDGE_TRANSITIONS}
+    assert BRIDGE_TRANSITIONS == expected
+
+
+def test_the_e_stop_latches_and_its_reset_and_a_lifecycle_round_clear_it(bridge_set):
+    results, _ = bridge_set
+    assert_clean_exit(results["estop"], 0)
+    assert "/emergency_stop: emergency stop latched until reset_emergency_stop" in results["estop"].stdout
+    assert "bridge faults latched: EMERGENCY_STOP" in results["status after estop"].stdout, \
+        results["status after estop"].stdout
+    assert_clean_exit(results["reset"], 0)
+    for name in ("deactivate", "activate"):
+        assert_clean_exit(results[name], 0)
+        assert f"bridge_node: {name} done" in results[name].stdout
+    assert_clean_exit(results["activate again"], 2)
+    assert "bridge_node refused activate" in results["activate again"].stderr
+    after = results["status after reset"].stdout
+    assert "bridge lifecycle state: active" in after and "bridge faults latched: NONE; emergency stop pending: " \
+        "False" in after, after
+
