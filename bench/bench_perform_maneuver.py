@@ -10,6 +10,7 @@ received here. That span holds maneuver_node's checks, the primitive list, the p
 sent on to tracker_node, and its first period. Prints one JSON line.
 """
 import json
+import os
 import statistics
 import tempfile
 import time
@@ -44,7 +45,7 @@ def main() -> None:
     print(json.dumps({"benchmark": "perform_maneuver", "segments": segments, "runs": len(latencies_ms),
                       "median_ms": round(median, 1), "max_ms": round(max(latencies_ms), 1),
                       "min_ms": round(min(latencies_ms), 1), "target_ms": TARGET_MS,
-                      "meets_target": median <= TARGET_MS}))
+                      "meets_target": median <= TARGET_MS, "load_average": round(os.getloadavg()[0], 2)}))
 
 
 def measure() -> tuple[list[float], int]:

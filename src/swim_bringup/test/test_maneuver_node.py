@@ -1,7 +1,7 @@
 """maneuver_node over DDS on the simulator in lock-step (the realistic pipeline, each node in its own process): the
 perform_maneuver goal as an operator types it (fields from a YAML string, as ros2cli fills them), refusals with their
-reasons and nothing moved, the phases of the feedback, a refused goal that leaves the maneuver under way alone, and
-a cancel passed on to the tracker."""
+reasons and nothing moved, the phases of the feedback, a refused goal that leaves the maneuver under way alone, a
+cancel passed on to the tracker, and a plan sent to the tracker directly preempting the maneuver."""
 import math
 
 import numpy as np
@@ -170,3 +170,30 @@ def test_a_goal_for_a_moving_vehicle_is_refused_and_a_cancel_reaches_the_tracker
     operator.spin_until(lambda: operator.status.statuses.get(bytes(handle.goal_id.uuid)) == GoalStatus.STATUS_CANCELED)
     # the tracker's own goal was canceled too (its status topic is transient local, the latest goal last)
     operator.spin_until(lambda: GoalStatus.STATUS_CANCELED in operator.tracker_status.statuses.values())
+
+
+def test_a_plan_sent_to_the_tracker_preempts_the_maneuver_under_way(operator):
+    """Preemption keeps execute_plan's meaning: a goal the tracker starts ends the maneuver under way, PREEMPTED."""
+    from rclpy.action import ActionClient
+    from swim_interfaces.action import ExecutePlan, PerformManeuver
+    from swim_interfaces.srv import RequestManeuver
+    from swim_ros.calls import (GoalStatusWatch, RetryPolicy, call_service, cancel_goal, goal_result, new_request_id,
+                                send_goal)
+    Feedback = PerformManeuver.Feedback
+    policy = RetryPolicy(attempt_timeout_s=10.0, attempts=3, discovery_timeout_s=POLICY_S)
+    feedback: list = []
+    handle = operator.send(PAPER_GOAL_YAML, feedback)
+    operator.spin_until(lambda: any(f.phase == Feedback.PHASE_TRACKING for f in feedback))
+    planner = operator.node.create_client(RequestManeuver, "request_maneuver")
+    reply = call_service(operator.executor, planner, RequestManeuver.Request(
+        primitive_ids=["constrained/accelerate/E0.05"], repeat_counts=[1], request_id=new_request_id(),
+        start_alpha_rad=feedback[-1].state.feedback.positions[0]), policy)
+    assert reply.success, reply.message
+    tracker = ActionClient(operator.node, ExecutePlan, "execute_plan")
+    direct = send_goal(operator.executor, tracker, ExecutePlan.Goal(plan=reply.plan), GoalStatusWatch(
+        operator.node, "execute_plan"), policy=policy)
+    result = operator.result(handle)
+    assert result.error_code == PerformManeuver.Result.PREEMPTED, result.error_string
+    cancel_goal(operator.executor, direct, policy)
+    assert goal_result(operator.executor, direct, RESULT_TIMEOUT_S).result.error_code == \
+        ExecutePlan.Result.CANCELED
