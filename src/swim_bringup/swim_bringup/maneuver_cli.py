@@ -462,12 +462,12 @@ def latest_vehicle(session: Any, timeout_s: float) -> Optional[VehicleState]:
             return None
         raise CommandError(f"a plant runs, or joint_states has a publisher, but no joint_states arrived within "
                            f"{timeout_s:g} s")
-    message = latest[-1]
-    if "alpha" not in message.name or len(message.name) != len(message.position):
-        raise CommandError(f"joint_states names {list(message.name)} with {len(message.position)} positions: not "
-                           f"the vehicle's (alpha, [R,] phi, theta)")
-    return VehicleState(tuple(message.name), np.asarray(message.position, dtype=float),
-                        np.asarray(message.velocity, dtype=float))
+    from swim_bringup.maneuver_node import vehicle_of
+    from swim_controller.errors import StateMessageError
+    try:
+        return vehicle_of(latest[-1])
+    except StateMessageError as err:
+        raise CommandError(f"the latest joint_states is not the vehicle's (alpha, [R,] phi, theta): {err}") from err
 
 
 def plan_request(goal: ManeuverGoal, vehicle: Optional[VehicleState], states: Sequence[str]) -> Any:

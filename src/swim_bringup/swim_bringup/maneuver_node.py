@@ -139,11 +139,9 @@ class ManeuverNode(Node):
             raise ManeuverGoalError("the latest joint_states carries no velocities: whether the vehicle is at rest "
                                     "is unknown")
         try:
-            _, q, qdot = state_from_message(message, None, VelocityEstimator(), 0.0)
+            return vehicle_of(message)
         except StateMessageError as err:
             raise ManeuverGoalError(f"the latest joint_states is not the vehicle's: {err}") from err
-        return VehicleState(JOINT_NAMES_UNCONSTRAINED if len(q) == len(JOINT_NAMES_UNCONSTRAINED)
-                            else JOINT_NAMES_CONSTRAINED, q, qdot)
 
     def _primitive_list(self):
         """planner_node's list_primitives reply, kept for the next goals."""
@@ -314,6 +312,15 @@ class ManeuverNode(Node):
             handle.abort()
         self.get_logger().warning(f"maneuver not flown: {reason}")
         return Result(error_code=code, error_string=reason, request_id=request_id)
+
+
+def vehicle_of(message) -> VehicleState:
+    """The vehicle a sensor_msgs/JointState gives, by swim_controller.messages.state_from_message's checks (the
+    vehicle's joints in any order, finite values, lengths that agree); its speeds zero when the message carries none.
+    StateMessageError otherwise."""
+    _, q, qdot = state_from_message(message, None, VelocityEstimator(), 0.0)
+    return VehicleState(JOINT_NAMES_UNCONSTRAINED if len(q) == len(JOINT_NAMES_UNCONSTRAINED)
+                        else JOINT_NAMES_CONSTRAINED, q, qdot)
 
 
 def goal_of(request) -> ManeuverGoal:
