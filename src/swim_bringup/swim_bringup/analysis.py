@@ -26,6 +26,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Any, Mapping, Optional
@@ -181,15 +182,34 @@ def bridge_measures(bag_path: Path) -> Optional[BridgeMeasures]:
         return None
     faults: set[str] = set()
     overruns = None
+    timing: dict[str, str] = {}
     for _, _, array in read_messages(bag_path, (topic,)):
         for status in array.status:
             if status.name.endswith("bridge_node: I/O loop"):
                 values = {pair.key: pair.value for pair in status.values}
                 faults.update(name for name in values.get("faults", "NONE").split("|") if name != "NONE")
                 overruns = int(values.get("overruns", overruns or 0))
+                if "worst_lateness_ms" in values:
+                    timing = values
     if overruns is None:
         return None
-    return BridgeMeasures(bridge_faults="|".join(sorted(faults)) or "NONE", bridge_overruns=overruns)
+
+    def number(key: str) -> Optional[float]:
+        try:
+            value = float(timing[key])
+        except (KeyError, ValueError):
+            return None
+        return value if math.isfinite(value) else None
+
+    return BridgeMeasures(
+        bridge_faults="|".join(sorted(faults)) or "NONE", bridge_overruns=overruns,
+        bridge_worst_lateness_ms=number("worst_lateness_ms"),
+        bridge_overrun_cause=timing.get("worst_lateness_cause"),
+        bridge_wake_lateness_p99_ms=number("wake_lateness_p99_ms"),
+        bridge_command_latency_p50_ms=number("command_latency_p50_ms"),
+        bridge_command_latency_p99_ms=number("command_latency_p99_ms"),
+        bridge_command_jitter_p50_ms=number("command_jitter_p50_ms"),
+        bridge_command_jitter_p99_ms=number("command_jitter_p99_ms"))
 
 
 def analyze(bag_path: Path, hard_limits_rad: Optional[HardLimits] = None) -> RunAnalysis:

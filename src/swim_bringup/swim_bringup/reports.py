@@ -52,9 +52,17 @@ class RunMeasures:
 
 @dataclasses.dataclass(frozen=True)
 class BridgeMeasures:
-    """What a bridge_node's /diagnostics tell of a run (analysis.bridge_measures)."""
+    """What a bridge_node's /diagnostics tell of a run (analysis.bridge_measures). The loop's timing, from its
+    last report: None where the bridge did not report it."""
     bridge_faults: str          # the faults latched during the run, joined by "|"; "NONE" if none
     bridge_overruns: int        # the bridge's count of overrun periods at its last report
+    bridge_worst_lateness_ms: Optional[float] = None  # the latest end of a period past its deadline
+    bridge_overrun_cause: Optional[str] = None     # that period's cause: LATE_WAKEUP, SLOW_READ, SLOW_WRITE, ...
+    bridge_wake_lateness_p99_ms: Optional[float] = None  # the periods' start past their place on the grid
+    bridge_command_latency_p50_ms: Optional[float] = None   # a command's receipt past the sample of its state
+    bridge_command_latency_p99_ms: Optional[float] = None
+    bridge_command_jitter_p50_ms: Optional[float] = None    # |interval between two commands' receipts - period|
+    bridge_command_jitter_p99_ms: Optional[float] = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -83,9 +91,12 @@ def _analysis_from_json(data: Mapping[str, Any], other_keys: list[str]) -> tuple
     """The measures and bridge measures of a flat report object that also holds other_keys."""
     measure_keys, bridge_keys = _field_names(RunMeasures), _field_names(BridgeMeasures)
     has_bridge = any(key in data for key in bridge_keys)
-    _checked_keys(data, measure_keys + (bridge_keys if has_bridge else []) + other_keys, "a run's report")
+    # a report from a bridge that did not report its timing lacks those keys (they have defaults)
+    bridge_present = [field.name for field in dataclasses.fields(BridgeMeasures)
+                      if field.name in data or field.default is dataclasses.MISSING] if has_bridge else []
+    _checked_keys(data, measure_keys + bridge_present + other_keys, "a run's report")
     return (RunMeasures(**{key: data[key] for key in measure_keys}),
-            BridgeMeasures(**{key: data[key] for key in bridge_keys}) if has_bridge else None)
+            BridgeMeasures(**{key: data[key] for key in bridge_present}) if has_bridge else None)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -22,13 +22,14 @@ def tracking_state_cdr(store, joint_names, stamp_ns: int, plan_time_s: float, fe
     return bytes(store.serialize_cdr(message, message.__msgtype__))
 
 
-def diagnostics_cdr(store, name: str, faults: str, overruns: int, sec: int) -> bytes:
-    """A diagnostic_msgs/DiagnosticArray as bridge_node publishes it."""
+def diagnostics_cdr(store, name: str, faults: str, overruns: int, sec: int, timing: dict | None = None) -> bytes:
+    """A diagnostic_msgs/DiagnosticArray as bridge_node publishes it (with timing: those keys and values too)."""
     types = store.types
     Array, Status, KeyValue = (types[f"diagnostic_msgs/msg/{t}"] for t in ("DiagnosticArray", "DiagnosticStatus",
                                                                             "KeyValue"))
     Header, Time = types["std_msgs/msg/Header"], types["builtin_interfaces/msg/Time"]
     values = [KeyValue(key="faults", value=faults), KeyValue(key="overruns", value=str(overruns))]
+    values += [KeyValue(key=key, value=value) for key, value in (timing or {}).items()]
     status = Status(level=0, name=f"/{name}: I/O loop", message="", hardware_id="emulated", values=values)
     array = Array(header=Header(stamp=Time(sec=sec, nanosec=0), frame_id=""), status=[status])
     return bytes(store.serialize_cdr(array, "diagnostic_msgs/msg/DiagnosticArray"))

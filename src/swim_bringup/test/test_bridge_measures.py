@@ -25,3 +25,21 @@ def test_a_clean_run_and_a_run_without_a_bridge(tmp_path):
     assert bridge_measures(tmp_path / "clean") == BridgeMeasures(bridge_faults="NONE", bridge_overruns=1)
     write_bag(tmp_path / "none", [])
     assert bridge_measures(tmp_path / "none") is None
+
+
+def test_the_loops_timing_is_its_last_report(tmp_path):
+    """The timing keys of the bridge's last status that has them; "nan" (an empty histogram) reads as None."""
+    bag = BagWriter(tmp_path / "bag", {"/diagnostics": "diagnostic_msgs/msg/DiagnosticArray"})
+    first = {"worst_lateness_ms": "1.000", "worst_lateness_cause": "SLOW_READ", "wake_lateness_p99_ms": "0.1",
+             "command_latency_p50_ms": "2.0", "command_latency_p99_ms": "3.0", "command_jitter_p50_ms": "0.1",
+             "command_jitter_p99_ms": "0.9"}
+    last = {**first, "worst_lateness_ms": "12.500", "worst_lateness_cause": "LATE_WAKEUP",
+            "command_jitter_p99_ms": "nan"}
+    for sec, timing in enumerate((first, last, None), start=1):   # the last status: a bridge without timing
+        bag.write("/diagnostics", sec * 1_000_000_000,
+                  diagnostics_cdr(bag.store, "bridge_node", "NONE", 1, sec, timing))
+    bag.close()
+    assert bridge_measures(tmp_path / "bag") == BridgeMeasures(
+        bridge_faults="NONE", bridge_overruns=1, bridge_worst_lateness_ms=12.5, bridge_overrun_cause="LATE_WAKEUP",
+        bridge_wake_lateness_p99_ms=0.1, bridge_command_latency_p50_ms=2.0, bridge_command_latency_p99_ms=3.0,
+        bridge_command_jitter_p50_ms=0.1, bridge_command_jitter_p99_ms=None)

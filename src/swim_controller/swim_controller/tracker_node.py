@@ -67,8 +67,10 @@ from swim_model.velocity_filter import DEFAULT_CUTOFF_HZ, VelocityEstimator
 from swim_model import SwimModelError, VehicleModel, load_rig
 from swim_ros.codecs import ACTUATED_JOINTS, float_array
 from swim_ros.entry import run_node
-from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, positive
+from swim_ros.parameters import (ParameterSpec, check_parameters, declare_parameters, positive, realtime_parameters,
+                                 realtime_settings)
 from swim_ros.qos import per_period_publisher, per_period_subscription
+from swim_ros.realtime import PeriodicCollector, make_process_realtime, make_thread_ordinary
 
 RESULT_CODES = {
     Outcome.SUCCEEDED: ExecutePlan.Result.SUCCESSFUL,
@@ -107,7 +109,10 @@ PARAMETERS = (
     ParameterSpec("velocity_cutoff_hz", DEFAULT_CUTOFF_HZ,
                   "cut-off of the velocity filter used when states carry no velocities, Hz", range=(0.0, 1e4),
                   check=positive),
-)
+) + realtime_parameters(70, "node's threads (executor, middleware; the model builder's runs at the ordinary "
+                        "policy)")
+#: states between two garbage collections after a command (collect_garbage_between_periods): 1 s at 8 ms
+GC_INTERVAL_STATES = 125
 
 
 @dataclasses.dataclass(frozen=True)
@@ -152,6 +157,7 @@ class ModelBuilder:
 
     def _run(self) -> None:
         while (request := self._requests.get()) is not None:
+            make_thread_ordinary()   # compilation is no period, in a real-time process too (and its compiler)
             key, future = request
             try:
                 future.set_result(build_model(self._rig, key))
@@ -214,6 +220,7 @@ class TrackerNode(Node):
         self._velocity = VelocityEstimator(self.get_parameter("velocity_cutoff_hz").value)
         self.rejected_states = 0
         self.commands_sent = 0
+        self._collector: Optional[PeriodicCollector] = None   # set by make_realtime
         self.add_on_set_parameters_callback(functools.partial(check_parameters, PARAMETERS))
         self.add_post_set_parameters_callback(self._apply_parameters)
 
@@ -289,6 +296,16 @@ class TrackerNode(Node):
         except Exception:  # noqa: BLE001 - the node is being destroyed: nothing waits any more
             pass
 
+    def make_realtime(self) -> None:
+        """The real-time means of the parameters for this process (main() calls it once the start-up's models are
+        built): its threads at realtime_priority, memory locked, the collector between periods. Said once at info
+        level, or as one warning with what was refused and why."""
+        settings = realtime_settings(self)
+        outcome = make_process_realtime(settings)
+        (self.get_logger().warning if outcome.refused else self.get_logger().info)(outcome.summary())
+        if settings.collect_garbage_between_periods:
+            self._collector = PeriodicCollector(GC_INTERVAL_STATES)
+
     def destroy_node(self) -> None:
         self._builder.stop()
         super().destroy_node()
@@ -343,6 +360,8 @@ class TrackerNode(Node):
                 goal.finish(step.outcome, step.outcome.value)
             else:
                 self._publish_feedback(goal)
+        if self._collector is not None:
+            self._collector.after_period()   # the command is out: the rest of the period is free
 
     def _publish_feedback(self, goal: ActiveGoal) -> None:
         """At most feedback_rate_hz: the latest tracking state and the fraction of the plan done."""
@@ -482,7 +501,8 @@ class TrackerNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
-    run_node(TrackerNode, args, name="tracker_node", fatal_errors=(ValueError, SwimModelError))
+    run_node(TrackerNode, args, name="tracker_node", fatal_errors=(ValueError, SwimModelError),
+             start=TrackerNode.make_realtime)
 
 
 if __name__ == "__main__":

@@ -4,8 +4,12 @@
                                                    publishes; anything else is refused and counted
     joint_states (pub, sensor_msgs/JointState)     names alpha, R, phi, theta; position (rad, m), velocity
                                                    (filtered differences), effort (the joint torques N Kt i
-                                                   written; 0 for the unactuated alpha, R); while active
-    /diagnostics (pub, diagnostic_msgs/DiagnosticArray)  loop rate, overruns, watchdog, saturation count, faults
+                                                   written; 0 for the unactuated alpha, R); while active, one
+                                                   per period, right after the period that read it
+    /diagnostics (pub, diagnostic_msgs/DiagnosticArray)  loop rate, overruns (by cause, and the worst one: how
+                                                   late and why), watchdog, saturation count, faults; the
+                                                   periods' wake-up lateness and the commands' latency and jitter
+                                                   (median, p99); the real-time means in effect or refused
     emergency_stop (srv std_srvs/Trigger, and sub std_msgs/Bool: true stops)   latches zero current and stops the
                                                    amplifier enable line until reset_emergency_stop
     reset_emergency_stop (srv std_srvs/Trigger)    clears the e-stop and every latched fault; torque resumes
@@ -22,7 +26,16 @@ toggling (see below). Parameters: the table PARAMETERS (description and range of
 take effect at the next configure): backend (emulated | serial | mf624), config_path (bridge.yaml; empty: the
 shipped one), flow (the emulated rig's water: ideal | circulatory | wake, as sim_node's), sample_period_s,
 watchdog_periods, overrun_limit, stale_read_limit, read_failure_limit; read-only: diagnostics_rate_hz, autostart
-(configure and activate at start-up, for runs without a lifecycle manager).
+(configure and activate at start-up, for runs without a lifecycle manager), and the real-time means.
+
+Real-time means (swim_ros.realtime; on by default): while active, the node's threads run at SCHED_FIFO
+realtime_priority (70) and the I/O loop's thread at io_loop_priority (80), memory locked, on the CPUs of
+cpu_affinity (empty: all), the garbage collector frozen and run at a period's end once a second. Configuring
+(opening the device, compiling the emulated rig's model) runs before, at the ordinary policy, and deactivating
+returns to it. Where the host refuses a means the node logs one warning saying what and why, and /diagnostics
+carries it (realtime_refused). The I/O loop is a thread of the node's process, not a process of its own: with
+both at real-time priorities the interpreter lock it shares with the executor delays a period by less than the
+executor's longest callback (docs/realtime.md gives the measurement).
 
 Amplifier-enable wiring (the charge pump). A DAC holds its last value when the process dies, so a current
 command alone cannot make a crashed bridge safe. The bridge therefore drives a digital output that it toggles
@@ -35,6 +48,7 @@ stuck. An e-stop or latched fault stops the toggling on purpose.
 """
 from __future__ import annotations
 
+import collections
 import dataclasses
 import functools
 import time
@@ -47,7 +61,6 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.duration import Duration
 from rclpy.lifecycle import Node as LifecycleNode
 from rclpy.lifecycle import State, TransitionCallbackReturn
-from rclpy.timer import Timer
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
 from std_srvs.srv import Trigger
@@ -58,13 +71,16 @@ from swim_hw_bridge.conversions import BridgeConfigError, Conversions, load_brid
 from swim_hw_bridge.device import Device, DeviceError
 from swim_hw_bridge.io_loop import IoLoop, Snapshot
 from swim_hw_bridge.safety import Command, FaultCode, SafetyLayer, SafetyLimits, WatchdogState, fault_names
+from swim_hw_bridge.timing import LatencyHistogram
 from swim_model import load_rig
 from swim_model.vehicle import JOINT_NAMES_UNCONSTRAINED
 from swim_model.wake_coupling import FLOWS
 from swim_ros.codecs import MessageError, torque_from_command
 from swim_ros.entry import run_node
-from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, one_of
+from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, one_of, realtime_parameters
 from swim_ros.qos import RECORDABLE_QOS
+from swim_ros.realtime import (NO_REALTIME_MEANS, RealtimeOutcome, RealtimeSettings, make_process_ordinary,
+                               make_process_realtime, memory_locked_kib)
 
 
 #: the bridge's parameters (swim_ros.parameters). The lifecycle node reads them when it is configured: a value set
@@ -84,7 +100,12 @@ PARAMETERS = (
     ParameterSpec("diagnostics_rate_hz", 2.0, "/diagnostics publication rate, Hz", range=(0.1, 100.0),
                   read_only=True),
     ParameterSpec("autostart", False, "configure and activate at start-up", read_only=True),
-)
+    ParameterSpec("io_loop_priority", 80, "real-time priority of the I/O loop's thread (1-98), above "
+                  "realtime_priority so that nothing of the node's own delays a period", range=(1, 98),
+                  read_only=True),
+) + realtime_parameters(70, "node's threads while active (executor, middleware; the I/O loop: io_loop_priority)")
+#: how many published states the node remembers, to find the state a command answers (its stamp): 0.5 s at 8 ms
+STATES_REMEMBERED = 64
 
 
 @dataclasses.dataclass(frozen=True)
@@ -99,11 +120,26 @@ class BridgeSettings:
     read_failure_limit: int
     diagnostics_rate_hz: float
     autostart: bool
+    io_loop_priority: int
+    realtime_policy: str
+    realtime_priority: int
+    lock_memory: bool
+    cpu_affinity: str
+    collect_garbage_between_periods: bool
+
+    @property
+    def realtime(self) -> RealtimeSettings:
+        return RealtimeSettings(self.realtime_policy, self.realtime_priority, self.lock_memory, self.cpu_affinity,
+                                self.collect_garbage_between_periods)
 
 
 class BridgeNode(LifecycleNode):
-    def __init__(self) -> None:
+    """owns_process: the node is its process's (main() makes it so) and applies the real-time means to it; a node
+    made in another's process (a test's, a benchmark's) leaves that process's scheduling and collector alone."""
+
+    def __init__(self, owns_process: bool = False) -> None:
         super().__init__("bridge_node")
+        self.owns_process = owns_process
         self._guard_change_state_service()
         declare_parameters(self, PARAMETERS)
         self.add_on_set_parameters_callback(functools.partial(check_parameters, PARAMETERS))
@@ -122,7 +158,10 @@ class BridgeNode(LifecycleNode):
         self._state_label = "unconfigured"
         self._last_published_period = -1
         self._reported_faults = FaultCode.NONE
-        self._state_timer: Optional[Timer] = None
+        # the I/O loop triggers it after each period: the state goes out right after the period that read it
+        self._state_ready = self.create_guard_condition(self._publish_state)
+        self.realtime_outcome: Optional[RealtimeOutcome] = None   # what the last activation got
+        self._reset_command_timing()
         self._diagnostics_timer = self.create_timer(1.0 / self.settings.diagnostics_rate_hz,
                                                     self._publish_diagnostics)
 
@@ -185,7 +224,8 @@ class BridgeNode(LifecycleNode):
                                               self.settings.stale_read_limit, self.settings.read_failure_limit,
                                               joint_dynamics_bounds(load_rig(), hard_limits, config.torque_limits_n_m))
             self.loop = IoLoop(device, Conversions(config), SafetyLayer(limits), self.settings.sample_period_s,
-                               self.settings.overrun_limit)
+                               self.settings.overrun_limit, self._realtime(), self.settings.io_loop_priority,
+                               on_period=self._state_ready.trigger)
         except DeviceError as err:
             self.get_logger().error(f"configure failed: cannot zero the outputs: {err}")
             device.close()
@@ -206,15 +246,38 @@ class BridgeNode(LifecycleNode):
         except DeviceError as err:
             self.get_logger().error(f"activate failed: cannot enable the amplifiers: {err}")
             return TransitionCallbackReturn.FAILURE
+        self._make_realtime()
+        self._reset_command_timing()
         self.loop.start(enable_toggling=True)
-        self._state_timer = self.create_timer(self.settings.sample_period_s, self._publish_state)
         self.active = True
         self._state_label = "active"
         self.get_logger().info("active: amplifiers enabled, I/O loop running")
         return super().on_activate(state)
 
+    def _realtime(self) -> RealtimeSettings:
+        """The means this node applies: its parameters' if it owns its process, none otherwise."""
+        return self.settings.realtime if self.owns_process else NO_REALTIME_MEANS
+
+    def _make_realtime(self) -> None:
+        """The process's threads at realtime_priority while active (the I/O loop sets its own thread above them),
+        memory locked; said once at info level, or as one warning with what was refused and why."""
+        if not self.owns_process:
+            return
+        outcome = make_process_realtime(self._realtime())
+        if outcome != self.realtime_outcome:
+            log = self.get_logger()
+            (log.warning if outcome.refused else log.info)(outcome.summary())
+        self.realtime_outcome = outcome
+
+    def _reset_command_timing(self) -> None:
+        """The command timing of an activation, from its start: the receipt of each command past the state it
+        answers (the latency) and past the command before less the period (the jitter)."""
+        self.command_latency = LatencyHistogram()
+        self.command_jitter = LatencyHistogram()
+        self._state_samples: collections.OrderedDict[int, float] = collections.OrderedDict()
+        self._last_command_received_s = float("nan")
+
     def on_deactivate(self, state: State) -> TransitionCallbackReturn:
-        self._stop_state_timer()
         if not self._stop_outputs():
             # the outputs are not known to be safe: error processing (on_error) instead of "inactive"
             self.get_logger().error("deactivate failed: the device did not take the zero current or the disable")
@@ -228,14 +291,12 @@ class BridgeNode(LifecycleNode):
         return super().on_cleanup(state)
 
     def on_shutdown(self, state: State) -> TransitionCallbackReturn:
-        self._stop_state_timer()
         self.release()
         self._state_label = "finalized"
         return super().on_shutdown(state)
 
     def on_error(self, state: State) -> TransitionCallbackReturn:
         self.get_logger().error("error processing: zero current, amplifiers disabled, device closed")
-        self._stop_state_timer()
         self.release()
         self._state_label = "unconfigured"
         return TransitionCallbackReturn.SUCCESS
@@ -245,11 +306,6 @@ class BridgeNode(LifecycleNode):
         self._stop_outputs()
         self._close_device()
 
-    def _stop_state_timer(self) -> None:
-        if self._state_timer is not None:
-            self.destroy_timer(self._state_timer)
-            self._state_timer = None
-
     def _stop_outputs(self) -> bool:
         """Stop the loop, zero, disable; True when all of it was done (or there is no device)."""
         self.active = False
@@ -257,6 +313,8 @@ class BridgeNode(LifecycleNode):
         if self.loop is not None and not self.loop.stop():
             self.get_logger().error("the I/O loop did not stop within 1 s (device call hung?)")
             done = False
+        if self._realtime().realtime:
+            make_process_ordinary()   # what runs next (a configure's compilation) is no period
         if self.device is None:
             return done
         for action, call in (("zero the currents", lambda: self.device.write_currents(0.0, 0.0)),
@@ -290,6 +348,11 @@ class BridgeNode(LifecycleNode):
             return
         stamp_ns = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
         self.loop.set_command(Command(heave_n_m, pitch_n_m, received_s, stamp_ns))
+        self.command_jitter.add(abs(received_s - self._last_command_received_s - self.settings.sample_period_s))
+        self._last_command_received_s = received_s
+        sample_s = self._state_samples.get(stamp_ns)
+        if sample_s is not None:
+            self.command_latency.add(received_s - sample_s)
 
     def _emergency_stop(self) -> None:
         self._estop_pending = True
@@ -325,7 +388,11 @@ class BridgeNode(LifecycleNode):
         self._last_published_period = snapshot.periods
         message = JointState()
         age_s = max(time.monotonic() - snapshot.monotonic_s, 0.0)
-        message.header.stamp = (self.get_clock().now() - Duration(nanoseconds=int(age_s * 1e9))).to_msg()
+        stamp = self.get_clock().now() - Duration(nanoseconds=int(age_s * 1e9))
+        message.header.stamp = stamp.to_msg()
+        self._state_samples[stamp.nanoseconds] = snapshot.monotonic_s
+        if len(self._state_samples) > STATES_REMEMBERED:
+            self._state_samples.popitem(last=False)
         message.name = list(JOINT_NAMES_UNCONSTRAINED)   # the rig's free vehicle: the bridge reads every encoder
         message.position = list(snapshot.positions)
         message.velocity = list(snapshot.velocities)
@@ -352,6 +419,31 @@ class BridgeNode(LifecycleNode):
             self.get_logger().error(f"fault latched: {fault_names(new)} (zero current until reset)")
         self._reported_faults = faults
 
+    def _timing_values(self, snapshot: Snapshot) -> dict[str, object]:
+        """How the periods went since the activation: overruns by cause and the worst one, the wake-up lateness,
+        the commands' latency and jitter (median and p99, ms), and the real-time means in effect."""
+        loop = self.loop
+        by_cause = dict(zip(("late_wakeup", "slow_read", "slow_write", "slow_work"), snapshot.overruns_by_cause))
+        values: dict[str, object] = {f"overruns_{cause}": count for cause, count in by_cause.items()}
+        values["worst_lateness_ms"] = f"{snapshot.worst_lateness_s * 1e3:.3f}"
+        values["worst_lateness_cause"] = snapshot.worst_lateness_cause.name
+        for name, histogram in (("wake_lateness", loop.wake_lateness if loop is not None else None),
+                                ("command_latency", self.command_latency), ("command_jitter", self.command_jitter)):
+            for percent in (50, 99):
+                value_s = histogram.percentile_s(percent) if histogram is not None else float("nan")
+                values[f"{name}_p{percent}_ms"] = f"{value_s * 1e3:.3f}"
+            values[f"{name}_max_ms"] = f"{histogram.largest_s * 1e3:.3f}" if histogram is not None else "nan"
+        if loop is not None:
+            policy, priority = loop.thread_policy
+            values["io_loop_scheduling"] = f"SCHED_{policy.upper()} {priority}"
+            values["gc_longest_ms"] = f"{loop.collector.longest_s * 1e3:.3f}" if loop.collector is not None else "off"
+        values["memory_locked_kib"] = memory_locked_kib()
+        refused = list(self.realtime_outcome.refused) if self.realtime_outcome is not None else []
+        if loop is not None and loop.policy_refused is not None:
+            refused.append(f"I/O loop: {loop.policy_refused}")
+        values["realtime_refused"] = "; ".join(refused)
+        return values
+
     def _loop_running(self) -> bool:
         return self.loop is not None and self.loop.running
 
@@ -375,8 +467,11 @@ class BridgeNode(LifecycleNode):
                 enable_toggling=snapshot.enable_toggling and running,
                 heave_current_a=currents_a[0], pitch_current_a=currents_a[1],
                 heave_torque_n_m=torques_n_m[0], pitch_torque_n_m=torques_n_m[1])
+            values.update(self._timing_values(snapshot))
             if snapshot.faults:
                 status.level, status.message = DiagnosticStatus.ERROR, f"fault: {fault_names(snapshot.faults)}"
+                if snapshot.faults & FaultCode.OVERRUN:
+                    status.message += f" ({overrun_phrase(snapshot)})"
             elif not self.active or snapshot.watchdog is not WatchdogState.OK:
                 status.level = DiagnosticStatus.WARN
                 status.message = f"{self._state_label}, watchdog {snapshot.watchdog.name}: zero torque"
@@ -384,6 +479,12 @@ class BridgeNode(LifecycleNode):
                 status.level, status.message = DiagnosticStatus.OK, "active"
         status.values = [KeyValue(key=key, value=str(value)) for key, value in values.items()]
         return status
+
+
+def overrun_phrase(snapshot: Snapshot) -> str:
+    """The worst overrun and its cause, as the fault's message says it: "worst 12.3 ms late, late wake-up"."""
+    cause = snapshot.worst_lateness_cause.name.lower().replace("_", " ").replace("wakeup", "wake-up")
+    return f"worst {snapshot.worst_lateness_s * 1e3:.1f} ms late, {cause}"
 
 
 def autostart(node: BridgeNode) -> None:
@@ -394,7 +495,8 @@ def autostart(node: BridgeNode) -> None:
 
 def main(args: list[str] | None = None) -> None:
     # release: zero, then disable, then close, however the node stops: never leave the amplifiers driven
-    run_node(BridgeNode, args, name="bridge_node", start=autostart, stop=BridgeNode.release)
+    run_node(functools.partial(BridgeNode, owns_process=True), args, name="bridge_node", start=autostart,
+             stop=BridgeNode.release)
 
 
 if __name__ == "__main__":

@@ -8,7 +8,16 @@ and no fault is latched), publish a snapshot. Then sleep until the next deadline
 blocks on ROS or builds more than a few small tuples.
 
 A period whose work ends after the next deadline is an overrun: counted, the missed deadlines are skipped (the
-grid t_0 + k h is kept), and overrun_limit overruns in a row latch FaultCode.OVERRUN.
+grid t_0 + k h is kept), and overrun_limit overruns in a row latch FaultCode.OVERRUN. Each overrun is given its
+cause (timing.py: a late wake-up, a slow read, a slow write or slow work) and the worst lateness, its cause and the
+count of each cause are in every snapshot; the wake-up lateness of every period is counted in a histogram.
+
+Real-time means (swim_ros.realtime, given as realtime and io_loop_priority): the thread sets itself to the
+policy at io_loop_priority when it starts (the node sets the rest of the process a step below), and, with
+collect_garbage_between_periods, the garbage collector is frozen and runs only at the end of a period, every
+GC_INTERVAL_PERIODS periods (realtime.PeriodicCollector): never inside one. on_period, if given, is called by the
+thread after each period; it must not block (bridge_node triggers a guard condition, so that the state is
+published right after the period that read it).
 
 The ROS side talks to the loop through two lock-protected slots only: set_command() replaces the latest
 timestamped command, snapshot() returns the latest Snapshot (immutable). E-stop and reset requests are flags
@@ -22,16 +31,23 @@ import dataclasses
 import math
 import threading
 import time
+from typing import Callable, Optional
 
 import numpy as np
 from swim_model.velocity_filter import VelocityEstimator
+from swim_ros.realtime import (NO_REALTIME_MEANS, PeriodicCollector, RealtimeSettings, make_thread_realtime,
+                               thread_policy)
 
 from swim_hw_bridge.conversions import Conversions
 from swim_hw_bridge.device import Device, DeviceError
 from swim_hw_bridge.safety import Command, FaultCode, Motion, SafetyLayer, WatchdogState
+from swim_hw_bridge.timing import LatencyHistogram, OverrunCause, overrun_cause
 from swim_hw_bridge.unwrap import CounterUnwrapper
 
 _RATE_SMOOTHING = 0.05   # weight of the newest interval in the loop-rate average (about 20 periods)
+#: periods between two garbage collections at a period's end: 1 s at 8 ms; what a second of periods leaves
+#: (a few hundred small objects) takes well under a millisecond to collect
+GC_INTERVAL_PERIODS = 125
 
 
 @dataclasses.dataclass(frozen=True)
@@ -60,18 +76,32 @@ class Snapshot:
     saturation_count: int
     loop_rate_hz: float
     jump_channels: int
+    worst_lateness_s: float = 0.0   # the latest end of an overrun period past its deadline
+    worst_lateness_cause: OverrunCause = OverrunCause.NONE
+    overruns_by_cause: tuple[int, int, int, int] = (0, 0, 0, 0)   # late wake-up, slow read, slow write, slow work
 
 
 class IoLoop:
     """Runs device I/O and the safety rules at a fixed period in its own thread."""
 
     def __init__(self, device: Device, conversions: Conversions, safety: SafetyLayer, sample_period_s: float,
-                 overrun_limit: int) -> None:
+                 overrun_limit: int, realtime: RealtimeSettings = NO_REALTIME_MEANS,
+                 io_loop_priority: int = 80, on_period: Optional[Callable[[], None]] = None) -> None:
         if not (math.isfinite(sample_period_s) and sample_period_s > 0.0) or overrun_limit < 1:
             raise ValueError("sample_period_s must be positive and overrun_limit at least 1")
         self.device, self.conversions, self.safety = device, conversions, safety
         self.sample_period_s = sample_period_s
         self.overrun_limit = overrun_limit
+        self.realtime, self.io_loop_priority, self.on_period = realtime, io_loop_priority, on_period
+        #: what the thread runs with: ("fifo", 80) once started; and why it could not have its policy, if so
+        self.thread_policy: tuple[str, int] = ("other", 0)
+        self.policy_refused: Optional[str] = None
+        self.collector: Optional[PeriodicCollector] = None
+        self.wake_lateness = LatencyHistogram()   # every period's start past its place on the grid
+        self.worst_lateness_s = 0.0
+        self.worst_lateness_cause = OverrunCause.NONE
+        self._overruns_by_cause = [0, 0, 0, 0]
+        self._read_s = self._write_s = 0.0   # the last period's read and write, s
         self.unwrapper = CounterUnwrapper(device.counter_bits,
                                           [v * n for v, n in zip(conversions.config.max_speeds,
                                                                  conversions.config.counts_per_unit)])
@@ -141,23 +171,52 @@ class IoLoop:
 
     # --- the loop's thread ---------------------------------------------------------------------------------
     def _run(self) -> None:
+        self.policy_refused = make_thread_realtime(self.realtime, self.io_loop_priority)
+        self.thread_policy = thread_policy()
+        if self.realtime.collect_garbage_between_periods:
+            self.collector = PeriodicCollector(GC_INTERVAL_PERIODS)
+        try:
+            self._periods()
+        finally:
+            if self.collector is not None:
+                self.collector.stop()
+
+    def _periods(self) -> None:
         period_s = self.sample_period_s
-        deadline_s = time.monotonic()
+        clock = time.monotonic
+        deadline_s = clock()   # the next period's place on the grid
         while not self._stop.is_set():
-            self.run_period(time.monotonic())
+            start_s = clock()
+            wake_lateness_s = start_s - deadline_s
+            self.wake_lateness.add(wake_lateness_s)
+            self.run_period(start_s)
             deadline_s += period_s
-            end_s = time.monotonic()
+            end_s = clock()
             if end_s > deadline_s:
-                self.overruns += 1
-                self.consecutive_overruns += 1
-                if self.consecutive_overruns >= self.overrun_limit:
-                    self.safety.latch(FaultCode.OVERRUN)
+                self._overrun(end_s - deadline_s, wake_lateness_s, end_s - start_s)
                 deadline_s += math.ceil((end_s - deadline_s) / period_s) * period_s   # stay on the grid
             else:
                 self.consecutive_overruns = 0
-            remaining_s = deadline_s - time.monotonic()
+            if self.on_period is not None:
+                try:
+                    self.on_period()
+                except Exception:   # noqa: BLE001 - a notification (the node may be going down), never the end
+                    pass
+            if self.collector is not None:
+                self.collector.after_period()
+            remaining_s = deadline_s - clock()
             if remaining_s > 0.0:
                 time.sleep(remaining_s)
+
+    def _overrun(self, lateness_s: float, wake_lateness_s: float, work_s: float) -> None:
+        self.overruns += 1
+        self.consecutive_overruns += 1
+        cause = overrun_cause(max(wake_lateness_s, 0.0), self._read_s, self._write_s, work_s)
+        self._overruns_by_cause[cause - 1] += 1
+        if lateness_s > self.worst_lateness_s:
+            self.worst_lateness_s, self.worst_lateness_cause = lateness_s, cause
+        if self.consecutive_overruns >= self.overrun_limit:
+            self.safety.latch(FaultCode.OVERRUN)
 
     def run_period(self, now_s: float) -> None:
         """One period's work (public for tests that step the loop by hand)."""
@@ -183,10 +242,13 @@ class IoLoop:
         self._rate(now_s)
         currents = torques = (0.0, 0.0)
         sample_time_s = now_s
+        clock = time.monotonic
+        read_start_s = clock()
         try:
             sample = self.device.read_counters()
         except DeviceError:
             sample = None
+        self._read_s = clock() - read_start_s
         safety.check_read(None if sample is None else sample.sequence)
         if sample is not None:
             sample_time_s = sample.monotonic_s
@@ -197,6 +259,7 @@ class IoLoop:
             heave_a, pitch_a, heave_n_m, pitch_n_m = safety.output(now_s, command, phi, theta, motion)
             currents, torques = (heave_a, pitch_a), (heave_n_m, pitch_n_m)
         toggling = self.enable_toggling and not safety.faults
+        write_start_s = clock()
         try:
             self.device.write_currents(currents[0], currents[1])
             if toggling:
@@ -205,13 +268,16 @@ class IoLoop:
             safety.latch(FaultCode.DEVICE_FAILED)
             currents = torques = (0.0, 0.0)
             toggling = False
+        self._write_s = clock() - write_start_s
         self.periods += 1
+        by_cause = self._overruns_by_cause
         snapshot = Snapshot(
             sample_time_s, self._sequence, self._positions, self._velocities, currents, torques,
             command.stamp_ns if command is not None else 0,
             command.received_monotonic_s if command is not None else math.nan,
             safety.faults, safety.watchdog, toggling, self.periods, self.overruns, self.consecutive_overruns,
-            safety.saturation_count, 1.0 / self._rate_interval_s, self._jumps)
+            safety.saturation_count, 1.0 / self._rate_interval_s, self._jumps, self.worst_lateness_s,
+            self.worst_lateness_cause, (by_cause[0], by_cause[1], by_cause[2], by_cause[3]))
         with self._lock:
             self._snapshot = snapshot
 

@@ -303,3 +303,90 @@ def test_the_braking_rule_reads_the_plain_difference_quotient(config, conversion
     assert last.positions == snapshot.positions and last.interval_s > 0.0
     one_count = 1.0 / (np.array(config.counts_per_unit) * last.interval_s)
     assert np.all(np.abs(np.array(last.mean_rates) - RampDevice.rate) <= 1.01 * one_count)
+
+
+class SlowWriteDevice(VirtualTimeDevice):
+    """The virtual-clock rig whose writes take write_s each, and whose reads take works_s once each in turn, then
+    10 us (the loop runs on until stopped)."""
+
+    write_s = 0.0
+
+    def __init__(self, config, clock, works_s):
+        super().__init__(config, clock, works_s)
+        self.works_s = itertools.chain(works_s, itertools.repeat(1e-5))
+
+    def write_currents(self, heave_a, pitch_a):
+        self.clock.now_s += self.write_s
+        super().write_currents(heave_a, pitch_a)
+
+
+def run_on_virtual_clock(monkeypatch, config, conversions, limits, latenesses_s, works_s, write_s=0.0):
+    """The loop on the virtual clock for len(latenesses_s) periods (reads taking works_s in turn, writes write_s);
+    the loop, stopped."""
+    clock = VirtualClock(latenesses_s)
+    monkeypatch.setattr(io_loop, "time", clock)
+    device = SlowWriteDevice({**config.device_config("emulated"), "charge_pump_timeout_s": 0.03}, clock, works_s)
+    device.write_s = write_s
+    device.open()
+    device.enable()
+    loop = IoLoop(device, conversions, SafetyLayer(limits), PERIOD_S, 10_000)
+    loop.start()
+    while len(device.read_starts) < len(latenesses_s) and loop.running:
+        time.sleep(0.01)
+    assert loop.stop()
+    return loop
+
+
+@pytest.mark.parametrize("case", ["late_wakeup", "slow_read", "slow_write"])
+def test_each_overrun_is_given_its_cause_and_the_worst_its_lateness(monkeypatch, config, conversions, limits,
+                                                                    case):
+    """On the virtual clock: 40 periods, of which three overrun by a known amount, each through one part of the
+    period. The worst lateness is the largest of the three exactly, the cause is that part's, every overrun is
+    counted under it, and the wake-up histogram holds the late wake-ups."""
+    from swim_hw_bridge.timing import OverrunCause
+    work_s = 0.45e-3
+    excess_s = np.zeros(40)
+    excess_s[[10, 20, 30]] = 0.3 * PERIOD_S, 0.7 * PERIOD_S, 0.5 * PERIOD_S   # past the next deadline
+    # a wake-up h - work late ends its period on the next deadline: excess_s later ends it excess_s past it
+    late = np.where(excess_s > 0, excess_s + PERIOD_S - work_s, 0.0) if case == "late_wakeup" else np.zeros(40)
+    reads = list(PERIOD_S + excess_s if case == "slow_read" else np.full(40, work_s))
+    write_s = 0.0
+    if case == "slow_write":   # every write slow, three of them past the period: the clock moves in the write
+        write_s = 0.9 * PERIOD_S
+        reads = list(np.where(excess_s > 0, 0.1 * PERIOD_S + excess_s, 1e-5))
+    loop = run_on_virtual_clock(monkeypatch, config, conversions, limits, late, reads, write_s)
+    cause = {"late_wakeup": OverrunCause.LATE_WAKEUP, "slow_read": OverrunCause.SLOW_READ,
+             "slow_write": OverrunCause.SLOW_WRITE}[case]
+    snapshot = loop.snapshot()
+    assert loop.overruns == 3 and loop.worst_lateness_cause is cause
+    assert loop._overruns_by_cause[cause - 1] == loop.overruns
+    assert loop.worst_lateness_s == pytest.approx(0.7 * PERIOD_S, abs=1e-9)
+    if case == "late_wakeup":
+        assert loop.wake_lateness.largest_s == pytest.approx(max(late), abs=1e-9)
+        assert snapshot.worst_lateness_cause is cause   # the snapshot carries it (the period after it)
+
+
+def test_overrun_causes_are_the_largest_part():
+    from swim_hw_bridge.timing import OverrunCause, overrun_cause
+    assert overrun_cause(5e-3, 1e-3, 1e-3, 4e-3) is OverrunCause.LATE_WAKEUP
+    assert overrun_cause(1e-3, 7e-3, 1e-3, 9e-3) is OverrunCause.SLOW_READ
+    assert overrun_cause(1e-3, 1e-3, 7e-3, 9e-3) is OverrunCause.SLOW_WRITE
+    assert overrun_cause(1e-3, 1e-3, 1e-3, 9e-3) is OverrunCause.SLOW_WORK
+
+
+def test_the_histograms_percentiles_are_exact_to_one_bin():
+    from swim_hw_bridge.timing import HISTOGRAM_BIN_S, HISTOGRAM_RANGE_S, LatencyHistogram
+    rng = np.random.default_rng(7)
+    samples = rng.gamma(2.0, 0.4e-3, 20_000)
+    histogram = LatencyHistogram()
+    for value in samples:
+        histogram.add(float(value))
+    histogram.add(float("nan"))
+    histogram.add(-1.0)   # neither is a duration: not counted
+    assert histogram.count == len(samples)
+    for percent in (50, 90, 99):
+        exact = np.percentile(samples, percent)
+        assert exact <= histogram.percentile_s(percent) <= exact + HISTOGRAM_BIN_S + 1e-12
+    histogram.add(2 * HISTOGRAM_RANGE_S)   # past the range: the last bin, and the largest is kept
+    assert histogram.percentile_s(100) == pytest.approx(2 * HISTOGRAM_RANGE_S)
+    assert math.isnan(LatencyHistogram().percentile_s(50))

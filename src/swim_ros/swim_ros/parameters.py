@@ -22,6 +22,8 @@ from typing import Any, Callable, Optional, Sequence, Union
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
 
+from swim_ros.realtime import SCHEDULING_POLICIES, RealtimeSettings, parse_cpu_list
+
 ParameterValue = Union[bool, int, float, str, list]
 #: a rule beyond the range: the reason a value is not valid, or None if it is
 Check = Callable[[Any], Optional[str]]
@@ -107,3 +109,40 @@ def one_of(*choices: str) -> Check:
     def check(value: Any) -> Optional[str]:
         return None if value in choices else f"must be one of {', '.join(repr(c) for c in choices)}"
     return check
+
+
+def realtime_parameters(priority: int, thread: str) -> tuple[ParameterSpec, ...]:
+    """The real-time means of a periodic node (swim_ros.realtime.RealtimeSettings), fixed at start; priority is
+    the default priority of thread (which of the node's threads it sets: "node's threads", ...)."""
+
+    def cpu_list(value: Any) -> Optional[str]:
+        if value == "":
+            return None
+        try:
+            parse_cpu_list(value)
+        except (ValueError, AttributeError) as err:
+            return f"must be a CPU list such as '1', '0,2' or '2-3' ({err})"
+        return None
+
+    return (
+        ParameterSpec("realtime_policy", "fifo", f"scheduling policy of the {thread}: "
+                      f"{' | '.join(SCHEDULING_POLICIES)} (other: no real-time means); where the host refuses it the "
+                      "node warns once and runs as an ordinary process", check=one_of(*SCHEDULING_POLICIES),
+                      read_only=True),
+        ParameterSpec("realtime_priority", priority, f"real-time priority of the {thread} (1-98; the kernel's own "
+                      "threads hold 99)", range=(1, 98), read_only=True),
+        ParameterSpec("lock_memory", True, "mlockall the process's current and future pages, so no page fault "
+                      "stalls a period", read_only=True),
+        ParameterSpec("cpu_affinity", "", "CPUs the process runs on, taskset's list form ('1', '2-3'); empty: every "
+                      "CPU (on the rig: the CPUs isolcpus keeps free)", check=cpu_list, read_only=True),
+        ParameterSpec("collect_garbage_between_periods", True, "freeze the start-up's objects, turn automatic "
+                      "garbage collection off and collect at a period's end once a second instead",
+                      read_only=True),
+    )
+
+
+def realtime_settings(node: Node) -> RealtimeSettings:
+    """The node's real-time parameters (declared from realtime_parameters) as RealtimeSettings."""
+    get = node.get_parameter
+    return RealtimeSettings(get("realtime_policy").value, get("realtime_priority").value, get("lock_memory").value,
+                            get("cpu_affinity").value, get("collect_garbage_between_periods").value)

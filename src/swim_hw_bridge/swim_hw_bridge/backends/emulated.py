@@ -50,6 +50,8 @@ from swim_hw_bridge.conversions import BridgeConfig, HardLimits
 from swim_hw_bridge.device import CounterSample, Device, DeviceError
 
 DEFAULT_CHARGE_PUMP_TIMEOUT_S = 0.05   # assumed: about 6 periods of 8 ms
+#: steps of the throwaway wake open() swims to load the wake's kernels: enough to shed and move vortices
+WAKE_WARM_UP_STEPS = 4
 #: the wake flow's separation drag coefficients when the options leave them out: a flat plate broadside (Hoerner,
 #: Fluid-Dynamic Drag, 1965, Ch. 3) and a thin section's skin friction (assumed, as swim_sim's Disturbances)
 DEFAULT_NORMAL_DRAG_COEFFICIENT = 1.2
@@ -140,6 +142,11 @@ class EmulatedDevice(Device):
                 self._step.inputs[3][:] = [half_rho_area * c for c in self.drag_coefficients]
                 self.wake = WakeCoupling(self.model)
                 self._wake_interval_s = 0.0
+                # load the wake's compiled kernels now (numba's import and its cache, about 0.3-0.5 s), not in the
+                # I/O loop's first periods: a throwaway wake swims a few steps of a pitching foil
+                warm_up = WakeCoupling(self.model)
+                for k in range(WAKE_WARM_UP_STEPS):
+                    warm_up.step(self.q, np.array([0.0, 0.0, 0.0, 1.0 if k % 2 else -1.0]), 1e-3)
         self.commanded_currents_a = (0.0, 0.0)
         self.enable_requested = False
         self._last_toggle_s = -math.inf
