@@ -31,6 +31,12 @@ host (cached on disk after: 0.2-0.5 s to load); meanwhile the node answered each
 28 ms (the compilation runs in the C compiler's process, the model's symbolic setup holds the interpreter a few
 ms at a time).
 
+Real-time means (swim_ros.realtime; parameters, on by default): once the start-up models are built, main() sets
+the process's threads to SCHED_FIFO realtime_priority, locks its memory and has the garbage collector run after a
+command is published, once a second (collect_garbage_between_periods); ModelBuilder's thread returns to the ordinary
+policy before each build, so a compilation and its C compiler run as ordinary processes. Where the host refuses a
+means the node logs one warning with the reason and runs on.
+
 Speed (in lock-step every period waits on this node): per period the command and tracking_state messages are
 reused and their float64[] fields filled with array('d') (rosidl's setters check lists element by element), and
 the per-period topics have no QoS event handlers: rclpy gives each publisher and subscription two by default,

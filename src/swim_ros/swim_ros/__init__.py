@@ -9,6 +9,8 @@
   matched the client's response reader).
 - ``processes``: ``NodeSpec`` and ``NodeProcess``, how every process we start runs (``ros2 run`` in its own process
   group, stopped by SIGINT, then SIGKILL after a grace period).
+- ``realtime``: the real-time means of a periodic process (scheduling policy, locked memory, CPU set, the garbage
+  collector between periods), applied where permitted and otherwise refused with the reason.
 - ``testing``: for tests only (never imported by a node): the DDS fixtures and fuzz strategies every package's
   tests share.
 """
