@@ -11,6 +11,7 @@ import dataclasses
 import math
 import os
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -418,6 +419,30 @@ def test_a_bridge_file_that_does_not_load_stops_the_node_with_the_reason(ros_dom
     log = log_path.read_text()
     assert process.returncode == 2, log[-2000:]
     assert "bridge_config_path" in log and str(missing) in log and "Traceback" not in log
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="the real-time means need root here (CI runs as root)")
+@pytest.mark.parametrize("policy", ["fifo", "other"])
+def test_the_node_takes_its_real_time_means_once_started(ros_domain, tmp_path, policy):
+    """With realtime_policy fifo (the default) every thread of the process runs at SCHED_FIFO 70 once the node is
+    up, its memory locked; with other, the policy it was started with. The node says which, once."""
+    log_path = tmp_path / "tracker.txt"
+    with running_node("swim_controller", "tracker_node", log_path, "-p", f"realtime_policy:={policy}") as process:
+        deadline = time.monotonic() + STARTUP_TIMEOUT_S
+        while "real-time means" not in log_path.read_text() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        log = log_path.read_text()
+        policies = set()
+        for name in os.listdir(f"/proc/{process.pid}/task"):
+            try:
+                policies.add((os.sched_getscheduler(int(name)), os.sched_getparam(int(name)).sched_priority))
+            except ProcessLookupError:
+                pass
+        status = Path(f"/proc/{process.pid}/status").read_text()
+    assert log.count("real-time means in effect") == 1 and "refused" not in log, log[-2000:]
+    assert policies == ({(os.SCHED_FIFO, 70)} if policy == "fifo" else {(os.SCHED_OTHER, 0)})
+    locked_kib = int(next(line for line in status.splitlines() if line.startswith("VmLck:")).split()[1])
+    assert locked_kib > 0
 
 
 def test_a_time_scale_past_the_motor_limits_refuses_the_goal(rig_loop, plan_message):

@@ -4,6 +4,7 @@ The test side closes a PD loop (the role tracker_node plays) over joint_states -
 lifecycle through bridge_node/change_state as a lifecycle manager would.
 """
 import math
+import os
 import time
 
 import pytest
@@ -204,10 +205,21 @@ def bridge(bridge_log, rclpy_context):
     client.close()
 
 
+def thread_policies(pid):
+    """{thread id: (scheduling policy, priority)} of every thread of the process pid."""
+    policies = {}
+    for name in os.listdir(f"/proc/{pid}/task"):
+        try:
+            policies[int(name)] = (os.sched_getscheduler(int(name)), os.sched_getparam(int(name)).sched_priority)
+        except ProcessLookupError:
+            pass   # a thread that ended meanwhile
+    return policies
+
+
 def test_lifecycle_transitions_open_enable_and_release_the_device(ros_domain, rclpy_context, tmp_path):
     from lifecycle_msgs.msg import Transition
     with running_node("swim_hw_bridge", "bridge_node", tmp_path / "log.txt", "-r", "__ns:=/lifecycle_test",
-                      "-p", "diagnostics_rate_hz:=20.0"):
+                      "-p", "diagnostics_rate_hz:=20.0") as process:
         client = BridgeClient(rclpy_context, "/lifecycle_test", tmp_path / "log.txt")
         try:
             assert client.state_label() == "unconfigured"
@@ -218,6 +230,7 @@ def test_lifecycle_transitions_open_enable_and_release_the_device(ros_domain, rc
             assert not client.states   # inactive: the loop is not running, nothing published
             _, values = client.latest_diagnostic()
             assert values["lifecycle_state"] == "inactive"
+            assert set(thread_policies(process.pid).values()) == {(os.SCHED_OTHER, 0)}   # configuring: ordinary
 
             assert client.transition(Transition.TRANSITION_ACTIVATE)
             client.wait_for(lambda: len(client.states) >= 40, RATE_WINDOW_S)
@@ -230,6 +243,12 @@ def test_lifecycle_transitions_open_enable_and_release_the_device(ros_domain, rc
             status, values = client.latest_diagnostic()
             assert values["lifecycle_state"] == "active" and values["enable_toggling"] == "True"
             assert values["watchdog"] == "WAITING"
+            if os.geteuid() == 0:   # the real-time means (CI runs as root): the I/O loop above the rest
+                policies = sorted(thread_policies(process.pid).values())
+                assert set(policies) == {(os.SCHED_FIFO, 70), (os.SCHED_FIFO, 80)}
+                assert policies.count((os.SCHED_FIFO, 80)) == 1
+                assert values["io_loop_scheduling"] == "SCHED_FIFO 80" and values["realtime_refused"] == ""
+                assert int(values["memory_locked_kib"]) > 0
 
             assert client.transition(Transition.TRANSITION_DEACTIVATE)
             client.spin(IN_FLIGHT_S)
@@ -238,6 +257,7 @@ def test_lifecycle_transitions_open_enable_and_release_the_device(ros_domain, rc
             assert not client.states
             _, values = client.latest_diagnostic()
             assert values["lifecycle_state"] == "inactive" and values["enable_toggling"] == "False"
+            assert set(thread_policies(process.pid).values()) == {(os.SCHED_OTHER, 0)}   # given up
 
             assert client.transition(Transition.TRANSITION_CLEANUP)
             assert client.state_label() == "unconfigured"
