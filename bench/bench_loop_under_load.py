@@ -18,7 +18,7 @@ meets_target: with two busy processes and the real-time means, every run tracked
 at most TARGET_OVERRUNS_PER_MIN overruns a minute. meets_jitter_target: there, the commands' p99 jitter at most
 TARGET_JITTER_P99_MS. Prints one JSON line last.
 
-    python bench/bench_loop_under_load.py [--repeats 2] [--busy 0 1 2]
+    python bench/bench_loop_under_load.py [--repeats 3] [--busy 0 1 2]
 """
 from __future__ import annotations
 
@@ -122,7 +122,7 @@ def summarize(runs: list[dict]) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=2, help="runs per case (default 2)")
+    parser.add_argument("--repeats", type=int, default=3, help="runs per case (default 3: about 9 minutes)")
     parser.add_argument("--busy", type=int, nargs="+", default=[0, 1, 2], help="busy processes per case")
     args = parser.parse_args()
     from swim_ros.domains import run_domain
