@@ -427,7 +427,9 @@ def test_a_device_lost_while_active_takes_deactivate_into_error_processing(ros_d
             client.send([0.05, 0.0])
             sent = time.monotonic()
             assert client.wait_for(lambda: (0.05, 0.0) in [pytest.approx(e) for e in efforts(client, sent)])
-            assert firmware.applied_currents_ua[0] > 0 and firmware.applied_currents_ua[1] == 0
+            # the state goes out right after the write; the firmware's thread applies it when it next runs
+            assert client.wait_for(lambda: firmware.applied_currents_ua[0] > 0)
+            assert firmware.applied_currents_ua[1] == 0
 
             firmware.disconnect()   # the cable is pulled
             lost = time.monotonic()
