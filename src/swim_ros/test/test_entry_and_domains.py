@@ -7,6 +7,8 @@ import sys
 import select
 import textwrap
 
+from swim_ros.processes import run_child, start_child
+
 NODE_SCRIPT = textwrap.dedent("""
     import sys
     from rclpy.executors import SingleThreadedExecutor
@@ -35,8 +37,8 @@ START_TIMEOUT_S = 30.0
 
 
 def _start(mode):
-    return subprocess.Popen([sys.executable, "-c", NODE_SCRIPT, mode], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    return start_child([sys.executable, "-c", NODE_SCRIPT, mode], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                       text=True)
 
 
 def test_fatal_start_up_error_exits_2_with_the_reason(ros_domain):
@@ -74,16 +76,16 @@ def test_two_processes_never_claim_the_same_domain(tmp_path):
         print(claim_ros_domain(range(1, 3), Path({str(tmp_path)!r})), flush=True)
         sys.stdin.readline()
     """)
-    holders = [subprocess.Popen([sys.executable, "-c", script], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                stderr=subprocess.PIPE, text=True) for _ in range(2)]
+    holders = [start_child([sys.executable, "-c", script], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True) for _ in range(2)]
     claimed = [int(h.stdout.readline()) for h in holders]
     assert sorted(claimed) == [1, 2]
-    third = subprocess.run([sys.executable, "-c", script], input="\n", capture_output=True, text=True,
-                           timeout=START_TIMEOUT_S)
+    third = run_child([sys.executable, "-c", script], input="\n", capture_output=True, text=True,
+                      timeout_s=START_TIMEOUT_S)
     assert third.returncode != 0 and "every ROS domain" in third.stderr
     for holder in holders:
         holder.communicate("\n", timeout=START_TIMEOUT_S)
     # released with the processes: a new one gets one again
-    again = subprocess.run([sys.executable, "-c", script], input="\n", capture_output=True, text=True,
-                           timeout=START_TIMEOUT_S, env=dict(os.environ))
+    again = run_child([sys.executable, "-c", script], input="\n", capture_output=True, text=True,
+                      timeout_s=START_TIMEOUT_S, env=dict(os.environ))
     assert again.returncode == 0 and int(again.stdout) in (1, 2)
