@@ -7,12 +7,12 @@ A test of one node over DDS lives in that node's package, src/<package>/test/, s
 --packages-select <package>` starts it. The DDS fixtures and timeouts every test shares are swim_ros.testing's.
 """
 import functools
-import subprocess
 from pathlib import Path
 from typing import Optional
 
 import pytest
 
+from swim_ros.processes import run_child
 from swim_ros.testing.fixtures import (MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, rclpy_context,  # noqa: F401
                                        ros_domain, running_node)
 
@@ -32,7 +32,7 @@ def own_shm_possible() -> bool:
     """Whether a process here may have a /dev/shm of its own (a tmpfs in a mount namespace of its own: root)."""
     command = ["unshare", "-m", "sh", "-c", "mount -t tmpfs -o size=1m tmpfs /dev/shm"]
     try:
-        return subprocess.run(command, capture_output=True, timeout=30).returncode == 0
+        return run_child(command, capture_output=True, timeout_s=30).returncode == 0
     except OSError:
         return False
 
@@ -43,13 +43,13 @@ def run_demo(run_dir: Path, *arguments: str, timeout_s: float = DEMO_TIMEOUT_S, 
     (the summary table) and stderr. With shm_mib, the run's processes share a new /dev/shm of that size (a tmpfs
     in a mount namespace of their own; the test is skipped where that is not allowed). Fails the test with the
     tail of its output if it does not exit with expected_returncode."""
-    command = f"source scripts/env.sh && ros2 run swim_bringup swim-demo --run-dir {run_dir} {' '.join(arguments)}"
+    command = f"source scripts/env.sh && exec ros2 run swim_bringup swim-demo --run-dir {run_dir} {' '.join(arguments)}"
     argv = ["bash", "-c", command]
     if shm_mib is not None:
         if not own_shm_possible():
             pytest.skip("a /dev/shm of the run's own needs a mount namespace (root)")
         argv = ["unshare", "-m", "bash", "-c", f"mount -t tmpfs -o size={shm_mib}m tmpfs /dev/shm && {command}"]
-    result = subprocess.run(argv, cwd=WORKSPACE, capture_output=True, text=True, timeout=timeout_s)
+    result = run_child(argv, cwd=WORKSPACE, capture_output=True, text=True, timeout_s=timeout_s)
     assert result.returncode == expected_returncode, result.stdout[-2000:] + result.stderr[-2000:]
     return result.stdout + result.stderr
 
