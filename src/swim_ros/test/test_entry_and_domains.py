@@ -1,11 +1,13 @@
-"""run_node in a real process: a fatal start-up error exits 2 with its reason; SIGINT stops cleanly, stop runs.
-claim_ros_domain: two live processes never hold the same domain."""
+"""run_node in a real process: a fatal start-up error exits 2 with its reason; SIGINT stops cleanly, stop runs;
+SIGTERM stops every idle node, wherever its executor looked. claim_ros_domain: two live processes never hold the
+same domain."""
 import os
 import signal
 import subprocess
 import sys
 import select
 import textwrap
+import time
 
 from swim_ros.processes import run_child, start_child
 
@@ -26,7 +28,10 @@ NODE_SCRIPT = textwrap.dedent("""
             super().__init__("entry_demo")
             if sys.argv[1] == "fail":
                 raise ValueError("lane_radius_m must be positive, got -1.0")
-            self.create_timer(0.05, lambda: print("spinning", flush=True))
+            if sys.argv[1] == "idle":   # no timer: only a signal wakes its executor
+                print("spinning", flush=True)
+            else:
+                self.create_timer(0.05, lambda: print("spinning", flush=True))
 
     executor = ShutDownBeforeWaiting if sys.argv[1] == "race" else SingleThreadedExecutor
     run_node(Demo, name="entry_demo", executor=executor,
@@ -34,6 +39,10 @@ NODE_SCRIPT = textwrap.dedent("""
 """)
 #: how long a child process may take to start rclpy and spin (seconds): generous for a loaded 2-core host
 START_TIMEOUT_S = 30.0
+#: idle nodes SIGTERMed, so many at once (their starts share the host), in so many rounds, each once in its wait
+IDLE_NODES_AT_ONCE = 8
+IDLE_ROUNDS = 3
+IDLE_WAIT_S = 0.3
 
 
 def _start(mode):
@@ -59,6 +68,28 @@ def test_sigint_stops_cleanly_and_runs_stop(ros_domain):
     out, err = process.communicate(timeout=START_TIMEOUT_S)
     assert process.returncode == 0, err
     assert "stopped entry_demo" in out and "Traceback" not in err
+
+
+def test_sigterm_stops_every_idle_node(ros_domain):
+    """rclpy's signal thread wakes the executors, then shuts the contexts down: an executor that looks between the
+    two waits again, and a node with nothing else to wake it (no timer) never stops; that lost about one SIGTERM in
+    a hundred here. run_node takes SIGTERM as Ctrl-C, which stops a node wherever its executor looked."""
+    for _ in range(IDLE_ROUNDS):
+        processes = [_start("idle") for _ in range(IDLE_NODES_AT_ONCE)]
+        try:
+            for process in processes:
+                ready, _, _ = select.select([process.stdout], [], [], START_TIMEOUT_S)
+                assert ready and process.stdout.readline().strip() == "spinning"
+            time.sleep(IDLE_WAIT_S)
+            for process in processes:
+                process.send_signal(signal.SIGTERM)
+            for process in processes:
+                out, err = process.communicate(timeout=START_TIMEOUT_S)
+                assert process.returncode == 0 and "stopped entry_demo" in out, err
+        finally:
+            for process in processes:
+                process.kill()
+                process.wait()
 
 
 def test_a_shutdown_landing_before_the_wait_set_is_a_clean_stop(ros_domain):
