@@ -4,7 +4,8 @@ The rule. Whatever a starter (swim-demo, swim-experiments, swim-bringup, a bench
 when the starter ends, however it ends: a normal exit, Ctrl-C, SIGTERM, SIGKILL or a crash, at any moment. A node
 left behind keeps its ROS domain's topics alive and a core busy long after anyone looks at it. So:
 - every child is started through ``start_child`` (or ``run_child``, ``NodeProcess``; a shell script through
-  ``python -m swim_ros.processes``), which gives it a parent-death signal: util-linux's setpriv sets
+  ``python -m swim_ros.processes``; a Python child that another library starts, a multiprocessing worker, calls
+  ``end_with_starter`` first thing), which gives it a parent-death signal: util-linux's setpriv sets
   PARENT_DEATH_SIGNAL, then, before the command runs, the child checks that its parent is still the starter. The
   kernel sends that signal only to a child whose starter dies after the setting; a starter that died between the
   fork and the setting (a `timeout` ending a sweep while a run was being brought up) would leave it for good, and
@@ -24,6 +25,7 @@ down and leaves DDS cleanly), waits, and kills only what is still there after th
 """
 from __future__ import annotations
 
+import ctypes
 import dataclasses
 import os
 import shutil
@@ -42,6 +44,8 @@ PARENT_DEATH_SIGNAL = "TERM"
 #: the exit status of a child whose starter was gone before its parent-death signal was set: as if the signal had
 #: come (128 + SIGTERM)
 ORPHAN_EXIT_STATUS = 128 + signal.SIGTERM
+#: prctl(2)'s option that sets the calling process's parent-death signal (linux/prctl.h)
+_PR_SET_PDEATHSIG = 1
 #: what the child runs once setpriv has set its parent-death signal: its parent must still be the starter ($1),
 #: else the starter died before the setting and no signal will ever come; then the command, in the same process
 _PARENT_CHECK = f'[ "$PPID" = "$1" ] || exit {ORPHAN_EXIT_STATUS}; shift; exec "$@"'
@@ -102,6 +106,19 @@ def run_child(command: Sequence[str], *, timeout_s: Optional[float] = None, inpu
             process.wait()
             raise
     return subprocess.CompletedProcess(list(command), process.returncode, stdout, stderr)
+
+
+def end_with_starter(starter_pid: int) -> None:
+    """From inside a Python child that was not started by start_child (a multiprocessing worker), what start_child
+    gives its children: SIGTERM when the starter (process starter_pid, its parent) dies, and an exit now if it has
+    died already. Nothing where prctl(2) is missing (not Linux)."""
+    if not sys.platform.startswith("linux"):
+        return
+    libc = ctypes.CDLL(None, use_errno=True)
+    if libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0) != 0:
+        raise OSError(ctypes.get_errno(), "prctl(PR_SET_PDEATHSIG) failed")
+    if os.getppid() != starter_pid:
+        os._exit(ORPHAN_EXIT_STATUS)
 
 
 def interrupt_on_sigterm() -> None:
