@@ -5,8 +5,12 @@ recorder and visualization on a demo's bag, the experiments run), the launch fil
 package sees them, packaging, and the checks of the whole source tree (style, types, comments, repeated tests).
 A test of one node over DDS lives in that node's package, src/<package>/test/, so `colcon test
 --packages-select <package>` starts it. The DDS fixtures and timeouts every test shares are swim_ros.testing's.
+
+A test marked `slow` (a grid of cases run by hand before a change that needs it, minutes long) is skipped unless
+SWIM_SLOW_TESTS=1: `SWIM_SLOW_TESTS=1 python -m pytest tests -m slow` runs them.
 """
 import functools
+import os
 from pathlib import Path
 from typing import Optional
 
@@ -25,6 +29,21 @@ PACKAGES = ("swim_model", "swim_ros", "swim_planner", "swim_controller", "swim_s
 DEMO_TIMEOUT_S = 300.0
 #: Docker's default /dev/shm, MiB: what a run in a container has for Fast DDS's shared memory
 CONTAINER_SHM_MIB = 64
+#: the environment variable that runs the tests marked slow (SWIM_SLOW_TESTS=1)
+SLOW_TESTS_VARIABLE = "SWIM_SLOW_TESTS"
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", f"slow: minutes long, run by hand; skipped unless {SLOW_TESTS_VARIABLE}=1")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    if os.environ.get(SLOW_TESTS_VARIABLE) == "1":
+        return
+    skip = pytest.mark.skip(reason=f"slow: run with {SLOW_TESTS_VARIABLE}=1")
+    for item in items:
+        if "slow" in item.keywords:
+            item.add_marker(skip)
 
 
 @functools.lru_cache(maxsize=None)
