@@ -17,7 +17,6 @@ import argparse
 import json
 import random
 import statistics
-import subprocess
 import sys
 import tempfile
 import threading
@@ -60,6 +59,8 @@ def main() -> None:
     parser.add_argument("--ordinary", action="store_true", help="without the real-time means")
     args = parser.parse_args()
     from swim_ros.domains import run_domain
+    from swim_ros.processes import interrupt_on_sigterm
+    interrupt_on_sigterm()   # SIGTERM ends the run as Ctrl-C does: the bridge releases its device
     run_domain()   # a domain of our own unless the user chose one: never another session's nodes
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
@@ -115,10 +116,11 @@ def main() -> None:
     sender.destroy_node()
     bridge.destroy_node()
     rclpy.try_shutdown()
-    from swim_ros.processes import with_parent_death_signal
-    bare = subprocess.run(with_parent_death_signal([sys.executable, "-c", BARE_LOOP,
-                                                    "off" if args.ordinary else "on", str(run_s)]),
-                          capture_output=True, text=True, check=True)
+    from swim_ros.processes import run_child
+    bare = run_child([sys.executable, "-c", BARE_LOOP, "off" if args.ordinary else "on", str(run_s)],
+                     capture_output=True, text=True)
+    if bare.returncode != 0:
+        raise SystemExit(f"the bare loop failed: {bare.stderr[-2000:]}")
     bare_ms = json.loads(bare.stdout.strip().splitlines()[-1])
     p99 = latencies_ms[min(len(latencies_ms) - 1, int(0.99 * len(latencies_ms)))]
     print(json.dumps({"benchmark": "bridge_latency", "backend": "emulated", "sample_period_ms": 1e3 * PERIOD_S,

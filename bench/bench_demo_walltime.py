@@ -5,10 +5,11 @@ in lock-step simulation, recording, analysis, figures, shut-down) and of the pap
 from __future__ import annotations
 
 import json
-import subprocess
 import tempfile
 import time
 from pathlib import Path
+
+from swim_ros.processes import interrupt_on_sigterm, run_child
 
 #: name -> command, timed from start to exit; "{run_dir}" becomes a fresh temporary folder
 RUNS: dict[str, list[str]] = {
@@ -24,11 +25,12 @@ def wall_time_s(command: list[str]) -> tuple[float, int]:
     with tempfile.TemporaryDirectory() as work:
         arguments = [a.replace("{run_dir}", str(Path(work) / "run")) for a in command]
         started = time.perf_counter()
-        completed = subprocess.run(arguments, check=False, capture_output=True)
+        completed = run_child(arguments, capture_output=True)
         return time.perf_counter() - started, completed.returncode
 
 
 def main() -> None:
+    interrupt_on_sigterm()   # SIGTERM stops the run under way as Ctrl-C does
     results = {}
     for name, command in RUNS.items():
         seconds, exit_code = wall_time_s(command)

@@ -79,7 +79,9 @@ def loop_timing(bag: Path, period_s: float) -> dict:
 
 def main() -> None:
     from swim_ros.domains import run_domain
+    from swim_ros.processes import interrupt_on_sigterm
     run_domain()   # a domain of our own unless the user chose one: never another session's nodes
+    interrupt_on_sigterm()   # SIGTERM stops the nodes as Ctrl-C does
     results = {}
     with tempfile.TemporaryDirectory() as work:
         for period_s in PERIODS_S:

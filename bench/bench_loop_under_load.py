@@ -52,8 +52,8 @@ def cpu_times() -> tuple[int, int]:
 
 
 def start_busy(count: int) -> list[subprocess.Popen]:
-    from swim_ros.processes import with_parent_death_signal
-    return [subprocess.Popen(with_parent_death_signal([sys.executable, "-c", BUSY_LOOP])) for _ in range(count)]
+    from swim_ros.processes import start_child
+    return [start_child([sys.executable, "-c", BUSY_LOOP]) for _ in range(count)]
 
 
 def stop_busy(processes: list[subprocess.Popen]) -> None:
@@ -140,7 +140,9 @@ def main() -> None:
     parser.add_argument("--busy", type=int, nargs="+", default=[0, 1, 2], help="busy processes per case")
     args = parser.parse_args()
     from swim_ros.domains import run_domain
+    from swim_ros.processes import interrupt_on_sigterm
     run_domain()   # a domain of our own unless the user chose one: never another session's nodes
+    interrupt_on_sigterm()   # SIGTERM stops the nodes and the busy processes as Ctrl-C does
     started_s = time.monotonic()
     runs: dict[tuple[int, bool], list[dict]] = {}
     with tempfile.TemporaryDirectory() as work:

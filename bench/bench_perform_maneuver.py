@@ -33,7 +33,9 @@ FIRST_PERIOD_PLAN_TIME_S = 0.05
 
 def main() -> None:
     from swim_ros.domains import run_domain
+    from swim_ros.processes import interrupt_on_sigterm
     run_domain()   # a domain of our own unless the user chose one: never another session's nodes
+    interrupt_on_sigterm()   # SIGTERM stops the nodes as Ctrl-C does
     from swim_bringup.system import System, closed_loop_specs, config_dir
     specs = closed_loop_specs(config_dir("realistic"), ("mode:=realtime",), plant="sim", visualization=False,
                               maneuver=True)

@@ -21,14 +21,16 @@ STARTUP_TIMEOUT_S = 60.0
 
 def main() -> None:
     from swim_ros.domains import run_domain
+    from swim_ros.processes import interrupt_on_sigterm, start_child
     run_domain()   # a domain of our own unless the user chose one: never another session's nodes
+    interrupt_on_sigterm()   # SIGTERM stops the nodes as Ctrl-C does
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from swim_interfaces.srv import RequestManeuver
     from swim_ros.calls import call_service, new_request_id, wait_for_server
-    node_process = subprocess.Popen(["bash", "-c", "source scripts/env.sh && exec ros2 run swim_planner planner_node"],
-                                    cwd=WORKSPACE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                    start_new_session=True)
+    node_process = start_child(["bash", "-c", "source scripts/env.sh && exec ros2 run swim_planner planner_node"],
+                               cwd=WORKSPACE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                               start_new_session=True)
     try:
         rclpy.init()
         node = rclpy.create_node("planner_latency_bench")

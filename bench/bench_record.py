@@ -32,6 +32,7 @@ from swim_bringup.bag import RUN_TOPICS, read_messages
 from swim_bringup.recorded_run import PAPER_CONSTRAINED, RUN_TOLERANCES
 from swim_bringup.run_client import LOOP_TOPICS, RunClient
 from swim_bringup.system import System, closed_loop_specs, config_dir
+from swim_ros.processes import interrupt_on_sigterm, start_child
 
 PERIOD_NS = 8_000_000   # the demo's control period (rig.yaml sample_period: paper Sec. 2)
 STARTUP_TIMEOUT_S, GOAL_TIMEOUT_S, RECORDER_TIMEOUT_S = 120.0, 600.0, 120.0
@@ -89,8 +90,8 @@ def swim_record(work: Path) -> tuple[float, float, dict[str, int], int]:
     from any loop topic)."""
     bag, log_path = work / "bag_swim_record", work / "swim_record.log"
     with System(closed_loop_specs(config_dir("paper")), work / "logs_swim_record"), open(log_path, "w") as log:
-        recorder = subprocess.Popen(["ros2", "run", "swim_bringup", "swim-record", "-o", str(bag), *RUN_TOPICS],
-                                    stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        recorder = start_child(["ros2", "run", "swim_bringup", "swim-record", "-o", str(bag), *RUN_TOPICS],
+                               stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
         try:
             # joint_states and joint_commands flow before the goal: messages on them show the recorder matched
             wait_for(lambda: all(recorded_counts(log_path).get(t, 0) > 0 for t in LOOP_TOPICS[:2])
@@ -117,6 +118,7 @@ def swim_record(work: Path) -> tuple[float, float, dict[str, int], int]:
 def main() -> None:
     from swim_ros.domains import run_domain
     run_domain()   # a domain of our own unless the user chose one: never another session's nodes
+    interrupt_on_sigterm()   # SIGTERM stops the nodes as Ctrl-C does
     load_before = os.getloadavg()[0]
     in_process_speeds, swim_record_speeds, missing_periods, counts = [], [], 0, {}
     in_process_cpu, swim_record_cpu = [], []

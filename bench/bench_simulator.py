@@ -140,6 +140,8 @@ def summary(factors: list[float]) -> dict[str, float]:
 
 
 def main() -> None:
+    from swim_ros.processes import interrupt_on_sigterm
+    interrupt_on_sigterm()   # SIGTERM stops the nodes as Ctrl-C does
     load_before = os.getloadavg()[0]
     free, constrained = plant_realtime_factors(False), plant_realtime_factors(True)
     steady, whole = loop_realtime_factors()

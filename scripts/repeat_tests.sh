@@ -52,9 +52,10 @@ interrupted=0
 trap 'interrupted=1' INT
 trap 'exit 143' TERM
 
+# Every process this script starts dies with it, however it ends (swim_ros.processes: a parent-death signal).
+with_me=(python -m swim_ros.processes "$BASHPID")
 if [ "$load" -eq 1 ]; then
-  # A busy loop that also ends by itself within a fraction of a second if this script is killed outright.
-  ( while kill -0 $$ 2>/dev/null; do for ((i = 0; i < 100000; i++)); do :; done; done ) &
+  "${with_me[@]}" bash -c 'while :; do :; done' &
   load_pid=$!
   echo "load: one core kept busy (pid $load_pid)"
 fi
@@ -64,7 +65,7 @@ done_runs=0
 for ((run = 1; run <= runs; run++)); do
   [ "$interrupted" -eq 1 ] && break
   start_us=${EPOCHREALTIME/[.,]/}
-  python -m pytest -p no:cacheprovider -o junit_family=xunit1 --junitxml="$out/run-$run.xml" \
+  "${with_me[@]}" python -m pytest -p no:cacheprovider -o junit_family=xunit1 --junitxml="$out/run-$run.xml" \
     "${pytest_args[@]}" >"$out/run-$run.log" 2>&1
   status=$?
   [ "$interrupted" -eq 1 ] && break

@@ -5,14 +5,18 @@ recorder and visualization on a demo's bag, the experiments run), the launch fil
 package sees them, packaging, and the checks of the whole source tree (style, types, comments, repeated tests).
 A test of one node over DDS lives in that node's package, src/<package>/test/, so `colcon test
 --packages-select <package>` starts it. The DDS fixtures and timeouts every test shares are swim_ros.testing's.
+
+A test marked `slow` (a grid of cases run by hand before a change that needs it, minutes long) is skipped unless
+SWIM_SLOW_TESTS=1: `SWIM_SLOW_TESTS=1 python -m pytest tests -m slow` runs them.
 """
 import functools
-import subprocess
+import os
 from pathlib import Path
 from typing import Optional
 
 import pytest
 
+from swim_ros.processes import run_child
 from swim_ros.testing.fixtures import (MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, rclpy_context,  # noqa: F401
                                        ros_domain, running_node)
 
@@ -25,6 +29,21 @@ PACKAGES = ("swim_model", "swim_ros", "swim_planner", "swim_controller", "swim_s
 DEMO_TIMEOUT_S = 300.0
 #: Docker's default /dev/shm, MiB: what a run in a container has for Fast DDS's shared memory
 CONTAINER_SHM_MIB = 64
+#: the environment variable that runs the tests marked slow (SWIM_SLOW_TESTS=1)
+SLOW_TESTS_VARIABLE = "SWIM_SLOW_TESTS"
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", f"slow: minutes long, run by hand; skipped unless {SLOW_TESTS_VARIABLE}=1")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    if os.environ.get(SLOW_TESTS_VARIABLE) == "1":
+        return
+    skip = pytest.mark.skip(reason=f"slow: run with {SLOW_TESTS_VARIABLE}=1")
+    for item in items:
+        if "slow" in item.keywords:
+            item.add_marker(skip)
 
 
 @functools.lru_cache(maxsize=None)
@@ -32,7 +51,7 @@ def own_shm_possible() -> bool:
     """Whether a process here may have a /dev/shm of its own (a tmpfs in a mount namespace of its own: root)."""
     command = ["unshare", "-m", "sh", "-c", "mount -t tmpfs -o size=1m tmpfs /dev/shm"]
     try:
-        return subprocess.run(command, capture_output=True, timeout=30).returncode == 0
+        return run_child(command, capture_output=True, timeout_s=30).returncode == 0
     except OSError:
         return False
 
@@ -43,13 +62,13 @@ def run_demo(run_dir: Path, *arguments: str, timeout_s: float = DEMO_TIMEOUT_S, 
     (the summary table) and stderr. With shm_mib, the run's processes share a new /dev/shm of that size (a tmpfs
     in a mount namespace of their own; the test is skipped where that is not allowed). Fails the test with the
     tail of its output if it does not exit with expected_returncode."""
-    command = f"source scripts/env.sh && ros2 run swim_bringup swim-demo --run-dir {run_dir} {' '.join(arguments)}"
+    command = f"source scripts/env.sh && exec ros2 run swim_bringup swim-demo --run-dir {run_dir} {' '.join(arguments)}"
     argv = ["bash", "-c", command]
     if shm_mib is not None:
         if not own_shm_possible():
             pytest.skip("a /dev/shm of the run's own needs a mount namespace (root)")
         argv = ["unshare", "-m", "bash", "-c", f"mount -t tmpfs -o size={shm_mib}m tmpfs /dev/shm && {command}"]
-    result = subprocess.run(argv, cwd=WORKSPACE, capture_output=True, text=True, timeout=timeout_s)
+    result = run_child(argv, cwd=WORKSPACE, capture_output=True, text=True, timeout_s=timeout_s)
     assert result.returncode == expected_returncode, result.stdout[-2000:] + result.stderr[-2000:]
     return result.stdout + result.stderr
 

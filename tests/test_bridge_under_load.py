@@ -4,7 +4,6 @@ parameter files, so with the real-time means the bridge and the tracker take by 
 under the shipped limits (the bridge's 3 overruns in a row, the tracker's 200 ms without a state). The bridge's
 /diagnostics, read back from the bag, show the means in effect and how the loop kept its period."""
 import os
-import subprocess
 import sys
 
 import pytest
@@ -22,9 +21,9 @@ WAKE_LATENESS_P99_BOUND_MS = 1.6
 
 @pytest.fixture(scope="module")
 def run_beside_a_busy_process(ros_domain, tmp_path_factory):
-    from swim_ros.processes import with_parent_death_signal
+    from swim_ros.processes import start_child
     work = tmp_path_factory.mktemp("bridge_under_load")
-    busy = subprocess.Popen(with_parent_death_signal([sys.executable, "-c", "while True: pass"]))
+    busy = start_child([sys.executable, "-c", "while True: pass"])
     try:
         stdout = run_demo(work / "run", "--plant", "bridge", "--timeout", str(MANEUVER_TIMEOUT_S))
     finally:

@@ -2,11 +2,10 @@
 seeds, two runs at once (each in its own process and ROS domain): the runs the flake hunter repeats
 (scripts/repeat_tests.sh N tests/test_experiments_run.py). Every run succeeds, experiments.json reads back with
 every key, each seed reached its simulator, and the row agrees with the analyses of the four recorded runs."""
-import subprocess
-
 import pytest
 
 from conftest import DEMO_TIMEOUT_S, WORKSPACE
+from swim_ros.processes import run_child
 
 #: the shortest of the paper's experiments: the constrained maneuver at lambda = 1.67 (30 s / 1.67 = 18 s)
 EXPERIMENT = "constrained_lambda1.67"
@@ -19,10 +18,10 @@ def test_one_experiment_runs_over_two_seeds_two_runs_at_once(ros_domain, tmp_pat
     from swim_bringup.experiments import NORMS, paper_experiments, run_label
     from swim_bringup.reports import ExperimentsSummary, RunReport
     run_dir = tmp_path / "experiments"
-    command = (f"source scripts/env.sh && ros2 run swim_bringup swim-experiments --only {EXPERIMENT} "
+    command = (f"source scripts/env.sh && exec ros2 run swim_bringup swim-experiments --only {EXPERIMENT} "
                f"--seeds {len(SEEDS)} --jobs 2 --pipeline paper --run-dir {run_dir}")
-    result = subprocess.run(["bash", "-c", command], cwd=WORKSPACE, capture_output=True, text=True,
-                            timeout=EXPERIMENTS_TIMEOUT_S)
+    result = run_child(["bash", "-c", command], cwd=WORKSPACE, capture_output=True, text=True,
+                       timeout_s=EXPERIMENTS_TIMEOUT_S)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
     summary = ExperimentsSummary.load(run_dir / "experiments.json")
     assert summary.failed_runs == [] and summary.seeds == SEEDS and summary.pipeline == "paper"

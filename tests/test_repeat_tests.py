@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from conftest import WORKSPACE
+from swim_ros.processes import run_child, start_child
 
 SCRIPT = WORKSPACE / "scripts" / "repeat_tests.sh"
 # Generous against pytest's start-up (about 1 s per run here, more on a loaded host) times the runs of a call.
@@ -53,8 +54,8 @@ def sample(tmp_path) -> Path:
 
 def repeat(tmp_path: Path, *arguments: str) -> subprocess.CompletedProcess:
     """The script run from tmp_path."""
-    return subprocess.run([str(SCRIPT), *arguments], cwd=tmp_path, env=script_env(tmp_path), capture_output=True,
-                          text=True, timeout=SCRIPT_TIMEOUT_S)
+    return run_child([str(SCRIPT), *arguments], cwd=tmp_path, env=script_env(tmp_path), capture_output=True,
+                     text=True, timeout_s=SCRIPT_TIMEOUT_S)
 
 
 def load_pid(output: str) -> int:
@@ -100,10 +101,10 @@ def test_ctrl_c_stops_the_runs_and_the_load(tmp_path):
             time.sleep({SLOW_SAMPLE_TEST_S})
         """))
     # A terminal's Ctrl-C: SIGINT to the script's process group, SIGINT not ignored whatever this test inherited.
-    process = subprocess.Popen([str(SCRIPT), "3", "--load", str(tmp_path / "test_slow.py")], cwd=tmp_path,
-                               env=script_env(tmp_path), stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True, start_new_session=True,
-                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    process = start_child([str(SCRIPT), "3", "--load", str(tmp_path / "test_slow.py")], cwd=tmp_path,
+                          env=script_env(tmp_path), stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, text=True, start_new_session=True,
+                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         deadline = time.monotonic() + SCRIPT_TIMEOUT_S
         while not started.exists() and process.poll() is None and time.monotonic() < deadline:

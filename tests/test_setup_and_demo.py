@@ -1,12 +1,12 @@
 """The setup step (idempotent, clear failures) and the README's main command."""
 import json
 import os
-import subprocess
 import sys
 
 import pytest
 
 from conftest import WORKSPACE
+from swim_ros.processes import run_child
 
 SETUP = WORKSPACE / "scripts" / "setup.sh"
 #: a second setup only hashes its inputs against the last run's stamps: well under a second (README); 120 s only stops
@@ -19,7 +19,7 @@ MODEL_DEMO_TIMEOUT_S = 300
 
 
 def test_second_setup_does_no_work():
-    result = subprocess.run(["bash", str(SETUP)], capture_output=True, text=True, timeout=SETUP_TIMEOUT_S)
+    result = run_child(["bash", str(SETUP)], capture_output=True, text=True, timeout_s=SETUP_TIMEOUT_S)
     assert result.returncode == 0, result.stderr
     assert "installing" not in result.stdout and "colcon build" not in result.stdout
     assert result.stdout.strip().endswith(f"ready ({WORKSPACE / '.venv'}, {WORKSPACE / 'install'})")
@@ -31,32 +31,32 @@ def test_setup_refuses_a_python_that_is_not_3_11(tmp_path):
     fake.write_text('#!/bin/sh\ncase "$2" in *sys.exit*) exit 1;; *) echo 3.12;; esac\n')
     fake.chmod(0o755)
     env = dict(os.environ, SWIM_PYTHON=str(fake), SWIM_VENV=str(tmp_path / "venv"))
-    result = subprocess.run(["bash", str(SETUP)], capture_output=True, text=True, env=env,
-                            timeout=EARLY_FAILURE_TIMEOUT_S)
+    result = run_child(["bash", str(SETUP)], capture_output=True, text=True, env=env,
+                       timeout_s=EARLY_FAILURE_TIMEOUT_S)
     assert result.returncode != 0
     assert "not 3.11" in result.stderr and "Traceback" not in result.stderr
     assert not (tmp_path / "venv").exists()
 
 
 def test_ros2_run_stand_in_names_what_is_missing():
-    result = subprocess.run(["bash", "-c", "source scripts/env.sh && ros2 run swim_model no-such-tool"],
-                            cwd=WORKSPACE, capture_output=True, text=True, timeout=EARLY_FAILURE_TIMEOUT_S)
+    result = run_child(["bash", "-c", "source scripts/env.sh && ros2 run swim_model no-such-tool"],
+                       cwd=WORKSPACE, capture_output=True, text=True, timeout_s=EARLY_FAILURE_TIMEOUT_S)
     assert result.returncode == 1 and "no executable 'no-such-tool' in package 'swim_model'" in result.stderr
 
 
 def test_setup_names_a_missing_python(tmp_path):
     env = dict(os.environ, SWIM_PYTHON="python-that-does-not-exist")
-    result = subprocess.run(["bash", str(SETUP)], capture_output=True, text=True, env=env,
-                            timeout=EARLY_FAILURE_TIMEOUT_S)
+    result = run_child(["bash", str(SETUP)], capture_output=True, text=True, env=env,
+                       timeout_s=EARLY_FAILURE_TIMEOUT_S)
     assert result.returncode != 0 and "no 'python-that-does-not-exist' on PATH" in result.stderr
 
 
 def test_model_demo_runs_through_ros2_run(tmp_path):
     """`ros2 run swim_model swim-model-demo` (the README's demo) prints and saves what it claims."""
     from swim_model import VehicleModel
-    command = f"source scripts/env.sh && ros2 run swim_model swim-model-demo --duration 3 --output-dir {tmp_path}"
-    result = subprocess.run(["bash", "-c", command], cwd=WORKSPACE, capture_output=True, text=True,
-                            timeout=MODEL_DEMO_TIMEOUT_S)
+    command = f"source scripts/env.sh && exec ros2 run swim_model swim-model-demo --duration 3 --output-dir {tmp_path}"
+    result = run_child(["bash", "-c", command], cwd=WORKSPACE, capture_output=True, text=True,
+                       timeout_s=MODEL_DEMO_TIMEOUT_S)
     assert result.returncode == 0, result.stderr
     summary = json.loads((tmp_path / "summary.json").read_text())
     added = VehicleModel(constrained=True).added_mass
@@ -70,7 +70,7 @@ def test_model_demo_runs_through_ros2_run(tmp_path):
 def test_model_demo_reports_a_bad_rig_file_clearly(tmp_path):
     bad = tmp_path / "rig.yaml"
     bad.write_text("format_version: 1\nparameters: {}\n")
-    result = subprocess.run([sys.executable, "-m", "swim_model.demo", "--rig", str(bad), "--output-dir", str(tmp_path)],
-                            capture_output=True, text=True, timeout=EARLY_FAILURE_TIMEOUT_S)
+    result = run_child([sys.executable, "-m", "swim_model.demo", "--rig", str(bad), "--output-dir", str(tmp_path)],
+                       capture_output=True, text=True, timeout_s=EARLY_FAILURE_TIMEOUT_S)
     assert result.returncode == 2
     assert "missing parameters" in result.stderr and "Traceback" not in result.stderr

@@ -12,6 +12,7 @@ import pytest
 import yaml
 
 from conftest import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, WORKSPACE, running_node
+from swim_ros.processes import start_child
 
 STATES = 200
 
@@ -24,8 +25,8 @@ def recording_all_published(bag, log_path, publisher, *arguments):
     node, joint_states, publish = publisher
     command = f"source scripts/env.sh && exec ros2 run swim_bringup swim-record -o {bag} {' '.join(arguments)}"
     with open(log_path, "w") as log:
-        recorder = subprocess.Popen(["bash", "-c", command], cwd=WORKSPACE, stdout=log, stderr=subprocess.STDOUT,
-                                    start_new_session=True)
+        recorder = start_child(["bash", "-c", command], cwd=WORKSPACE, stdout=log, stderr=subprocess.STDOUT,
+                               start_new_session=True)
         try:
             wait_for_recorder(node, joint_states, log_path)
             publish(STATES)

@@ -22,6 +22,7 @@ from swim_bringup.recorded_run import (PAPER_CONSTRAINED, PAPER_LANE_KEEPING, pa
                                        run_recorded)
 from swim_bringup.run_client import RunError
 from swim_bringup.system import PIPELINES, PLANTS, closed_loop_specs, config_dir
+from swim_ros.processes import interrupt_on_sigterm
 
 
 def parse_arguments(argv: list[str] | None) -> argparse.Namespace:
@@ -57,6 +58,7 @@ def parameter_folder(args: argparse.Namespace) -> Path:
 
 
 def main(argv: list[str] | None = None) -> int:
+    interrupt_on_sigterm()   # SIGTERM stops the nodes as Ctrl-C does
     args = parse_arguments(argv)
     run_dir = args.run_dir or Path("runs") / datetime.datetime.now().strftime("demo-%Y%m%d-%H%M%S")
     run_dir.mkdir(parents=True, exist_ok=True)

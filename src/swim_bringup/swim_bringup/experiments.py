@@ -38,7 +38,7 @@ from swim_bringup.run_client import DRAIN_TIMEOUT_S, STARTUP_TIMEOUT_S
 from swim_bringup.statistics import NormStatistics, PairedChange, largest_magnitude
 from swim_bringup.system import PIPELINES, closed_loop_specs, config_dir
 from swim_controller.supervisor import Tolerances
-from swim_ros.processes import STOP_GRACE_S
+from swim_ros.processes import STOP_GRACE_S, interrupt_on_sigterm
 
 NORMS = ("longitudinal_error_two_norm_m_s05", "lateral_error_two_norm_m_s05", "cartesian_error_two_norm_m_s05")
 #: the paper's lane change (Sec. 7.3) at E = 0.05: accelerate, 5 cruises in lane 1, the change, 10 in lane 2, stop
@@ -311,6 +311,7 @@ def executor_for(args: argparse.Namespace) -> concurrent.futures.Executor:
 
 
 def main(argv: Optional[list[str]] = None) -> int:
+    interrupt_on_sigterm()   # SIGTERM stops the runs as Ctrl-C does
     args = parse_arguments(argv)
     run_dir = (args.run_dir or Path("runs") / datetime.datetime.now().strftime("experiments-%Y%m%d-%H%M%S")).resolve()
     if (run_dir / "experiments.json").exists():

@@ -8,6 +8,10 @@ run to a ``concurrent.futures.Executor``: a thread pool on this host (each threa
 process), or a Dask ``distributed.Client``'s executor, whose workers then start the runs' processes on their hosts
 (swim installed there too). Whatever stops a run (an exception of the function, a process that died or hung, a
 lost worker) comes back as a RunFailed naming the run and why; the other runs' results are kept.
+
+A run's process dies with the one that started it (swim_ros.processes.start_child) and takes that death's signal,
+SIGTERM, as Ctrl-C: it stops its nodes before it ends. A caller that stops (Ctrl-C, SIGTERM) while run_all waits
+starts no further run and interrupts those under way on this host.
 """
 from __future__ import annotations
 
@@ -18,8 +22,11 @@ import signal
 import subprocess
 import sys
 import tempfile
+import threading
 from pathlib import Path
 from typing import Any, Callable, Generic, Mapping, Optional, TypeVar
+
+from swim_ros.processes import interrupt_on_sigterm, start_child
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -29,6 +36,12 @@ R = TypeVar("R")
 INTERRUPT_GRACE_S = 30.0
 #: the lines of a dead run process's output its failure quotes
 FAILURE_OUTPUT_LINES = 20
+
+#: the run processes under way in this process, and whether its run_all is stopping (then a run process that starts
+#: is interrupted at once): what a caller's Ctrl-C interrupts
+_running: set[subprocess.Popen[str]] = set()
+_stopping = False
+_running_lock = threading.Lock()
 
 
 class RunFailed(RuntimeError):
@@ -64,9 +77,12 @@ def run_isolated(function: Callable[[T], R], task: T, run: str, timeout_s: float
     with tempfile.TemporaryDirectory(prefix="swim_run_") as folder:
         call, answer = Path(folder) / "call.pickle", Path(folder) / "answer.pickle"
         call.write_bytes(pickle.dumps((function, task)))
-        process = subprocess.Popen([sys.executable, "-m", "swim_bringup.parallel", str(call), str(answer)],
-                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=environment)
+        # the thread that starts the process waits for its end below, so the parent-death signal, which comes when
+        # that thread ends, never comes early
+        process = start_child([sys.executable, "-m", "swim_bringup.parallel", str(call), str(answer)],
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=environment)
         try:
+            _track(process)
             output, _ = process.communicate(timeout=timeout_s)
         except subprocess.TimeoutExpired:
             process.send_signal(signal.SIGINT)
@@ -83,6 +99,8 @@ def run_isolated(function: Callable[[T], R], task: T, run: str, timeout_s: float
             except subprocess.TimeoutExpired:
                 process.kill()
             raise
+        finally:
+            _untrack(process)
         if not answer.exists():
             raise RunFailed(run, f"its process exited with {process.returncode} ({_tail(output)})")
         kind, value = pickle.loads(answer.read_bytes())
@@ -91,29 +109,64 @@ def run_isolated(function: Callable[[T], R], task: T, run: str, timeout_s: float
     return value
 
 
+def _track(process: subprocess.Popen[str]) -> None:
+    with _running_lock:
+        _running.add(process)
+        if _stopping:
+            process.send_signal(signal.SIGINT)
+
+
+def _untrack(process: subprocess.Popen[str]) -> None:
+    with _running_lock:
+        _running.discard(process)
+
+
+def _interrupt_runs(stopping: bool) -> None:
+    """With stopping, SIGINT to every run process under way, and to any that starts from now on; without, runs
+    start normally again."""
+    global _stopping
+    with _running_lock:
+        _stopping = stopping
+        if stopping:
+            for process in _running:
+                process.send_signal(signal.SIGINT)   # nothing if it has ended
+
+
 def run_all(function: Callable[[T], R], tasks: Mapping[str, T], executor: concurrent.futures.Executor,
             timeout_s: float, done: Callable[[str, Outcome[R]], None] = lambda run, outcome: None
             ) -> dict[str, Outcome[R]]:
     """Every task's run (run_isolated, submitted to executor), by its label (the keys of tasks); done is called
     with each as it ends. A run that failed has its RunFailed; the executor's own failures (a lost Dask worker)
-    are named the same way."""
+    are named the same way. If the caller stops while waiting (Ctrl-C, SIGTERM as Ctrl-C), the runs not started
+    are cancelled and those under way on this host interrupted (they stop their nodes), then the exception goes
+    on."""
+    _interrupt_runs(stopping=False)
     futures = {executor.submit(run_isolated, function, task, run, timeout_s): run for run, task in tasks.items()}
     outcomes: dict[str, Outcome[R]] = {}
-    for future in concurrent.futures.as_completed(futures):
-        run = futures[future]
-        try:
-            outcome: Outcome[R] = Outcome(result=future.result())
-        except RunFailed as failure:
-            outcome = Outcome(failure=failure)
-        except Exception as err:   # noqa: BLE001 - whatever stops a run is named, and the others kept
-            outcome = Outcome(failure=RunFailed(run, f"{type(err).__name__}: {err}"))
-        outcomes[run] = outcome
-        done(run, outcome)
+    try:
+        for future in concurrent.futures.as_completed(futures):
+            run = futures[future]
+            try:
+                outcome: Outcome[R] = Outcome(result=future.result())
+            except RunFailed as failure:
+                outcome = Outcome(failure=failure)
+            except Exception as err:   # noqa: BLE001 - whatever stops a run is named, and the others kept
+                outcome = Outcome(failure=RunFailed(run, f"{type(err).__name__}: {err}"))
+            outcomes[run] = outcome
+            done(run, outcome)
+    except BaseException:
+        for future in futures:
+            future.cancel()
+        _interrupt_runs(stopping=True)
+        raise
     return {run: outcomes[run] for run in tasks}
 
 
 def _run_in_this_process(call: Path, answer: Path) -> None:
-    """The new process's side of run_isolated: claim a domain, call the function, write its result or error."""
+    """The new process's side of run_isolated: claim a domain, call the function, write its result or error.
+    SIGTERM (the parent-death signal among others) is Ctrl-C here: the run stops its nodes before the process
+    ends."""
+    interrupt_on_sigterm()
     from swim_ros.domains import RUN_DOMAINS, claim_ros_domain
     claim_ros_domain(RUN_DOMAINS)
     function, task = pickle.loads(call.read_bytes())

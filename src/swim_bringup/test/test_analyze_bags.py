@@ -3,7 +3,6 @@ sqlite3 bag with a type this environment does not know, and paths that are no ba
 against what was written; a bag that lacks something gets its other parts analysed and the missing part named."""
 import json
 import math
-import subprocess
 import sys
 from pathlib import Path
 
@@ -18,6 +17,7 @@ from swim_bringup.analysis import (EXIT_FULL_REPORT, EXIT_PARTIAL_REPORT, EXIT_U
                                    main)
 from swim_bringup.bag import RUN_TOPICS, BagWriter, bag_info, read_messages, swim_typestore
 from swim_hw_bridge.conversions import default_config_path
+from swim_ros.processes import run_child
 
 PERIOD_S, PERIODS = 0.008, 251                  # 2 s of tracking at the controller's period
 LANE_M, ALPHA_OFFSET_RAD = 0.43, 0.02
@@ -241,8 +241,8 @@ def test_a_corrupt_bag_beside_a_good_one_no_traceback(tmp_path):
     named; no traceback."""
     good = record_constrained_run(tmp_path / "good", {t: t for t in MEASURED})
     bad = corrupt_inputs(tmp_path)[-1]
-    result = subprocess.run([sys.executable, "-m", "swim_bringup.analysis", str(good), str(bad)],
-                            capture_output=True, text=True, timeout=120)
+    result = run_child([sys.executable, "-m", "swim_bringup.analysis", str(good), str(bad)],
+                       capture_output=True, text=True, timeout_s=120)
     assert result.returncode == EXIT_UNREADABLE
     assert "Traceback" not in result.stderr and result.stderr.startswith(f"swim-analyze: {bad}")
     assert "longitudinal_error_two_norm_m_s05" in result.stdout

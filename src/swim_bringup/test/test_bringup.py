@@ -15,7 +15,7 @@ import pytest
 
 from swim_bringup.bringup import LOG_TAIL_LINES, bringup_specs, exit_status, log_tail, main
 from swim_bringup.system import LOCKSTEP_STALE_OVERRIDE, closed_loop_specs, config_dir
-from swim_ros.processes import STOP_GRACE_S
+from swim_ros.processes import STOP_GRACE_S, start_child
 from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, new_rclpy_context, ros_domain  # noqa: F401
 
 #: the variable that marks every process a test's swim-bringup starts (children inherit the environment)
@@ -105,9 +105,9 @@ class Bringup:
         self.log_dir = tmp_path / "logs"
         self.output_path = tmp_path / "swim-bringup.out"
         with open(self.output_path, "w") as output:
-            self.process = subprocess.Popen([str(executable), *arguments, "--log-dir", str(self.log_dir)],
-                                            stdout=output, stderr=subprocess.STDOUT,
-                                            env={**os.environ, TAG_VARIABLE: self.tag})
+            self.process = start_child([str(executable), *arguments, "--log-dir", str(self.log_dir)],
+                                       stdout=output, stderr=subprocess.STDOUT,
+                                       env={**os.environ, TAG_VARIABLE: self.tag})
 
     def output(self) -> str:
         return self.output_path.read_text()

@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 import yaml
 
+from swim_ros.processes import run_child, start_child
 from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, new_rclpy_context, ros_domain, running_node  # noqa: F401
 
 LANE_KEEPING = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/decelerate/R0.43/E0.05"],
@@ -49,8 +50,8 @@ START_ALPHA_TOLERANCE_RAD = 0.05
 
 def swim_maneuver(*arguments: str, env=None) -> subprocess.CompletedProcess:
     """`ros2 run swim_bringup swim-maneuver arguments` in this test's ROS domain; its exit status and output."""
-    return subprocess.run(["ros2", "run", "swim_bringup", "swim-maneuver", *arguments], capture_output=True,
-                          text=True, timeout=COMMAND_TIMEOUT_S, env=dict(os.environ if env is None else env))
+    return run_child(["ros2", "run", "swim_bringup", "swim-maneuver", *arguments], capture_output=True,
+                     text=True, timeout_s=COMMAND_TIMEOUT_S, env=dict(os.environ if env is None else env))
 
 
 def assert_clean_exit(result: subprocess.CompletedProcess, status: int) -> None:
@@ -384,9 +385,9 @@ def brought_up(work: Path, *arguments: str):
     """`swim-bringup arguments --log-dir work/logs` running until the block ends (then Ctrl-C, as an operator)."""
     log_path = work / "bringup.log"
     with open(log_path, "w") as log:
-        process = subprocess.Popen(["ros2", "run", "swim_bringup", "swim-bringup", *arguments, "--log-dir",
-                                    str(work / "logs")], stdout=log, stderr=subprocess.STDOUT,
-                                   start_new_session=True, env=dict(os.environ))
+        process = start_child(["ros2", "run", "swim_bringup", "swim-bringup", *arguments, "--log-dir",
+                               str(work / "logs")], stdout=log, stderr=subprocess.STDOUT,
+                              start_new_session=True, env=dict(os.environ))
     try:
         yield log_path
     finally:
@@ -511,9 +512,9 @@ def sim_set(ros_domain, tmp_path_factory):  # noqa: F811
         results["goal"] = swim_maneuver("run", "--goal", "constrained/rest", "--goal-alpha", "1", "--record",
                                         str(work / "goal"), *wait)
         with open(log_path, "w") as log:
-            process = subprocess.Popen(["ros2", "run", "swim_bringup", "swim-maneuver", "run", "--primitives",
-                                        *sequence, "--record", str(canceled), *wait], stdout=log,
-                                       stderr=subprocess.STDOUT, start_new_session=True, env=dict(os.environ))
+            process = start_child(["ros2", "run", "swim_bringup", "swim-maneuver", "run", "--primitives",
+                                   *sequence, "--record", str(canceled), *wait], stdout=log,
+                                  stderr=subprocess.STDOUT, start_new_session=True, env=dict(os.environ))
         try:
             deadline = time.monotonic() + COMMAND_TIMEOUT_S
             while "constrained/cruise/E0.05 (2/3)" not in log_path.read_text():   # the accelerate done

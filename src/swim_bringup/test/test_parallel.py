@@ -1,16 +1,23 @@
 """Runs side by side (swim_bringup.parallel) with cheap stand-in runs, pure Python in real processes (no DDS): each
 run's process holds a ROS domain no other run at the same time holds, none the caller's; whatever stops a run
 (an exception, a process that dies, one that hangs, on this host or a Dask worker) is named, and the other runs'
-results are kept."""
+results are kept. A caller killed outright takes its runs and what they started with it; a caller interrupted
+starts no further run and interrupts those under way, which stop what they started."""
 import concurrent.futures
 import os
+import signal
+import subprocess
+import sys
+import textwrap
 import time
+import uuid
 from pathlib import Path
 
 import pytest
 
 from swim_bringup.parallel import RunFailed, run_all, run_isolated
 from swim_ros.domains import RUN_DOMAINS
+from swim_ros.processes import start_child
 
 #: how long a stand-in waits for the others to start: all start at once on an idle host, within seconds on a busy one
 START_TIMEOUT_S = 120.0
@@ -40,6 +47,101 @@ def fail_on_seed_three(seed: int) -> int:
 
 def sleep_forever(_: object) -> None:
     time.sleep(3600.0)
+
+
+#: the variable that tags the processes of a caller started by a test (its runs and theirs inherit it)
+TAG_VARIABLE = "SWIM_PARALLEL_TEST"
+#: how long the processes of a stopped caller may take to end: a run process stops its child at once
+END_TIMEOUT_S = 30.0
+
+
+def start_a_child_and_wait(folder: Path) -> None:
+    """A stand-in run that starts a child as a bring-up starts its nodes, notes its start, and waits; in its
+    `finally` (where a run stops its nodes) it notes its stop."""
+    child = start_child(["sleep", "3600"])
+    (folder / f"started-{os.getpid()}").touch()
+    try:
+        child.wait()
+    finally:
+        child.terminate()
+        (folder / f"stopped-{os.getpid()}").touch()
+
+
+def tagged(tag: str) -> list[int]:
+    """Live processes whose environment holds TAG_VARIABLE=tag."""
+    marker = f"{TAG_VARIABLE}={tag}".encode()
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if marker in (entry / "environ").read_bytes().split(b"\0"):
+                    found.append(int(entry.name))
+            except OSError:
+                continue
+    return found
+
+
+def start_caller(folder: Path, runs: int, jobs: int, tag: str) -> subprocess.Popen:
+    """A process that runs `runs` stand-in runs (start_a_child_and_wait), `jobs` at once, through run_all."""
+    script = textwrap.dedent(f"""
+        import concurrent.futures, sys
+        from pathlib import Path
+        sys.path.insert(0, {str(Path(__file__).parent)!r})
+        from swim_bringup.parallel import run_all
+        from test_parallel import start_a_child_and_wait
+        tasks = {{f"run{{k}}": Path({str(folder)!r}) for k in range({runs})}}
+        with concurrent.futures.ThreadPoolExecutor({jobs}) as executor:
+            run_all(start_a_child_and_wait, tasks, executor, timeout_s=3600.0)
+        """)
+    return start_child([sys.executable, "-c", script], env={**os.environ, TAG_VARIABLE: tag})
+
+
+def wait_for_starts(folder: Path, count: int, caller: subprocess.Popen) -> None:
+    deadline = time.monotonic() + START_TIMEOUT_S
+    while len(list(folder.glob("started-*"))) < count:
+        assert caller.poll() is None and time.monotonic() < deadline, "the runs did not start"
+        time.sleep(0.05)
+
+
+def assert_nothing_left(tag: str) -> None:
+    """No process tagged tag within END_TIMEOUT_S; whatever is left is killed after the assertion."""
+    deadline = time.monotonic() + END_TIMEOUT_S
+    while tagged(tag) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    left = tagged(tag)
+    for pid in left:
+        os.kill(pid, signal.SIGKILL)
+    assert left == []
+
+
+def test_a_killed_caller_takes_its_runs_and_what_they_started_with_it(tmp_path):
+    """SIGKILL of the caller: each run process gets its parent-death signal, stops what it started (its `finally`
+    runs, as a run's nodes are stopped) and ends."""
+    tag = uuid.uuid4().hex
+    caller = start_caller(tmp_path, runs=2, jobs=2, tag=tag)
+    try:
+        wait_for_starts(tmp_path, 2, caller)
+    finally:
+        caller.kill()
+        caller.wait()
+    assert_nothing_left(tag)
+    assert len(list(tmp_path.glob("stopped-*"))) == 2
+
+
+def test_an_interrupted_caller_starts_no_further_run_and_stops_those_under_way(tmp_path):
+    """SIGINT to the caller alone (not its process group): run_all cancels the runs not started and interrupts the
+    one under way, so the caller ends within seconds instead of running the others."""
+    tag = uuid.uuid4().hex
+    caller = start_caller(tmp_path, runs=3, jobs=1, tag=tag)
+    try:
+        wait_for_starts(tmp_path, 1, caller)
+        caller.send_signal(signal.SIGINT)
+        caller.wait(timeout=END_TIMEOUT_S)
+    finally:
+        caller.kill()
+        caller.wait()
+    assert_nothing_left(tag)
+    assert len(list(tmp_path.glob("started-*"))) == len(list(tmp_path.glob("stopped-*"))) == 1
 
 
 def test_runs_at_once_hold_distinct_domains_none_the_callers(tmp_path, monkeypatch):

@@ -7,7 +7,6 @@ messages cannot be decoded are named with why."""
 import json
 import math
 import shutil
-import subprocess
 import sys
 from pathlib import Path
 
@@ -21,6 +20,7 @@ from rosbags.rosbag2 import Reader
 
 from swim_bringup.analysis import EXIT_PARTIAL_REPORT, analyze_bag, main
 from swim_bringup.bag import BagError, bag_info, read_messages, swim_typestore, undecodable_topics
+from swim_ros.processes import run_child
 
 HUMBLE_BAG = Path(__file__).parent / "data" / "rosbag2_humble" / "bagfile_0_cut.mcap"
 #: the topics of the Humble bag whose schema rosbag2 wrote with encoding 'unknown' (action feedback messages)
@@ -111,8 +111,8 @@ def test_swim_analyze_on_the_humble_bag_reports_what_it_can_and_names_the_rest(t
 
 
 def test_swim_analyze_on_the_humble_bag_in_its_own_process_no_traceback():
-    result = subprocess.run([sys.executable, "-m", "swim_bringup.analysis", str(HUMBLE_BAG)], capture_output=True,
-                            text=True, timeout=120)
+    result = run_child([sys.executable, "-m", "swim_bringup.analysis", str(HUMBLE_BAG)], capture_output=True,
+                       text=True, timeout_s=120)
     assert result.returncode == EXIT_PARTIAL_REPORT, result.stderr
     assert "Traceback" not in result.stderr and "not decodable:" in result.stdout
 

@@ -26,6 +26,7 @@ from swim_planner.gains import gains_job
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.primitive_solver import solve_primitive
 from swim_planner.primitives import PlanningLimits, Primitive, PrimitiveSpec, SolverSettings
+from swim_ros.processes import end_with_starter
 
 Progress = Callable[[str, str], None]
 
@@ -35,12 +36,14 @@ def local_executor(workers: int) -> concurrent.futures.ProcessPoolExecutor:
     BLAS that CasADi's IPOPT (MUMPS) loads runs as many threads as cores, and on the larger factorizations they
     spin: the free R = 0.43 m, E = 0.05 decelerate took 66 s of CPU for 43 s of wall time with them, 43 s for the
     same wall time on one thread, so workers that share the cores slow each other down. The workers are spawned,
-    not forked, so none inherits a BLAS this process may have started already."""
+    not forked, so none inherits a BLAS this process may have started already. They die with this process
+    (swim_ros.processes), which a worker waiting for its next job would otherwise outlive for good."""
     return concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                                                  initializer=_single_threaded_blas)
+                                                  initializer=_start_worker, initargs=(os.getpid(),))
 
 
-def _single_threaded_blas() -> None:
+def _start_worker(starter_pid: int) -> None:
+    end_with_starter(starter_pid)
     # read by OpenBLAS when IPOPT's plugin first loads it, in the worker's first solve
     os.environ["OPENBLAS_NUM_THREADS"] = "1"
 

@@ -1,9 +1,17 @@
 """Library builds: dependency order, the longest solves first, resumability, and a Dask cluster through the Executor
-interface."""
+interface; local workers that die with the build."""
 import concurrent.futures
 import ctypes
 import dataclasses
+import os
+import signal
+import subprocess
+import sys
+import textwrap
 import threading
+import time
+import uuid
+from pathlib import Path
 
 import casadi
 import numpy as np
@@ -12,8 +20,11 @@ import pytest
 from swim_planner.build import build_library, critical_work, expected_work, local_executor, solve_job
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.primitives import PrimitiveSpec, PrimitiveType
+from swim_ros.processes import start_child
 
 LANE = 0.43
+#: how long a build's workers may take to end once it is killed: their parent-death signal is immediate
+WORKER_END_TIMEOUT_S = 10.0
 SMALL = [
     PrimitiveSpec("small/cruise", PrimitiveType.CRUISE, True, 1.0, LANE, LANE, energy_j=0.05, intervals=16),
     PrimitiveSpec("small/accelerate", PrimitiveType.ACCELERATE, True, 2.0, LANE, LANE, end_at="small/cruise",
@@ -125,6 +136,42 @@ def test_local_workers_run_ipopts_blas_on_one_thread():
     _ipopt_blas_threads()
     with local_executor(1) as executor:
         assert executor.submit(_ipopt_blas_threads).result() == 1
+
+
+def test_local_workers_die_with_the_build():
+    """A build killed outright leaves no worker: an idle one waits for its next job on a queue whose writing end it
+    holds itself, so no end of file ever tells it the build is gone; its parent-death signal does."""
+    tag = uuid.uuid4().hex
+    build = start_child([sys.executable, "-c", textwrap.dedent("""
+        import os, time
+        from swim_planner.build import local_executor
+        executor = local_executor(2)
+        print(executor.submit(os.getpid).result(), flush=True)
+        time.sleep(600)
+        """)], stdout=subprocess.PIPE, text=True, env={**os.environ, "SWIM_BUILD_TEST": tag})
+    try:
+        worker = int(build.stdout.readline())
+    finally:
+        build.kill()
+        build.wait()
+    marker = f"SWIM_BUILD_TEST={tag}".encode()
+
+    def tagged() -> list[int]:
+        found = []
+        for entry in Path("/proc").iterdir():
+            try:
+                if entry.name.isdigit() and marker in (entry / "environ").read_bytes().split(b"\0"):
+                    found.append(int(entry.name))
+            except OSError:
+                continue
+        return found
+    deadline = time.monotonic() + WORKER_END_TIMEOUT_S
+    while tagged() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    left = tagged()
+    for pid in left:
+        os.kill(pid, signal.SIGKILL)
+    assert worker > 0 and left == []
 
 
 def test_changed_spec_is_solved_again_with_what_joins_it(rig, tmp_path):

@@ -1,7 +1,8 @@
 """What serves plans does not load the optimizer: the library, graph, maneuvers, gains and planner_node import
 the primitives' data model (swim_planner.primitives), never the NLP (swim_planner.primitive_solver)."""
-import subprocess
 import sys
+
+from swim_ros.processes import run_child
 
 SERVING_MODULES = ("swim_planner.library", "swim_planner.graph", "swim_planner.maneuver", "swim_planner.gains",
                    "swim_planner.catalog", "swim_planner.planner_node")
@@ -10,6 +11,6 @@ SERVING_MODULES = ("swim_planner.library", "swim_planner.graph", "swim_planner.m
 def test_serving_modules_do_not_import_the_solver():
     script = (f"import sys\nfor name in {SERVING_MODULES!r}:\n    __import__(name)\n"
               "print('swim_planner.primitive_solver' in sys.modules)")
-    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    result = run_child([sys.executable, "-c", script], capture_output=True, text=True, timeout_s=120)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "False"

@@ -5,9 +5,16 @@ node, spin; Ctrl-C (SIGINT, SIGTERM) and an external shutdown are a normal stop,
 they land; the context is shut down however the process ends. A node whose construction raises one of
 ``fatal_errors`` (a bad parameter, a library that does not load) logs the reason as fatal and exits with status 2,
 without a traceback.
+
+SIGTERM (also a node's parent-death signal, swim_ros.processes) is taken as Ctrl-C: KeyboardInterrupt in the main
+thread. rclpy's own SIGTERM handling alone loses some: its signal thread wakes the executors and only then shuts
+the contexts down, so an executor that looks at its context in between waits again, and an idle node (no timer,
+no message coming) never stops; about one SIGTERM in a hundred here. SIGINT never had that gap: rclpy passes it on
+to Python's handler, which raises KeyboardInterrupt, and now passes SIGTERM on the same way.
 """
 from __future__ import annotations
 
+import threading
 from typing import Callable, Optional, TypeVar
 
 import rclpy
@@ -15,6 +22,7 @@ from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedE
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 
+from swim_ros.processes import interrupt_on_sigterm
 from swim_ros.transport import use_large_message_transport
 
 NodeT = TypeVar("NodeT", bound=Node)
@@ -40,6 +48,8 @@ def run_node(make_node: Callable[[], NodeT], args: Optional[list[str]] = None, *
         stop: called with the node however spinning ends, before shutdown (for example to release hardware).
         large_messages: the node sends plans: run it with swim's Fast DDS profile (swim_ros.transport).
     """
+    if threading.current_thread() is threading.main_thread():
+        interrupt_on_sigterm()   # before rclpy.init, so that rclpy's handler passes SIGTERM on to it
     transport = use_large_message_transport() if large_messages else None
     rclpy.init(args=args)   # this rclpy's init() is not a context manager, hence try/finally
     if transport is not None:

@@ -13,6 +13,7 @@ import xml.etree.ElementTree as ElementTree
 import numpy as np
 import pytest
 
+from swim_ros.processes import run_child, start_child
 from swim_ros.transport import (FREE_SHM_FACTOR, PROFILE_VARIABLES, choose_transport, large_message_profile,
                                 segment_bytes, use_large_message_transport)
 
@@ -53,8 +54,8 @@ def _choice_in_shm_of(size_mib):
     if shutil.which("unshare") is None:
         pytest.skip("no unshare here to give a process a /dev/shm of its own")
     command = f"mount -t tmpfs -o size={size_mib}m tmpfs /dev/shm && exec {sys.executable} -c \"{CHOICE_SCRIPT}\""
-    result = subprocess.run(["unshare", "-m", "sh", "-c", command], capture_output=True, text=True, timeout=60,
-                            env={k: v for k, v in os.environ.items() if k not in PROFILE_VARIABLES})
+    result = run_child(["unshare", "-m", "sh", "-c", command], capture_output=True, text=True, timeout_s=60,
+                       env={k: v for k, v in os.environ.items() if k not in PROFILE_VARIABLES})
     if result.returncode != 0 and "mount" in result.stderr:
         pytest.skip(f"no tmpfs of our own here (not root?): {result.stderr.strip()}")
     assert result.returncode == 0, result.stderr
@@ -124,8 +125,8 @@ def test_a_node_sends_a_plan_sized_message_with_the_profile(rclpy_context, monke
     from swim_ros.qos import LATCHED_QOS
     _clear(monkeypatch)
     count = PLAN_BYTES // 8
-    sender = subprocess.Popen([sys.executable, "-c", SENDER_SCRIPT.format(count=count)], stdout=subprocess.PIPE,
-                              stderr=subprocess.PIPE, text=True)
+    sender = start_child([sys.executable, "-c", SENDER_SCRIPT.format(count=count)], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
     node = rclpy.create_node("large_message_receiver", context=rclpy_context)
     executor = SingleThreadedExecutor(context=rclpy_context)
     executor.add_node(node)
