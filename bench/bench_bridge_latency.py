@@ -34,7 +34,7 @@ BARE_LOOP = """
 import json, sys, time
 from swim_hw_bridge.backends import make_device
 from swim_hw_bridge.conversions import Conversions, load_bridge_config
-from swim_hw_bridge.io_loop import SWITCH_INTERVAL_S, IoLoop
+from swim_hw_bridge.io_loop import IoLoop
 from swim_hw_bridge.safety import SafetyLayer, SafetyLimits
 from swim_ros.realtime import NO_REALTIME_MEANS, RealtimeSettings, make_process_realtime
 realtime = RealtimeSettings(priority=70) if sys.argv[1] == "on" else NO_REALTIME_MEANS
@@ -43,8 +43,6 @@ device = make_device("emulated", config.device_config("emulated"))
 device.open()
 limits = SafetyLimits.from_config(config, PERIOD_S, 5, 3, 3)
 make_process_realtime(realtime)
-if realtime.realtime:
-    sys.setswitchinterval(SWITCH_INTERVAL_S)
 loop = IoLoop(device, Conversions(config), SafetyLayer(limits), PERIOD_S, 10_000, realtime, 80)
 loop.start()
 time.sleep(float(sys.argv[2]))

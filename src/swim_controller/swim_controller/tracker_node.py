@@ -32,10 +32,12 @@ host (cached on disk after: 0.2-0.5 s to load); meanwhile the node answered each
 ms at a time).
 
 Real-time means (swim_ros.realtime; parameters, on by default): once the start-up models are built, main() sets
-the process's threads to SCHED_FIFO realtime_priority, locks its memory and has the garbage collector run after a
-command is published, once a second (collect_garbage_between_periods); ModelBuilder's thread returns to the ordinary
-policy before each build, so a compilation and its C compiler run as ordinary processes. Where the host refuses a
-means the node logs one warning with the reason and runs on.
+the process's threads to SCHED_FIFO realtime_priority, locks its memory, shortens the interpreter's switch interval
+and has the garbage collector run after a command is published, once a second (collect_garbage_between_periods).
+ModelBuilder's thread runs at the real-time policy's lowest priority before each build
+(realtime.make_thread_background): ordinary processes cannot preempt it while it holds the interpreter lock the
+executor waits for, and its C compiler runs as an ordinary process. Where the host refuses a means the node logs
+one warning with the reason and runs on.
 
 Speed (in lock-step every period waits on this node): per period the command and tracking_state messages are
 reused and their float64[] fields filled with array('d') (rosidl's setters check lists element by element), and
@@ -76,7 +78,8 @@ from swim_ros.entry import run_node
 from swim_ros.parameters import (ParameterSpec, check_parameters, declare_parameters, positive, realtime_parameters,
                                  realtime_settings)
 from swim_ros.qos import per_period_publisher, per_period_subscription
-from swim_ros.realtime import PeriodicCollector, make_process_realtime, make_thread_ordinary
+from swim_ros.realtime import (NO_REALTIME_MEANS, PeriodicCollector, RealtimeSettings, make_process_realtime,
+                               make_thread_background)
 
 RESULT_CODES = {
     Outcome.SUCCEEDED: ExecutePlan.Result.SUCCESSFUL,
@@ -144,8 +147,10 @@ class ModelBuilder:
     leaves no library behind: swim_model writes it under another name and renames it). on_built is called on that
     thread after each build, to wake the thread that waits for it."""
 
-    def __init__(self, rig, on_built: Callable[[], None]) -> None:
+    def __init__(self, rig, on_built: Callable[[], None],
+                 realtime: RealtimeSettings = NO_REALTIME_MEANS) -> None:
         self._rig = rig
+        self.realtime = realtime   # the process's means: the builds run as its background thread
         self._on_built = on_built
         self._requests: queue.Queue[Optional[tuple[ModelKey, concurrent.futures.Future]]] = queue.Queue()
         self._thread = threading.Thread(target=self._run, name="tracker_model_builder", daemon=True)
@@ -163,7 +168,7 @@ class ModelBuilder:
 
     def _run(self) -> None:
         while (request := self._requests.get()) is not None:
-            make_thread_ordinary()   # compilation is no period, in a real-time process too (and its compiler)
+            make_thread_background(self.realtime)   # below every period; its compiler an ordinary process
             key, future = request
             try:
                 future.set_result(build_model(self._rig, key))
@@ -308,6 +313,7 @@ class TrackerNode(Node):
         level, or as one warning with what was refused and why."""
         settings = realtime_settings(self)
         outcome = make_process_realtime(settings)
+        self._builder.realtime = settings
         (self.get_logger().warning if outcome.refused else self.get_logger().info)(outcome.summary())
         if settings.collect_garbage_between_periods:
             self._collector = PeriodicCollector(GC_INTERVAL_STATES)

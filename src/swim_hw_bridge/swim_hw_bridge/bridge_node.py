@@ -31,7 +31,7 @@ watchdog_periods, overrun_limit, stale_read_limit, read_failure_limit; read-only
 Real-time means (swim_ros.realtime; on by default): while active, the node's threads run at SCHED_FIFO
 realtime_priority (70) and the I/O loop's thread at io_loop_priority (80), memory locked, on the CPUs of
 cpu_affinity (empty: all), the garbage collector frozen and run at a period's end once a second, and the
-interpreter's switch interval at io_loop.SWITCH_INTERVAL_S. Configuring
+interpreter's switch interval at realtime.SWITCH_INTERVAL_S. Configuring
 (opening the device, compiling the emulated rig's model) runs before, at the ordinary policy, and deactivating
 returns to it. Where the host refuses a means the node logs one warning saying what and why, and /diagnostics
 carries it (realtime_refused). The I/O loop is a thread of the node's process, not a process of its own: with
@@ -52,7 +52,6 @@ from __future__ import annotations
 import collections
 import dataclasses
 import functools
-import sys
 import time
 from typing import Optional
 
@@ -71,7 +70,7 @@ from swim_hw_bridge.backends import BACKENDS, UnknownBackend, make_device
 from swim_hw_bridge.braking import joint_dynamics_bounds
 from swim_hw_bridge.conversions import BridgeConfigError, Conversions, load_bridge_config
 from swim_hw_bridge.device import Device, DeviceError
-from swim_hw_bridge.io_loop import SWITCH_INTERVAL_S, IoLoop, Snapshot
+from swim_hw_bridge.io_loop import IoLoop, Snapshot
 from swim_hw_bridge.safety import Command, FaultCode, SafetyLayer, SafetyLimits, WatchdogState, fault_names
 from swim_hw_bridge.timing import LatencyHistogram
 from swim_model import load_rig
@@ -266,8 +265,6 @@ class BridgeNode(LifecycleNode):
         if not self.owns_process:
             return
         outcome = make_process_realtime(self._realtime())
-        if self._realtime().realtime:
-            sys.setswitchinterval(SWITCH_INTERVAL_S)
         if outcome != self.realtime_outcome:
             log = self.get_logger()
             (log.warning if outcome.refused else log.info)(outcome.summary())

@@ -45,10 +45,6 @@ from swim_hw_bridge.timing import LatencyHistogram, OverrunCause, overrun_cause
 from swim_hw_bridge.unwrap import CounterUnwrapper
 
 _RATE_SMOOTHING = 0.05   # weight of the newest interval in the loop-rate average (about 20 periods)
-#: the interpreter's switch interval in a real-time bridge process, s: how long the I/O loop's thread, woken, waits
-#: at most for the executor to hand over the interpreter lock before the lock is taken from it (Python's default,
-#: 5 ms, is most of a period)
-SWITCH_INTERVAL_S = 0.5e-3
 #: periods between two garbage collections at a period's end: 1 s at 8 ms; what a second of periods leaves
 #: (a few hundred small objects) takes well under a millisecond to collect
 GC_INTERVAL_PERIODS = 125

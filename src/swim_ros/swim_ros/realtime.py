@@ -10,8 +10,10 @@ the node says it once and runs on as an ordinary process.
 
 Threads: on Linux the scheduling policy belongs to a thread, and a new thread inherits its creator's. So
 ``make_process_realtime`` sets every thread the process has (the executor's, the middleware's), and
-``make_thread_realtime`` and ``make_thread_ordinary`` set the calling thread: a loop thread above the rest, a
-compilation thread back to the ordinary policy (so that a C compiler it starts runs as an ordinary process too).
+``make_thread_realtime`` and ``make_thread_background`` set the calling thread: a loop thread above the rest, a
+compilation thread at the lowest real-time priority, whose children (a C compiler) run as ordinary processes.
+The interpreter's switch interval is shortened too (SWITCH_INTERVAL_S), so that a woken periodic thread waits
+little for the interpreter lock.
 
 The garbage collector: ``PeriodicCollector`` freezes every object the start-up made (gc.freeze: a collection
 never walks them again), turns automatic collection off (it would run inside whichever period allocates the
@@ -25,12 +27,20 @@ import ctypes.util
 import dataclasses
 import gc
 import os
+import sys
 import time
 from pathlib import Path
 from typing import Optional
 
 #: the policies a node can ask for ("other": the ordinary time-sharing policy, no real-time means)
 SCHEDULING_POLICIES = {"fifo": os.SCHED_FIFO, "rr": os.SCHED_RR, "other": os.SCHED_OTHER}
+#: the interpreter's switch interval in a real-time process, s: how long a woken real-time thread waits at most for
+#: another thread to hand over the interpreter lock before it is taken from that thread (Python's default, 5 ms, is
+#: most of an 8 ms period)
+SWITCH_INTERVAL_S = 0.5e-3
+#: the priority of a real-time process's background thread (a model build): the lowest real-time one, so that an
+#: ordinary process cannot preempt it while it holds the interpreter lock a periodic thread waits for
+BACKGROUND_PRIORITY = 1
 #: mlockall(2) flags: what is mapped now, what will be, and "as each page is first touched" (Linux 4.4)
 _MCL_CURRENT, _MCL_FUTURE, _MCL_ONFAULT = 1, 2, 4
 
@@ -182,6 +192,7 @@ def make_process_realtime(settings: RealtimeSettings) -> RealtimeOutcome:
         refused.extend(sorted(reasons))
         if not reasons:
             applied.append(f"SCHED_{settings.policy.upper()} priority {settings.priority}")
+            sys.setswitchinterval(SWITCH_INTERVAL_S)
     if settings.lock_memory:
         reason = _lock_memory()
         if reason is None:
@@ -204,6 +215,22 @@ def make_thread_realtime(settings: RealtimeSettings, priority: int) -> Optional[
     """The calling thread at settings' policy and this priority (nothing for "other"); the refusal's reason, or
     None."""
     return _set_policy(0, settings, priority) if settings.realtime else None
+
+
+def make_thread_background(settings: RealtimeSettings) -> None:
+    """The calling thread as a real-time process's background thread (a model build): at the lowest real-time
+    priority, below every periodic thread, with SCHED_RESET_ON_FORK so that what it starts (a C compiler) runs as
+    an ordinary process. Why not the ordinary policy: a thread that busy ordinary processes preempt while it holds
+    the interpreter lock would hold up the periodic threads that wait for it. The ordinary policy where settings
+    are not real-time or the host refuses."""
+    if settings.realtime:
+        try:
+            os.sched_setscheduler(0, SCHEDULING_POLICIES[settings.policy] | os.SCHED_RESET_ON_FORK,
+                                  os.sched_param(BACKGROUND_PRIORITY))
+            return
+        except OSError:
+            pass
+    make_thread_ordinary()
 
 
 def make_thread_ordinary() -> None:

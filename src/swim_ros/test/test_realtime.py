@@ -117,3 +117,19 @@ def test_the_collector_runs_only_between_periods_and_frees_cycles():
     assert not result["automatic"] and result["before"] == 0 and result["after_nine"] == 0
     assert result["after_ten"] == 2000 and result["collections"] == 1
     assert 0.0 < result["longest_s"] < 1.0 and result["frozen"] > 0 and result["enabled"]
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="applying the means needs root (CI runs as root)")
+def test_a_background_thread_runs_below_the_periods_and_its_children_as_ordinary_processes():
+    result = run_child("""
+        import json, os, subprocess
+        from swim_ros.realtime import BACKGROUND_PRIORITY, RealtimeSettings, make_thread_background
+        make_thread_background(RealtimeSettings())
+        child = subprocess.run(["python3", "-c", "import os; print(os.sched_getscheduler(0))"],
+                               capture_output=True, text=True).stdout
+        print(json.dumps({"policy": os.sched_getscheduler(0), "priority": os.sched_getparam(0).sched_priority,
+                          "child": int(child), "lowest": BACKGROUND_PRIORITY}))
+    """)
+    assert result["policy"] == os.SCHED_FIFO | os.SCHED_RESET_ON_FORK
+    assert result["priority"] == result["lowest"] == 1
+    assert result["child"] == os.SCHED_OTHER
