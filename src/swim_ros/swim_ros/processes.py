@@ -16,7 +16,9 @@ left behind keeps its ROS domain's topics alive and a core busy long after anyon
   swim_bringup.parallel's do), so that neither reading ends it early;
 - a starter's stop (Ctrl-C, and SIGTERM where a CLI treats it the same: ``interrupt_on_sigterm``) stops its
   children itself, the graceful way; the parent-death signal is for the ends that leave it no chance (SIGKILL, a
-  crash, a second signal during its stop).
+  crash, a second signal during its stop). A node takes that signal, SIGTERM, as Ctrl-C (swim_ros.entry).
+The one child outside the rule: the C compiler swim_model.codegen runs the first time a model is used (swim_model
+lies below swim_ros). A node that ends while it compiles leaves it to finish, seconds later.
 
 One node runs as ``ros2 run <package> <executable> --ros-args --params-file <yaml>`` (on a full ROS install the
 same command a user types; here `ros2 run` is our stand-in, scripts/bin/ros2, which executes the node in its own
