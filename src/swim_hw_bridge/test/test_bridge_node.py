@@ -413,8 +413,11 @@ def test_a_device_lost_while_active_takes_deactivate_into_error_processing(ros_d
                                                open_timeout_s=SERIAL_OPEN_TIMEOUT_S)
     config_path = tmp_path / "bridge.yaml"
     config_path.write_text(yaml.safe_dump(config))
-    # a 25 ms loop with room for a 20 ms read; overruns are not what this test is about
+    # a 25 ms loop with room for a 20 ms read; overruns are not what this test is about. The board is a thread of
+    # this ordinary test process: a bridge at a real-time priority would outrun its own device here (a real board
+    # answers in hardware), so the bridge runs without the real-time means
     with running_node("swim_hw_bridge", "bridge_node", tmp_path / "log.txt", "-r", "__ns:=/error_test",
+                      "-p", "realtime_policy:=other", "-p", "lock_memory:=false",
                       "-p", "backend:=serial", "-p", f"config_path:={config_path}", "-p", "sample_period_s:=0.025",
                       "-p", "overrun_limit:=1000", "-p", "watchdog_periods:=80", "-p", "diagnostics_rate_hz:=20.0"):
         client = BridgeClient(rclpy_context, "/error_test", tmp_path / "log.txt")
