@@ -35,6 +35,7 @@ import pytest
 from conftest import WORKSPACE
 from swim_bringup.parallel import INTERRUPT_GRACE_S
 from swim_ros.processes import STOP_GRACE_S, start_child
+from swim_ros.testing.processes import tagged_processes
 
 #: the variable that marks every process a case's starter starts
 TAG_VARIABLE = "SWIM_ORPHAN_PROBE"
@@ -80,17 +81,7 @@ class Case:
 
     def processes(self) -> dict[int, str]:
         """The live processes of this case (the starter too, while it lives), with their command lines."""
-        marker = f"{TAG_VARIABLE}={self.tag}".encode()
-        found = {}
-        for entry in Path("/proc").iterdir():
-            if entry.name.isdigit():
-                try:
-                    if marker in (entry / "environ").read_bytes().split(b"\0"):
-                        command_line = (entry / "cmdline").read_bytes().rstrip(b"\0").split(b"\0")
-                        found[int(entry.name)] = " ".join(part.decode(errors="replace") for part in command_line)
-                except OSError:   # gone meanwhile
-                    continue
-        return found
+        return tagged_processes(TAG_VARIABLE, self.tag)
 
     def look(self) -> None:
         """Note the nodes that have appeared and those that have ended since the last look."""

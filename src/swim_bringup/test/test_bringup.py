@@ -17,6 +17,7 @@ from swim_bringup.bringup import LOG_TAIL_LINES, bringup_specs, exit_status, log
 from swim_bringup.system import LOCKSTEP_STALE_OVERRIDE, closed_loop_specs, config_dir
 from swim_ros.processes import STOP_GRACE_S, start_child
 from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, new_rclpy_context, ros_domain  # noqa: F401
+from swim_ros.testing.processes import processes_left, tagged_processes
 
 #: the variable that marks every process a test's swim-bringup starts (children inherit the environment)
 TAG_VARIABLE = "SWIM_BRINGUP_TEST_RUN"
@@ -79,18 +80,8 @@ def test_a_death_reads_as_its_exit_status_and_log_tail(tmp_path):
 
 
 # --- the installed command over DDS ---------------------------------------------------------------------------------
-def tagged_processes(tag: str) -> list[int]:
-    """Live processes whose environment holds TAG_VARIABLE=tag (zombies have none left: they are not running)."""
-    marker = f"{TAG_VARIABLE}={tag}".encode()
-    found = []
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                if marker in (entry / "environ").read_bytes().split(b"\0"):
-                    found.append(int(entry.name))
-            except OSError:   # gone meanwhile, or not ours to read
-                continue
-    return found
+def tagged(tag: str) -> list[int]:
+    return list(tagged_processes(TAG_VARIABLE, tag))
 
 
 class Bringup:
@@ -156,13 +147,7 @@ class Bringup:
         if self.process.poll() is None:
             self.process.kill()
             self.process.wait()
-        left = tagged_processes(self.tag)
-        for pid in left:
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
-        return left
+        return processes_left(TAG_VARIABLE, self.tag, timeout_s=0.0)
 
 
 @pytest.fixture()
@@ -205,7 +190,7 @@ def test_a_node_that_dies_is_reported_and_the_rest_stopped(bringup):
     assert run.wait_for_exit() == 1
     assert_death_reported(run, "tracker_node", pids["tracker_node"], "killed by SIGKILL")
     assert "swim-bringup: every node stopped" in run.output()
-    assert tagged_processes(run.tag) == []
+    assert tagged(run.tag) == []
     assert sorted(p.stem for p in run.log_dir.glob("*.log")) == sorted(NODES)
 
 
@@ -217,12 +202,12 @@ def test_keep_going_reports_a_death_keeps_the_rest_up_and_sigint_stops_them(brin
     assert_death_reported(run, "tracker_node", pids["tracker_node"], "killed by SIGKILL")
     time.sleep(0.5)   # a few of swim-bringup's looks: it must not stop the others
     assert run.process.poll() is None
-    alive = set(tagged_processes(run.tag))
+    alive = set(tagged(run.tag))
     assert {pids[n] for n in NODES if n != "tracker_node"} <= alive and pids["tracker_node"] not in alive
     run.process.send_signal(signal.SIGINT)
     assert run.wait_for_exit() == 0
     assert "swim-bringup: SIGINT: stopping the nodes" in run.output()
-    assert tagged_processes(run.tag) == []
+    assert tagged(run.tag) == []
 
 
 @pytest.mark.parametrize("when", [r"swim-bringup: starting the sim set", r"^\s+marker_node\s+pid \d+"])
@@ -233,7 +218,7 @@ def test_sigterm_while_the_nodes_start_leaves_nothing(bringup, when):
     run.wait_for_output(when, NODES_UP_TIMEOUT_S)
     run.process.send_signal(signal.SIGTERM)
     assert run.wait_for_exit() == 0
-    assert tagged_processes(run.tag) == []
+    assert tagged(run.tag) == []
 
 
 def test_a_killed_swim_bringup_takes_its_nodes_with_it(bringup):
@@ -244,6 +229,6 @@ def test_a_killed_swim_bringup_takes_its_nodes_with_it(bringup):
     run.process.kill()
     run.process.wait()
     deadline = time.monotonic() + EXIT_TIMEOUT_S
-    while tagged_processes(run.tag):
-        assert time.monotonic() < deadline, f"left running: {tagged_processes(run.tag)}"
+    while tagged(run.tag):
+        assert time.monotonic() < deadline, f"left running: {tagged(run.tag)}"
         time.sleep(0.1)

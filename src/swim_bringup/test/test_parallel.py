@@ -18,6 +18,7 @@ import pytest
 from swim_bringup.parallel import RunFailed, run_all, run_isolated
 from swim_ros.domains import RUN_DOMAINS
 from swim_ros.processes import start_child
+from swim_ros.testing.processes import processes_left
 
 #: how long a stand-in waits for the others to start: all start at once on an idle host, within seconds on a busy one
 START_TIMEOUT_S = 120.0
@@ -67,24 +68,19 @@ def start_a_child_and_wait(folder: Path) -> None:
         (folder / f"stopped-{os.getpid()}").touch()
 
 
-def tagged(tag: str) -> list[int]:
-    """Live processes whose environment holds TAG_VARIABLE=tag."""
-    marker = f"{TAG_VARIABLE}={tag}".encode()
-    found = []
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                if marker in (entry / "environ").read_bytes().split(b"\0"):
-                    found.append(int(entry.name))
-            except OSError:
-                continue
-    return found
+#: how the caller of start_caller stops: SIGINT as a terminal's Ctrl-C gives it, whatever this test inherited (a
+#: Python started with SIGINT ignored keeps ignoring it, as one put in the background by a shell without job control
+#: is); or, as a CLI put in the background that way, SIGINT ignored (its runs inherit that) and SIGTERM taken as Ctrl-C
+CTRL_C, BACKGROUND = "signal.default_int_handler", "signal.SIG_IGN"
 
 
-def start_caller(folder: Path, runs: int, jobs: int, tag: str) -> subprocess.Popen:
-    """A process that runs `runs` stand-in runs (start_a_child_and_wait), `jobs` at once, through run_all."""
+def start_caller(folder: Path, runs: int, jobs: int, tag: str, sigint: str = CTRL_C) -> subprocess.Popen:
+    """A process that runs `runs` stand-in runs (start_a_child_and_wait), `jobs` at once, through run_all; its
+    SIGINT handler sigint, its SIGTERM Ctrl-C."""
     script = textwrap.dedent(f"""
-        import concurrent.futures, sys
+        import concurrent.futures, signal, sys
+        signal.signal(signal.SIGINT, {sigint})
+        signal.signal(signal.SIGTERM, signal.default_int_handler)
         from pathlib import Path
         sys.path.insert(0, {str(Path(__file__).parent)!r})
         from swim_bringup.parallel import run_all
@@ -105,13 +101,7 @@ def wait_for_starts(folder: Path, count: int, caller: subprocess.Popen) -> None:
 
 def assert_nothing_left(tag: str) -> None:
     """No process tagged tag within END_TIMEOUT_S; whatever is left is killed after the assertion."""
-    deadline = time.monotonic() + END_TIMEOUT_S
-    while tagged(tag) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    left = tagged(tag)
-    for pid in left:
-        os.kill(pid, signal.SIGKILL)
-    assert left == []
+    assert processes_left(TAG_VARIABLE, tag, END_TIMEOUT_S) == []
 
 
 def test_a_killed_caller_takes_its_runs_and_what_they_started_with_it(tmp_path):
@@ -128,14 +118,18 @@ def test_a_killed_caller_takes_its_runs_and_what_they_started_with_it(tmp_path):
     assert len(list(tmp_path.glob("stopped-*"))) == 2
 
 
-def test_an_interrupted_caller_starts_no_further_run_and_stops_those_under_way(tmp_path):
-    """SIGINT to the caller alone (not its process group): run_all cancels the runs not started and interrupts the
-    one under way, so the caller ends within seconds instead of running the others."""
+@pytest.mark.parametrize("sigint, stop", [(CTRL_C, signal.SIGINT), (BACKGROUND, signal.SIGTERM)],
+                         ids=["ctrl_c", "sigterm_with_sigint_ignored"])
+def test_an_interrupted_caller_starts_no_further_run_and_stops_those_under_way(tmp_path, sigint, stop):
+    """SIGINT to the caller alone (not its process group), or SIGTERM to a caller started with SIGINT ignored (its
+    run processes inherit that): run_all cancels the runs not started and interrupts the one under way, which stops
+    the graceful way at once (not killed after INTERRUPT_GRACE_S), so the caller ends within seconds instead of
+    running the others."""
     tag = uuid.uuid4().hex
-    caller = start_caller(tmp_path, runs=3, jobs=1, tag=tag)
+    caller = start_caller(tmp_path, runs=3, jobs=1, tag=tag, sigint=sigint)
     try:
         wait_for_starts(tmp_path, 1, caller)
-        caller.send_signal(signal.SIGINT)
+        caller.send_signal(stop)
         caller.wait(timeout=END_TIMEOUT_S)
     finally:
         caller.kill()

@@ -4,14 +4,11 @@ import concurrent.futures
 import ctypes
 import dataclasses
 import os
-import signal
 import subprocess
 import sys
 import textwrap
 import threading
-import time
 import uuid
-from pathlib import Path
 
 import casadi
 import numpy as np
@@ -21,6 +18,7 @@ from swim_planner.build import build_library, critical_work, expected_work, loca
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.primitives import PrimitiveSpec, PrimitiveType
 from swim_ros.processes import start_child
+from swim_ros.testing.processes import processes_left
 
 LANE = 0.43
 #: how long a build's workers may take to end once it is killed: their parent-death signal is immediate
@@ -154,24 +152,7 @@ def test_local_workers_die_with_the_build():
     finally:
         build.kill()
         build.wait()
-    marker = f"SWIM_BUILD_TEST={tag}".encode()
-
-    def tagged() -> list[int]:
-        found = []
-        for entry in Path("/proc").iterdir():
-            try:
-                if entry.name.isdigit() and marker in (entry / "environ").read_bytes().split(b"\0"):
-                    found.append(int(entry.name))
-            except OSError:
-                continue
-        return found
-    deadline = time.monotonic() + WORKER_END_TIMEOUT_S
-    while tagged() and time.monotonic() < deadline:
-        time.sleep(0.05)
-    left = tagged()
-    for pid in left:
-        os.kill(pid, signal.SIGKILL)
-    assert worker > 0 and left == []
+    assert worker > 0 and processes_left("SWIM_BUILD_TEST", tag, WORKER_END_TIMEOUT_S) == []
 
 
 def test_changed_spec_is_solved_again_with_what_joins_it(rig, tmp_path):

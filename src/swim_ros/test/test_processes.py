@@ -16,6 +16,7 @@ import pytest
 
 from swim_ros.processes import (ORPHAN_EXIT_STATUS, executable_command, run_child, start_child,
                                 with_parent_death_signal)
+from swim_ros.testing.processes import processes_left, tagged_processes
 
 #: how long a child may take to notice its starter's death and end: the signal is immediate, `sleep` dies of it
 END_TIMEOUT_S = 10.0
@@ -30,28 +31,11 @@ pytestmark = pytest.mark.skipif(shutil.which("setpriv") is None,
 
 
 def tagged(tag: str) -> list[int]:
-    """Live processes whose environment holds TAG_VARIABLE=tag."""
-    marker = f"{TAG_VARIABLE}={tag}".encode()
-    found = []
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                if marker in (entry / "environ").read_bytes().split(b"\0"):
-                    found.append(int(entry.name))
-            except OSError:
-                continue
-    return found
+    return list(tagged_processes(TAG_VARIABLE, tag))
 
 
 def wait_until_none_left(tag: str, timeout_s: float = END_TIMEOUT_S) -> list[int]:
-    """The processes tagged tag still alive after timeout_s (none as soon as none is), then killed."""
-    deadline = time.monotonic() + timeout_s
-    while tagged(tag) and time.monotonic() < deadline:
-        time.sleep(0.05)
-    left = tagged(tag)
-    for pid in left:
-        os.kill(pid, signal.SIGKILL)
-    return left
+    return processes_left(TAG_VARIABLE, tag, timeout_s)
 
 
 def starter(script: str, tag: str) -> subprocess.Popen:

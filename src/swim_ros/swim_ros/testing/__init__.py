@@ -5,4 +5,6 @@
   A package's ``test/conftest.py`` imports the fixtures by name (``from swim_ros.testing.fixtures import
   ros_domain, rclpy_context  # noqa: F401``).
 - ``fuzz``: the hypothesis strategies and settings of the DDS fuzz tests (``test_fuzz_*.py``).
+- ``processes``: the processes a test started, found by a tag in their environment whatever their parent, and
+  those left after a stop, killed.
 """
