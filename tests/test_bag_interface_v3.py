@@ -11,7 +11,8 @@ from ament_index_python.packages import get_package_share_directory
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from swim_bringup.analysis import analyze, analyze_bag
-from swim_bringup.bag import BagWriter, read_messages, swim_typestore
+from swim_bringup.bag import BagWriter, read_messages
+from swim_ros.typestore import swim_typestore
 
 #: swim_interfaces v3's PlannedTrajectory, as shipped (its comments left out)
 PLANNED_TRAJECTORY_V3 = """uint32 INTERFACE_VERSION = 3

@@ -115,7 +115,8 @@ def test_the_foxglove_layout_reads_run_topics_and_numeric_fields_of_their_types(
     """Without a run: every topic the layout names is one a run records (bag.RUN_TOPICS, by its full name), and each
     plotted path reaches a number in that topic's type (our installed messages')."""
     from rosbags.interfaces import Nodetype
-    from swim_bringup.bag import RUN_TOPICS, swim_typestore
+    from swim_bringup.bag import RUN_TOPICS
+    from swim_ros.typestore import swim_typestore
     topics, paths = layout_reads(json.loads(FOXGLOVE_LAYOUT.read_text()))
     assert topics and paths   # the 3D panel's markers and URDF, the plots' errors and torques
     assert topics | {topic for topic, _ in paths} <= set(RUN_TOPICS)

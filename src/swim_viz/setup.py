@@ -21,6 +21,7 @@ setup(
         'console_scripts': [
             'rig_state_publisher = swim_viz.rig_state_publisher:main',
             'marker_node = swim_viz.marker_node:main',
+            'foxglove_node = swim_viz.foxglove_node:main',
         ],
     },
 )

@@ -34,6 +34,8 @@ from rosbags.rosbag2 import Reader, ReaderError, StoragePlugin, Writer
 from rosbags.typesys import Stores, TypesysError, get_types_from_idl, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
+from swim_ros.typestore import swim_typestore
+
 #: the run's topics and their types (the demo records all of them), by their fully qualified names: the nodes of a
 #: run are in the root namespace, and rosbag2, swim-record and Foxglove's layouts (docs/foxglove_layout.json) name
 #: topics in full
@@ -56,16 +58,6 @@ LATCHED_TOPICS = ("/plan", "/robot_description", "/tf_static")
 
 class BagError(RuntimeError):
     """A bag that cannot be read or written as asked (an unknown message type, a folder without a bag)."""
-
-
-def swim_typestore() -> Typestore:
-    """ROS 2 Jazzy's types plus swim_interfaces' messages, from the installed .msg files."""
-    from ament_index_python.packages import get_package_share_directory
-    store = get_typestore(Stores.ROS2_JAZZY)
-    message_dir = Path(get_package_share_directory("swim_interfaces")) / "msg"
-    for path in sorted(message_dir.glob("*.msg")):
-        store.register(get_types_from_msg(path.read_text(), f"swim_interfaces/msg/{path.stem}"))
-    return store
 
 
 class BagWriter:

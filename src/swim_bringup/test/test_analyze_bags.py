@@ -15,7 +15,8 @@ from rosbags.typesys import get_types_from_msg
 
 from swim_bringup.analysis import (EXIT_FULL_REPORT, EXIT_PARTIAL_REPORT, EXIT_UNREADABLE, analyze, analyze_bag,
                                    main)
-from swim_bringup.bag import RUN_TOPICS, BagWriter, bag_info, read_messages, swim_typestore
+from swim_bringup.bag import RUN_TOPICS, BagWriter, bag_info, read_messages
+from swim_ros.typestore import swim_typestore
 from swim_hw_bridge.conversions import default_config_path
 from swim_ros.processes import run_child
 

@@ -7,7 +7,8 @@ def test_rosbags_reads_wake_statistics():
     from rclpy.serialization import serialize_message
     from swim_interfaces.msg import WakeStatistics
 
-    from swim_bringup.bag import RUN_TOPICS, swim_typestore
+    from swim_bringup.bag import RUN_TOPICS
+    from swim_ros.typestore import swim_typestore
     sent = WakeStatistics(vortex_count=300, total_circulation_m2_s=1e-17, thrust_n=-0.25,
                           joint_names=["alpha", "phi", "theta"], generalized_force=[0.1, -0.2, 0.003], clipped_count=2)
     decoded = swim_typestore().deserialize_cdr(serialize_message(sent), RUN_TOPICS["/wake_statistics"])

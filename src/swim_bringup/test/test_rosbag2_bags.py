@@ -19,7 +19,8 @@ from mcap.writer import CompressionType, Writer
 from rosbags.rosbag2 import Reader
 
 from swim_bringup.analysis import EXIT_PARTIAL_REPORT, analyze_bag, main
-from swim_bringup.bag import BagError, bag_info, read_messages, swim_typestore, undecodable_topics
+from swim_bringup.bag import BagError, bag_info, read_messages, undecodable_topics
+from swim_ros.typestore import swim_typestore
 from swim_ros.processes import run_child
 
 HUMBLE_BAG = Path(__file__).parent / "data" / "rosbag2_humble" / "bagfile_0_cut.mcap"

@@ -1,0 +1,168 @@
+"""A client of the Foxglove WebSocket protocol (``foxglove.websocket.v1``), written from its specification, for
+tests that talk to a server as the Foxglove app does: it reads the server's info and advertisements, subscribes to
+channels and decodes their message frames, calls services, and advertises a channel of its own to publish on.
+
+Frames (the protocol's spec, foxglove/ws-protocol docs/spec.md): text frames are JSON objects with an ``op``; binary
+frames start with an opcode byte. Server to client: 0x01 message data (uint32 subscription id, uint64 receive time
+ns, payload), 0x03 service call response (uint32 service id, uint32 call id, uint32 encoding length, encoding,
+payload). Client to server: 0x01 message data (uint32 channel id, payload), 0x02 service call request (as 0x03).
+All integers little-endian. The protocol's subprotocol name is ``foxglove.websocket.v1``; foxglove-sdk's server
+accepts only its new name for the same protocol, ``foxglove.sdk.v1``. The client offers both, as the Foxglove app
+does.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import struct
+import time
+from typing import Any, Optional
+
+from websockets.sync.client import ClientConnection, connect
+
+#: the protocol's names, the SDK's first
+SUBPROTOCOLS = ("foxglove.sdk.v1", "foxglove.websocket.v1")
+SERVER_MESSAGE_DATA = 0x01
+SERVER_SERVICE_CALL_RESPONSE = 0x03
+CLIENT_MESSAGE_DATA = 0x01
+CLIENT_SERVICE_CALL_REQUEST = 0x02
+
+
+@dataclasses.dataclass(frozen=True)
+class MessageFrame:
+    """One message of a subscribed channel: its topic, the server's log time (ns) and the payload as sent."""
+
+    topic: str
+    log_time_ns: int
+    payload: bytes
+
+
+@dataclasses.dataclass(frozen=True)
+class ServiceReply:
+    """A service call's answer: its payload and encoding, or the server's failure message (then payload is None)."""
+
+    payload: Optional[bytes]
+    encoding: str = ""
+    failure: str = ""
+
+
+class FoxgloveClient:
+    """A connection to url (``ws://host:port``); text messages other than the awaited ones are kept in ``info``,
+    ``channels``, ``services`` and ``statuses`` as they come."""
+
+    def __init__(self, url: str, open_timeout_s: float = 10.0) -> None:
+        self.connection: ClientConnection = connect(url, subprotocols=list(SUBPROTOCOLS), open_timeout=open_timeout_s,
+                                                    max_size=None)
+        self.info: dict[str, Any] = {}
+        self.channels: dict[int, dict[str, Any]] = {}      # channel id -> its advertisement
+        self.services: dict[str, dict[str, Any]] = {}      # service name -> its advertisement
+        self.statuses: list[dict[str, Any]] = []
+        self._subscriptions: dict[int, str] = {}           # subscription id -> topic
+        self._replies: dict[int, ServiceReply] = {}        # call id -> its answer
+        self._messages: list[MessageFrame] = []
+        self._next_id = 1
+
+    def close(self) -> None:
+        self.connection.close()
+
+    def __enter__(self) -> "FoxgloveClient":
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self.close()
+
+    def _new_id(self) -> int:
+        self._next_id += 1
+        return self._next_id
+
+    def _receive(self, timeout_s: float) -> bool:
+        """Read one frame within timeout_s and file it; False if none came."""
+        try:
+            frame = self.connection.recv(timeout=timeout_s)
+        except TimeoutError:
+            return False
+        if isinstance(frame, str):
+            message = json.loads(frame)
+            op = message.get("op")
+            if op == "serverInfo":
+                self.info = message
+            elif op == "advertise":
+                self.channels.update({channel["id"]: channel for channel in message["channels"]})
+            elif op == "unadvertise":
+                for channel_id in message["channelIds"]:
+                    self.channels.pop(channel_id, None)
+            elif op == "advertiseServices":
+                self.services.update({service["name"]: service for service in message["services"]})
+            elif op == "serviceCallFailure":
+                self._replies[message["callId"]] = ServiceReply(None, failure=message["message"])
+            elif op == "status":
+                self.statuses.append(message)
+            return True
+        opcode = frame[0]
+        if opcode == SERVER_MESSAGE_DATA:
+            subscription, log_time_ns = struct.unpack_from("<IQ", frame, 1)
+            if subscription in self._subscriptions:
+                self._messages.append(MessageFrame(self._subscriptions[subscription], log_time_ns, bytes(frame[13:])))
+        elif opcode == SERVER_SERVICE_CALL_RESPONSE:
+            _, call_id, encoding_length = struct.unpack_from("<III", frame, 1)
+            encoding = bytes(frame[13:13 + encoding_length]).decode()
+            self._replies[call_id] = ServiceReply(bytes(frame[13 + encoding_length:]), encoding)
+        return True
+
+    def wait_for(self, condition: Any, timeout_s: float) -> bool:
+        """Read frames until condition() holds or timeout_s passes; whether it holds."""
+        deadline = time.monotonic() + timeout_s
+        while not condition():
+            remaining_s = deadline - time.monotonic()
+            if remaining_s <= 0.0:
+                return False
+            self._receive(min(remaining_s, 0.1))
+        return True
+
+    def channel(self, topic: str, timeout_s: float = 10.0) -> dict[str, Any]:
+        """The advertisement of topic's channel, waited for; KeyError if none came within timeout_s."""
+        def found() -> Optional[dict[str, Any]]:
+            return next((c for c in self.channels.values() if c["topic"] == topic), None)
+        if not self.wait_for(lambda: found() is not None, timeout_s):
+            raise KeyError(f"no channel {topic!r} advertised within {timeout_s} s: {sorted(c['topic'] for c in self.channels.values())}")
+        channel = found()
+        assert channel is not None
+        return channel
+
+    def subscribe(self, topic: str, timeout_s: float = 10.0) -> int:
+        channel = self.channel(topic, timeout_s)
+        subscription = self._new_id()
+        self._subscriptions[subscription] = topic
+        self.connection.send(json.dumps({"op": "subscribe",
+                                         "subscriptions": [{"id": subscription, "channelId": channel["id"]}]}))
+        return subscription
+
+    def messages(self, topic: str) -> list[MessageFrame]:
+        """The frames received so far on topic (read more with wait_for or receive_for)."""
+        return [message for message in self._messages if message.topic == topic]
+
+    def receive_for(self, duration_s: float) -> None:
+        """Read whatever comes for duration_s."""
+        self.wait_for(lambda: False, duration_s)
+
+    def call_service(self, name: str, payload: bytes, encoding: str = "json", timeout_s: float = 30.0) -> ServiceReply:
+        """Call the service name with payload; its reply (TimeoutError if none within timeout_s)."""
+        if not self.wait_for(lambda: name in self.services, timeout_s):
+            raise KeyError(f"no service {name!r} advertised: {sorted(self.services)}")
+        call_id = self._new_id()
+        encoded = encoding.encode()
+        self.connection.send(struct.pack("<BIII", CLIENT_SERVICE_CALL_REQUEST, self.services[name]["id"], call_id,
+                                         len(encoded)) + encoded + payload)
+        if not self.wait_for(lambda: call_id in self._replies, timeout_s):
+            raise TimeoutError(f"no reply from {name!r} within {timeout_s} s")
+        return self._replies.pop(call_id)
+
+    def advertise(self, topic: str, encoding: str = "json", schema_name: str = "") -> int:
+        """Advertise a channel of this client's on topic; its id, to publish with."""
+        channel_id = self._new_id()
+        self.connection.send(json.dumps({"op": "advertise", "channels": [
+            {"id": channel_id, "topic": topic, "encoding": encoding, "schemaName": schema_name}]}))
+        return channel_id
+
+    def publish(self, channel_id: int, payload: bytes) -> None:
+        self.connection.send(struct.pack("<BI", CLIENT_MESSAGE_DATA, channel_id) + payload)

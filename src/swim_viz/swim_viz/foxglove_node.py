@@ -1,0 +1,390 @@
+"""foxglove_node: the running system, live in the Foxglove app, and a maneuver and the e-stop from it.
+
+A foxglove-sdk WebSocket server (the Foxglove WebSocket protocol; the SDK names it ``foxglove.sdk.v1``) on host:port,
+loopback by default: the server has no authentication, so anyone who reaches the port can steer the rig.
+
+Channels (what a client can subscribe to):
+    /joint_states, /joint_commands, /tracking_state, /plan, /diagnostics, /wake_statistics, /wake_vortices,
+    /robot_description, /markers   the ROS topics as DDS carries them (CDR), schema their ros2msg definition
+    /tf, /tf_static                 foxglove.FrameTransforms, from the ROS topics
+    /scene                          foxglove.SceneUpdate: the planned and travelled paths (from /markers' line
+                                    strips) and the wake's vortices (from /wake_vortices)
+    /log                            foxglove.Log: the bridge's faults as they latch and clear (/diagnostics), the
+                                    tracker's goals as they start and end, the maneuvers called from the app
+Every stream is bounded by a rate parameter: a message that comes sooner is dropped; the SDK keeps at most
+message_backlog messages per client and drops the oldest past that, so a slow client never slows the loop.
+
+Services (JSON requests; a malformed one gets an error reply and changes nothing):
+    perform_maneuver      swim_viz.live.MANEUVER_REQUEST_SCHEMA, sent as a perform_maneuver action goal
+                          (maneuver_node, which checks it and plans it); the reply comes once the plan is being
+                          tracked ({"goal_id", "phase"}), or is the error that ended it first
+    cancel_maneuver       {} : cancels the maneuver this server started (the foil is held where it is)
+    emergency_stop        {} : the bridge's emergency_stop service
+    reset_emergency_stop  {} : the bridge's reset_emergency_stop service
+Client topic: /emergency_stop, JSON {"data": true} (the app's publish panel), published as std_msgs/Bool on the
+bridge's emergency_stop topic. Assets: the meshes the latest robot_description names, and nothing else.
+
+Parameters (read at start): the table PARAMETERS.
+"""
+from __future__ import annotations
+
+import json
+import re
+import threading
+import time
+import urllib.parse
+from pathlib import Path
+from typing import Any, Callable, Optional
+
+import foxglove
+from action_msgs.msg import GoalStatus, GoalStatusArray
+from diagnostic_msgs.msg import DiagnosticArray
+from foxglove import Capability, MessageSchema, Schema, Service, ServiceSchema
+from foxglove.channels import FrameTransformsChannel, LogChannel, SceneUpdateChannel
+from foxglove.messages import (FrameTransform, FrameTransforms, Log, LogLevel, Quaternion, SceneUpdate, Timestamp,
+                               Vector3)
+from foxglove.websocket import ServerListener
+from rclpy.action import ActionClient
+from rclpy.action.client import qos_profile_action_status_default
+from rclpy.node import Node
+from rclpy.serialization import deserialize_message
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Bool, String
+from std_srvs.srv import Trigger
+from swim_interfaces.action import PerformManeuver
+from swim_interfaces.msg import PlannedTrajectory, TrackingState, WakeStatistics, WakeVortices
+from tf2_msgs.msg import TFMessage
+from visualization_msgs.msg import Marker, MarkerArray
+
+from swim_ros.calls import CallFailed, GoalStatusWatch, ServedElsewhere, call_service, cancel_goal, send_goal
+from swim_ros.entry import run_node
+from swim_ros.parameters import ParameterSpec, declare_parameters, positive
+from swim_ros.qos import LATCHED_QOS, per_period_subscription
+from swim_ros.typestore import message_definition
+from swim_viz.live import (MANEUVER_REQUEST_SCHEMA, LogLine, ManeuverRequestError, RateGate, fault_changes,
+                           parse_maneuver_request, path_entity, wake_entity)
+
+PARAMETERS = (
+    ParameterSpec("host", "127.0.0.1", "the address the server listens on (0.0.0.0: every interface; the server has "
+                  "no authentication)", read_only=True),
+    ParameterSpec("port", 8765, "the server's TCP port (8765: Foxglove's default; 0: any free port, logged)",
+                  range=(0, 65535), read_only=True),
+    ParameterSpec("state_rate_hz", 30.0, "the most messages a second per per-period stream (joint_states, "
+                  "joint_commands, tracking_state, wake_statistics, /tf); 0: every one", range=(0.0, 1000.0),
+                  read_only=True),
+    ParameterSpec("scene_rate_hz", 5.0, "the most updates a second of the scene and of wake_vortices; 0: every one",
+                  range=(0.0, 1000.0), read_only=True),
+    ParameterSpec("message_backlog", 256, "the most messages queued per client before the oldest are dropped",
+                  range=(1, 100000), read_only=True),
+    ParameterSpec("maneuver_start_timeout_s", 120.0, "how long perform_maneuver waits for its plan to be tracked "
+                  "(planning, and a model build the first time), s", range=(0.0, 3600.0), read_only=True,
+                  check=positive),
+)
+
+#: the ROS topics sent as they are: name -> (type, its class, per-period stream: bounded by state_rate_hz)
+FORWARDED_TOPICS: dict[str, tuple[str, Any, bool]] = {
+    "/joint_states": ("sensor_msgs/msg/JointState", JointState, True),
+    "/joint_commands": ("sensor_msgs/msg/JointState", JointState, True),
+    "/tracking_state": ("swim_interfaces/msg/TrackingState", TrackingState, True),
+    "/wake_statistics": ("swim_interfaces/msg/WakeStatistics", WakeStatistics, True),
+    "/plan": ("swim_interfaces/msg/PlannedTrajectory", PlannedTrajectory, False),
+    "/diagnostics": ("diagnostic_msgs/msg/DiagnosticArray", DiagnosticArray, False),
+    "/robot_description": ("std_msgs/msg/String", String, False),
+    "/markers": ("visualization_msgs/msg/MarkerArray", MarkerArray, False),
+    "/wake_vortices": ("swim_interfaces/msg/WakeVortices", WakeVortices, False),
+}
+#: the latched topics (a late subscriber gets the last message)
+LATCHED_TOPICS = ("/plan", "/robot_description")
+#: the frame the scene is drawn in (swim_viz.frames)
+SCENE_FRAME = "tank"
+#: the tracker's action, whose goals the log follows
+TRACKER_ACTION = "execute_plan"
+GOAL_STATUS_NAMES = {GoalStatus.STATUS_ACCEPTED: "accepted", GoalStatus.STATUS_EXECUTING: "executing",
+                     GoalStatus.STATUS_CANCELING: "canceling", GoalStatus.STATUS_SUCCEEDED: "succeeded",
+                     GoalStatus.STATUS_CANCELED: "canceled", GoalStatus.STATUS_ABORTED: "aborted"}
+TERMINAL_STATUSES = (GoalStatus.STATUS_SUCCEEDED, GoalStatus.STATUS_CANCELED, GoalStatus.STATUS_ABORTED)
+LOG_LEVELS = {"info": LogLevel.Info, "warning": LogLevel.Warning, "error": LogLevel.Error}
+#: how often a waiting service call looks at its goal, s
+GOAL_POLL_S = 0.02
+#: the empty request of the trigger-like services
+EMPTY_REQUEST_SCHEMA = {"type": "object", "additionalProperties": False, "properties": {}}
+#: a mesh the URDF names: filename="file://..." or package://
+MESH_URI = re.compile(r'filename="([^"]+)"')
+
+
+def _stamp(time_ns: int) -> Timestamp:
+    return Timestamp(sec=time_ns // 1_000_000_000, nsec=time_ns % 1_000_000_000)
+
+
+def _json_service(name: str, request_schema: dict[str, Any], handler: Callable[[bytes], dict[str, Any]]) -> Service:
+    """A service whose request and reply are JSON; a handler's exception is the call's error reply."""
+    def handle(request: Any) -> bytes:
+        if request.encoding != "json":
+            raise ValueError(f"{name} takes JSON requests, got encoding {request.encoding!r}")
+        return json.dumps(handler(bytes(request.payload))).encode()
+    schema = ServiceSchema(name=f"swim/{name}", request=MessageSchema(
+        encoding="json", schema=Schema(name=f"swim/{name}/Request", encoding="jsonschema",
+                                       data=json.dumps(request_schema).encode())))
+    return Service(name, schema=schema, handler=handle)
+
+
+def _empty_request(payload: bytes) -> None:
+    try:
+        request = json.loads(payload or b"{}")
+    except (UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise ValueError(f"the request is not JSON: {err}") from None
+    if request not in ({}, None):
+        raise ValueError(f"this service takes an empty request, got {request!r}")
+
+
+class _ClientTopics(ServerListener):
+    """The topics clients publish on: /emergency_stop (JSON {"data": bool}) to the bridge's topic."""
+
+    def __init__(self, node: "FoxgloveNode") -> None:
+        self.node = node
+        self.emergency_stop_channels: set[tuple[int, int]] = set()   # (client id, client channel id)
+
+    def on_client_advertise(self, client: Any, channel: Any) -> None:
+        if channel.topic == "/emergency_stop" and channel.encoding == "json":
+            self.emergency_stop_channels.add((client.id, channel.id))
+
+    def on_client_unadvertise(self, client: Any, client_channel_id: int) -> None:
+        self.emergency_stop_channels.discard((client.id, client_channel_id))
+
+    def on_message_data(self, client: Any, client_channel_id: int, data: bytes) -> None:
+        if (client.id, client_channel_id) not in self.emergency_stop_channels:
+            return
+        try:
+            value = json.loads(data).get("data")
+        except (UnicodeDecodeError, json.JSONDecodeError, AttributeError):
+            value = None
+        if not isinstance(value, bool):
+            self.node.log(LogLine("warning", f"/emergency_stop from the app ignored: not {{\"data\": true|false}}: "
+                                             f"{bytes(data)[:80]!r}"))
+            return
+        self.node.emergency_stop_publisher.publish(Bool(data=value))
+        if value:
+            self.node.log(LogLine("warning", "emergency stop published from the app"))
+
+
+class FoxgloveNode(Node):
+    def __init__(self) -> None:
+        super().__init__("foxglove_node")
+        declare_parameters(self, PARAMETERS)
+        value = lambda name: self.get_parameter(name).value  # noqa: E731
+        state_rate_hz, scene_rate_hz = value("state_rate_hz"), value("scene_rate_hz")
+        self.maneuver_start_timeout_s = value("maneuver_start_timeout_s")
+        self._mesh_uris: set[str] = set()
+        self._faults: dict[str, str] = {}          # bridge diagnostics name -> its last faults
+        self._tracker_goals: dict[bytes, int] = {}  # goal id -> its last status
+        self._maneuver: Optional[Any] = None        # the goal handle of the maneuver this server started
+        self._maneuver_phase = -1
+        self._maneuver_lock = threading.Lock()
+        self._scene_gate = RateGate(scene_rate_hz)
+        self._tf_gate = RateGate(state_rate_hz)
+
+        self.channels: dict[str, foxglove.Channel] = {}
+        self.gates: dict[str, RateGate] = {}
+        for topic, (type_name, _, per_period) in FORWARDED_TOPICS.items():
+            self.channels[topic] = foxglove.Channel(topic, message_encoding="cdr", schema=Schema(
+                name=type_name, encoding="ros2msg", data=message_definition(type_name).encode()))
+            self.gates[topic] = RateGate(state_rate_hz if per_period else
+                                         scene_rate_hz if topic in ("/markers", "/wake_vortices") else 0.0)
+        self.tf_channel = FrameTransformsChannel("/tf")
+        self.tf_static_channel = FrameTransformsChannel("/tf_static")
+        self.scene_channel = SceneUpdateChannel("/scene")
+        self.log_channel = LogChannel("/log")
+
+        self.emergency_stop_publisher = self.create_publisher(Bool, "emergency_stop", 10)
+        self.emergency_stop_client = self.create_client(Trigger, "emergency_stop")
+        self.reset_client = self.create_client(Trigger, "reset_emergency_stop")
+        self.maneuver_client = ActionClient(self, PerformManeuver, "perform_maneuver")
+        self.maneuver_status = GoalStatusWatch(self, "perform_maneuver")
+
+        for topic, (_, message_type, per_period) in FORWARDED_TOPICS.items():
+            callback = self._forwarder(topic)
+            if per_period:
+                per_period_subscription(self, message_type, topic, callback, raw=True)
+            else:
+                self.create_subscription(message_type, topic, callback,
+                                         LATCHED_QOS if topic in LATCHED_TOPICS else 10, raw=True)
+        self.create_subscription(TFMessage, "/tf", self._on_tf, 100)
+        self.create_subscription(TFMessage, "/tf_static", self._on_tf_static, LATCHED_QOS)
+        self.create_subscription(GoalStatusArray, f"{TRACKER_ACTION}/_action/status", self._on_tracker_status,
+                                 qos_profile_action_status_default)
+
+        services = [
+            _json_service("perform_maneuver", MANEUVER_REQUEST_SCHEMA, self._perform_maneuver),
+            _json_service("cancel_maneuver", EMPTY_REQUEST_SCHEMA, self._cancel_maneuver),
+            _json_service("emergency_stop", EMPTY_REQUEST_SCHEMA,
+                          lambda payload: self._trigger(self.emergency_stop_client, payload)),
+            _json_service("reset_emergency_stop", EMPTY_REQUEST_SCHEMA,
+                          lambda payload: self._trigger(self.reset_client, payload)),
+        ]
+        self.listener = _ClientTopics(self)
+        self.server = foxglove.start_server(
+            name="swim", host=value("host"), port=value("port"), supported_encodings=["json"],
+            capabilities=[Capability.Services, Capability.ClientPublish], services=services,
+            server_listener=self.listener, asset_handler=self._asset, message_backlog_size=value("message_backlog"))
+        self.get_logger().info(f"Foxglove server on ws://{value('host')}:{self.server.port} "
+                               f"(no authentication: keep it on a trusted network)")
+
+    def close(self) -> None:
+        self.server.stop()
+
+    # --- what the system publishes -------------------------------------------------------------------------------
+    def _now_ns(self) -> int:
+        return self.get_clock().now().nanoseconds
+
+    def _forwarder(self, topic: str) -> Callable[[bytes], None]:
+        channel, gate = self.channels[topic], self.gates[topic]
+        convert = {"/diagnostics": self._on_diagnostics, "/markers": self._on_markers,
+                   "/wake_vortices": self._on_wake, "/robot_description": self._on_robot_description}.get(topic)
+
+        def forward(raw: bytes) -> None:
+            if not gate.due(time.monotonic()):
+                return
+            now_ns = self._now_ns()
+            channel.log(raw, log_time=now_ns)
+            if convert is not None:
+                try:
+                    convert(raw, now_ns)
+                except Exception as err:   # noqa: BLE001 - a message we cannot draw is named, never the end
+                    self.get_logger().warning(f"{topic} not converted: {err!r}", throttle_duration_sec=5.0)
+        return forward
+
+    def _transforms(self, message: TFMessage) -> FrameTransforms:
+        return FrameTransforms(transforms=[FrameTransform(
+            timestamp=Timestamp(sec=t.header.stamp.sec, nsec=t.header.stamp.nanosec),
+            parent_frame_id=t.header.frame_id, child_frame_id=t.child_frame_id,
+            translation=Vector3(x=t.transform.translation.x, y=t.transform.translation.y,
+                                z=t.transform.translation.z),
+            rotation=Quaternion(x=t.transform.rotation.x, y=t.transform.rotation.y, z=t.transform.rotation.z,
+                                w=t.transform.rotation.w)) for t in message.transforms])
+
+    def _on_tf(self, message: TFMessage) -> None:
+        if self._tf_gate.due(time.monotonic()):
+            self.tf_channel.log(self._transforms(message), log_time=self._now_ns())
+
+    def _on_tf_static(self, message: TFMessage) -> None:
+        self.tf_static_channel.log(self._transforms(message), log_time=self._now_ns())
+
+    def _on_markers(self, raw: bytes, now_ns: int) -> None:
+        markers = deserialize_message(raw, MarkerArray).markers
+        entities = [path_entity(f"{m.ns}/{m.id}", m.header.frame_id or SCENE_FRAME,
+                                [(p.x, p.y, p.z) for p in m.points], (m.color.r, m.color.g, m.color.b, m.color.a),
+                                m.scale.x, now_ns)
+                    for m in markers if m.type == Marker.LINE_STRIP and m.action == Marker.ADD and len(m.points) >= 2]
+        self.scene_channel.log(SceneUpdate(entities=entities), log_time=now_ns)
+
+    def _on_wake(self, raw: bytes, now_ns: int) -> None:
+        wake = deserialize_message(raw, WakeVortices)
+        entity = wake_entity("wake", SCENE_FRAME, wake.x_m, wake.y_m, wake.circulations_m2_s, now_ns)
+        self.scene_channel.log(SceneUpdate(entities=[entity]), log_time=now_ns)
+
+    def _on_robot_description(self, raw: bytes, now_ns: int) -> None:
+        description = deserialize_message(raw, String).data
+        self._mesh_uris = set(MESH_URI.findall(description))
+
+    def _on_diagnostics(self, raw: bytes, now_ns: int) -> None:
+        for status in deserialize_message(raw, DiagnosticArray).status:
+            values = {pair.key: pair.value for pair in status.values}
+            if "faults" not in values:
+                continue
+            previous = self._faults.get(status.name, "NONE")
+            self._faults[status.name] = values["faults"]
+            for line in fault_changes(previous, values["faults"], source=status.name or "bridge"):
+                self.log(line, now_ns)
+
+    def _on_tracker_status(self, message: GoalStatusArray) -> None:
+        for status in message.status_list:
+            goal_id = bytes(status.goal_info.goal_id.uuid)
+            if self._tracker_goals.get(goal_id) == status.status:
+                continue
+            self._tracker_goals[goal_id] = status.status
+            name = GOAL_STATUS_NAMES.get(status.status, f"status {status.status}")
+            level = "warning" if status.status == GoalStatus.STATUS_ABORTED else "info"
+            self.log(LogLine(level, f"tracker: goal {goal_id.hex()[:8]} {name}"))
+
+    def log(self, line: LogLine, now_ns: Optional[int] = None) -> None:
+        """A line in the app's log panel (and in this node's log)."""
+        now_ns = self._now_ns() if now_ns is None else now_ns
+        self.log_channel.log(Log(timestamp=_stamp(now_ns), level=LOG_LEVELS[line.level], message=line.text,
+                                 name="swim"), log_time=now_ns)
+        {"info": self.get_logger().info, "warning": self.get_logger().warning,
+         "error": self.get_logger().error}[line.level](line.text)
+
+    def _asset(self, uri: str) -> Optional[bytes]:
+        """A mesh the robot description names (file:// URIs), and nothing else."""
+        if uri not in self._mesh_uris or not uri.startswith("file://"):
+            return None
+        try:
+            return Path(urllib.parse.urlparse(uri).path).read_bytes()
+        except OSError:
+            return None
+
+    # --- what the app asks for (each on a server thread; the executor serves the ROS answers meanwhile) ----------
+    def _perform_maneuver(self, payload: bytes) -> dict[str, Any]:
+        goal = PerformManeuver.Goal(**parse_maneuver_request(payload))
+        with self._maneuver_lock:
+            self._maneuver_phase = -1
+            handle = send_goal(ServedElsewhere(), self.maneuver_client, goal, self.maneuver_status,
+                               feedback_callback=self._on_maneuver_feedback)
+            if not handle.accepted:
+                raise RuntimeError("maneuver_node refused the goal")
+            self._maneuver = handle
+        goal_id = bytes(handle.goal_id.uuid)
+        self.log(LogLine("info", f"maneuver {goal_id.hex()[:8]} requested from the app: {payload.decode()[:200]}"))
+        deadline = time.monotonic() + self.maneuver_start_timeout_s
+        while time.monotonic() < deadline:
+            status = self.maneuver_status.statuses.get(goal_id, GoalStatus.STATUS_UNKNOWN)
+            if self._maneuver_phase == PerformManeuver.Feedback.PHASE_TRACKING and self._maneuver is handle:
+                return {"goal_id": goal_id.hex(), "phase": "tracking"}
+            if status in TERMINAL_STATUSES:
+                return self._ended_maneuver(handle, goal_id, status)
+            time.sleep(GOAL_POLL_S)
+        raise TimeoutError(f"maneuver {goal_id.hex()[:8]} not tracked within {self.maneuver_start_timeout_s} s; "
+                           "it goes on: cancel_maneuver stops it")
+
+    def _ended_maneuver(self, handle: Any, goal_id: bytes, status: int) -> dict[str, Any]:
+        """A maneuver that ended before it was tracked: its result, or its error."""
+        from swim_ros.calls import goal_result
+        try:
+            result = goal_result(ServedElsewhere(), handle, timeout_s=30.0).result
+        except CallFailed:
+            raise RuntimeError(f"maneuver {goal_id.hex()[:8]} {GOAL_STATUS_NAMES.get(status)}; its result was "
+                               "not received") from None
+        if result.error_code != PerformManeuver.Result.SUCCESSFUL:
+            self.log(LogLine("warning", f"maneuver {goal_id.hex()[:8]} failed: {result.error_string}"))
+            raise RuntimeError(f"maneuver failed ({result.error_code}): {result.error_string}")
+        return {"goal_id": goal_id.hex(), "phase": "succeeded"}
+
+    def _on_maneuver_feedback(self, message: Any) -> None:
+        self._maneuver_phase = message.feedback.phase
+
+    def _cancel_maneuver(self, payload: bytes) -> dict[str, Any]:
+        _empty_request(payload)
+        handle = self._maneuver
+        if handle is None:
+            raise RuntimeError("no maneuver started from this server to cancel")
+        response = cancel_goal(ServedElsewhere(), handle)
+        self.log(LogLine("info", f"maneuver {bytes(handle.goal_id.uuid).hex()[:8]} canceled from the app"))
+        return {"goal_id": bytes(handle.goal_id.uuid).hex(), "canceling": len(response.goals_canceling) > 0}
+
+    def _trigger(self, client: Any, payload: bytes) -> dict[str, Any]:
+        _empty_request(payload)
+        response = call_service(ServedElsewhere(), client, Trigger.Request())
+        self.log(LogLine("warning" if response.success else "error",
+                         f"{client.srv_name} from the app: {response.message}"))
+        if not response.success:
+            raise RuntimeError(f"{client.srv_name} refused: {response.message}")
+        return {"success": True, "message": response.message}
+
+
+def main(args: list[str] | None = None) -> None:
+    run_node(FoxgloveNode, args, name="foxglove_node", fatal_errors=(ValueError, RuntimeError, OSError),
+             stop=FoxgloveNode.close)
+
+
+if __name__ == "__main__":
+    main()
