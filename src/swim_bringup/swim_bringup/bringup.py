@@ -3,7 +3,8 @@
 
 `swim-bringup sim` starts sim_node (lock-step, or real time with --realtime), `swim-bringup bridge` bridge_node
 (--backend emulated | serial | mf624); then planner_node, tracker_node, maneuver_node (the perform_maneuver action)
-and swim_viz's rig_state_publisher and marker_node, each in a process of its own (swim_bringup.system) with the
+and swim_viz's rig_state_publisher and marker_node (and, with --foxglove [PORT], foxglove_node: the run live in the
+Foxglove app), each in a process of its own (swim_bringup.system) with the
 parameter files of a pipeline or of --config, every node's output in a log folder. It watches them until Ctrl-C
 or SIGTERM, which stop them all (exit 0). A node that dies is reported at once with its exit status and the end of
 its log; the others are then stopped (exit 1), or with --keep-going kept up. Bad input exits 2.
@@ -47,12 +48,18 @@ class BringupError(ValueError):
     """Input swim-bringup cannot start from: an option the set does not take, a missing parameter file."""
 
 
+#: foxglove_node's port when --foxglove names none: Foxglove's default (swim_viz.foxglove_node)
+FOXGLOVE_DEFAULT_PORT = 8765
+
+
 def bringup_specs(plant: str, backend: Optional[str] = None, pipeline: str = "realistic", realtime: bool = False,
-                  sliding_mode: bool = True, config: Optional[Path] = None) -> list[NodeSpec]:
+                  sliding_mode: bool = True, config: Optional[Path] = None,
+                  foxglove_port: Optional[int] = None) -> list[NodeSpec]:
     """The nodes swim-bringup starts for a plant ("sim" or "bridge"), as the launch files start them: the pipeline's
     parameter files (config_dir(pipeline)) or config's, sim_node in real time if realtime (else as its file says:
     lock-step, with the tracker's stale limit raised, system.LOCKSTEP_STALE_OVERRIDE), bridge_node with backend
-    (default emulated), the tracker's sliding mode on or off, and the maneuver server. BringupError for a backend
+    (default emulated), the tracker's sliding mode on or off, the maneuver server, and foxglove_node on
+    foxglove_port (loopback) unless it is None. BringupError for a backend
     with the simulator, real time with the bridge (always real time) or an unknown backend."""
     if plant not in PLANTS:
         raise BringupError(f"the set is one of {', '.join(PLANTS)}, not {plant!r}")
@@ -65,8 +72,13 @@ def bringup_specs(plant: str, backend: Optional[str] = None, pipeline: str = "re
     plant_overrides = ("mode:=realtime",) if realtime else ()
     if plant == "bridge":
         plant_overrides = (f"backend:={backend or 'emulated'}",)
-    return closed_loop_specs(config or config_dir(pipeline), plant_overrides,
-                             (f"sliding_mode_enabled:={str(sliding_mode).lower()}",), plant=plant, maneuver=True)
+    if foxglove_port is not None and not 0 <= foxglove_port <= 65535:
+        raise BringupError(f"--foxglove takes a TCP port (0-65535), not {foxglove_port}")
+    specs = closed_loop_specs(config or config_dir(pipeline), plant_overrides,
+                              (f"sliding_mode_enabled:={str(sliding_mode).lower()}",), plant=plant, maneuver=True)
+    if foxglove_port is not None:
+        specs.append(NodeSpec("swim_viz", "foxglove_node", parameters=(f"port:={foxglove_port}",)))
+    return specs
 
 
 def missing_files(specs: list[NodeSpec]) -> list[str]:
@@ -91,6 +103,9 @@ def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
     parser.add_argument("--sliding-mode", choices=("on", "off"), default="on", help="tracker_node's sliding mode")
     parser.add_argument("--keep-going", action="store_true",
                         help="when a node dies, report it and keep the others up (default: stop them, exit 1)")
+    parser.add_argument("--foxglove", type=int, nargs="?", const=FOXGLOVE_DEFAULT_PORT, default=None, metavar="PORT",
+                        help=f"also start foxglove_node, the Foxglove app's live connection, on ws://127.0.0.1:PORT "
+                             f"(default {FOXGLOVE_DEFAULT_PORT}; no authentication: loopback only)")
     parser.add_argument("--log-dir", type=Path, default=None,
                         help="folder of the nodes' logs (default runs/bringup-<time>/logs)")
     return parser.parse_args(argv)
@@ -174,7 +189,7 @@ def main(argv: Optional[list[str]] = None) -> int:
             raise BringupError(f"--config {args.config}: no such folder")
         config = args.config or config_dir(args.pipeline)
         specs = bringup_specs(args.plant, args.backend, args.pipeline, args.realtime, args.sliding_mode == "on",
-                              config)
+                              config, args.foxglove)
         missing = missing_files(specs)
         if missing:
             raise BringupError(f"no parameter file {'; '.join(missing)}")
@@ -192,6 +207,9 @@ def main(argv: Optional[list[str]] = None) -> int:
             for node in system.nodes:
                 print(f"  {node.spec.executable:<20} pid {node.process.pid:<8} {node.log_path}")
             print(f"swim-bringup: Ctrl-C stops them. Fly a maneuver: {SEND_GOAL_EXAMPLE[args.plant]}", flush=True)
+            if args.foxglove is not None:
+                print(f"swim-bringup: the Foxglove app connects to ws://127.0.0.1:{args.foxglove} "
+                      "(Open connection, Foxglove WebSocket; layout docs/foxglove_layout.json)", flush=True)
             status = watch(system, stop, args.keep_going)
         print("swim-bringup: every node stopped", flush=True)
     return status

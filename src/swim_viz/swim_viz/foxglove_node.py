@@ -61,8 +61,8 @@ from swim_ros.entry import run_node
 from swim_ros.parameters import ParameterSpec, declare_parameters, positive
 from swim_ros.qos import LATCHED_QOS, per_period_subscription
 from swim_ros.typestore import message_definition
-from swim_viz.live import (MANEUVER_REQUEST_SCHEMA, LogLine, ManeuverRequestError, RateGate, fault_changes,
-                           parse_maneuver_request, path_entity, wake_entity)
+from swim_viz.live import (MANEUVER_REQUEST_SCHEMA, LogLine, RateGate, fault_changes, parse_maneuver_request,
+                           path_entity, wake_entity)
 
 PARAMETERS = (
     ParameterSpec("host", "127.0.0.1", "the address the server listens on (0.0.0.0: every interface; the server has "
@@ -311,8 +311,13 @@ class FoxgloveNode(Node):
         now_ns = self._now_ns() if now_ns is None else now_ns
         self.log_channel.log(Log(timestamp=_stamp(now_ns), level=LOG_LEVELS[line.level], message=line.text,
                                  name="swim"), log_time=now_ns)
-        {"info": self.get_logger().info, "warning": self.get_logger().warning,
-         "error": self.get_logger().error}[line.level](line.text)
+        logger = self.get_logger()   # one call site per severity: rclpy refuses a site that changes it
+        if line.level == "error":
+            logger.error(line.text)
+        elif line.level == "warning":
+            logger.warning(line.text)
+        else:
+            logger.info(line.text)
 
     def _asset(self, uri: str) -> Optional[bytes]:
         """A mesh the robot description names (file:// URIs), and nothing else."""

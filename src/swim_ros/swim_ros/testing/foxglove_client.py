@@ -124,7 +124,8 @@ class FoxgloveClient:
         def found() -> Optional[dict[str, Any]]:
             return next((c for c in self.channels.values() if c["topic"] == topic), None)
         if not self.wait_for(lambda: found() is not None, timeout_s):
-            raise KeyError(f"no channel {topic!r} advertised within {timeout_s} s: {sorted(c['topic'] for c in self.channels.values())}")
+            topics = sorted(c["topic"] for c in self.channels.values())
+            raise KeyError(f"no channel {topic!r} advertised within {timeout_s} s: {topics}")
         channel = found()
         assert channel is not None
         return channel

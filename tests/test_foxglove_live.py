@@ -1,0 +1,227 @@
+"""foxglove_node live, as the Foxglove app meets it: `swim-bringup bridge --foxglove PORT` (the emulated rig in
+real time, the planner, the tracker, the maneuver server and the visualization nodes) in a ROS domain of the
+test's, and a client speaking the Foxglove WebSocket protocol (swim_ros.testing.foxglove_client).
+
+It checks the server's info and advertised channels with their schemas; that the messages a client receives are the
+ones DDS carried (joint_states byte for byte, /tf transform for transform, stamps included); that the maneuver
+service flies a short maneuver and the e-stop service stops the emulated bridge (its /diagnostics show it); that a
+malformed call gets an error and nothing moves; and that a message the app publishes on /emergency_stop reaches
+the bridge.
+"""
+from __future__ import annotations
+
+import base64
+import json
+import socket
+import time
+from pathlib import Path
+
+import pytest
+
+from swim_ros.processes import start_child
+from swim_ros.testing.fixtures import new_rclpy_context
+from swim_ros.testing.foxglove_client import FoxgloveClient
+from swim_ros.typestore import message_definition
+
+#: the bring-up and the first states: the emulated rig loads its wake's kernels, the tracker builds its models
+SET_UP_TIMEOUT_S = 180.0
+#: how long messages are compared for, s
+COMPARE_S = 3.0
+#: a short maneuver of the free vehicle on the emulated rig's lane: start and stop (about 10 s of plan)
+SHORT_MANEUVER = {"mode": "sequence", "primitive_ids": ["free/accelerate/R0.43/E0.05", "free/decelerate/R0.43/E0.05"],
+                  "path_tolerance_alpha_rad": 1.0, "goal_tolerance_alpha_rad": 0.25, "goal_tolerance_r_m": 0.025}
+#: the maneuver's wall time: its plan, and the model the tracker builds for it the first time on a loaded host
+MANEUVER_TIMEOUT_S = 300.0
+FORWARDED = ("/joint_states", "/joint_commands", "/tracking_state", "/plan", "/diagnostics", "/wake_statistics",
+             "/wake_vortices", "/robot_description", "/markers")
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+class Observer:
+    """The test's own node on the set's domain: what DDS carries, as it carries it."""
+
+    def __init__(self, context) -> None:
+        import rclpy
+        from action_msgs.msg import GoalStatusArray  # noqa: F401 - the watch's type, imported where rclpy is up
+        from diagnostic_msgs.msg import DiagnosticArray
+        from rclpy.executors import SingleThreadedExecutor
+        from sensor_msgs.msg import JointState
+        from tf2_msgs.msg import TFMessage
+
+        from swim_ros.calls import GoalStatusWatch
+        self.node = rclpy.create_node("foxglove_test_observer", context=context)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+        self.joint_states: list[bytes] = []
+        self.transforms: set[tuple] = set()
+        self.faults: list[str] = []
+        self.node.create_subscription(JointState, "/joint_states", self.joint_states.append, 1000, raw=True)
+        self.node.create_subscription(TFMessage, "/tf", self._on_tf, 1000)
+        self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diagnostics, 100)
+        self.maneuvers = GoalStatusWatch(self.node, "perform_maneuver")
+
+    def _on_tf(self, message) -> None:
+        for t in message.transforms:
+            self.transforms.add(transform_key(t.header.stamp.sec, t.header.stamp.nanosec, t.header.frame_id,
+                                              t.child_frame_id, t.transform.translation, t.transform.rotation))
+
+    def _on_diagnostics(self, message) -> None:
+        for status in message.status:
+            self.faults += [pair.value for pair in status.values if pair.key == "faults"]
+
+    def spin_for(self, duration_s: float) -> None:
+        deadline = time.monotonic() + duration_s
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.02)
+
+    def spin_until(self, done, timeout_s: float, what: str) -> None:
+        deadline = time.monotonic() + timeout_s
+        while not done():
+            assert time.monotonic() < deadline, f"not within {timeout_s} s: {what}"
+            self.executor.spin_once(timeout_sec=0.05)
+
+    def close(self) -> None:
+        self.executor.shutdown()
+        self.node.destroy_node()
+
+
+def transform_key(sec, nanosec, parent, child, translation, rotation) -> tuple:
+    return (int(sec), int(nanosec), parent, child, round(translation.x, 12), round(translation.y, 12),
+            round(translation.z, 12), round(rotation.x, 12), round(rotation.y, 12), round(rotation.z, 12),
+            round(rotation.w, 12))
+
+
+@pytest.fixture(scope="module")
+def live(ros_domain, tmp_path_factory):  # noqa: F811 - the session's domain fixture (conftest)
+    """The bridge set with foxglove_node, its client and the test's observer, up and swimming at rest."""
+    from ament_index_python.packages import get_package_prefix
+    folder = tmp_path_factory.mktemp("foxglove_live")
+    port = free_port()
+    executable = Path(get_package_prefix("swim_bringup")) / "lib" / "swim_bringup" / "swim-bringup"
+    with open(folder / "swim-bringup.out", "w") as output:
+        bringup = start_child([str(executable), "bridge", "--foxglove", str(port), "--log-dir", str(folder / "logs")],
+                              stdout=output, stderr=output)
+    try:
+        with new_rclpy_context() as context:
+            observer = Observer(context)
+            try:
+                deadline = time.monotonic() + SET_UP_TIMEOUT_S
+                client = None
+                while client is None:
+                    assert bringup.poll() is None, (folder / "swim-bringup.out").read_text()
+                    assert time.monotonic() < deadline, "foxglove_node did not listen"
+                    try:
+                        client = FoxgloveClient(f"ws://127.0.0.1:{port}")
+                    except OSError:
+                        observer.spin_for(0.5)
+                observer.spin_until(lambda: len(observer.joint_states) > 50 and observer.faults, SET_UP_TIMEOUT_S,
+                                    "joint_states and diagnostics flowing")
+                with client:
+                    yield client, observer
+            finally:
+                observer.close()
+    finally:
+        bringup.terminate()
+        try:
+            bringup.wait(60.0)
+        except Exception:   # noqa: BLE001 - whatever is left is killed
+            bringup.kill()
+            bringup.wait()
+
+
+def test_the_server_says_who_it_is_and_advertises_every_channel_with_its_schema(live):
+    client, _ = live
+    assert client.wait_for(lambda: client.info and len(client.channels) >= len(FORWARDED) + 4
+                           and len(client.services) >= 4, 30.0)
+    assert client.connection.subprotocol in ("foxglove.sdk.v1", "foxglove.websocket.v1")
+    assert client.info["name"] == "swim"
+    assert {"services", "clientPublish"} <= set(client.info["capabilities"])
+    by_topic = {channel["topic"]: channel for channel in client.channels.values()}
+    for topic in FORWARDED:
+        channel = by_topic[topic]
+        assert channel["encoding"] == "cdr" and channel["schemaEncoding"] == "ros2msg"
+        assert channel["schema"] == message_definition(channel["schemaName"])
+    assert by_topic["/tf"]["schemaName"] == "foxglove.FrameTransforms"
+    assert by_topic["/scene"]["schemaName"] == "foxglove.SceneUpdate"
+    assert by_topic["/log"]["schemaName"] == "foxglove.Log"
+    assert {"perform_maneuver", "cancel_maneuver", "emergency_stop", "reset_emergency_stop"} <= set(client.services)
+
+
+def decode_protobuf(channel: dict, payload: bytes):
+    """A protobuf channel's message, decoded by the schema the server advertised (a FileDescriptorSet)."""
+    from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
+    files = descriptor_pb2.FileDescriptorSet.FromString(base64.b64decode(channel["schema"]))
+    pool = descriptor_pool.DescriptorPool()
+    for file in files.file:
+        pool.Add(file)
+    message_class = message_factory.GetMessageClass(pool.FindMessageTypeByName(channel["schemaName"]))
+    return message_class.FromString(payload)
+
+
+def test_the_client_gets_what_dds_carried_stamps_and_values(live):
+    client, observer = live
+    client.subscribe("/joint_states")
+    client.subscribe("/tf")
+    deadline = time.monotonic() + COMPARE_S
+    while time.monotonic() < deadline:
+        client.receive_for(0.05)
+        observer.spin_for(0.05)
+    observer.spin_for(1.0)   # what the client got, DDS brought the observer too
+    states, transforms = client.messages("/joint_states"), client.messages("/tf")
+    assert len(states) >= 10 and len(transforms) >= 10, (len(states), len(transforms))
+    carried = set(observer.joint_states)
+    assert all(message.payload in carried for message in states)   # byte for byte: the same stamps and values
+    tf_channel = client.channel("/tf")
+    for message in transforms:
+        for t in decode_protobuf(tf_channel, message.payload).transforms:
+            key = transform_key(t.timestamp.seconds, t.timestamp.nanos, t.parent_frame_id, t.child_frame_id,
+                                t.translation, t.rotation)
+            assert key in observer.transforms, key
+
+
+def test_a_malformed_call_gets_an_error_and_nothing_moves(live):
+    client, observer = live
+    observer.spin_for(0.5)
+    maneuvers_before = dict(observer.maneuvers.statuses)
+    for payload in (b"not json", b'{"mode": "sequence"}', b'{"mode": "sequence", "primitive_ids": ["x"], '
+                                                          b'"time_scale": -1}', b'{"mode": "dance"}', b"[1, 2]"):
+        reply = client.call_service("perform_maneuver", payload)
+        assert reply.payload is None and reply.failure, payload
+    reply = client.call_service("emergency_stop", b'{"now": true}')
+    assert reply.payload is None and "empty request" in reply.failure
+    reply = client.call_service("cancel_maneuver", b"{}")   # none started from this server
+    assert reply.payload is None and "no maneuver" in reply.failure
+    observer.spin_for(1.0)
+    assert observer.maneuvers.statuses == maneuvers_before
+    assert observer.faults[-1] == "NONE"
+
+
+def test_a_maneuver_from_the_app_flies_and_the_e_stop_stops_the_bridge(live):
+    from action_msgs.msg import GoalStatus
+    client, observer = live
+    reply = client.call_service("perform_maneuver", json.dumps(SHORT_MANEUVER).encode(), timeout_s=MANEUVER_TIMEOUT_S)
+    assert reply.payload is not None, reply.failure
+    answer = json.loads(reply.payload)
+    assert answer["phase"] in ("tracking", "succeeded")
+    goal_id = bytes.fromhex(answer["goal_id"])
+    observer.spin_until(lambda: observer.maneuvers.statuses.get(goal_id) in (
+        GoalStatus.STATUS_SUCCEEDED, GoalStatus.STATUS_ABORTED, GoalStatus.STATUS_CANCELED), MANEUVER_TIMEOUT_S,
+        "the maneuver's end")
+    assert observer.maneuvers.statuses[goal_id] == GoalStatus.STATUS_SUCCEEDED
+
+    reply = client.call_service("emergency_stop", b"{}")
+    assert reply.payload is not None and json.loads(reply.payload)["success"], reply.failure
+    observer.spin_until(lambda: "EMERGENCY_STOP" in observer.faults[-1], 10.0, "the e-stop in /diagnostics")
+    reply = client.call_service("reset_emergency_stop", b"{}")
+    assert reply.payload is not None, reply.failure
+    observer.spin_until(lambda: observer.faults[-1] == "NONE", 10.0, "the e-stop reset in /diagnostics")
+
+    channel = client.advertise("/emergency_stop")   # the app's publish panel
+    client.publish(channel, b'{"data": true}')
+    observer.spin_until(lambda: "EMERGENCY_STOP" in observer.faults[-1], 10.0, "the e-stop topic's stop")
+    assert client.call_service("reset_emergency_stop", b"{}").payload is not None
