@@ -18,10 +18,14 @@ from pathlib import Path
 
 import pytest
 
+from conftest import WORKSPACE
 from swim_ros.processes import start_child
 from swim_ros.testing.fixtures import new_rclpy_context
 from swim_ros.testing.foxglove_client import FoxgloveClient
 from swim_ros.typestore import message_definition
+from test_viz_demo_bag import layout_reads
+
+FOXGLOVE_LAYOUT = WORKSPACE / "docs" / "foxglove_layout.json"
 
 #: the bring-up and the first states: the emulated rig loads its wake's kernels, the tracker builds its models
 SET_UP_TIMEOUT_S = 180.0
@@ -150,6 +154,22 @@ def test_the_server_says_who_it_is_and_advertises_every_channel_with_its_schema(
     assert by_topic["/scene"]["schemaName"] == "foxglove.SceneUpdate"
     assert by_topic["/log"]["schemaName"] == "foxglove.Log"
     assert {"perform_maneuver", "cancel_maneuver", "emergency_stop", "reset_emergency_stop"} <= set(client.services)
+
+
+def test_the_layout_opens_live_every_topic_and_service_it_reads_is_served(live):
+    """docs/foxglove_layout.json on a live connection: the topics of its 3D panel and plots are channels, the
+    services of its call-service panels are advertised, and their default requests are well-formed calls."""
+    from swim_viz.live import parse_maneuver_request
+    client, _ = live
+    layout = json.loads(FOXGLOVE_LAYOUT.read_text())
+    topics, paths = layout_reads(layout)
+    for topic in topics | {topic for topic, _ in paths}:
+        client.channel(topic)
+    calls = [panel for key, panel in layout["configById"].items() if key.startswith("CallService!")]
+    assert {panel["serviceName"] for panel in calls} == {"perform_maneuver", "emergency_stop"}
+    assert client.wait_for(lambda: all(panel["serviceName"] in client.services for panel in calls), 10.0)
+    maneuver = next(panel for panel in calls if panel["serviceName"] == "perform_maneuver")
+    parse_maneuver_request(maneuver["requestPayload"].encode())
 
 
 def decode_protobuf(channel: dict, payload: bytes):
