@@ -10,7 +10,6 @@ the bridge.
 """
 from __future__ import annotations
 
-import base64
 import json
 import socket
 import time
@@ -21,7 +20,7 @@ import pytest
 from conftest import WORKSPACE
 from swim_ros.processes import start_child
 from swim_ros.testing.fixtures import new_rclpy_context
-from swim_ros.testing.foxglove_client import FoxgloveClient
+from swim_ros.testing.foxglove_client import FoxgloveClient, channel_schema, decode_protobuf
 from swim_ros.typestore import message_definition
 from test_viz_demo_bag import layout_reads
 
@@ -172,17 +171,6 @@ def test_the_layout_opens_live_every_topic_and_service_it_reads_is_served(live):
     parse_maneuver_request(maneuver["requestPayload"].encode())
 
 
-def decode_protobuf(channel: dict, payload: bytes):
-    """A protobuf channel's message, decoded by the schema the server advertised (a FileDescriptorSet)."""
-    from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
-    files = descriptor_pb2.FileDescriptorSet.FromString(base64.b64decode(channel["schema"]))
-    pool = descriptor_pool.DescriptorPool()
-    for file in files.file:
-        pool.Add(file)
-    message_class = message_factory.GetMessageClass(pool.FindMessageTypeByName(channel["schemaName"]))
-    return message_class.FromString(payload)
-
-
 def test_the_client_gets_what_dds_carried_stamps_and_values(live):
     client, observer = live
     client.subscribe("/joint_states")
@@ -198,7 +186,7 @@ def test_the_client_gets_what_dds_carried_stamps_and_values(live):
     assert all(message.payload in carried for message in states)   # byte for byte: the same stamps and values
     tf_channel = client.channel("/tf")
     for message in transforms:
-        for t in decode_protobuf(tf_channel, message.payload).transforms:
+        for t in decode_protobuf(tf_channel["schemaName"], channel_schema(tf_channel), message.payload).transforms:
             key = transform_key(t.timestamp.seconds, t.timestamp.nanos, t.parent_frame_id, t.child_frame_id,
                                 t.translation, t.rotation)
             assert key in observer.transforms, key

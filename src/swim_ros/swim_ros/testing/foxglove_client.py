@@ -12,6 +12,7 @@ does.
 """
 from __future__ import annotations
 
+import base64
 import dataclasses
 import json
 import struct
@@ -167,3 +168,22 @@ class FoxgloveClient:
 
     def publish(self, channel_id: int, payload: bytes) -> None:
         self.connection.send(struct.pack("<BI", CLIENT_MESSAGE_DATA, channel_id) + payload)
+
+
+def decode_protobuf(schema_name: str, file_descriptor_set: bytes, payload: bytes) -> Any:
+    """A protobuf message (a foxglove schema's, e.g. foxglove.FrameTransforms) decoded by the schema it came with: its
+    name and a serialized FileDescriptorSet (what a channel advertises, base64-decoded: ``channel_schema``)."""
+    from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
+    files = descriptor_pb2.FileDescriptorSet.FromString(file_descriptor_set)
+    pool = descriptor_pool.DescriptorPool()
+    for file in files.file:
+        pool.Add(file)
+    return message_factory.GetMessageClass(pool.FindMessageTypeByName(schema_name)).FromString(payload)
+
+
+def channel_schema(channel: dict[str, Any]) -> bytes:
+    """An advertised channel's schema as bytes: binary schemas (protobuf's) come base64-encoded, text ones as they
+    are."""
+    if channel.get("schemaEncoding") == "protobuf":
+        return base64.b64decode(channel["schema"])
+    return str(channel["schema"]).encode()
