@@ -3,7 +3,9 @@
 #   1. a Python 3.11 virtual environment in .venv (the ros-jazzy-* wheels are cp311 only);
 #   2. the pinned dependencies of requirements.lock;
 #   3. the wheels' CMake path fix (below);
-#   4. `colcon build` of src/ into install/.
+#   4. `colcon build` of src/ into install/;
+#   5. the browser test's tools: Debian's chromium (when missing, as root with apt) and the test page's bundle
+#      (npm ci, esbuild) in src/swim_viz/test/browser.
 # Each step records what it did in a stamp file and is skipped when its inputs are unchanged,
 # so a second run does nothing it need not do.
 set -euo pipefail
@@ -70,11 +72,16 @@ if [ "${#stale[@]}" -gt 0 ]; then
     "${stale[@]}"
 fi
 
+# the browser test's page (step 5): no input of the colcon build (nothing of it is installed), step 5 has its own stamps
+browser_rel=src/swim_viz/test/browser
+browser_dir=$root/$browser_rel
+
 # --- 4. colcon build --------------------------------------------------------------------------
 # shellcheck source=scripts/env.sh
 source "$root/scripts/env.sh"
 sources=$(cd "$root" && { cat colcon.meta requirements.lock; \
-  find src -type f -not -path '*/__pycache__/*' -not -path '*/.*' -not -name '*.pyc' -print0 | sort -z | xargs -0 sha256sum; } | digest)
+  find src -type f -not -path '*/__pycache__/*' -not -path '*/.*' -not -name '*.pyc' \
+    -not -path "$browser_rel/*" -print0 | sort -z | xargs -0 sha256sum; } | digest)
 stamp="$root/install/.swim-sources.sha256"
 if [ "$(cat "$stamp" 2>/dev/null)" != "$sources" ]; then
   note "colcon build (log: $root/log/latest_build)"
@@ -88,5 +95,50 @@ if [ "$(cat "$stamp" 2>/dev/null)" != "$sources" ]; then
   (source "$root/scripts/env.sh" && python -c 'from swim_model.wake import compile_kernels; compile_kernels()') \
     || fail "compiling the vortex wake's kernels failed"
   echo "$sources" > "$stamp"
+fi
+# --- 5. the browser test's tools -------------------------------------------------------------
+# Optional: without them the browser test skips and says why; everything else runs. Debian's chromium is the only
+# browser we use (npm packages that download a browser of their own cannot here); the page's npm packages are pinned
+# by its package-lock.json and installed without their install scripts (esbuild's only checks its binary).
+if ! command -v chromium >/dev/null 2>&1; then
+  chromium_failed="$root/log/.setup-chromium-failed"
+  if [ "$(id -u)" -eq 0 ] && command -v apt-get >/dev/null 2>&1 && [ ! -f "$chromium_failed" ]; then
+    note "installing chromium (Debian) for the browser test (log: $root/log/setup-chromium.txt)"
+    # the package lists may be missing or stale on a fresh machine: update them once if the first try fails
+    if { DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends chromium \
+         || { apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends chromium; }; \
+       } >"$root/log/setup-chromium.txt" 2>&1; then
+      :
+    else
+      # not again on every setup: delete the marker to retry
+      touch "$chromium_failed"
+      note "chromium could not be installed (see log/setup-chromium.txt): the browser test will be skipped"
+    fi
+  elif [ -f "$chromium_failed" ]; then
+    note "no chromium (its install failed, see log/setup-chromium.txt; delete $chromium_failed to retry): the browser test will be skipped"
+  else
+    note "no chromium (setup installs it only as root with apt-get): the browser test will be skipped"
+  fi
+fi
+if command -v npm >/dev/null 2>&1; then
+  want=$(cd "$browser_dir" && cat package.json package-lock.json | digest)
+  stamp="$browser_dir/node_modules/.swim-lock.sha256"
+  if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
+    note "installing the browser test page's npm packages (package-lock.json)"
+    (cd "$browser_dir" && npm ci --ignore-scripts --no-audit --no-fund >"$root/log/setup-npm.txt" 2>&1) \
+      || { tail -n 20 "$root/log/setup-npm.txt" >&2
+           fail "npm ci failed in $browser_rel (is the npm registry reachable? full output: log/setup-npm.txt)"; }
+    echo "$want" > "$stamp"
+  fi
+  want=$(cd "$browser_dir" && cat package.json package-lock.json index.html page.ts | digest)
+  stamp="$browser_dir/dist/.swim-sources.sha256"
+  if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ] || [ ! -f "$browser_dir/dist/page.js" ]; then
+    note "bundling the browser test's page (esbuild)"
+    (cd "$browser_dir" && npm run --silent build >"$root/log/setup-esbuild.txt" 2>&1) \
+      || { cat "$root/log/setup-esbuild.txt" >&2; fail "bundling $browser_rel/page.ts failed (log/setup-esbuild.txt)"; }
+    echo "$want" > "$stamp"
+  fi
+else
+  note "no npm (Node.js): the browser test's page cannot be built, the browser test will be skipped"
 fi
 note "ready ($venv, $root/install)"

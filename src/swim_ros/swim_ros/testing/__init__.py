@@ -7,4 +7,6 @@
 - ``fuzz``: the hypothesis strategies and settings of the DDS fuzz tests (``test_fuzz_*.py``).
 - ``processes``: the processes a test started, found by a tag in their environment whatever their parent, and
   those left after a stop, killed.
+- ``browser``: a real browser in a test: a folder served on loopback, headless Chromium reading a page's elements
+  through the DevTools protocol, and swim_viz's page that shows the latest message of a Foxglove WebSocket topic.
 """
