@@ -5,11 +5,13 @@ test's, and a client speaking the Foxglove WebSocket protocol (swim_ros.testing.
 It checks the server's info and advertised channels with their schemas; that the messages a client receives are the
 ones DDS carried (joint_states byte for byte, /tf transform for transform, stamps included); that the maneuver
 service flies a short maneuver and the e-stop service stops the emulated bridge (its /diagnostics show it); that a
-malformed call gets an error and nothing moves; and that a message the app publishes on /emergency_stop reaches
-the bridge.
+malformed call gets an error and nothing moves; that a message the app publishes on /emergency_stop reaches the
+bridge; and, in headless Chromium with the protocol's JavaScript client (swim_viz's browser test page), that the
+page shows a tracking_state DDS carried during the maneuver.
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import socket
 import time
@@ -19,12 +21,16 @@ import pytest
 
 from conftest import WORKSPACE
 from swim_ros.processes import start_child
+from swim_ros.testing.browser import LatestMessagePage, browser_unavailable
 from swim_ros.testing.fixtures import new_rclpy_context
 from swim_ros.testing.foxglove_client import FoxgloveClient, channel_schema, decode_protobuf
 from swim_ros.typestore import message_definition
 from test_viz_demo_bag import layout_reads
 
 FOXGLOVE_LAYOUT = WORKSPACE / "docs" / "foxglove_layout.json"
+#: the test page of swim_viz's browser test (its bundle made by scripts/setup.sh)
+PAGE_DIR = WORKSPACE / "src" / "swim_viz" / "test" / "browser"
+BROWSER_MISSING = browser_unavailable(PAGE_DIR)
 
 #: the bring-up and the first states: the emulated rig loads its wake's kernels, the tracker builds its models
 SET_UP_TIMEOUT_S = 180.0
@@ -60,11 +66,15 @@ class Observer:
         self.node = rclpy.create_node("foxglove_test_observer", context=context)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
+        from swim_interfaces.msg import TrackingState
         self.joint_states: list[bytes] = []
+        self.tracking: set[tuple[int, int, float]] = set()   # (sec, nanosec, plan_time_s) of each tracking_state
         self.transforms: set[tuple] = set()
         self.faults: list[str] = []
         self.node.create_subscription(JointState, "/joint_states", self.joint_states.append, 1000, raw=True)
         self.node.create_subscription(TFMessage, "/tf", self._on_tf, 1000)
+        self.node.create_subscription(TrackingState, "/tracking_state", lambda m: self.tracking.add(
+            (m.header.stamp.sec, m.header.stamp.nanosec, m.plan_time_s)), 1000)
         self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diagnostics, 100)
         self.maneuvers = GoalStatusWatch(self.node, "perform_maneuver")
 
@@ -212,15 +222,24 @@ def test_a_malformed_call_gets_an_error_and_nothing_moves(live):
 def test_a_maneuver_from_the_app_flies_and_the_e_stop_stops_the_bridge(live):
     from action_msgs.msg import GoalStatus
     client, observer = live
-    reply = client.call_service("perform_maneuver", json.dumps(SHORT_MANEUVER).encode(), timeout_s=MANEUVER_TIMEOUT_S)
-    assert reply.payload is not None, reply.failure
-    answer = json.loads(reply.payload)
-    assert answer["phase"] in ("tracking", "succeeded")
-    goal_id = bytes.fromhex(answer["goal_id"])
-    observer.spin_until(lambda: observer.maneuvers.statuses.get(goal_id) in (
-        GoalStatus.STATUS_SUCCEEDED, GoalStatus.STATUS_ABORTED, GoalStatus.STATUS_CANCELED), MANEUVER_TIMEOUT_S,
-        "the maneuver's end")
-    assert observer.maneuvers.statuses[goal_id] == GoalStatus.STATUS_SUCCEEDED
+    with contextlib.ExitStack() as stack:
+        # the app in a real browser, watching tracking_state while the maneuver flies (where Chromium is here)
+        page = None if BROWSER_MISSING else stack.enter_context(
+            LatestMessagePage(PAGE_DIR, f"ws://127.0.0.1:{client.port}", "/tracking_state", field="plan_time_s"))
+        reply = client.call_service("perform_maneuver", json.dumps(SHORT_MANEUVER).encode(),
+                                    timeout_s=MANEUVER_TIMEOUT_S)
+        assert reply.payload is not None, reply.failure
+        answer = json.loads(reply.payload)
+        assert answer["phase"] in ("tracking", "succeeded")
+        goal_id = bytes.fromhex(answer["goal_id"])
+        observer.spin_until(lambda: observer.maneuvers.statuses.get(goal_id) in (
+            GoalStatus.STATUS_SUCCEEDED, GoalStatus.STATUS_ABORTED, GoalStatus.STATUS_CANCELED), MANEUVER_TIMEOUT_S,
+            "the maneuver's end")
+        assert observer.maneuvers.statuses[goal_id] == GoalStatus.STATUS_SUCCEEDED
+        if page is not None:
+            shown = page.latest(accept=lambda shown: shown["value"] > 0.0)
+            observer.spin_for(1.0)
+            assert (shown["sec"], shown["nanosec"], shown["value"]) in observer.tracking, shown
 
     reply = client.call_service("emergency_stop", b"{}")
     assert reply.payload is not None and json.loads(reply.payload)["success"], reply.failure

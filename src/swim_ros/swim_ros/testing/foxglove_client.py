@@ -31,11 +31,13 @@ CLIENT_SERVICE_CALL_REQUEST = 0x02
 
 @dataclasses.dataclass(frozen=True)
 class MessageFrame:
-    """One message of a subscribed channel: its topic, the server's log time (ns) and the payload as sent."""
+    """One message of a subscribed channel: its topic, the server's log time (ns), the payload as sent, and when
+    this client read it (time.monotonic, s)."""
 
     topic: str
     log_time_ns: int
     payload: bytes
+    received_s: float
 
 
 @dataclasses.dataclass(frozen=True)
@@ -52,6 +54,7 @@ class FoxgloveClient:
     ``channels``, ``services`` and ``statuses`` as they come."""
 
     def __init__(self, url: str, open_timeout_s: float = 10.0) -> None:
+        self.port = int(url.rsplit(":", 1)[1].split("/")[0])
         self.connection: ClientConnection = connect(url, subprotocols=list(SUBPROTOCOLS), open_timeout=open_timeout_s,
                                                     max_size=None)
         self.info: dict[str, Any] = {}
@@ -103,7 +106,8 @@ class FoxgloveClient:
         if opcode == SERVER_MESSAGE_DATA:
             subscription, log_time_ns = struct.unpack_from("<IQ", frame, 1)
             if subscription in self._subscriptions:
-                self._messages.append(MessageFrame(self._subscriptions[subscription], log_time_ns, bytes(frame[13:])))
+                self._messages.append(MessageFrame(self._subscriptions[subscription], log_time_ns, bytes(frame[13:]),
+                                                   time.monotonic()))
         elif opcode == SERVER_SERVICE_CALL_RESPONSE:
             _, call_id, encoding_length = struct.unpack_from("<III", frame, 1)
             encoding = bytes(frame[13:13 + encoding_length]).decode()

@@ -1,0 +1,159 @@
+"""Benchmark: what a live Foxglove connection costs the closed loop. The paper's constrained maneuver (30 s of plan)
+flown in lock-step (sim_node, planner, tracker, the visualization nodes; swim_bringup.recorded_run) with
+foxglove_node and one client subscribed to joint_states, tracking_state, /tf and the scene, reading as the app
+does, against the same run without them; the pairs interleaved, so that a slow hour of the host falls on both.
+
+Speed: the plan's seconds per wall second of the maneuver (the tracker's duration over the run's wall time, bring-up
+and analysis included alike); slowdown = 1 - with/without, from the medians. Latency from DDS to the client: for
+each joint_states message the client got, its receipt by the client less its receipt by an rclpy subscriber in
+this process (the same bytes, the same clock), median and p99 over the runs.
+
+Target: the loop at most TARGET_SLOWDOWN slower with the client. Prints one JSON line last.
+
+    python bench/bench_foxglove.py [--pairs 3]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import socket
+import statistics
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+TARGET_SLOWDOWN = 0.10
+#: the topics the client reads, as the layout's 3D panel and plots would
+READ_TOPICS = ("/joint_states", "/tracking_state", "/tf", "/scene")
+RUN_TIMEOUT_S = 600.0
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+class ReadingClient(threading.Thread):
+    """Connects once the server listens, subscribes to READ_TOPICS and reads until stopped; then the receipt time
+    (time.monotonic) of each joint_states payload."""
+
+    def __init__(self, port: int) -> None:
+        super().__init__(daemon=True)
+        self.port, self.stop = port, threading.Event()
+        self.received: dict[bytes, float] = {}
+
+    def run(self) -> None:
+        from swim_ros.testing.foxglove_client import FoxgloveClient
+        while not self.stop.is_set():
+            try:
+                client = FoxgloveClient(f"ws://127.0.0.1:{self.port}")
+                break
+            except OSError:
+                self.stop.wait(0.05)
+        else:
+            return
+        with client:
+            client.wait_for(lambda: len(client.channels) >= 13, 30.0)
+            for topic in READ_TOPICS:
+                client.subscribe(topic)
+            while not self.stop.is_set():
+                client.receive_for(0.05)
+            for message in client.messages("/joint_states"):
+                self.received.setdefault(message.payload, message.received_s)
+
+
+class Observer(threading.Thread):
+    """An rclpy subscriber to /joint_states in this process: the wall receipt time of each payload."""
+
+    def __init__(self) -> None:
+        super().__init__(daemon=True)
+        self.stop = threading.Event()
+        self.received: dict[bytes, float] = {}
+
+    def run(self) -> None:
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from sensor_msgs.msg import JointState
+        context = rclpy.Context()
+        rclpy.init(context=context)
+        try:
+            node = rclpy.create_node("bench_foxglove_observer", context=context)
+            node.create_subscription(JointState, "/joint_states",
+                                     lambda raw: self.received.setdefault(raw, time.monotonic()), 1000, raw=True)
+            executor = SingleThreadedExecutor(context=context)
+            executor.add_node(node)
+            while not self.stop.is_set():
+                executor.spin_once(timeout_sec=0.01)
+            executor.shutdown()
+            node.destroy_node()
+        finally:
+            rclpy.shutdown(context=context)
+
+
+def one_run(with_foxglove: bool, folder: Path) -> tuple[float, list[float]]:
+    """(plan seconds per wall second, latencies in s) of one run."""
+    from swim_bringup.recorded_run import PAPER_CONSTRAINED, run_recorded
+    from swim_bringup.system import closed_loop_specs, config_dir
+    from swim_ros.processes import NodeSpec
+    specs = closed_loop_specs(config_dir("realistic"), plant="sim")
+    threads: list = []
+    if with_foxglove:
+        port = free_port()
+        specs = [*specs, NodeSpec("swim_viz", "foxglove_node", parameters=(f"port:={port}",))]
+        threads = [ReadingClient(port), Observer()]
+    for thread in threads:
+        thread.start()
+    try:
+        report = run_recorded(specs, folder, *PAPER_CONSTRAINED, time_scale=1.0, timeout_s=RUN_TIMEOUT_S)
+    finally:
+        for thread in threads:
+            thread.stop.set()
+            thread.join(10.0)
+    if report.result.error_code != 0:
+        raise RuntimeError(f"the run failed: {report.result.error_string}")
+    latencies = []
+    if threads:
+        client, observer = threads
+        latencies = [t - observer.received[payload] for payload, t in client.received.items()
+                     if payload in observer.received]
+    return report.result.duration_s / report.wall_time_s, latencies
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--pairs", type=int, default=3)
+    args = parser.parse_args()
+    from swim_ros.domains import run_domain
+    from swim_ros.processes import interrupt_on_sigterm
+    interrupt_on_sigterm()
+    run_domain()
+    speeds: dict[bool, list[float]] = {False: [], True: []}
+    latencies: list[float] = []
+    started = time.monotonic()
+    with tempfile.TemporaryDirectory(prefix="bench_foxglove_") as work:
+        for pair in range(args.pairs):
+            for with_foxglove in (False, True):
+                speed, run_latencies = one_run(with_foxglove, Path(work) / f"{pair}-{with_foxglove}")
+                speeds[with_foxglove].append(speed)
+                latencies += run_latencies
+                print(f"pair {pair}, {'with' if with_foxglove else 'without'} foxglove_node: {speed:.2f}x real time"
+                      f"{f', {len(run_latencies)} messages matched' if with_foxglove else ''}", flush=True)
+    without, with_ = statistics.median(speeds[False]), statistics.median(speeds[True])
+    slowdown = 1.0 - with_ / without
+    print(json.dumps({
+        "benchmark": "foxglove", "pairs": args.pairs,
+        "speed_without_x_real_time": [round(s, 2) for s in speeds[False]],
+        "speed_with_x_real_time": [round(s, 2) for s in speeds[True]],
+        "slowdown": round(slowdown, 3), "target_slowdown": TARGET_SLOWDOWN, "meets_target": slowdown <= TARGET_SLOWDOWN,
+        "messages_matched": len(latencies),
+        "latency_p50_ms": round(float(np.percentile(latencies, 50)) * 1e3, 2) if latencies else None,
+        "latency_p99_ms": round(float(np.percentile(latencies, 99)) * 1e3, 2) if latencies else None,
+        "wall_time_s": round(time.monotonic() - started, 1)}))
+
+
+if __name__ == "__main__":
+    main()
