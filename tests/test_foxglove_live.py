@@ -181,6 +181,20 @@ def test_the_layout_opens_live_every_topic_and_service_it_reads_is_served(live):
     parse_maneuver_request(maneuver["requestPayload"].encode())
 
 
+def test_a_ros_topic_is_read_only_while_a_client_watches_its_channel(live):
+    """foxglove_node subscribes to /joint_commands once a client subscribes to its channel, not before."""
+    client, observer = live
+
+    def foxglove_reads() -> bool:
+        return any(info.node_name == "foxglove_node"
+                   for info in observer.node.get_subscriptions_info_by_topic("/joint_commands"))
+    observer.spin_for(1.0)
+    assert not foxglove_reads()
+    client.subscribe("/joint_commands")
+    observer.spin_until(foxglove_reads, 10.0, "foxglove_node subscribed to /joint_commands")
+    assert client.wait_for(lambda: len(client.messages("/joint_commands")) > 0, 10.0)
+
+
 def test_the_client_gets_what_dds_carried_stamps_and_values(live):
     client, observer = live
     client.subscribe("/joint_states")

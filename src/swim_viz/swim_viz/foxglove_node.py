@@ -11,8 +11,11 @@ Channels (what a client can subscribe to):
                                     strips) and the wake's vortices (from /wake_vortices)
     /log                            foxglove.Log: the bridge's faults as they latch and clear (/diagnostics), the
                                     tracker's goals as they start and end, the maneuvers called from the app
-Every stream is bounded by a rate parameter: a message that comes sooner is dropped; the SDK keeps at most
-message_backlog messages per client and drops the oldest past that, so a slow client never slows the loop.
+A ROS topic is subscribed only while a client subscribes to a channel made from it (as foxglove_bridge does), so
+a server nobody watches costs the loop nothing; /diagnostics, the tracker's goal status and robot_description are
+always read (the log, and the meshes the app asks for). Every stream is bounded by a rate parameter: a message that
+comes sooner is dropped; the SDK keeps at most message_backlog messages per client and drops the oldest past that,
+so a slow client never slows the loop.
 
 Services (JSON requests; a malformed one gets an error reply and changes nothing):
     perform_maneuver      swim_viz.live.MANEUVER_REQUEST_SCHEMA, sent as a perform_maneuver action goal
@@ -93,6 +96,13 @@ FORWARDED_TOPICS: dict[str, tuple[str, Any, bool]] = {
     "/markers": ("visualization_msgs/msg/MarkerArray", MarkerArray, False),
     "/wake_vortices": ("swim_interfaces/msg/WakeVortices", WakeVortices, False),
 }
+#: the ROS topics read whether or not a client watches: what the log and the asset handler need
+ALWAYS_READ = ("/diagnostics", "/robot_description")
+#: the ROS topics a derived channel is made from: channel -> the ROS topics it needs
+DERIVED_FROM = {"/tf": ("/tf",), "/tf_static": ("/tf_static",), "/scene": ("/markers", "/wake_vortices")}
+#: how often the ROS subscriptions are brought in line with the clients' (s): a new client's first messages come
+#: this much later at most
+SUBSCRIPTION_SYNC_PERIOD_S = 0.1
 #: the latched topics (a late subscriber gets the last message)
 LATCHED_TOPICS = ("/plan", "/robot_description")
 #: the frame the scene is drawn in (swim_viz.frames)
@@ -138,11 +148,18 @@ def _empty_request(payload: bytes) -> None:
 
 
 class _ClientTopics(ServerListener):
-    """The topics clients publish on: /emergency_stop (JSON {"data": bool}) to the bridge's topic."""
+    """What clients watch (their subscriptions, counted per channel), and the topics they publish on: /emergency_stop
+    (JSON {"data": bool}) to the bridge's topic."""
 
     def __init__(self, node: "FoxgloveNode") -> None:
         self.node = node
         self.emergency_stop_channels: set[tuple[int, int]] = set()   # (client id, client channel id)
+
+    def on_subscribe(self, client: Any, channel: Any) -> None:
+        self.node.watch(channel.topic, +1)
+
+    def on_unsubscribe(self, client: Any, channel: Any) -> None:
+        self.node.watch(channel.topic, -1)
 
     def on_client_advertise(self, client: Any, channel: Any) -> None:
         if channel.topic == "/emergency_stop" and channel.encoding == "json":
@@ -201,15 +218,11 @@ class FoxgloveNode(Node):
         self.maneuver_client = ActionClient(self, PerformManeuver, "perform_maneuver")
         self.maneuver_status = GoalStatusWatch(self, "perform_maneuver")
 
-        for topic, (_, message_type, per_period) in FORWARDED_TOPICS.items():
-            callback = self._forwarder(topic)
-            if per_period:
-                per_period_subscription(self, message_type, topic, callback, raw=True)
-            else:
-                self.create_subscription(message_type, topic, callback,
-                                         LATCHED_QOS if topic in LATCHED_TOPICS else 10, raw=True)
-        self.create_subscription(TFMessage, "/tf", self._on_tf, 100)
-        self.create_subscription(TFMessage, "/tf_static", self._on_tf_static, LATCHED_QOS)
+        self._ros_subscriptions: dict[str, Any] = {}     # ROS topic -> its subscription, while wanted
+        self._watched: dict[str, int] = {}            # channel topic -> clients subscribed to it
+        self._watched_lock = threading.Lock()
+        self._sync_subscriptions()
+        self.create_timer(SUBSCRIPTION_SYNC_PERIOD_S, self._sync_subscriptions)
         self.create_subscription(GoalStatusArray, f"{TRACKER_ACTION}/_action/status", self._on_tracker_status,
                                  qos_profile_action_status_default)
 
@@ -233,6 +246,40 @@ class FoxgloveNode(Node):
         self.server.stop()
 
     # --- what the system publishes -------------------------------------------------------------------------------
+    def watch(self, channel_topic: str, change: int) -> None:
+        """A client subscribed to (+1) or left (-1) a channel (on a server thread)."""
+        with self._watched_lock:
+            self._watched[channel_topic] = max(self._watched.get(channel_topic, 0) + change, 0)
+
+    def wanted_topics(self) -> set[str]:
+        """The ROS topics to read now: those always read, and those of every channel a client watches."""
+        with self._watched_lock:
+            watched = {topic for topic, count in self._watched.items() if count > 0}
+        wanted = set(ALWAYS_READ) | (watched & set(FORWARDED_TOPICS))
+        for channel, sources in DERIVED_FROM.items():
+            if channel in watched:
+                wanted.update(sources)
+        return wanted
+
+    def _sync_subscriptions(self) -> None:
+        """Subscribe to the ROS topics now wanted, and leave the others (on the executor's thread)."""
+        wanted = self.wanted_topics()
+        for topic in set(self._ros_subscriptions) - wanted:
+            self.destroy_subscription(self._ros_subscriptions.pop(topic))
+        for topic in wanted - set(self._ros_subscriptions):
+            self._ros_subscriptions[topic] = self._subscribe(topic)
+
+    def _subscribe(self, topic: str) -> Any:
+        if topic == "/tf":
+            return self.create_subscription(TFMessage, "/tf", self._on_tf, 100)
+        if topic == "/tf_static":
+            return self.create_subscription(TFMessage, "/tf_static", self._on_tf_static, LATCHED_QOS)
+        _, message_type, per_period = FORWARDED_TOPICS[topic]
+        if per_period:
+            return per_period_subscription(self, message_type, topic, self._forwarder(topic), raw=True)
+        return self.create_subscription(message_type, topic, self._forwarder(topic),
+                                         LATCHED_QOS if topic in LATCHED_TOPICS else 10, raw=True)
+
     def _now_ns(self) -> int:
         return self.get_clock().now().nanoseconds
 
