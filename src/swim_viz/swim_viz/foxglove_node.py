@@ -13,9 +13,11 @@ Channels (what a client can subscribe to):
                                     tracker's goals as they start and end, the maneuvers called from the app
 A ROS topic is subscribed only while a client subscribes to a channel made from it (as foxglove_bridge does), so
 a server nobody watches costs the loop nothing; /diagnostics, the tracker's goal status and robot_description are
-always read (the log, and the meshes the app asks for). Every stream is bounded by a rate parameter: a message that
-comes sooner is dropped; the SDK keeps at most message_backlog messages per client and drops the oldest past that,
-so a slow client never slows the loop.
+always read (the log, and the meshes the app asks for). The per-period topics (125 Hz in real time, faster in
+lock-step) are sampled, not called back: a reader of depth 1 that no executor serves holds each one's newest
+message, and a timer at state_rate_hz sends it if it is new, so their cost does not grow with the loop's rate. The
+scene and the wake are bounded by scene_rate_hz (a message sooner is dropped). The SDK keeps at most
+message_backlog messages per client and drops the oldest past that, so a slow client never slows the loop.
 
 Services (JSON requests; a malformed one gets an error reply and changes nothing):
     perform_maneuver      swim_viz.live.MANEUVER_REQUEST_SCHEMA, sent as a perform_maneuver action goal
@@ -40,6 +42,7 @@ from pathlib import Path
 from typing import Any, Callable, Optional
 
 import foxglove
+import rclpy
 from action_msgs.msg import GoalStatus, GoalStatusArray
 from diagnostic_msgs.msg import DiagnosticArray
 from foxglove import Capability, MessageSchema, Schema, Service, ServiceSchema
@@ -50,6 +53,7 @@ from foxglove.websocket import ServerListener
 from rclpy.action import ActionClient
 from rclpy.action.client import qos_profile_action_status_default
 from rclpy.node import Node
+from rclpy.qos import QoSProfile, QoSReliabilityPolicy
 from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool, String
@@ -72,9 +76,9 @@ PARAMETERS = (
                   "no authentication)", read_only=True),
     ParameterSpec("port", 8765, "the server's TCP port (8765: Foxglove's default; 0: any free port, logged)",
                   range=(0, 65535), read_only=True),
-    ParameterSpec("state_rate_hz", 30.0, "the most messages a second per per-period stream (joint_states, "
-                  "joint_commands, tracking_state, wake_statistics, /tf); 0: every one", range=(0.0, 1000.0),
-                  read_only=True),
+    ParameterSpec("state_rate_hz", 30.0, "how often the per-period streams (joint_states, joint_commands, "
+                  "tracking_state, wake_statistics) are sampled, each its newest message, and the most /tf messages "
+                  "a second", range=(1.0, 1000.0), read_only=True),
     ParameterSpec("scene_rate_hz", 5.0, "the most updates a second of the scene and of wake_vortices; 0: every one",
                   range=(0.0, 1000.0), read_only=True),
     ParameterSpec("message_backlog", 256, "the most messages queued per client before the oldest are dropped",
@@ -84,7 +88,7 @@ PARAMETERS = (
                   check=positive),
 )
 
-#: the ROS topics sent as they are: name -> (type, its class, per-period stream: bounded by state_rate_hz)
+#: the ROS topics sent as they are: name -> (type, its class, per-period stream: sampled at state_rate_hz)
 FORWARDED_TOPICS: dict[str, tuple[str, Any, bool]] = {
     "/joint_states": ("sensor_msgs/msg/JointState", JointState, True),
     "/joint_commands": ("sensor_msgs/msg/JointState", JointState, True),
@@ -96,6 +100,8 @@ FORWARDED_TOPICS: dict[str, tuple[str, Any, bool]] = {
     "/markers": ("visualization_msgs/msg/MarkerArray", MarkerArray, False),
     "/wake_vortices": ("swim_interfaces/msg/WakeVortices", WakeVortices, False),
 }
+#: the sampled topics' readers: best effort, the newest message only
+SAMPLED_QOS = QoSProfile(depth=1, reliability=QoSReliabilityPolicy.BEST_EFFORT)
 #: the ROS topics read whether or not a client watches: what the log and the asset handler need
 ALWAYS_READ = ("/diagnostics", "/robot_description")
 #: the ROS topics a derived channel is made from: channel -> the ROS topics it needs
@@ -205,8 +211,7 @@ class FoxgloveNode(Node):
         for topic, (type_name, _, per_period) in FORWARDED_TOPICS.items():
             self.channels[topic] = foxglove.Channel(topic, message_encoding="cdr", schema=Schema(
                 name=type_name, encoding="ros2msg", data=message_definition(type_name).encode()))
-            self.gates[topic] = RateGate(state_rate_hz if per_period else
-                                         scene_rate_hz if topic in ("/markers", "/wake_vortices") else 0.0)
+            self.gates[topic] = RateGate(scene_rate_hz if topic in ("/markers", "/wake_vortices") else 0.0)
         self.tf_channel = FrameTransformsChannel("/tf")
         self.tf_static_channel = FrameTransformsChannel("/tf_static")
         self.scene_channel = SceneUpdateChannel("/scene")
@@ -218,6 +223,10 @@ class FoxgloveNode(Node):
         self.maneuver_client = ActionClient(self, PerformManeuver, "perform_maneuver")
         self.maneuver_status = GoalStatusWatch(self, "perform_maneuver")
 
+        self._sampler = rclpy.create_node("foxglove_node_sampler", context=self.context,
+                                          start_parameter_services=False)
+        self._last_sampled: dict[str, bytes] = {}
+        self.create_timer(1.0 / state_rate_hz, self._sample)
         self._ros_subscriptions: dict[str, Any] = {}     # ROS topic -> its subscription, while wanted
         self._watched: dict[str, int] = {}            # channel topic -> clients subscribed to it
         self._watched_lock = threading.Lock()
@@ -244,6 +253,7 @@ class FoxgloveNode(Node):
 
     def close(self) -> None:
         self.server.stop()
+        self._sampler.destroy_node()
 
     # --- what the system publishes -------------------------------------------------------------------------------
     def watch(self, channel_topic: str, change: int) -> None:
@@ -265,7 +275,10 @@ class FoxgloveNode(Node):
         """Subscribe to the ROS topics now wanted, and leave the others (on the executor's thread)."""
         wanted = self.wanted_topics()
         for topic in set(self._ros_subscriptions) - wanted:
-            self.destroy_subscription(self._ros_subscriptions.pop(topic))
+            subscription = self._ros_subscriptions.pop(topic)
+            (self._sampler if FORWARDED_TOPICS.get(topic, ("", None, False))[2] else self).destroy_subscription(
+                subscription)
+            self._last_sampled.pop(topic, None)
         for topic in wanted - set(self._ros_subscriptions):
             self._ros_subscriptions[topic] = self._subscribe(topic)
 
@@ -276,9 +289,24 @@ class FoxgloveNode(Node):
             return self.create_subscription(TFMessage, "/tf_static", self._on_tf_static, LATCHED_QOS)
         _, message_type, per_period = FORWARDED_TOPICS[topic]
         if per_period:
-            return per_period_subscription(self, message_type, topic, self._forwarder(topic), raw=True)
+            # best effort, as the other viewers read them (the loop's reliable writers keep no history for this
+            # one), depth 1: the newest message; on the sampler node, which no executor serves (_sample takes it)
+            return per_period_subscription(self._sampler, message_type, topic, lambda _: None, SAMPLED_QOS, raw=True)
         return self.create_subscription(message_type, topic, self._forwarder(topic),
                                          LATCHED_QOS if topic in LATCHED_TOPICS else 10, raw=True)
+
+    def _sample(self) -> None:
+        """Each sampled stream's newest message, sent if it is new."""
+        for topic, subscription in list(self._ros_subscriptions.items()):
+            if not FORWARDED_TOPICS.get(topic, ("", None, False))[2]:
+                continue
+            newest = None
+            with subscription.handle:
+                while (taken := subscription.handle.take_message(subscription.msg_type, True)) is not None:
+                    newest = taken[0]
+            if newest is not None and newest != self._last_sampled.get(topic):
+                self._last_sampled[topic] = newest
+                self.channels[topic].log(newest, log_time=self._now_ns())
 
     def _now_ns(self) -> int:
         return self.get_clock().now().nanoseconds

@@ -19,6 +19,7 @@ import struct
 import time
 from typing import Any, Optional
 
+from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import ClientConnection, connect
 
 #: the protocol's names, the SDK's first
@@ -65,6 +66,7 @@ class FoxgloveClient:
         self._replies: dict[int, ServiceReply] = {}        # call id -> its answer
         self._messages: list[MessageFrame] = []
         self._next_id = 1
+        self.closed = False   # the server closed the connection (it stopped)
 
     def close(self) -> None:
         self.connection.close()
@@ -80,10 +82,15 @@ class FoxgloveClient:
         return self._next_id
 
     def _receive(self, timeout_s: float) -> bool:
-        """Read one frame within timeout_s and file it; False if none came."""
+        """Read one frame within timeout_s and file it; False if none came (or the connection is closed)."""
+        if self.closed:
+            return False
         try:
             frame = self.connection.recv(timeout=timeout_s)
         except TimeoutError:
+            return False
+        except ConnectionClosed:
+            self.closed = True
             return False
         if isinstance(frame, str):
             message = json.loads(frame)
@@ -115,11 +122,11 @@ class FoxgloveClient:
         return True
 
     def wait_for(self, condition: Any, timeout_s: float) -> bool:
-        """Read frames until condition() holds or timeout_s passes; whether it holds."""
+        """Read frames until condition() holds, timeout_s passes or the server closes; whether it holds."""
         deadline = time.monotonic() + timeout_s
         while not condition():
             remaining_s = deadline - time.monotonic()
-            if remaining_s <= 0.0:
+            if remaining_s <= 0.0 or self.closed:
                 return False
             self._receive(min(remaining_s, 0.1))
         return True
