@@ -4,13 +4,14 @@ foxglove_node and one client subscribed to joint_states, tracking_state, /tf and
 does, against the same run without them; the pairs interleaved, so that a slow hour of the host falls on both.
 
 Speed: the plan's seconds per wall second of the maneuver (the tracker's duration over the maneuver's wall time,
-from the goal sent to its result, recorded as swim-demo records it); slowdown = 1 - with/without, from the medians. Latency from DDS to the client: for
-each joint_states message the client got, its receipt by the client less its receipt by an rclpy subscriber in
-this process (the same bytes, the same clock), median and p99 over the runs.
+from the goal sent to its result, recorded as swim-demo records it); slowdown = 1 - with/without, from the
+medians. Latency from DDS to the client: for each joint_states message the client got, its receipt by the client
+less its receipt by an rclpy subscriber in this process (the same bytes, the same clock), median and p99 over the
+runs.
 
 Target: the loop at most TARGET_SLOWDOWN slower with the client. Prints one JSON line last.
 
-    python bench/bench_foxglove.py [--pairs 3]
+    python bench/bench_foxglove.py [--pairs 5]
 """
 from __future__ import annotations
 
@@ -129,7 +130,7 @@ def one_run(with_foxglove: bool, folder: Path) -> tuple[float, list[float]]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--pairs", type=int, default=3)
+    parser.add_argument("--pairs", type=int, default=5)
     args = parser.parse_args()
     from swim_ros.domains import run_domain
     from swim_ros.processes import interrupt_on_sigterm
