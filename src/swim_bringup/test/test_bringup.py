@@ -46,6 +46,10 @@ def test_swim_bringup_adds_the_maneuver_server_and_the_runs_do_not():
     assert bridge["bridge_node"].parameters == ("backend:=mf624",)
     assert bridge["tracker_node"].parameters == ("sliding_mode_enabled:=false",)
     assert {s.params_file.parent for s in bridge.values() if s.params_file} == {config_dir("paper")}
+    watched = {s.executable: s for s in bringup_specs("bridge", foxglove_port=9001)}
+    assert list(watched) == [*[s.executable for s in bringup_specs("bridge")],
+                             "foxglove_node"]
+    assert watched["foxglove_node"].package == "swim_viz" and watched["foxglove_node"].parameters == ("port:=9001",)
 
 
 @pytest.mark.parametrize("arguments, reason", [
@@ -53,6 +57,7 @@ def test_swim_bringup_adds_the_maneuver_server_and_the_runs_do_not():
     (["bridge", "--realtime"], "--realtime is sim_node's"),
     (["sim", "--config", "/nonexistent/swim"], "--config /nonexistent/swim: no such folder"),
     (["bridge", "--config", "EMPTY"], "no parameter file bridge_node: "),
+    (["sim", "--foxglove", "70000"], "--foxglove takes a TCP port (0-65535), not 70000"),
 ])
 def test_bad_input_exits_2_with_one_line_and_starts_nothing(tmp_path, capsys, arguments, reason):
     (tmp_path / "empty").mkdir()
