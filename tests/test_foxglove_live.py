@@ -165,6 +165,29 @@ def test_the_server_says_who_it_is_and_advertises_every_channel_with_its_schema(
     assert {"perform_maneuver", "cancel_maneuver", "emergency_stop", "reset_emergency_stop"} <= set(client.services)
 
 
+def test_the_meshes_the_urdf_names_are_served_and_nothing_else(live, tmp_path):
+    """The app's 3D panel fetches the foil's mesh the URDF names (file://) from the server; any other file is
+    refused, an existing one included."""
+    import re
+
+    from rclpy.serialization import deserialize_message
+    from std_msgs.msg import String
+    client, _ = live
+    client.subscribe("/robot_description")
+    assert client.wait_for(lambda: client.messages("/robot_description"), 30.0)
+    urdf = deserialize_message(client.messages("/robot_description")[-1].payload, String).data
+    meshes = re.findall(r'filename="(file://[^"]+)"', urdf)
+    assert meshes
+    for uri in meshes:
+        data, error = client.fetch_asset(uri)
+        assert data == Path(uri[len("file://"):]).read_bytes() and error == ""
+    secret = tmp_path / "secret.txt"
+    secret.write_text("not for the app")
+    for uri in (f"file://{secret}", "file:///etc/passwd", f"{meshes[0]}/../../../etc/passwd", "package://swim_viz/x"):
+        data, error = client.fetch_asset(uri)
+        assert data is None and error, uri
+
+
 def test_the_layout_opens_live_every_topic_and_service_it_reads_is_served(live):
     """docs/foxglove_layout.json on a live connection: the topics of its 3D panel and plots are channels, the
     services of its call-service panels are advertised, and their default requests are well-formed calls."""
@@ -236,6 +259,7 @@ def test_a_malformed_call_gets_an_error_and_nothing_moves(live):
 def test_a_maneuver_from_the_app_flies_and_the_e_stop_stops_the_bridge(live):
     from action_msgs.msg import GoalStatus
     client, observer = live
+    client.subscribe("/log")
     with contextlib.ExitStack() as stack:
         # the app in a real browser, watching tracking_state while the maneuver flies (where Chromium is here)
         page = None if BROWSER_MISSING else stack.enter_context(
@@ -267,3 +291,13 @@ def test_a_maneuver_from_the_app_flies_and_the_e_stop_stops_the_bridge(live):
     client.publish(channel, b'{"data": true}')
     observer.spin_until(lambda: "EMERGENCY_STOP" in observer.faults[-1], 10.0, "the e-stop topic's stop")
     assert client.call_service("reset_emergency_stop", b"{}").payload is not None
+
+    # the app's log panel told the story: the maneuver asked for, the tracker's goal, the e-stop latched and cleared
+    log = client.channel("/log")
+
+    def lines() -> list[str]:
+        return [decode_protobuf(log["schemaName"], channel_schema(log), m.payload).message
+                for m in client.messages("/log")]
+    expected = (f"maneuver {answer['goal_id'][:8]} requested from the app", "tracker: goal", "succeeded",
+                "EMERGENCY_STOP latched, motors off", "faults cleared (EMERGENCY_STOP)")
+    assert client.wait_for(lambda: all(any(part in line for line in lines()) for part in expected), 10.0), lines()

@@ -109,7 +109,7 @@ DERIVED_FROM = {"/tf": ("/tf",), "/tf_static": ("/tf_static",), "/scene": ("/mar
 #: how often the ROS subscriptions are brought in line with the clients' (s): a new client's first messages come
 #: this much later at most
 SUBSCRIPTION_SYNC_PERIOD_S = 0.1
-#: the latched topics (a late subscriber gets the last message)
+#: the latched topics: a client that subscribes late gets the last message (sent again to every subscriber of it)
 LATCHED_TOPICS = ("/plan", "/robot_description")
 #: the frame the scene is drawn in (swim_viz.frames)
 SCENE_FRAME = "tank"
@@ -230,6 +230,8 @@ class FoxgloveNode(Node):
         self._ros_subscriptions: dict[str, Any] = {}     # ROS topic -> its subscription, while wanted
         self._watched: dict[str, int] = {}            # channel topic -> clients subscribed to it
         self._watched_lock = threading.Lock()
+        self._resend: set[str] = set()               # channels a client has just subscribed to
+        self._latched: dict[str, tuple[Any, Any]] = {}   # latched channel -> (its channel, its last message)
         self._sync_subscriptions()
         self.create_timer(SUBSCRIPTION_SYNC_PERIOD_S, self._sync_subscriptions)
         self.create_subscription(GoalStatusArray, f"{TRACKER_ACTION}/_action/status", self._on_tracker_status,
@@ -260,6 +262,8 @@ class FoxgloveNode(Node):
         """A client subscribed to (+1) or left (-1) a channel (on a server thread)."""
         with self._watched_lock:
             self._watched[channel_topic] = max(self._watched.get(channel_topic, 0) + change, 0)
+            if change > 0:
+                self._resend.add(channel_topic)
 
     def wanted_topics(self) -> set[str]:
         """The ROS topics to read now: those always read, and those of every channel a client watches."""
@@ -273,6 +277,11 @@ class FoxgloveNode(Node):
 
     def _sync_subscriptions(self) -> None:
         """Subscribe to the ROS topics now wanted, and leave the others (on the executor's thread)."""
+        with self._watched_lock:
+            resend, self._resend = self._resend, set()
+        for topic in resend & set(self._latched):   # a latched topic's last message, for the new subscriber
+            channel, message = self._latched[topic]
+            channel.log(message, log_time=self._now_ns())
         wanted = self.wanted_topics()
         for topic in set(self._ros_subscriptions) - wanted:
             subscription = self._ros_subscriptions.pop(topic)
@@ -321,6 +330,8 @@ class FoxgloveNode(Node):
                 return
             now_ns = self._now_ns()
             channel.log(raw, log_time=now_ns)
+            if topic in LATCHED_TOPICS:
+                self._latched[topic] = (channel, raw)
             if convert is not None:
                 try:
                     convert(raw, now_ns)
@@ -342,7 +353,9 @@ class FoxgloveNode(Node):
             self.tf_channel.log(self._transforms(message), log_time=self._now_ns())
 
     def _on_tf_static(self, message: TFMessage) -> None:
-        self.tf_static_channel.log(self._transforms(message), log_time=self._now_ns())
+        transforms = self._transforms(message)
+        self.tf_static_channel.log(transforms, log_time=self._now_ns())
+        self._latched["/tf_static"] = (self.tf_static_channel, transforms)
 
     def _on_markers(self, raw: bytes, now_ns: int) -> None:
         markers = deserialize_message(raw, MarkerArray).markers

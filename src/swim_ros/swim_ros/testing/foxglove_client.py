@@ -5,7 +5,8 @@ channels and decodes their message frames, calls services, and advertises a chan
 Frames (the protocol's spec, foxglove/ws-protocol docs/spec.md): text frames are JSON objects with an ``op``; binary
 frames start with an opcode byte. Server to client: 0x01 message data (uint32 subscription id, uint64 receive time
 ns, payload), 0x03 service call response (uint32 service id, uint32 call id, uint32 encoding length, encoding,
-payload). Client to server: 0x01 message data (uint32 channel id, payload), 0x02 service call request (as 0x03).
+payload), 0x04 fetch asset response (uint32 request id, uint8 status 0 found / 1 not, uint32 error length, error,
+data). Client to server: 0x01 message data (uint32 channel id, payload), 0x02 service call request (as 0x03).
 All integers little-endian. The protocol's subprotocol name is ``foxglove.websocket.v1``; foxglove-sdk's server
 accepts only its new name for the same protocol, ``foxglove.sdk.v1``. The client offers both, as the Foxglove app
 does.
@@ -26,6 +27,7 @@ from websockets.sync.client import ClientConnection, connect
 SUBPROTOCOLS = ("foxglove.sdk.v1", "foxglove.websocket.v1")
 SERVER_MESSAGE_DATA = 0x01
 SERVER_SERVICE_CALL_RESPONSE = 0x03
+SERVER_FETCH_ASSET_RESPONSE = 0x04
 CLIENT_MESSAGE_DATA = 0x01
 CLIENT_SERVICE_CALL_REQUEST = 0x02
 
@@ -64,6 +66,7 @@ class FoxgloveClient:
         self.statuses: list[dict[str, Any]] = []
         self._subscriptions: dict[int, str] = {}           # subscription id -> topic
         self._replies: dict[int, ServiceReply] = {}        # call id -> its answer
+        self._assets: dict[int, tuple[Optional[bytes], str]] = {}   # request id -> (data or None, error)
         self._messages: list[MessageFrame] = []
         self._next_id = 1
         self.closed = False   # the server closed the connection (it stopped)
@@ -115,6 +118,10 @@ class FoxgloveClient:
             if subscription in self._subscriptions:
                 self._messages.append(MessageFrame(self._subscriptions[subscription], log_time_ns, bytes(frame[13:]),
                                                    time.monotonic()))
+        elif opcode == SERVER_FETCH_ASSET_RESPONSE:
+            request_id, status, error_length = struct.unpack_from("<IBI", frame, 1)
+            error = bytes(frame[10:10 + error_length]).decode()
+            self._assets[request_id] = (bytes(frame[10 + error_length:]) if status == 0 else None, error)
         elif opcode == SERVER_SERVICE_CALL_RESPONSE:
             _, call_id, encoding_length = struct.unpack_from("<III", frame, 1)
             encoding = bytes(frame[13:13 + encoding_length]).decode()
@@ -169,6 +176,15 @@ class FoxgloveClient:
         if not self.wait_for(lambda: call_id in self._replies, timeout_s):
             raise TimeoutError(f"no reply from {name!r} within {timeout_s} s")
         return self._replies.pop(call_id)
+
+    def fetch_asset(self, uri: str, timeout_s: float = 10.0) -> tuple[Optional[bytes], str]:
+        """The asset at uri as the server gives it (the 3D panel asks for a URDF's meshes so): (its bytes, "") or
+        (None, the server's error)."""
+        request_id = self._new_id()
+        self.connection.send(json.dumps({"op": "fetchAsset", "uri": uri, "requestId": request_id}))
+        if not self.wait_for(lambda: request_id in self._assets, timeout_s):
+            raise TimeoutError(f"no answer for the asset {uri!r} within {timeout_s} s")
+        return self._assets.pop(request_id)
 
     def advertise(self, topic: str, encoding: str = "json", schema_name: str = "") -> int:
         """Advertise a channel of this client's on topic; its id, to publish with."""
