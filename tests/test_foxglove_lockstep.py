@@ -1,16 +1,21 @@
-"""A Foxglove client that subscribes to everything and never reads changes nothing of a run: the lock-step closed
-loop (sim_node, planner, tracker, the visualization nodes) flown with foxglove_node and such a client gives the
-report of the same run without them, key by key (the wall time aside). foxglove_node only subscribes, and drops
-what its client does not take."""
+"""foxglove_node during a lock-step closed loop (sim_node, planner, tracker, the visualization nodes):
+
+- a client that subscribes to everything and never reads changes nothing of the run: the run flown with
+  foxglove_node and such a client gives the report of the same run without them, key by key (the wall time
+  aside); foxglove_node only subscribes, and drops what its client does not take;
+- a client that reads gets what DDS carried: every joint_states message byte for byte (its stamp and values),
+  every /tf transform as a FrameTransform with the same stamp, frames, translation and rotation.
+"""
 from __future__ import annotations
 
 import socket
 import threading
+import time
 
 from swim_bringup.recorded_run import run_recorded
 from swim_bringup.system import closed_loop_specs, config_dir
 from swim_ros.processes import NodeSpec
-from swim_ros.testing.foxglove_client import FoxgloveClient
+from swim_ros.testing.foxglove_client import FoxgloveClient, channel_schema, decode_protobuf
 
 #: the paper's constrained start and stop: about 8 s of plan, a few seconds of wall time in lock-step
 MANEUVER = (["constrained/accelerate/E0.05", "constrained/decelerate/E0.05"], [1, 1])
@@ -48,6 +53,109 @@ class StalledClient(threading.Thread):
                 client.subscribe(topic)
             self.subscribed.set()
             self.stop.wait()
+
+
+class ReadingClient(threading.Thread):
+    """Connects as soon as the server listens, subscribes to joint_states and /tf, and reads until stopped."""
+
+    def __init__(self, port: int) -> None:
+        super().__init__(daemon=True)
+        self.port, self.stop = port, threading.Event()
+        self.client: FoxgloveClient | None = None
+
+    def run(self) -> None:
+        while not self.stop.is_set():
+            try:
+                self.client = FoxgloveClient(f"ws://127.0.0.1:{self.port}")
+                break
+            except OSError:
+                self.stop.wait(0.1)
+        else:
+            return
+        with self.client:
+            for topic in ("/joint_states", "/tf"):
+                self.client.subscribe(topic, timeout_s=30.0)
+            while not self.stop.is_set() and not self.client.closed:
+                self.client.receive_for(0.05)
+
+
+class Observer(threading.Thread):
+    """The test's rclpy node on the run's domain: joint_states as DDS carried them, and /tf's transforms."""
+
+    def __init__(self) -> None:
+        super().__init__(daemon=True)
+        self.stop = threading.Event()
+        self.joint_states: set[bytes] = set()
+        self.transforms: set[tuple] = set()
+        self.last_read_s = time.monotonic()
+
+    def drained(self, quiet_s: float = 1.0, timeout_s: float = 60.0) -> None:
+        """Wait until nothing was read for quiet_s: the messages queued for it when the run ended are read."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() - self.last_read_s < quiet_s and time.monotonic() < deadline:
+            time.sleep(0.1)
+
+    def run(self) -> None:
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from sensor_msgs.msg import JointState
+        from tf2_msgs.msg import TFMessage
+        context = rclpy.Context()
+        rclpy.init(context=context)
+        try:
+            node = rclpy.create_node("foxglove_lockstep_observer", context=context)
+            node.create_subscription(JointState, "/joint_states", lambda raw: self.joint_states.add(raw), 1000,
+                                     raw=True)
+            node.create_subscription(TFMessage, "/tf", lambda m: self.transforms.update(
+                transform_key(t.header.stamp.sec, t.header.stamp.nanosec, t.header.frame_id, t.child_frame_id,
+                              t.transform.translation, t.transform.rotation) for t in m.transforms), 1000)
+            executor = SingleThreadedExecutor(context=context)
+            executor.add_node(node)
+            count = 0
+            while not self.stop.is_set():
+                executor.spin_once(timeout_sec=0.01)
+                self.last_read_s = time.monotonic() if count != len(self.joint_states) else self.last_read_s
+                count = len(self.joint_states)
+            executor.shutdown()
+            node.destroy_node()
+        finally:
+            rclpy.shutdown(context=context)
+
+
+def transform_key(sec, nanosec, parent, child, translation, rotation) -> tuple:
+    return (int(sec), int(nanosec), parent, child, *(round(v, 12) for v in (
+        translation.x, translation.y, translation.z, rotation.x, rotation.y, rotation.z, rotation.w)))
+
+
+def test_a_reading_client_gets_what_dds_carried_during_a_lockstep_run(ros_domain, tmp_path):  # noqa: F811
+    port = free_port()
+    observer, reader = Observer(), ReadingClient(port)
+    observer.start()
+    reader.start()
+    try:
+        specs = closed_loop_specs(config_dir("realistic"), plant="sim")
+        report = run_recorded([*specs, NodeSpec("swim_viz", "foxglove_node", parameters=(f"port:={port}",))],
+                              tmp_path / "run", *MANEUVER, time_scale=1.0, timeout_s=RUN_TIMEOUT_S)
+    finally:
+        reader.stop.set()
+        reader.join(10.0)
+        observer.drained()
+        observer.stop.set()
+        observer.join(10.0)
+    assert report.result.error_code == 0
+    client = reader.client
+    assert client is not None
+    states, transforms = client.messages("/joint_states"), client.messages("/tf")
+    assert len(states) >= 10 and len(transforms) >= 10, (len(states), len(transforms))
+    missing = [message for message in states if message.payload not in observer.joint_states]
+    assert not missing, (f"{len(missing)} of {len(states)} not among the {len(observer.joint_states)} DDS carried",
+                         missing[:2], sorted(observer.joint_states)[:2])
+    tf_channel = client.channel("/tf")
+    for message in transforms:
+        for t in decode_protobuf(tf_channel["schemaName"], channel_schema(tf_channel), message.payload).transforms:
+            key = transform_key(t.timestamp.seconds, t.timestamp.nanos, t.parent_frame_id, t.child_frame_id,
+                                t.translation, t.rotation)
+            assert key in observer.transforms, key
 
 
 def test_a_client_that_never_reads_leaves_the_lockstep_run_as_it_was(ros_domain, tmp_path):  # noqa: F811
