@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import socket
 import statistics
 import tempfile
 import threading
@@ -26,45 +25,12 @@ from pathlib import Path
 
 import numpy as np
 
+from swim_ros.testing.foxglove_client import ClientThread, free_port
+
 TARGET_SLOWDOWN = 0.10
 #: the topics the client reads, as the layout's 3D panel and plots would
 READ_TOPICS = ("/joint_states", "/tracking_state", "/tf", "/scene")
 RUN_TIMEOUT_S = 600.0
-
-
-def free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
-
-
-class ReadingClient(threading.Thread):
-    """Connects once the server listens, subscribes to READ_TOPICS and reads until stopped; then the receipt time
-    (time.monotonic) of each joint_states payload."""
-
-    def __init__(self, port: int) -> None:
-        super().__init__(daemon=True)
-        self.port, self.stop = port, threading.Event()
-        self.received: dict[bytes, float] = {}
-
-    def run(self) -> None:
-        from swim_ros.testing.foxglove_client import FoxgloveClient
-        while not self.stop.is_set():
-            try:
-                client = FoxgloveClient(f"ws://127.0.0.1:{self.port}")
-                break
-            except OSError:
-                self.stop.wait(0.05)
-        else:
-            return
-        with client:
-            client.wait_for(lambda: len(client.channels) >= 13, 30.0)
-            for topic in READ_TOPICS:
-                client.subscribe(topic)
-            while not self.stop.is_set() and not client.closed:
-                client.receive_for(0.05)
-            for message in client.messages("/joint_states"):
-                self.received.setdefault(message.payload, message.received_s)
 
 
 class Observer(threading.Thread):
@@ -106,7 +72,7 @@ def one_run(with_foxglove: bool, folder: Path) -> tuple[float, list[float]]:
     if with_foxglove:
         port = free_port()
         specs = [*specs, NodeSpec("swim_viz", "foxglove_node", parameters=(f"port:={port}",))]
-        threads.append(ReadingClient(port))
+        threads.append(ClientThread(port, READ_TOPICS))
     for thread in threads:
         thread.start()
     try:
@@ -121,10 +87,11 @@ def one_run(with_foxglove: bool, folder: Path) -> tuple[float, list[float]]:
     if result.error_code != 0:
         raise RuntimeError(f"the run failed: {result.error_string}")
     latencies = []
-    if with_foxglove:
-        client = threads[1]
-        latencies = [t - observer.received[payload] for payload, t in client.received.items()
-                     if payload in observer.received]
+    if with_foxglove and threads[1].client is not None:
+        received: dict[bytes, float] = {}
+        for message in threads[1].client.messages("/joint_states"):
+            received.setdefault(message.payload, message.received_s)
+        latencies = [t - observer.received[payload] for payload, t in received.items() if payload in observer.received]
     return result.duration_s / wall_s, latencies
 
 

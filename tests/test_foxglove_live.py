@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import socket
 import time
 from pathlib import Path
 
@@ -23,7 +22,8 @@ from conftest import WORKSPACE
 from swim_ros.processes import start_child
 from swim_ros.testing.browser import LatestMessagePage, browser_unavailable
 from swim_ros.testing.fixtures import new_rclpy_context
-from swim_ros.testing.foxglove_client import FoxgloveClient, channel_schema, decode_protobuf
+from swim_ros.testing.foxglove_client import (FoxgloveClient, channel_schema, decode_protobuf, frame_transforms_keys,
+                                              free_port, tf_message_keys)
 from swim_ros.typestore import message_definition
 from test_viz_demo_bag import layout_reads
 
@@ -43,12 +43,6 @@ SHORT_MANEUVER = {"mode": "sequence", "primitive_ids": ["free/accelerate/R0.43/E
 MANEUVER_TIMEOUT_S = 300.0
 FORWARDED = ("/joint_states", "/joint_commands", "/tracking_state", "/plan", "/diagnostics", "/wake_statistics",
              "/wake_vortices", "/robot_description", "/markers")
-
-
-def free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
 
 
 class Observer:
@@ -79,9 +73,7 @@ class Observer:
         self.maneuvers = GoalStatusWatch(self.node, "perform_maneuver")
 
     def _on_tf(self, message) -> None:
-        for t in message.transforms:
-            self.transforms.add(transform_key(t.header.stamp.sec, t.header.stamp.nanosec, t.header.frame_id,
-                                              t.child_frame_id, t.transform.translation, t.transform.rotation))
+        self.transforms |= tf_message_keys(message)
 
     def _on_diagnostics(self, message) -> None:
         for status in message.status:
@@ -101,12 +93,6 @@ class Observer:
     def close(self) -> None:
         self.executor.shutdown()
         self.node.destroy_node()
-
-
-def transform_key(sec, nanosec, parent, child, translation, rotation) -> tuple:
-    return (int(sec), int(nanosec), parent, child, round(translation.x, 12), round(translation.y, 12),
-            round(translation.z, 12), round(rotation.x, 12), round(rotation.y, 12), round(rotation.z, 12),
-            round(rotation.w, 12))
 
 
 @pytest.fixture(scope="module")
@@ -231,12 +217,8 @@ def test_the_client_gets_what_dds_carried_stamps_and_values(live):
     assert len(states) >= 10 and len(transforms) >= 10, (len(states), len(transforms))
     carried = set(observer.joint_states)
     assert all(message.payload in carried for message in states)   # byte for byte: the same stamps and values
-    tf_channel = client.channel("/tf")
-    for message in transforms:
-        for t in decode_protobuf(tf_channel["schemaName"], channel_schema(tf_channel), message.payload).transforms:
-            key = transform_key(t.timestamp.seconds, t.timestamp.nanos, t.parent_frame_id, t.child_frame_id,
-                                t.translation, t.rotation)
-            assert key in observer.transforms, key
+    received = frame_transforms_keys(client)
+    assert received and set(received) <= observer.transforms, set(received) - observer.transforms
 
 
 def test_a_malformed_call_gets_an_error_and_nothing_moves(live):

@@ -8,75 +8,18 @@
 """
 from __future__ import annotations
 
-import socket
 import threading
 import time
 
 from swim_bringup.recorded_run import run_recorded
 from swim_bringup.system import closed_loop_specs, config_dir
 from swim_ros.processes import NodeSpec
-from swim_ros.testing.foxglove_client import FoxgloveClient, channel_schema, decode_protobuf
+from swim_ros.testing.foxglove_client import ClientThread, frame_transforms_keys, free_port, tf_message_keys
 
 #: the paper's constrained start and stop: about 8 s of plan, a few seconds of wall time in lock-step
 MANEUVER = (["constrained/accelerate/E0.05", "constrained/decelerate/E0.05"], [1, 1])
 #: a lock-step run on a loaded host
 RUN_TIMEOUT_S = 300.0
-
-
-def free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
-
-
-class StalledClient(threading.Thread):
-    """Connects as soon as the server listens, subscribes to every channel, and then never reads."""
-
-    def __init__(self, port: int) -> None:
-        super().__init__(daemon=True)
-        self.port, self.subscribed, self.stop = port, threading.Event(), threading.Event()
-        self.topics: list[str] = []
-
-    def run(self) -> None:
-        while not self.stop.is_set():
-            try:
-                client = FoxgloveClient(f"ws://127.0.0.1:{self.port}")
-                break
-            except OSError:
-                self.stop.wait(0.1)
-        else:
-            return
-        with client:
-            client.wait_for(lambda: len(client.channels) >= 13, 30.0)
-            self.topics = sorted(channel["topic"] for channel in client.channels.values())
-            for topic in self.topics:
-                client.subscribe(topic)
-            self.subscribed.set()
-            self.stop.wait()
-
-
-class ReadingClient(threading.Thread):
-    """Connects as soon as the server listens, subscribes to joint_states and /tf, and reads until stopped."""
-
-    def __init__(self, port: int) -> None:
-        super().__init__(daemon=True)
-        self.port, self.stop = port, threading.Event()
-        self.client: FoxgloveClient | None = None
-
-    def run(self) -> None:
-        while not self.stop.is_set():
-            try:
-                self.client = FoxgloveClient(f"ws://127.0.0.1:{self.port}")
-                break
-            except OSError:
-                self.stop.wait(0.1)
-        else:
-            return
-        with self.client:
-            for topic in ("/joint_states", "/tf"):
-                self.client.subscribe(topic, timeout_s=30.0)
-            while not self.stop.is_set() and not self.client.closed:
-                self.client.receive_for(0.05)
 
 
 class Observer(threading.Thread):
@@ -106,9 +49,7 @@ class Observer(threading.Thread):
             node = rclpy.create_node("foxglove_lockstep_observer", context=context)
             node.create_subscription(JointState, "/joint_states", lambda raw: self.joint_states.add(raw), 1000,
                                      raw=True)
-            node.create_subscription(TFMessage, "/tf", lambda m: self.transforms.update(
-                transform_key(t.header.stamp.sec, t.header.stamp.nanosec, t.header.frame_id, t.child_frame_id,
-                              t.transform.translation, t.transform.rotation) for t in m.transforms), 1000)
+            node.create_subscription(TFMessage, "/tf", lambda m: self.transforms.update(tf_message_keys(m)), 1000)
             executor = SingleThreadedExecutor(context=context)
             executor.add_node(node)
             count = 0
@@ -122,14 +63,9 @@ class Observer(threading.Thread):
             rclpy.shutdown(context=context)
 
 
-def transform_key(sec, nanosec, parent, child, translation, rotation) -> tuple:
-    return (int(sec), int(nanosec), parent, child, *(round(v, 12) for v in (
-        translation.x, translation.y, translation.z, rotation.x, rotation.y, rotation.z, rotation.w)))
-
-
 def test_a_reading_client_gets_what_dds_carried_during_a_lockstep_run(ros_domain, tmp_path):  # noqa: F811
     port = free_port()
-    observer, reader = Observer(), ReadingClient(port)
+    observer, reader = Observer(), ClientThread(port, ("/joint_states", "/tf"))
     observer.start()
     reader.start()
     try:
@@ -150,19 +86,15 @@ def test_a_reading_client_gets_what_dds_carried_during_a_lockstep_run(ros_domain
     missing = [message for message in states if message.payload not in observer.joint_states]
     assert not missing, (f"{len(missing)} of {len(states)} not among the {len(observer.joint_states)} DDS carried",
                          missing[:2], sorted(observer.joint_states)[:2])
-    tf_channel = client.channel("/tf")
-    for message in transforms:
-        for t in decode_protobuf(tf_channel["schemaName"], channel_schema(tf_channel), message.payload).transforms:
-            key = transform_key(t.timestamp.seconds, t.timestamp.nanos, t.parent_frame_id, t.child_frame_id,
-                                t.translation, t.rotation)
-            assert key in observer.transforms, key
+    received = frame_transforms_keys(client)
+    assert received and set(received) <= observer.transforms, set(received) - observer.transforms
 
 
 def test_a_client_that_never_reads_leaves_the_lockstep_run_as_it_was(ros_domain, tmp_path):  # noqa: F811
     specs = closed_loop_specs(config_dir("realistic"), plant="sim")
     alone = run_recorded(specs, tmp_path / "alone", *MANEUVER, time_scale=1.0, timeout_s=RUN_TIMEOUT_S)
     port = free_port()
-    client = StalledClient(port)
+    client = ClientThread(port, read=False, min_channels=13)   # subscribes to every channel, never reads
     client.start()
     try:
         watched = run_recorded([*specs, NodeSpec("swim_viz", "foxglove_node", parameters=(f"port:={port}",))],

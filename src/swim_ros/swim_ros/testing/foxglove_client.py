@@ -16,9 +16,11 @@ from __future__ import annotations
 import base64
 import dataclasses
 import json
+import socket
 import struct
+import threading
 import time
-from typing import Any, Optional
+from typing import Any, Optional, Sequence
 
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import ClientConnection, connect
@@ -214,3 +216,75 @@ def channel_schema(channel: dict[str, Any]) -> bytes:
     if channel.get("schemaEncoding") == "protobuf":
         return base64.b64decode(channel["schema"])
     return str(channel["schema"]).encode()
+
+
+def free_port() -> int:
+    """A TCP port free on loopback now, for a server a test or bench starts."""
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def connect_when_listening(port: int, stop: threading.Event) -> Optional[FoxgloveClient]:
+    """A client of the server on 127.0.0.1:port, connected as soon as it listens (a node that is still starting),
+    or None if stop is set first."""
+    while not stop.is_set():
+        try:
+            return FoxgloveClient(f"ws://127.0.0.1:{port}")
+        except OSError:
+            stop.wait(0.05)
+    return None
+
+
+def transform_key(sec: int, nanosec: int, parent: str, child: str, translation: Any, rotation: Any) -> tuple:
+    """A transform (tf2's or Foxglove's: translation x, y, z and rotation x, y, z, w) as a comparable tuple, its
+    numbers to 1e-12."""
+    return (int(sec), int(nanosec), parent, child, *(round(v, 12) for v in (
+        translation.x, translation.y, translation.z, rotation.x, rotation.y, rotation.z, rotation.w)))
+
+
+def tf_message_keys(message: Any) -> set[tuple]:
+    """The transform_keys of a tf2_msgs/TFMessage."""
+    return {transform_key(t.header.stamp.sec, t.header.stamp.nanosec, t.header.frame_id, t.child_frame_id,
+                          t.transform.translation, t.transform.rotation) for t in message.transforms}
+
+
+def frame_transforms_keys(client: FoxgloveClient, topic: str = "/tf") -> list[tuple]:
+    """The transform_keys of every foxglove.FrameTransforms message client received on topic, decoded by the
+    channel's advertised schema."""
+    channel = client.channel(topic)
+    keys = []
+    for message in client.messages(topic):
+        for t in decode_protobuf(channel["schemaName"], channel_schema(channel), message.payload).transforms:
+            keys.append(transform_key(t.timestamp.seconds, t.timestamp.nanos, t.parent_frame_id, t.child_frame_id,
+                                      t.translation, t.rotation))
+    return keys
+
+
+class ClientThread(threading.Thread):
+    """A client on a thread of its own, as a Foxglove app beside a run: it connects as soon as the server on
+    127.0.0.1:port listens, subscribes to topics (None: every channel, once at least min_channels are advertised),
+    and then reads until stopped, or never reads (read False: a stalled app). ``subscribed`` is set once it has
+    subscribed; ``client`` holds what it received."""
+
+    def __init__(self, port: int, topics: Optional[Sequence[str]] = None, read: bool = True,
+                 min_channels: int = 1) -> None:
+        super().__init__(daemon=True)
+        self.port, self.topics, self.read, self.min_channels = port, topics, read, min_channels
+        self.stop, self.subscribed = threading.Event(), threading.Event()
+        self.client: Optional[FoxgloveClient] = None
+
+    def run(self) -> None:
+        self.client = client = connect_when_listening(self.port, self.stop)
+        if client is None:
+            return
+        with client:
+            if self.topics is None:
+                client.wait_for(lambda: len(client.channels) >= self.min_channels, 30.0)
+                self.topics = sorted(channel["topic"] for channel in client.channels.values())
+            for topic in self.topics:
+                client.subscribe(topic, timeout_s=30.0)
+            self.subscribed.set()
+            while self.read and not self.stop.is_set() and not client.closed:
+                client.receive_for(0.05)
+            self.stop.wait()
