@@ -203,7 +203,6 @@ class FoxgloveNode(Node):
         self._maneuver: Optional[Any] = None        # the goal handle of the maneuver this server started
         self._maneuver_phase = -1
         self._maneuver_lock = threading.Lock()
-        self._scene_gate = RateGate(scene_rate_hz)
         self._tf_gate = RateGate(state_rate_hz)
 
         self.channels: dict[str, foxglove.Channel] = {}
