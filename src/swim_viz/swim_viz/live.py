@@ -56,7 +56,7 @@ MANEUVER_NUMBERS = ("time_scale", "path_tolerance_alpha_rad", "path_tolerance_r_
                     "goal_tolerance_r_m")
 
 #: the JSON schema of a maneuver call, as the app shows it: a sequence of library primitives, or a goal state
-MANEUVER_REQUEST_SCHEMA = {
+MANEUVER_REQUEST_SCHEMA: dict[str, Any] = {
     "title": "swim maneuver",
     "type": "object",
     "additionalProperties": False,
@@ -93,9 +93,10 @@ def parse_maneuver_request(payload: bytes) -> dict[str, Any]:
         raise ManeuverRequestError(f"the request is not JSON: {err}") from None
     if not isinstance(request, dict):
         raise ManeuverRequestError(f"the request must be a JSON object, got {type(request).__name__}")
-    unknown = sorted(set(request) - set(MANEUVER_REQUEST_SCHEMA["properties"]))
+    known: set[str] = set(MANEUVER_REQUEST_SCHEMA["properties"])
+    unknown = sorted(set(request) - known)
     if unknown:
-        raise ManeuverRequestError(f"unknown fields {unknown}; known: {sorted(MANEUVER_REQUEST_SCHEMA['properties'])}")
+        raise ManeuverRequestError(f"unknown fields {unknown}; known: {sorted(known)}")
     mode = request.get("mode")
     if mode not in MANEUVER_MODES:
         raise ManeuverRequestError(f"mode must be one of {list(MANEUVER_MODES)}, got {mode!r}")

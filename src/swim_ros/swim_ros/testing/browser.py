@@ -199,6 +199,7 @@ class HeadlessChromium:
         from websockets.sync.client import connect
 
         self._profile = tempfile.TemporaryDirectory(prefix="swim-chromium-")
+        assert self.executable is not None   # __init__ refused a machine without one
         command = [self.executable, "--headless=new", "--no-sandbox", "--remote-debugging-port=0",
                    f"--user-data-dir={self._profile.name}", "--no-first-run", "--no-default-browser-check",
                    "--disable-extensions", "--disable-background-networking", "--disable-component-update",

@@ -24,6 +24,7 @@ from typing import Any, Optional, Sequence
 
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import ClientConnection, connect
+from websockets.typing import Subprotocol
 
 #: the protocol's names, the SDK's first
 SUBPROTOCOLS = ("foxglove.sdk.v1", "foxglove.websocket.v1")
@@ -60,7 +61,8 @@ class FoxgloveClient:
 
     def __init__(self, url: str, open_timeout_s: float = 10.0) -> None:
         self.port = int(url.rsplit(":", 1)[1].split("/")[0])
-        self.connection: ClientConnection = connect(url, subprotocols=list(SUBPROTOCOLS), open_timeout=open_timeout_s,
+        self.connection: ClientConnection = connect(url, subprotocols=[Subprotocol(name) for name in SUBPROTOCOLS],
+                                                    open_timeout=open_timeout_s,
                                                     max_size=None)
         self.info: dict[str, Any] = {}
         self.channels: dict[int, dict[str, Any]] = {}      # channel id -> its advertisement
