@@ -63,7 +63,8 @@ from swim_interfaces.msg import PlannedTrajectory, TrackingState, WakeStatistics
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import Marker, MarkerArray
 
-from swim_ros.calls import CallFailed, GoalStatusWatch, ServedElsewhere, call_service, cancel_goal, send_goal
+from swim_ros.calls import (CallFailed, GoalStatusWatch, ServedElsewhere, call_service, cancel_goal, goal_result,
+                            send_goal)
 from swim_ros.entry import run_node
 from swim_ros.parameters import ParameterSpec, declare_parameters, positive
 from swim_ros.qos import LATCHED_QOS, per_period_subscription
@@ -109,6 +110,8 @@ DERIVED_FROM = {"/tf": ("/tf",), "/tf_static": ("/tf_static",), "/scene": ("/mar
 #: how often the ROS subscriptions are brought in line with the clients' (s): a new client's first messages come
 #: this much later at most
 SUBSCRIPTION_SYNC_PERIOD_S = 0.1
+#: the per-period topics, sampled rather than called back
+SAMPLED_TOPICS = frozenset(topic for topic, (_, _, per_period) in FORWARDED_TOPICS.items() if per_period)
 #: the latched topics: a client that subscribes late gets the last message (sent again to every subscriber of it)
 LATCHED_TOPICS = ("/plan", "/robot_description")
 #: the frame the scene is drawn in (swim_viz.frames)
@@ -284,8 +287,7 @@ class FoxgloveNode(Node):
         wanted = self.wanted_topics()
         for topic in set(self._ros_subscriptions) - wanted:
             subscription = self._ros_subscriptions.pop(topic)
-            (self._sampler if FORWARDED_TOPICS.get(topic, ("", None, False))[2] else self).destroy_subscription(
-                subscription)
+            (self._sampler if topic in SAMPLED_TOPICS else self).destroy_subscription(subscription)
             self._last_sampled.pop(topic, None)
         for topic in wanted - set(self._ros_subscriptions):
             self._ros_subscriptions[topic] = self._subscribe(topic)
@@ -306,7 +308,7 @@ class FoxgloveNode(Node):
     def _sample(self) -> None:
         """Each sampled stream's newest message, sent if it is new."""
         for topic, subscription in list(self._ros_subscriptions.items()):
-            if not FORWARDED_TOPICS.get(topic, ("", None, False))[2]:
+            if topic not in SAMPLED_TOPICS:
                 continue
             newest = None
             with subscription.handle:
@@ -440,7 +442,6 @@ class FoxgloveNode(Node):
 
     def _ended_maneuver(self, handle: Any, goal_id: bytes, status: int) -> dict[str, Any]:
         """A maneuver that ended before it was tracked: its result, or its error."""
-        from swim_ros.calls import goal_result
         try:
             result = goal_result(ServedElsewhere(), handle, timeout_s=30.0).result
         except CallFailed:
