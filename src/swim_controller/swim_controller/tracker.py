@@ -36,7 +36,7 @@ from numpy.linalg import _umath_linalg
 from swim_controller.errors import PlanError
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.trajectory import Trajectory, TrajectoryPoint
-from swim_hw_bridge.conversions import HardLimits
+from swim_model.limits import HardLimits
 from swim_model.flow import LAG_STATE_NAMES
 
 if TYPE_CHECKING:

@@ -17,7 +17,7 @@ import itertools
 import numpy as np
 from swim_model import RigParameters, VehicleModel
 
-from swim_hw_bridge.conversions import HardLimits
+from swim_model.limits import HardLimits
 from swim_hw_bridge.safety import BRAKING_TORQUE_FRACTION, JointDynamicsBounds
 
 #: grid points per joint range when searching the largest inertia (M varies smoothly with the joint angles)

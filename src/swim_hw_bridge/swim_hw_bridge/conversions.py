@@ -25,6 +25,7 @@ from typing import Any
 
 import yaml
 from swim_model.units import POSITIVE, SIGNED, UNITS, EntryError, entry_to_si
+from swim_model.limits import HardLimits
 
 FORMAT_VERSION = 1
 
@@ -78,10 +79,6 @@ _SCHEMA: dict[str, tuple[str, str]] = {
     "pitch_home_position": ("angle", _ANY),
     "velocity_cutoff": ("frequency", _POSITIVE),
 }
-
-
-#: ((heave lower, upper), (pitch lower, upper)) joint limits, rad
-HardLimits = tuple[tuple[float, float], tuple[float, float]]
 
 
 class BridgeConfigError(ValueError):

@@ -45,7 +45,8 @@ import enum
 import math
 from typing import Callable
 
-from swim_hw_bridge.conversions import BridgeConfig, HardLimits
+from swim_hw_bridge.conversions import BridgeConfig
+from swim_model.limits import HardLimits
 
 class FaultCode(enum.IntFlag):
     """Latched faults, a bit each (several may be latched at once)."""

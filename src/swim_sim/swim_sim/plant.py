@@ -53,7 +53,7 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
-from swim_hw_bridge.conversions import HardLimits
+from swim_model.limits import HardLimits
 from swim_model import RigParameters, StateError, VehicleModel, codegen
 from swim_model.wake_coupling import FLOWS, MODEL_FLOWS, WakeCoupling, separation_drag
 from swim_sim.disturbances import GRAVITY_M_S2, Disturbances

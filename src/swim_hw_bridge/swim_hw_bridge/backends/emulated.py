@@ -46,7 +46,8 @@ from swim_model import SwimModelError, VehicleModel, codegen, load_rig
 from swim_model.codegen import NativeFunction
 from swim_model.wake_coupling import FLOWS, MODEL_FLOWS, WakeCoupling, separation_drag
 
-from swim_hw_bridge.conversions import BridgeConfig, HardLimits
+from swim_hw_bridge.conversions import BridgeConfig
+from swim_model.limits import HardLimits
 from swim_hw_bridge.device import CounterSample, Device, DeviceError
 
 DEFAULT_CHARGE_PUMP_TIMEOUT_S = 0.05   # assumed: about 6 periods of 8 ms
