@@ -53,7 +53,8 @@ def added_mass_from_circle_map(conformal_map: ComplexMap, circle_radius: float, 
         density_kg_m3: fluid density rho.
         samples: points on the circle (even); the result converges geometrically in it.
 
-    Returns:
+    Returns
+    -------
         M_A with rows/columns (U, V, Omega): kg/m, kg/m, kg m/m (= kg), kg m^2/m.
     """
     angle = 2.0 * np.pi * np.arange(samples) / samples

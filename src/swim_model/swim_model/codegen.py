@@ -72,7 +72,8 @@ def compiled(functions: list[ca.Function], tag: str) -> dict[str, ca.Function]:
 def native(functions: list[ca.Function], tag: str,
            names: Optional[Sequence[str]] = None) -> dict[str, "NativeFunction"]:
     """The functions, compiled to C, as NativeFunction (the fast call path), by name: all of them, or those named
-    (the library is the one ``compiled`` makes of the same list, so it is compiled once for both)."""
+    (the library is the one ``compiled`` makes of the same list, so it is compiled once for both).
+    """
     library = compile_library(functions, tag)
     loaded = None if library is None else ctypes.CDLL(str(library))
     return {f.name(): NativeFunction(f, loaded) for f in functions if names is None or f.name() in names}
@@ -83,7 +84,8 @@ class NativeFunction:
     (flat, column-major), call, read ``outputs[j]``. The buffers are reused: copy an output to keep it.
 
     With a library the C entry point is called through ctypes; without one (no compiler) the CasADi function
-    itself, into the same buffers. One instance is one set of buffers: not for concurrent use from threads."""
+    itself, into the same buffers. One instance is one set of buffers: not for concurrent use from threads.
+    """
 
     def __init__(self, function: ca.Function, library: Optional[ctypes.CDLL] = None) -> None:
         for i in range(function.n_in()):

@@ -217,7 +217,8 @@ class CirculatoryFlow:
     # ----- the model ------------------------------------------------------------------------------------------
     def terms(self, velocity: ca.SX, lag: ca.SX) -> FlowTerms:
         """The model's expressions for foil velocity (U, V, Omega) (3-vector, m/s, m/s, rad/s) and lag states
-        (2-vector, m/s)."""
+        (2-vector, m/s).
+        """
         p = self.params
         u, v, omega = velocity[0], velocity[1], velocity[2]
         eps2 = p.speed_regularization_m_s ** 2
@@ -265,7 +266,8 @@ class CirculatoryFlow:
 
     def profile_drag(self, velocity: ca.SX) -> ca.SX:
         """The attached flow's profile drag alone, (fx, fy, mz) = -1/2 rho s c C_D0 |u| (U, V, 0) (for the vortex
-        wake, whose flow is always attached)."""
+        wake, whose flow is always attached).
+        """
         u, v = velocity[0], velocity[1]
         speed = ca.sqrt(u * u + v * v + self.params.speed_regularization_m_s ** 2)
         drag = 0.5 * self.rho_kg_m3 * self.span_m * self.chord_m * self.params.profile_drag_coefficient * speed
@@ -275,7 +277,8 @@ class CirculatoryFlow:
     def functions(self) -> dict[str, ca.Function]:
         """CasADi functions: ``flow_force(nu, lag) -> f``, ``flow_lag_rate(nu, lag) -> lag_dot``,
         ``flow_terms(nu, lag) -> (f, lag_dot, Q, Q_eff, lesp, w, Gamma)``, ``profile_drag(nu) -> f``, and
-        ``flow_lag_step(lag, nu0, nu_half, nu1, h) -> lag_next`` (one RK4 step with the velocity prescribed)."""
+        ``flow_lag_step(lag, nu0, nu_half, nu1, h) -> lag_next`` (one RK4 step with the velocity prescribed).
+        """
         nu, lag = ca.SX.sym("nu", 3), ca.SX.sym("lag", 2)
         t = self.terms(nu, lag)
         rate = ca.Function("flow_lag_rate", [nu, lag], [t.lag_rate], ["nu", "lag"], ["lag_dot"])
@@ -333,7 +336,9 @@ class CirculatoryFlow:
             velocities: (2n + 1, 3) foil velocities (U, V, Omega) at t0, t0 + h/2, t0 + h, ..., t0 + n h.
             step_s: h, s.
             lag0: lag states at t0, m/s.
-        Returns:
+
+        Returns
+        -------
             (n + 1, 2) lag states at t0, t0 + h, ..., t0 + n h.
         """
         nu = np.asarray(velocities, dtype=float)

@@ -39,7 +39,8 @@ def read_measurements(path: Path) -> dict[str, list[tuple[float, float]]]:
 def compute(strouhal: list[float],
             models: tuple[str, ...] = ("circulatory", "wake")) -> dict[str, dict[str, list[float]]]:
     """{model: {"strouhal", "thrust_coefficient", "efficiency", "peak_angle_of_attack_deg",
-    "peak_leading_edge_suction_parameter", "min_attached_weight"}} for Anderson's case (OscillatingFoilResult)."""
+    "peak_leading_edge_suction_parameter", "min_attached_weight"}} for Anderson's case (OscillatingFoilResult).
+    """
     speed = REYNOLDS * KINEMATIC_VISCOSITY_WATER_M2_S / CHORD_M
     heave = HEAVE_OVER_CHORD * CHORD_M
     foil = JoukowskiFoil(CHORD_M, THICKNESS_RATIO * CHORD_M, SPAN_M)

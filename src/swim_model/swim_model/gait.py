@@ -55,7 +55,7 @@ class ShapeDrivenRun:
 
 
 def zero_momentum_velocity(model: VehicleModel, q: Array, psi_dot: Array) -> Array:
-    """ydot with Mm11 ydot + Mm12 psidot = 0: the unactuated momenta vanish."""
+    """Ydot with Mm11 ydot + Mm12 psidot = 0: the unactuated momenta vanish."""
     ny = model.n_unactuated
     mass = model.mass_matrix(q)
     return cast(Array, -np.linalg.solve(mass[:ny, :ny], mass[:ny, ny:] @ psi_dot))

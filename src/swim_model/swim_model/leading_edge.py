@@ -27,12 +27,14 @@ SPEED_REGULARIZATION_M_S = 1.0e-7
 
 def is_cap_exponent(exponent: object) -> bool:
     """Whether exponent can be smooth_cap's: an even integer >= 2 (an odd one leaves 1 + (value / limit)^n negative
-    for value below -limit)."""
+    for value below -limit).
+    """
     return isinstance(exponent, int) and not isinstance(exponent, bool) and exponent >= 2 and exponent % 2 == 0
 
 
 def smooth_cap(value: Any, limit: Any, exponent: int) -> Any:
-    """value / (1 + (value / limit)^exponent)^(1/exponent): value where |value| << limit, limit in size where
+    """Value / (1 + (value / limit)^exponent)^(1/exponent): value where |value| << limit, limit in size where
     |value| >> limit, smooth through zero for an even exponent. value and limit in one unit (a float or a CasADi
-    expression each); the result in that unit."""
+    expression each); the result in that unit.
+    """
     return value / (1.0 + (value / limit) ** exponent) ** (1.0 / exponent)

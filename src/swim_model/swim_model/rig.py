@@ -141,7 +141,8 @@ def default_rig_path() -> Path:
 def load_rig(path: str | Path | None = None) -> RigParameters:
     """Load and validate a rig file (default: the shipped ``config/rig.yaml``).
 
-    Raises:
+    Raises
+    ------
         RigConfigError: the file is missing or unreadable, or an entry is missing, unknown,
             in a unit of the wrong dimension, without ``source``/``assumed``, or impossible.
     """

@@ -225,7 +225,8 @@ class VehicleModel:
     def _rk4_chunk_functions(self, step: ca.Function) -> list[ca.Function]:
         """``rk4_steps_<n>`` for n in RK4_CHUNK_STEPS past 1: (x, tau (2, n), h) -> the states after each of n
         steps of ``step`` (the RK4 step, tau[:, k] held over step k), (nx, n); generated as calls of the same step
-        function, so they compute bit for bit what n calls of it do."""
+        function, so they compute bit for bit what n calls of it do.
+        """
         functions = []
         for steps in RK4_CHUNK_STEPS[1:]:
             x, tau, h = ca.MX.sym("x", self.nx), ca.MX.sym("tau", 2, steps), ca.MX.sym("h")
@@ -235,9 +236,10 @@ class VehicleModel:
         return functions
 
     def foil_pose_function(self) -> ca.Function:
-        """q -> (x_F m, y_F m, chord angle alpha + theta + pi/2 rad): the foil frame's origin F and its chord's angle
+        """Q -> (x_F m, y_F m, chord angle alpha + theta + pi/2 rad): the foil frame's origin F and its chord's angle
         in the tank frame (the pose swim_model.wake.Wake.step takes). A CasADi SX function (map it over many q, or
-        differentiate it); made once per model, not part of the compiled ``numeric`` set."""
+        differentiate it); made once per model, not part of the compiled ``numeric`` set.
+        """
         cache: dict[str, ca.Function] = self.__dict__.setdefault("_foil_pose", {})
         if "pose" not in cache:
             q = self.symbolic.q
@@ -260,7 +262,8 @@ class VehicleModel:
     def native_function(self, name: str) -> codegen.NativeFunction:
         """One of ``numeric``'s functions (dense arguments only) called through its C entry point on buffers it
         owns (codegen.NativeFunction): the same numbers, ~1 us a call instead of CasADi's ~45 us, for loops
-        that call it every period. One instance per name and model: copy what you keep of its outputs."""
+        that call it every period. One instance per name and model: copy what you keep of its outputs.
+        """
         # made on first use, like ``numeric``
         loaded: dict[str, codegen.NativeFunction] = self.__dict__.setdefault("_native", {})
         if name not in loaded:
@@ -322,7 +325,7 @@ class VehicleModel:
 
     def forward_dynamics(self, q: npt.ArrayLike, qdot: npt.ArrayLike, tau: npt.ArrayLike,
                          lag: npt.ArrayLike | None = None) -> Array:
-        """qddot = Mm^-1 (B tau - Cm qdot [+ Q_flow]) (eqs. 6-7)."""
+        """Qddot = Mm^-1 (B tau - Cm qdot [+ Q_flow]) (eqs. 6-7)."""
         out = self._call("forward_dynamics", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
                          self._vector(tau, 2, "tau"), *self._lag(lag))[0]
         return out.reshape(-1)
@@ -330,13 +333,14 @@ class VehicleModel:
     def generalized_force(self, q: npt.ArrayLike, qdot: npt.ArrayLike, qddot: npt.ArrayLike,
                           lag: npt.ArrayLike | None = None) -> Array:
         """Mm qddot + Cm qdot [- Q_flow]: the force the joints must supply on every coordinate (zero on the
-        unactuated ones if feasible)."""
+        unactuated ones if feasible).
+        """
         return self._call("generalized_force", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
                           self._vector(qddot, self.nq, "qddot"), *self._lag(lag))[0].reshape(-1)
 
     def inverse_dynamics(self, q: npt.ArrayLike, qdot: npt.ArrayLike, qddot: npt.ArrayLike,
                          lag: npt.ArrayLike | None = None) -> Array:
-        """tau = (Mm qddot + Cm qdot [- Q_flow]) on the actuated rows (heave, pitch), N m."""
+        """Tau = (Mm qddot + Cm qdot [- Q_flow]) on the actuated rows (heave, pitch), N m."""
         return self.generalized_force(q, qdot, qddot, lag)[self.n_unactuated:]
 
     def kinetic_energy(self, q: npt.ArrayLike, qdot: npt.ArrayLike, lag: npt.ArrayLike | None = None) -> float:
@@ -349,7 +353,8 @@ class VehicleModel:
     def momentum(self, q: npt.ArrayLike, qdot: npt.ArrayLike, lag: npt.ArrayLike | None = None) -> Array:
         """Generalized momentum p = dT/dqdot = Mm qdot; p[0] = p_alpha is conserved (Prop. 1) by the ideal model
         and changes at Q_flow[0] with the circulatory flow. The lag states hold no momentum; ``lag`` is only
-        checked."""
+        checked.
+        """
         if lag is not None:
             self._lag(lag)
         return self._call("momentum", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"))[0].reshape(-1)
@@ -380,7 +385,8 @@ class VehicleModel:
 
     def flow_force(self, q: npt.ArrayLike, qdot: npt.ArrayLike, lag: npt.ArrayLike) -> tuple[Array, Array]:
         """The circulatory flow's (fx, fy, mz) in foil axes at the foil frame's origin (N, N, N m) and its
-        generalized force Q_flow = Q2' f (one entry per coordinate)."""
+        generalized force Q_flow = Q2' f (one entry per coordinate).
+        """
         if self.n_lag == 0:
             raise StateError("flow_force: the ideal-flow model has no circulatory force")
         f, generalized = self._call("flow_force", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
@@ -397,7 +403,8 @@ class VehicleModel:
     def rk4_step(self, q: npt.ArrayLike, qdot: npt.ArrayLike, tau: npt.ArrayLike, step_s: float,
                  lag: npt.ArrayLike | None = None) -> tuple[Array, ...]:
         """One RK4 step of step_s seconds with tau held; returns (q, qdot), or (q, qdot, lag) with the
-        circulatory flow."""
+        circulatory flow.
+        """
         x = np.concatenate([self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"), *self._lag(lag)])
         x_next = self._call("rk4_step", x, self._vector(tau, 2, "tau"), np.array(float(step_s)))[0].reshape(-1)
         return self._split(x_next)
@@ -418,7 +425,9 @@ class VehicleModel:
         Args:
             torques: (n, 2) heave and pitch torques, N m.
             lag: the flow's lag states at the start (circulatory flow only), m/s.
-        Returns:
+
+        Returns
+        -------
             (q, qdot) at the n + 1 step boundaries, shapes (n + 1, nq); with the circulatory flow
             (q, qdot, lag), lag of shape (n + 1, n_lag).
         """
@@ -447,7 +456,8 @@ class VehicleModel:
 
     def _rk4_chunks(self) -> dict[int, codegen.NativeFunction]:
         """integrate_rk4's compiled chunks by step count, with buffers of their own (not native_function's, which
-        callers fill between their own calls)."""
+        callers fill between their own calls).
+        """
         chunks: dict[int, codegen.NativeFunction] | None = self.__dict__.get("_rk4_chunk_cache")
         if chunks is None:
             names = {steps: _rk4_chunk_name(steps) for steps in RK4_CHUNK_STEPS}

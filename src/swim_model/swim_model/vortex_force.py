@@ -91,7 +91,8 @@ _Points = TypeVar("_Points", Complex, complex)   # an array of points in the cir
 
 class _Kernel:
     """A function of this package's that numba compiles, numba imported only when a kernel is first called (so a
-    process that never steps a wake does not pay numba's import, about 0.6 s)."""
+    process that never steps a wake does not pay numba's import, about 0.6 s).
+    """
 
     registered: list["_Kernel"] = []
 
@@ -109,7 +110,8 @@ class _Kernel:
     def load_all() -> None:
         """Wrap every registered kernel in numba's dispatcher and put it in its module's namespace in place of this
         object, so that a kernel calling another compiles against the other's dispatcher and module code calls the
-        dispatcher directly. numba compiles a kernel at its first call for the argument types."""
+        dispatcher directly. numba compiles a kernel at its first call for the argument types.
+        """
         import numba   # here, not at the module top: the point of the lazy load
         for kernel in _Kernel.registered:
             if kernel.dispatcher is None:
@@ -122,7 +124,8 @@ class _Kernel:
 def compiled(function: _Function) -> _Function:
     """The function compiled to machine code by numba (nopython mode) at its first call, cached on disk beside the
     module: the first call in a fresh environment compiles it (about a second), later processes load it. numba
-    itself is imported at the first call of any such function (``_Kernel``)."""
+    itself is imported at the first call of any such function (``_Kernel``).
+    """
     return cast(_Function, _Kernel(function))
 
 
@@ -132,7 +135,8 @@ def _blob_sums(x: npt.NDArray[np.float64], y: npt.NDArray[np.float64], source_x:
                sum_x: npt.NDArray[np.float64], sum_y: npt.NDArray[np.float64]) -> None:
     """(sum_x, sum_y)[j] = sum_k (w_jk dx_jk, w_jk dy_jk), dx_jk + i dy_jk = (x_j + i y_j) - (source_x_k + i
     source_y_k), w_jk = gamma_k / (dx_jk^2 + dy_jk^2 + core2_k): O(N M), the cost of a wake step. Summed in index
-    order k; the loop over the points j is the inner one, so that it runs in SIMD lanes."""
+    order k; the loop over the points j is the inner one, so that it runs in SIMD lanes.
+    """
     sum_x[:] = 0.0
     sum_y[:] = 0.0
     for k in range(source_x.size):
@@ -148,7 +152,8 @@ def _blob_sums(x: npt.NDArray[np.float64], y: npt.NDArray[np.float64], source_x:
 def _vortex_potential_sums(points: Complex, zeta: Complex, gamma: npt.NDArray[np.float64], r_m: float,
                            sums: Complex) -> None:
     """sum_k Gamma_k [1/(p - zeta_k) - 1/(p - zeta_k*)] at the points p into sums; exact kernel, summed in index
-    order (1/D = conj(D)/|D|^2, the loop over the points inner, so that it runs in SIMD lanes)."""
+    order (1/D = conj(D)/|D|^2, the loop over the points inner, so that it runs in SIMD lanes).
+    """
     r2 = r_m * r_m
     x, y = points.real.copy(), points.imag.copy()
     real, imag = np.zeros(points.size), np.zeros(points.size)
@@ -168,7 +173,7 @@ def _vortex_potential_sums(points: Complex, zeta: Complex, gamma: npt.NDArray[np
 
 @compiled
 def _to_circle(z: Complex, a_m: float, zeta_c_m: float, zeta: Complex) -> None:
-    """zeta = F^{-1}(z) into zeta, the branch outside the circle (``CirclePlane.to_circle``)."""
+    """Zeta = F^{-1}(z) into zeta, the branch outside the circle (``CirclePlane.to_circle``)."""
     four_a2 = 4.0 * a_m * a_m
     for k in range(z.size):
         root = cmath.sqrt(z[k] * z[k] - four_a2)
@@ -181,7 +186,8 @@ def _vortex_velocities(zeta: Complex, gamma: npt.NDArray[np.float64], u_b: compl
                        core_radii_m: npt.NDArray[np.float64], a_m: float, zeta_c_m: float, r_m: float,
                        pole_origin_m3: float, pole_offset_m3: float, velocities: Complex) -> None:
     """``CirclePlane.vortex_velocities`` into velocities (N): the map's derivatives, each blob's core (N) in the
-    circle plane and the images per vortex, the O(N^2) sums (``_blob_sums``), then the body and Routh terms."""
+    circle plane and the images per vortex, the O(N^2) sums (``_blob_sums``), then the body and Routh terms.
+    """
     n = zeta.size
     a2, r2 = a_m * a_m, r_m * r_m
     x, y = np.empty(n), np.empty(n)
@@ -248,7 +254,7 @@ class CirclePlane:
 
     # --- the map ------------------------------------------------------------------------------------------
     def to_foil(self, zeta: Complex) -> Complex:
-        """z = F(zeta)."""
+        """Z = F(zeta)."""
         s = zeta + self.zeta_c_m
         return s + self.a_m ** 2 / s
 
@@ -259,7 +265,7 @@ class CirclePlane:
         return 1.0 - a2_over_s2, 2.0 * a2_over_s2 / s
 
     def to_circle(self, z: Complex) -> Complex:
-        """zeta = F^{-1}(z), the branch outside the circle (``|s| >= a``)."""
+        """Zeta = F^{-1}(z), the branch outside the circle (``|s| >= a``)."""
         points = np.ascontiguousarray(z, dtype=complex).reshape(-1)
         zeta: Complex = np.empty_like(points)
         _to_circle(points, self.a_m, self.zeta_c_m, zeta)
@@ -272,7 +278,7 @@ class CirclePlane:
 
     # --- flow -----------------------------------------------------------------------------------------------
     def body_potential_derivative(self, zeta: _Points, velocity: tuple[float, float, float]) -> _Points:
-        """d w_body / d zeta = u_b r^2/zeta^2 - conj(u_b) a^2/s^2 + i Omega (A/zeta^2 + B/s^2)."""
+        """D w_body / d zeta = u_b r^2/zeta^2 - conj(u_b) a^2/s^2 + i Omega (A/zeta^2 + B/s^2)."""
         u_b = complex(velocity[0], velocity[1])
         omega = velocity[2]
         s = zeta + self.zeta_c_m
@@ -301,7 +307,8 @@ class CirclePlane:
         """Fluid velocity u + iv (foil axes) at each free vortex: blob mutual terms, exact images, Routh term.
 
         core_radius_m: the blobs' core radius in the physical plane, m: one for all, or one per vortex (N,), the
-        source vortex's core desingularizing each pair's term."""
+        source vortex's core desingularizing each pair's term.
+        """
         velocities: Complex = np.empty(zeta_k.size, dtype=complex)
         cores = np.ascontiguousarray(np.broadcast_to(np.asarray(core_radius_m, dtype=float), np.shape(zeta_k)))
         _vortex_velocities(np.ascontiguousarray(zeta_k, dtype=complex), np.ascontiguousarray(gamma_k, dtype=float),
@@ -337,7 +344,8 @@ class CirclePlane:
         point (circle plane, counter-clockwise positive) over four times the foil's speed |u|, m/s. The relative
         derivative is dw/dzeta - conj(u_LE) F'(zeta_LE), u_LE the leading edge's own velocity. In the steady Kutta
         flow at angle of attack alpha it is sin(alpha) for every thickness, the thin aerofoil's A0 (swim_model.flow:
-        the suction 4 pi rho r (LESP |u|)^2)."""
+        the suction 4 pi rho r (LESP |u|)^2).
+        """
         u, v, omega = velocity
         leading_edge_velocity = complex(u, v) + 1j * omega * self.z_le
         relative = leading_edge_derivative - leading_edge_velocity.conjugate() * self.map_derivative_le
@@ -368,7 +376,8 @@ class CirclePlane:
                       gamma_k: npt.NDArray[np.float64]) -> tuple[Complex, npt.NDArray[np.float64]]:
         """Each vortex's terms of the impulse sums: (Gamma_k (zeta_k - zeta_k*), m^3/s: I_v = -i rho times their
         sum; Gamma_k [|z_k|^2 + Re(...)], m^4/s, the bracket of L_v in the module docstring: L_v = -rho/2 times
-        their sum)."""
+        their sum).
+        """
         zeta = np.ascontiguousarray(np.atleast_1d(zeta_k), dtype=complex)
         impulse: Complex = np.empty_like(zeta)
         angular: npt.NDArray[np.float64] = np.empty(zeta.size)
@@ -380,13 +389,15 @@ class CirclePlane:
 
 def impulse_from_terms(impulse_terms: Complex, rho_kg_m3: float) -> complex:
     """I_v = -i rho times the sum of the vortices' impulse terms (``CirclePlane.impulse_terms``), in the axes of the
-    terms (foil axes), kg/s per metre of span."""
+    terms (foil axes), kg/s per metre of span.
+    """
     return -1j * rho_kg_m3 * complex(np.sum(impulse_terms))
 
 
 def angular_impulse_from_terms(angular_terms: npt.NDArray[np.float64], rho_kg_m3: float) -> float:
     """L_v about the foil frame's origin = -rho/2 times the sum of the vortices' angular terms
-    (``CirclePlane.impulse_terms``), kg m/s per metre of span."""
+    (``CirclePlane.impulse_terms``), kg m/s per metre of span.
+    """
     return -0.5 * rho_kg_m3 * float(np.sum(angular_terms))
 
 

@@ -106,7 +106,8 @@ LAMB_OSEEN_CORE_GROWTH = LAMB_OSEEN_PEAK_RADIUS2 / (1.0 - math.exp(-LAMB_OSEEN_P
 def viscous_core_radius(core_radius_m: npt.NDArray[np.float64], kinematic_viscosity_m2_s: float,
                         dt_s: float) -> npt.NDArray[np.float64]:
     """The blob cores (m, any shape) after dt_s (s) of viscous diffusion at kinematic_viscosity_m2_s (m^2/s):
-    ``delta^2 + LAMB_OSEEN_CORE_GROWTH nu dt``, so that a vortex's largest speed stays a Lamb-Oseen vortex's."""
+    ``delta^2 + LAMB_OSEEN_CORE_GROWTH nu dt``, so that a vortex's largest speed stays a Lamb-Oseen vortex's.
+    """
     grown: npt.NDArray[np.float64] = np.sqrt(core_radius_m ** 2
                                              + LAMB_OSEEN_CORE_GROWTH * kinematic_viscosity_m2_s * dt_s)
     return grown
@@ -115,8 +116,9 @@ def viscous_core_radius(core_radius_m: npt.NDArray[np.float64], kinematic_viscos
 @compiled
 def _merge_pair(positions_m: npt.NDArray[np.complex128], circulations_m2_s: npt.NDArray[np.float64],
                 origin_m: complex, candidates: int, chord_m: float, opposite_sign_penalty: float) -> int:
-    """i of the pair (i, i + 1), i + 1 < candidates, of least cost: separation / (distance from the foil frame's
-    origin of the nearer one + chord), times opposite_sign_penalty for opposite signs (the first of equal costs)."""
+    """I of the pair (i, i + 1), i + 1 < candidates, of least cost: separation / (distance from the foil frame's
+    origin of the nearer one + chord), times opposite_sign_penalty for opposite signs (the first of equal costs).
+    """
     best, best_cost = 0, math.inf
     for i in range(candidates - 1):
         separation = abs(positions_m[i + 1] - positions_m[i])
@@ -133,7 +135,8 @@ def compile_kernels() -> None:
     """Compile the wake's numba kernels into their on-disk cache, or load them from it, by stepping a small wake
     through shedding, merging and the Kelvin statistics, so that a process stepping a wake afterwards starts at full
     speed. Compiling takes seconds (7 to 19 s on this 2-core host, by its load); loading the cache well under one.
-    For an install step."""
+    For an install step.
+    """
     # any foil, motion and bound do: the kernels are compiled for the argument types only
     foil = JoukowskiFoil(chord_m=0.06, thickness_m=0.008, span_m=0.2)
     wake = Wake(foil, WakeParameters(max_vortex_count=4, protected_vortex_count=2))
@@ -401,7 +404,8 @@ class Wake:
 
     def _absorb_at_surface(self, zeta: npt.NDArray[np.complex128]) -> npt.NDArray[np.complex128]:
         """Remove the vortices (circle-plane positions zeta) closer to the circle than surface_absorption_gap_m;
-        the circle-plane positions of those kept."""
+        the circle-plane positions of those kept.
+        """
         gap_m = self.params.surface_absorption_gap_m
         if gap_m == 0.0 or zeta.size == 0:
             return zeta
@@ -419,7 +423,8 @@ class Wake:
 
     def _shed(self, dt_s: float, zeta: npt.NDArray[np.complex128]) -> None:
         """Shed the step's vortex (Kutta condition against the vortices at zeta, their circle-plane positions at the
-        current pose); keeps the circle-plane positions and impulse terms of all (``_map_vortices``)."""
+        current pose); keeps the circle-plane positions and impulse terms of all (``_map_vortices``).
+        """
         u, v, omega = self._velocity
         te_speed = abs(complex(u, v) + 1j * omega * self.plane.z_te)
         distance = max(self.params.shed_distance_fraction * te_speed * dt_s, self.params.min_shed_distance_m)
@@ -440,7 +445,8 @@ class Wake:
     def leading_edge_suction_parameter(self) -> float:
         """The flow's leading-edge suction parameter now, before the cap: A0 = q_LE / (4 |u|)
         (``CirclePlane.leading_edge_suction_parameter``; sin(alpha) in the steady Kutta flow), dimensionless, signed
-        as the suction velocity of swim_model.flow. NaN before the first step."""
+        as the suction velocity of swim_model.flow. NaN before the first step.
+        """
         if self._pose is None:
             return math.nan
         _, known_le = self.plane.edge_potential_derivatives(self._current_circle_plane_positions(),
@@ -455,7 +461,8 @@ class Wake:
     def _lost_suction(self) -> float:
         """The leading-edge suction the edge cannot hold, per metre of span along the chord, N/m: the attached
         flow's 4 pi rho r (LESP |u|)^2 less the same with LESP capped at critical_leading_edge_suction as
-        swim_model.flow caps it (0 when the parameter is None)."""
+        swim_model.flow caps it (0 when the parameter is None).
+        """
         critical = self.params.critical_leading_edge_suction
         if critical is None:
             return 0.0

@@ -117,7 +117,8 @@ class WakeStatistics:
 @dataclasses.dataclass(frozen=True)
 class WakeVortices:
     """The free vortices after a period (published by sim_node on ``wake_vortices``): positions x + iy in the tank
-    frame (m, oldest first), circulations (m^2/s, counter-clockwise positive), the trailing edge x + iy (m)."""
+    frame (m, oldest first), circulations (m^2/s, counter-clockwise positive), the trailing edge x + iy (m).
+    """
 
     time_s: float
     positions_m: npt.NDArray[np.complex128]
@@ -192,7 +193,8 @@ class WakeCoupling:
 
     def thrust_n(self) -> float:
         """The held force's tank-frame component along e_t = z x F/|F|, the direction in which the foil moves when
-        the whole vehicle turns about the hub (what propels it along alpha: Q_alpha = |F| thrust_n + M_z), N."""
+        the whole vehicle turns about the hub (what propels it along alpha: Q_alpha = |F| thrust_n + M_z), N.
+        """
         x, y, angle = self._pose_now
         radius = math.hypot(x, y)
         if radius == 0.0:
@@ -223,6 +225,7 @@ class WakeCoupling:
 def separation_drag(foil_velocity: ca.SX, factors: ca.SX) -> ca.SX:
     """The foil's quadratic drag (fx, fy, M_z) in foil axes at F, N and N m, for the foil frame's velocity
     (U, V, Omega) = Q2 qdot and factors (k_U, k_V) = 1/2 rho Cd A (kg/m) on the chordwise and normal velocities:
-    (-k_U |U| U, -k_V |V| V, 0)."""
+    (-k_U |U| U, -k_V |V| V, 0).
+    """
     u, v = foil_velocity[0], foil_velocity[1]
     return ca.vertcat(-factors[0] * ca.fabs(u) * u, -factors[1] * ca.fabs(v) * v, 0)
