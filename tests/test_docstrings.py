@@ -48,7 +48,7 @@ def module_names(package: str) -> tuple[str, ...]:
     root = importlib.import_module(package)
     walked = [info.name for info in pkgutil.walk_packages(root.__path__, prefix=f"{package}.")
               if not any(part.startswith("_") or part in ("testing", "test") for part in info.name.split("."))]
-    return (package, *walked)
+    return (*walked, package)  # each object reported where it is defined, before the package re-exports it
 
 
 def numpydoc_sections(docstring: str) -> dict[str, list[str]]:
