@@ -395,7 +395,8 @@ class CirculatoryFlow:
         -------
         dict of str to ndarray
             Keyed as ``flow_terms``'s outputs: ``f`` (n, 3), ``lag_dot`` (n, 2), ``Q``, ``Q_eff``, ``lesp``,
-            ``attached_weight``, ``circulation`` (n,); for one sample given as vectors (3,) and (2,), without the n axis.
+            ``attached_weight``, ``circulation`` (n,); for one sample given as vectors (3,) and (2,), without the n
+        axis.
 
         Raises
         ------

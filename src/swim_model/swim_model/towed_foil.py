@@ -54,7 +54,7 @@ WAKE_STARTUP_CHORDS = 8.0                  # the starting vortex is 8 chords beh
 
 @dataclasses.dataclass(frozen=True)
 class TowedFoilKinematics:
-    """Prescribed heave and pitch of a towed foil (the module docstring's kinematics).
+    """Prescribed heave and pitch of a towed foil (kinematics: the module docstring).
 
     Attributes
     ----------
@@ -226,7 +226,7 @@ def kirchhoff_force(added: AddedMass, velocity: Array, acceleration: Array) -> A
 
 @dataclasses.dataclass(frozen=True)
 class OscillatingFoilResult:
-    """Cycle means and time series of a towed oscillating foil (the module docstring's signs and definitions).
+    """Cycle means and time series of a towed oscillating foil (signs and definitions: the module docstring).
 
     Attributes
     ----------
