@@ -133,7 +133,7 @@ def main(argv: list[str] | None = None) -> int:
     Returns
     -------
     int
-        The exit status: 0, or 2 for a rig file that cannot be used.
+        The exit status: 0, or 2 for a rig file or gait swim_model refuses.
     """
     args = parse_args(argv)
     if args.flow_comparison:

@@ -1,6 +1,7 @@
-"""A reduced-order circulatory flow model of the foil: lift with Wagner's lag, leading-edge suction with a cap,
-profile drag and a smooth transition to the flat plate's normal force past stall.
+"""A reduced-order circulatory flow model of the foil.
 
+Lift with Wagner's lag, leading-edge suction with a cap, profile drag and a smooth transition to the flat plate's
+normal force past stall.
 The ideal (paper's) model applies the added-mass force of Kirchhoff's equations (eq. 46, ``hydrodynamics.py``).
 This module is the rest, the force the vortex wake would add (``wake.py``: ``F_v = -dI_v/dt``), as a generalized
 force ``Q2(q)' f`` with ``f = (fx, fy, mz)`` in foil axes at the foil frame's origin F for the whole span; the
@@ -133,6 +134,7 @@ class FlowParameters:
     # assumed: eps in sqrt(speed^2 + eps^2), smooth at rest (swim_model.leading_edge)
 
     def __post_init__(self) -> None:
+        """Check every coefficient's range (the class's Raises)."""
         positive = ("wagner_slow_rate", "wagner_fast_rate", "critical_leading_edge_suction", "stall_angle_rad",
                     "stall_width_rad", "flat_plate_normal_force_coefficient", "speed_regularization_m_s")
         for name in positive:

@@ -1,9 +1,8 @@
-"""The leading edge's suction cap, shared by the reduced flow model (swim_model.flow) and the vortex wake
-(swim_model.wake).
+"""The leading edge's suction cap, shared by the reduced flow model and the vortex wake.
 
-One edge, one criterion, one formula. A rounded leading edge holds suction only up to a critical leading-edge
-suction parameter (LESP); beyond it the flow separates there (Ramesh, Gopalarathnam, Granlund, Ol & Edwards,
-J. Fluid Mech. 751, 2014). Both models cap the suction smoothly, x / (1 + (x / limit)^n)^(1/n), so that the
+swim_model.flow and swim_model.wake: one edge, one criterion, one formula. A rounded leading edge holds suction
+only up to a critical leading-edge suction parameter (LESP); beyond it the flow separates there (Ramesh,
+Gopalarathnam, Granlund, Ol & Edwards, J. Fluid Mech. 751, 2014). Both models cap the suction smoothly, x / (1 + (x / limit)^n)^(1/n), so that the
 optimizer has derivatives everywhere: flow caps the suction velocity at CRITICAL_LEADING_EDGE_SUCTION |u|, the
 wake its LESP at CRITICAL_LEADING_EDGE_SUCTION.
 
@@ -45,7 +44,7 @@ def is_cap_exponent(exponent: object) -> bool:
 
 
 def smooth_cap(value: Any, limit: Any, exponent: int) -> Any:
-    """value / (1 + (value / limit)^exponent)^(1/exponent).
+    """Value / (1 + (value / limit)^exponent)^(1/exponent).
 
     value where |value| << limit, limit in size where |value| >> limit, smooth through zero for an even exponent.
 

@@ -290,9 +290,11 @@ class VehicleModel:
         return ca.Function("rk4_step", [x, tau, h], [x_next], ["x", "tau", "h"], ["x_next"])
 
     def _rk4_chunk_functions(self, step: ca.Function) -> list[ca.Function]:
-        """``rk4_steps_<n>`` for n in RK4_CHUNK_STEPS past 1: (x, tau (2, n), h) -> the states after each of n
-        steps of ``step`` (the RK4 step, tau[:, k] held over step k), (nx, n); generated as calls of the same step
-        function, so they compute bit for bit what n calls of it do.
+        """``rk4_steps_<n>`` for n in RK4_CHUNK_STEPS past 1: n RK4 steps in one function.
+
+        (x, tau (2, n), h) -> the states after each of n steps of ``step`` (the RK4 step, tau[:, k] held over step
+        k), (nx, n); generated as calls of the same step function, so they compute bit for bit what n calls of it
+        do.
         """
         functions = []
         for steps in RK4_CHUNK_STEPS[1:]:
@@ -791,8 +793,9 @@ class VehicleModel:
         return self._split(trajectory)
 
     def _rk4_chunks(self) -> dict[int, codegen.NativeFunction]:
-        """integrate_rk4's compiled chunks by step count, with buffers of their own (not native_function's, which
-        callers fill between their own calls).
+        """integrate_rk4's compiled chunks by step count, with buffers of their own.
+
+        Not native_function's, which callers fill between their own calls.
         """
         chunks: dict[int, codegen.NativeFunction] | None = self.__dict__.get("_rk4_chunk_cache")
         if chunks is None:

@@ -29,6 +29,7 @@ class VelocityEstimator:
     ValueError
         For a cutoff that is not positive and finite.
     """
+
     def __init__(self, cutoff_hz: float = DEFAULT_CUTOFF_HZ) -> None:
         if not (math.isfinite(cutoff_hz) and cutoff_hz > 0.0):
             raise ValueError(f"cutoff must be positive and finite, got {cutoff_hz!r}")

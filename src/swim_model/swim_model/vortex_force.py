@@ -30,8 +30,9 @@ _Points = TypeVar("_Points", Complex, complex)   # an array of points in the cir
 
 
 class _Kernel:
-    """A function of this package's that numba compiles, numba imported only when a kernel is first called (so a
-    process that never steps a wake does not pay numba's import, about 0.6 s).
+    """A function of this package's that numba compiles, numba imported only when a kernel is first called.
+
+    A process that never steps a wake does not pay numba's import, about 0.6 s.
     """
 
     registered: list["_Kernel"] = []
@@ -48,9 +49,11 @@ class _Kernel:
 
     @staticmethod
     def load_all() -> None:
-        """Wrap every registered kernel in numba's dispatcher and put it in its module's namespace in place of this
-        object, so that a kernel calling another compiles against the other's dispatcher and module code calls the
-        dispatcher directly. numba compiles a kernel at its first call for the argument types.
+        """Wrap every registered kernel in numba's dispatcher.
+
+        Each dispatcher goes into its module's namespace in place of this object, so that a kernel calling another
+        compiles against the other's dispatcher and module code calls the dispatcher directly. numba compiles a kernel
+        at its first call for the argument types.
         """
         import numba   # here, not at the module top: the point of the lazy load
         for kernel in _Kernel.registered:
@@ -84,9 +87,11 @@ def compiled(function: _Function) -> _Function:
 def _blob_sums(x: npt.NDArray[np.float64], y: npt.NDArray[np.float64], source_x: npt.NDArray[np.float64],
                source_y: npt.NDArray[np.float64], gamma: npt.NDArray[np.float64], core2: npt.NDArray[np.float64],
                sum_x: npt.NDArray[np.float64], sum_y: npt.NDArray[np.float64]) -> None:
-    """(sum_x, sum_y)[j] = sum_k (w_jk dx_jk, w_jk dy_jk), dx_jk + i dy_jk = (x_j + i y_j) - (source_x_k + i
-    source_y_k), w_jk = gamma_k / (dx_jk^2 + dy_jk^2 + core2_k): O(N M), the cost of a wake step. Summed in index
-    order k; the loop over the points j is the inner one, so that it runs in SIMD lanes.
+    """(sum_x, sum_y)[j] = sum_k (w_jk dx_jk, w_jk dy_jk): the blob sums of a wake step.
+
+    dx_jk + i dy_jk = (x_j + i y_j) - (source_x_k + i source_y_k), w_jk = gamma_k / (dx_jk^2 + dy_jk^2 + core2_k): O(N
+    M), the cost of a wake step. Summed in index order k; the loop over the points j is the inner one, so that it runs
+    in SIMD lanes.
     """
     sum_x[:] = 0.0
     sum_y[:] = 0.0
@@ -102,8 +107,10 @@ def _blob_sums(x: npt.NDArray[np.float64], y: npt.NDArray[np.float64], source_x:
 @compiled
 def _vortex_potential_sums(points: Complex, zeta: Complex, gamma: npt.NDArray[np.float64], r_m: float,
                            sums: Complex) -> None:
-    """sum_k Gamma_k [1/(p - zeta_k) - 1/(p - zeta_k*)] at the points p into sums; exact kernel, summed in index
-    order (1/D = conj(D)/|D|^2, the loop over the points inner, so that it runs in SIMD lanes).
+    """sum_k Gamma_k [1/(p - zeta_k) - 1/(p - zeta_k*)] at the points p into sums.
+
+    Exact kernel, summed in index order (1/D = conj(D)/|D|^2, the loop over the points inner, so that it runs in SIMD
+    lanes).
     """
     r2 = r_m * r_m
     x, y = points.real.copy(), points.imag.copy()
@@ -136,8 +143,10 @@ def _to_circle(z: Complex, a_m: float, zeta_c_m: float, zeta: Complex) -> None:
 def _vortex_velocities(zeta: Complex, gamma: npt.NDArray[np.float64], u_b: complex, omega: float,
                        core_radii_m: npt.NDArray[np.float64], a_m: float, zeta_c_m: float, r_m: float,
                        pole_origin_m3: float, pole_offset_m3: float, velocities: Complex) -> None:
-    """``CirclePlane.vortex_velocities`` into velocities (N): the map's derivatives, each blob's core (N) in the
-    circle plane and the images per vortex, the O(N^2) sums (``_blob_sums``), then the body and Routh terms.
+    """``CirclePlane.vortex_velocities`` into velocities (N).
+
+    The map's derivatives, each blob's core (N) in the circle plane and the images per vortex, the O(N^2) sums
+    (``_blob_sums``), then the body and Routh terms.
     """
     n = zeta.size
     a2, r2 = a_m * a_m, r_m * r_m

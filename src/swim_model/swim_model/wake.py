@@ -64,8 +64,10 @@ def viscous_core_radius(core_radius_m: npt.NDArray[np.float64], kinematic_viscos
 @compiled
 def _merge_pair(positions_m: npt.NDArray[np.complex128], circulations_m2_s: npt.NDArray[np.float64],
                 origin_m: complex, candidates: int, chord_m: float, opposite_sign_penalty: float) -> int:
-    """I of the pair (i, i + 1), i + 1 < candidates, of least cost: separation / (distance from the foil frame's
-    origin of the nearer one + chord), times opposite_sign_penalty for opposite signs (the first of equal costs).
+    """I of the pair (i, i + 1), i + 1 < candidates, of least cost.
+
+    The cost is separation / (distance from the foil frame's origin of the nearer one + chord), times
+    opposite_sign_penalty for opposite signs (the first of equal costs).
     """
     best, best_cost = 0, math.inf
     for i in range(candidates - 1):
@@ -153,8 +155,8 @@ class WakeParameters:
     surface_absorption_gap_m: float = 1.5e-3
     # assumed: a vortex within one core radius (core_radius_m) of the circle, |zeta| - r, has its core on the
     # wall: its vorticity is in the boundary layer and it is absorbed into the bound circulation
-    # (docs/wake_near_surface.md). Smaller than the gap of a vortex just shed at min_shed_distance_m behind the cusp (1.8 mm on the
-    # rig's foil). 0: never absorb
+    # (docs/wake_near_surface.md). Smaller than the gap of a vortex just shed at min_shed_distance_m behind the
+    # cusp (1.8 mm on the rig's foil). 0: never absorb
     critical_leading_edge_suction: float | None = CRITICAL_LEADING_EDGE_SUCTION
     # the leading edge holds suction up to this leading-edge suction parameter, beyond it the suction is lost
     # (docs/wake_study.md, Sec. 1.2, "Leading-edge suction"); the reduced model's edge (swim_model.leading_edge).
@@ -165,10 +167,12 @@ class WakeParameters:
     # assumed: eps in the speed |u| = sqrt(U^2 + V^2 + eps^2) (swim_model.leading_edge)
     kinematic_viscosity_m2_s: float = 0.0
     # the fluid's kinematic viscosity, by which each vortex's core grows with its age (docs/wake_study.md,
-    # Sec. 1.2, "Viscous core growth"); water at 20 C: 1.0e-6. Assumed 0 by default: the inviscid wake, every core core_radius_m for
-    # as long as the vortex lives, as the wake's checks against theory and the tank were made
+    # Sec. 1.2, "Viscous core growth"); water at 20 C: 1.0e-6. Assumed 0 by default: the inviscid wake, every
+    # core core_radius_m for as long as the vortex lives, as the wake's checks against theory and the tank were
+    # made
 
     def __post_init__(self) -> None:
+        """Check every coefficient's range (the class's Raises)."""
         for name in ("rho_kg_m3", "core_radius_m", "shed_distance_fraction", "min_shed_distance_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
@@ -465,8 +469,9 @@ class Wake:
         return zeta
 
     def _absorb_at_surface(self, zeta: npt.NDArray[np.complex128]) -> npt.NDArray[np.complex128]:
-        """Remove the vortices (circle-plane positions zeta) closer to the circle than surface_absorption_gap_m;
-        the circle-plane positions of those kept.
+        """Remove the vortices closer to the circle than surface_absorption_gap_m.
+
+        zeta holds the vortices' circle-plane positions; returns those of the vortices kept.
         """
         gap_m = self.params.surface_absorption_gap_m
         if gap_m == 0.0 or zeta.size == 0:
@@ -484,8 +489,10 @@ class Wake:
         return zeta[keep]
 
     def _shed(self, dt_s: float, zeta: npt.NDArray[np.complex128]) -> None:
-        """Shed the step's vortex (Kutta condition against the vortices at zeta, their circle-plane positions at the
-        current pose); keeps the circle-plane positions and impulse terms of all (``_map_vortices``).
+        """Shed the step's vortex.
+
+        Its strength is the Kutta condition's against the vortices at zeta, their circle-plane positions at the
+        current pose; keeps the circle-plane positions and impulse terms of all (``_map_vortices``).
         """
         u, v, omega = self._velocity
         te_speed = abs(complex(u, v) + 1j * omega * self.plane.z_te)
@@ -527,8 +534,9 @@ class Wake:
         return math.sqrt(u * u + v * v + self.params.speed_regularization_m_s ** 2)
 
     def _lost_suction(self) -> float:
-        """The leading-edge suction the edge cannot hold, per metre of span along the chord, N/m: the attached
-        flow's 4 pi rho r (LESP |u|)^2 less the same with LESP capped at critical_leading_edge_suction as
+        """The leading-edge suction the edge cannot hold, per metre of span along the chord, N/m.
+
+        The attached flow's 4 pi rho r (LESP |u|)^2 less the same with LESP capped at critical_leading_edge_suction as
         swim_model.flow caps it (0 when the parameter is None).
         """
         critical = self.params.critical_leading_edge_suction

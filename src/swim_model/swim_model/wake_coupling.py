@@ -1,5 +1,6 @@
-"""The free-vortex wake (swim_model.wake) as a generalized force on a simulated vehicle, and the flat-plate
-separation drag the wake lacks. No ROS.
+"""The free-vortex wake as a generalized force on a simulated vehicle, and the separation drag it lacks.
+
+swim_model.wake's vortical force, and the flat-plate separation drag the wake lacks. No ROS.
 
 The plant's equations of motion already hold the added-mass force through Mm = M + Q2' M_A Q2; ``Wake.step``
 returns only the vortical force ``F_v = -dI_v/dt``, so adding it counts nothing twice:
@@ -70,6 +71,7 @@ class WakeCouplingParameters:
     moment_limit_n_m: float = MOMENT_LIMIT_N_M
 
     def __post_init__(self) -> None:
+        """Check that both clip limits are positive and finite."""
         for name in ("force_limit_n", "moment_limit_n_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
