@@ -2,9 +2,9 @@
 
 swim_model.flow and swim_model.wake: one edge, one criterion, one formula. A rounded leading edge holds suction
 only up to a critical leading-edge suction parameter (LESP); beyond it the flow separates there (Ramesh,
-Gopalarathnam, Granlund, Ol & Edwards, J. Fluid Mech. 751, 2014). Both models cap the suction smoothly, x / (1 + (x / limit)^n)^(1/n), so that the
-optimizer has derivatives everywhere: flow caps the suction velocity at CRITICAL_LEADING_EDGE_SUCTION |u|, the
-wake its LESP at CRITICAL_LEADING_EDGE_SUCTION.
+Gopalarathnam, Granlund, Ol & Edwards, J. Fluid Mech. 751, 2014). Both models cap the suction smoothly,
+x / (1 + (x / limit)^n)^(1/n), so that the optimizer has derivatives everywhere: flow caps the suction velocity at
+CRITICAL_LEADING_EDGE_SUCTION |u|, the wake its LESP at CRITICAL_LEADING_EDGE_SUCTION.
 
 Pure arithmetic: smooth_cap works on floats and on CasADi expressions alike, and this module sits below both models
 (flow imports the towed foil, which imports the wake).
