@@ -231,5 +231,5 @@ def test_package_exports_its_api(package):
     """Each package's ``__init__`` lists its public API in ``__all__``, and every name listed is there."""
     module = importlib.import_module(CONTROL_CORE_PACKAGE if package == "swim_control" else package)
     exported = getattr(module, "__all__", None)
-    assert exported, f"{package}.__init__ has no __all__"
+    assert exported, f"{module.__name__}.__init__ has no __all__"
     assert [name for name in exported if not hasattr(module, name)] == []
