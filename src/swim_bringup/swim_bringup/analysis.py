@@ -78,8 +78,7 @@ def find_topic(info: BagInfo, name: str) -> str:
     """The bag's name for the run topic `name` (a key of bag.RUN_TOPICS, /joint_states): the topic recorded under
     that full name (swim-demo's, swim-record's and rosbag2's) or its relative one (joint_states) or, failing both,
     under one namespace (/test/joint_states). MissingTopic if there is none, several, one of another type than
-    RUN_TOPICS gives, or one without messages.
-    """
+    RUN_TOPICS gives, or one without messages."""
     bare = name.lstrip("/")
     candidates = ([topic for topic in info.topics if topic.name.lstrip("/") == bare]
                   or [topic for topic in info.topics if topic.name.endswith("/" + bare)])
@@ -97,8 +96,7 @@ def find_topic(info: BagInfo, name: str) -> str:
 
 def load_run(bag_path: Path) -> Run:
     """The tracked periods of the last plan executed in the bag. MissingTopic if the bag has no tracking_state, or,
-    for the constrained vehicle, no plan; BagError if the bag cannot be read.
-    """
+    for the constrained vehicle, no plan; BagError if the bag cannot be read."""
     info = bag_info(bag_path)
     tracking_topic = find_topic(info, "/tracking_state")
     try:
@@ -139,8 +137,7 @@ def _radius(run: Run, q: np.ndarray) -> np.ndarray:
 
 def hard_stop_periods(run: Run, hard_limits_rad: HardLimits) -> int:
     """The periods in which the heave or the pitch (the run's last two joints) is at or past one of its hard limits
-    ((heave lower, upper), (pitch lower, upper), rad), to within HARD_STOP_TOLERANCE_RAD.
-    """
+    ((heave lower, upper), (pitch lower, upper), rad), to within HARD_STOP_TOLERANCE_RAD."""
     (heave_lower, heave_upper), (pitch_lower, pitch_upper) = hard_limits_rad
     foil = run.q[:, -2:]
     at_stop = ((foil <= np.array([heave_lower, pitch_lower]) + HARD_STOP_TOLERANCE_RAD)
@@ -179,8 +176,7 @@ def measures(run: Run, hard_limits_rad: Optional[HardLimits] = None) -> RunMeasu
 def bridge_measures(bag_path: Path) -> Optional[BridgeMeasures]:
     """From a bridge_node's /diagnostics in the bag (None without any): the faults it latched during the run (a
     latched fault holds the motors at zero until reset: the vehicle did not swim as commanded from then on) and
-    its count of overrun periods.
-    """
+    its count of overrun periods."""
     try:
         topic = find_topic(bag_info(bag_path), "/diagnostics")
     except MissingTopic:
@@ -219,8 +215,7 @@ def bridge_measures(bag_path: Path) -> Optional[BridgeMeasures]:
 
 def analyze(bag_path: Path, hard_limits_rad: Optional[HardLimits] = None) -> RunAnalysis:
     """The measures of the last plan tracked in the bag (hard_limits_rad: as measures'), and the bridge's if a
-    bridge ran.
-    """
+    bridge ran."""
     return RunAnalysis(measures(load_run(bag_path), hard_limits_rad), bridge_measures(bag_path))
 
 
@@ -228,9 +223,7 @@ def analyze(bag_path: Path, hard_limits_rad: Optional[HardLimits] = None) -> Run
 class JointSeries:
     """One joint's samples in a bag's joint_states: log time (when the recorder received the message) in s from
     the topic's first message, position and velocity in the joint's unit (rad for a revolute joint, m for a
-    prismatic one such as R; per s for the velocity), each (n,); velocity is empty when the messages carry none.
-    """
-
+    prismatic one such as R; per s for the velocity), each (n,); velocity is empty when the messages carry none."""
     time_s: np.ndarray
     position: np.ndarray
     velocity: np.ndarray
@@ -239,7 +232,6 @@ class JointSeries:
 @dataclasses.dataclass(frozen=True)
 class JointMotion:
     """One joint's range and peak speed in a bag's joint_states, in the joint's unit (rad or m, per s)."""
-
     joint_name: str
     samples: int
     min_position: float
@@ -250,7 +242,6 @@ class JointMotion:
 @dataclasses.dataclass(frozen=True)
 class JointStatesSummary:
     """What a bag's joint_states alone tell, by log time (when the recorder received each message)."""
-
     topic: str
     messages: int
     duration_s: float                # first to last message
@@ -262,8 +253,7 @@ class JointStatesSummary:
 def read_joint_states(bag_path: Path, topic: str) -> tuple[np.ndarray, dict[str, JointSeries]]:
     """The log times (s, from the first message) of the sensor_msgs/JointState messages on topic, (messages,),
     and each joint's samples by name, in the order the joints first appear. A message whose position (velocity)
-    list is shorter than its names gives no position (velocity) for the joints past its end.
-    """
+    list is shorter than its names gives no position (velocity) for the joints past its end."""
     log_ns: list[int] = []
     samples: dict[str, tuple[list[int], list[float], list[float]]] = {}
     for _, stamp_ns, message in read_messages(bag_path, (topic,)):
@@ -303,9 +293,7 @@ def joint_states_summary(topic: str, message_time_s: np.ndarray,
 @dataclasses.dataclass(frozen=True)
 class BagAnalysis:
     """What swim-analyze makes of one bag: its topics, the joint motion when it has joint_states, the run's measures
-    when it has what they need, and what it lacks, each with why.
-    """
-
+    when it has what they need, and what it lacks, each with why."""
     info: BagInfo
     unknown_types: tuple[str, ...]           # the bag's message types this environment does not know (ours and
     #                                          ROS 2 Jazzy's); the bag's own definitions may still decode them
@@ -316,8 +304,7 @@ class BagAnalysis:
 
     def to_json(self) -> dict[str, Any]:
         """bag_summary.json: the bag, its topics (each with whether its type is known here and, when its messages
-        cannot be decoded, why), the joint motion, the run's measures (report.json's keys), what is missing.
-        """
+        cannot be decoded, why), the joint motion, the run's measures (report.json's keys), what is missing."""
         undecodable = dict(self.undecodable)
         return {"bag": str(self.info.path), "storage": self.info.storage, "complete": self.info.complete,
                 "topics": [{**dataclasses.asdict(topic), "type_known": topic.msgtype not in self.unknown_types,
@@ -331,8 +318,7 @@ class BagAnalysis:
 def analyze_bag(bag_path: Path, hard_limits_rad: Optional[HardLimits] = None) -> BagAnalysis:
     """All that swim-analyze can tell of the bag at bag_path (a bag folder, or one .mcap or .db3 file; hard_limits_rad:
     as measures'). BagError if there is no readable bag there; anything else the bag lacks or holds unreadably is
-    named in `missing`.
-    """
+    named in `missing`."""
     info = bag_info(bag_path)
     known_types = swim_typestore().fielddefs
     missing = []
@@ -406,8 +392,7 @@ def write_joint_figure(joints: Mapping[str, JointSeries], path: Path) -> Path:
 
 def write_figures(bag_path: Path, output_dir: Path) -> list[Path]:
     """Desired vs actual alpha and alphadot (Figs. 19-20 style), heave and pitch, the Cartesian path; with the vortex
-    wake recorded, its last vortices over the path (wake.png).
-    """
+    wake recorded, its last vortices over the path (wake.png)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -467,8 +452,7 @@ def save_figure(figure, path: Path) -> Path:
 
 def summary_table(reports: Mapping[str, RunAnalysis]) -> str:
     """The measures of several runs (a RunReport is one) side by side, one column per run; a measure that only
-    some runs have (the bridge's) is blank for the others.
-    """
+    some runs have (the bridge's) is blank for the others."""
     columns = [report.measure_values() for report in reports.values()]
     rows = list(dict.fromkeys(key for values in columns for key in values))
     width = max(len(r) for r in rows)
@@ -489,8 +473,7 @@ def _label(bag: Path) -> str:
 
 def write_outputs(bag_path: Path, analysis: BagAnalysis, output_dir: Path) -> list[Path]:
     """bag_summary.json always; joint_states.png with joint_states; with the run's measures, report.json and the
-    run's figures (write_figures).
-    """
+    run's figures (write_figures)."""
     output_dir.mkdir(parents=True, exist_ok=True)
     paths = [output_dir / "bag_summary.json"]
     paths[0].write_text(json.dumps(analysis.to_json(), indent=2))

@@ -96,7 +96,6 @@ def default_jobs() -> int:
 @dataclasses.dataclass(frozen=True)
 class RunTask:
     """One run of an experiment (picklable: it goes to the run's process, on this host or a Dask worker)."""
-
     experiment: Experiment
     sliding_mode: bool
     seed: int                        # sim_node's seed
@@ -113,8 +112,7 @@ def run_label(experiment: str, seed: int, sliding_mode: bool) -> str:
 
 def run_one(task: RunTask) -> RunReport:
     """One closed-loop run in a fresh bring-up on the current ROS domain; its report (analysis measures, the
-    action's result, wall time).
-    """
+    action's result, wall time)."""
     task.run_dir.mkdir(parents=True, exist_ok=True)
     specs = closed_loop_specs(
         task.config, sim_overrides=(f"constrained:={str(task.experiment.constrained).lower()}", f"seed:={task.seed}"),
@@ -138,8 +136,7 @@ def run_outcome(run: SeedRun) -> str:
 def compare(experiment: Experiment, runs: Mapping[int, SlidingModePair[SeedRun]]) -> Optional[ExperimentRow]:
     """One experiment's row from its runs by seed, with (on) and without (off) sliding mode, beside the paper's;
     None if no seed has both runs reported. Each quantity of today's row is the seed value of largest magnitude
-    over the seeds reported, the outcome "ok" only if every run's is; the statistics are over the paired seeds.
-    """
+    over the seeds reported, the outcome "ok" only if every run's is; the statistics are over the paired seeds."""
     seeds = sorted(runs)
     paired = [seed for seed in seeds if all(isinstance(run, RunReport)
                                             for run in (runs[seed].sliding_on, runs[seed].sliding_off))]
@@ -216,8 +213,7 @@ def _spread(statistics: NormStatistics, sliding_mode: bool) -> str:
 
 def results_table(rows: Sequence[ExperimentRow], pipeline: str) -> str:
     """Markdown: the pipeline's runs (outcome, duration, the largest final offsets over seeds), then each two-norm's
-    statistics over seeds beside the paper's change (results.md).
-    """
+    statistics over seeds beside the paper's change (results.md)."""
     seeds = sorted({seed for row in rows for seed in row.per_seed.seeds})
     lines = [f"## Pipeline {pipeline}: seeds {', '.join(map(str, seeds))}", "",
              "| experiment | outcome (on/off) | duration s (paper) | final lateral offset cm, largest (on/off) "
@@ -252,8 +248,7 @@ def results_table(rows: Sequence[ExperimentRow], pipeline: str) -> str:
 
 def write_errors_figure(rows: Sequence[ExperimentRow], path: Path) -> Path:
     """The two-norms of every seed with and without sliding mode: one row of panels per experiment, one column per
-    two-norm, each seed's pair joined by a line; the panel's title gives the mean change and its interval.
-    """
+    two-norm, each seed's pair joined by a line; the panel's title gives the mean change and its interval."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

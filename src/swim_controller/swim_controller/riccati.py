@@ -123,8 +123,7 @@ class LqrWeights:
         from the motion (zdot = g(q, qdot, z) has no u). Its dynamics are stable (dg/dz < 0: a disturbance of
         the flow decays at the Wagner rates), so e_z -> 0 once the motion's errors do; weighting it would trade
         tracking error for a flow error no one asked to remove. Its effect on the motion is not ignored: F's
-        df/dz columns make P, and the gains, act on e_z as the disturbance of the motion it is.
-        """
+        df/dz columns make P, and the gains, act on e_z as the disturbance of the motion it is."""
         nq, ny = (3, 1) if constrained else (4, 2)
         n = error_state_size(nq, ny, n_lag)
         rates_y = [self.alpha_rate_per_s] if constrained else [self.alpha_rate_per_s, self.lateral_rate_per_s]
@@ -150,9 +149,8 @@ HUB_ERROR_INDEX_CONSTRAINED = 1
 
 
 def error_state_size(nq: int, ny: int, n_lag: int = 0) -> int:
-    """N = ny + 2 nq + n_lag: integral errors of y, position errors, velocity errors, and the flow's lag-state
-    errors (n_lag = 0 for the ideal flow, 2 for the circulatory one).
-    """
+    """n = ny + 2 nq + n_lag: integral errors of y, position errors, velocity errors, and the flow's lag-state
+    errors (n_lag = 0 for the ideal flow, 2 for the circulatory one)."""
     return ny + 2 * nq + n_lag
 
 
@@ -189,8 +187,7 @@ def linearize(model: VehicleModel, q: Array, qdot: Array, foil_acceleration: Arr
 
     q, qdot (N, nq); foil_acceleration (N, 2); lag (N, n_lag), m/s: the plan's lag states, required by a
     circulatory model (model.n_lag = 2) and refused by the ideal one. F is (N, n, n), G (N, n, 2) with
-    n = error_state_size(nq, ny, n_lag) (module docstring).
-    """
+    n = error_state_size(nq, ny, n_lag) (module docstring)."""
     samples, nq, ny, n_lag = len(q), model.nq, model.n_unactuated, model.n_lag
     if (lag is None) != (n_lag == 0):
         raise GainComputationError(f"linearize: the {model.flow} flow model "
@@ -272,8 +269,7 @@ def backward_transitions(time_s: Array, linearization: Linearization, state_weig
 
     With X(T) = I, Y(T) = S and d/dt (X, Y) = H(t) (X, Y), H = [[F, -G R^-1 G'], [-Q, -F']], P = Y X^-1 solves
     eq. 20; so P at a step's start is (Psi21 + Psi22 P)(Psi11 + Psi12 P)^-1 of P at its end. F and G are taken
-    linear between the plan's samples.
-    """
+    linear between the plan's samples."""
     time_s = np.asarray(time_s, dtype=float)
     if time_s.ndim != 1 or len(time_s) < 2 or np.any(np.diff(time_s) <= 0.0):
         raise GainComputationError("the time grid must be strictly increasing with at least two samples")
@@ -301,8 +297,7 @@ def backward_transitions(time_s: Array, linearization: Linearization, state_weig
 def merge_transitions(transitions: Array, max_norm: float = MERGED_TRANSITION_MAX_NORM) -> list[Array]:
     """The same span in fewer transitions: consecutive ones multiplied while the product's Frobenius norm
     stays at most max_norm. A Hamiltonian transition is symplectic, so its condition number is its 2-norm
-    squared: the bound keeps each map's rounding error below max_norm^2 times the machine epsilon.
-    """
+    squared: the bound keeps each map's rounding error below max_norm^2 times the machine epsilon."""
     merged = [transitions[-1]]
     for psi in transitions[-2::-1]:
         product = psi @ merged[-1]
@@ -335,8 +330,7 @@ def solve_riccati(time_s: Array, linearization: Linearization, state_weight: Arr
     """P(t_k), (N, n, n): eq. 20 solved backward from P(T) = S, F and G linear between samples.
 
     Each interval's Hamiltonian transition is found by sixth-order Magnus steps (``backward_transitions``)
-    and P is carried back through them as a linear-fractional map (``sweep_backward``).
-    """
+    and P is carried back through them as a linear-fractional map (``sweep_backward``)."""
     transitions = backward_transitions(time_s, linearization, state_weight, input_weight)
     return sweep_backward(transitions, terminal)
 
@@ -347,8 +341,7 @@ def continued_terminal(cycle_transitions: Array, cycle_duration_s: float, termin
     cycles, rounded up) and ends with P = terminal: eq. 20 over the one cycle, backward, again and again.
 
     cycle_transitions: the cycle's ``backward_transitions``, (K, 2n, 2n); merged once, so that each pass is
-    only a few linear-fractional maps.
-    """
+    only a few linear-fractional maps."""
     passes = int(np.ceil(lookahead_s / cycle_duration_s - 1e-9))
     merged = merge_transitions(cycle_transitions)
     for _ in range(passes):
@@ -379,8 +372,7 @@ def primitive_gains(model: VehicleModel, time_s: Array, q: Array, qdot: Array, f
 
     ends_at_rest: the primitive ends the vehicle at rest (a decelerate); S then gains
     ``weights.rest_lateral_terminal_weight`` on e_R, the carriage's position error, for the free vehicle, and
-    ``weights.rest_alpha_terminal_weight`` on e_alpha, the hub's, for the constrained one.
-    """
+    ``weights.rest_alpha_terminal_weight`` on e_alpha, the hub's, for the constrained one."""
     weights = weights or LqrWeights()
     weights.validate()
     linearization = linearize(model, q, qdot, foil_acceleration, lag)

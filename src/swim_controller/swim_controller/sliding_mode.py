@@ -54,10 +54,9 @@ class SlidingMode:
             raise ValueError(f"disturbance bound margin must be finite and >= 1, got {self.disturbance_bound_margin!r}")
 
     def term(self, sliding_variable: Array, plan_bound_n_m: Optional[float] = None) -> Array:
-        """Eps (N m, heave and pitch) for the sliding variable s (2,), with D = disturbance_bound_margin
+        """eps (N m, heave and pitch) for the sliding variable s (2,), with D = disturbance_bound_margin
         plan_bound_n_m (the plan's D(t) at this instant, N m) or, when the plan has none (None), the constant
-        disturbance_bound_n_m.
-        """
+        disturbance_bound_n_m."""
         return sliding_variable * self.term_factor(math.hypot(sliding_variable[0], sliding_variable[1]),
                                                    plan_bound_n_m)
 

@@ -52,8 +52,7 @@ class Step:
 @dataclasses.dataclass(frozen=True)
 class Tolerances:
     """Limits on the tracking errors, checked every period: |alpha error| (rad) and |R error| (m) along the plan
-    (path_*) and at its end (goal_*); 0 means not checked.
-    """
+    (path_*) and at its end (goal_*); 0 means not checked."""
 
     path_alpha_rad: float = 0.0
     path_r_m: float = 0.0

@@ -43,8 +43,7 @@ def scaling_matrix(time_scale: float, ny: int, nq: int, n_lag: int = 0) -> Array
 
 def scaling_diagonal(time_scale: float | Array, ny: int, nq: int, n_lag: int = 0) -> Array:
     """The diagonal of Gamma, (lambda^2 [ny], lambda [nq], 1 [nq], 1 [n_lag]); for an array of lambdas, one row
-    per lambda.
-    """
+    per lambda."""
     scale = np.asarray(time_scale, dtype=float)[..., None]
     return np.concatenate([np.repeat(scale ** 2, ny, -1), np.repeat(scale, nq, -1),
                            np.ones(scale.shape[:-1] + (nq + n_lag,))], axis=-1)
@@ -66,8 +65,7 @@ def scale_weights(state_weight: Array, input_weight: Array, terminal: Array, tim
 
 def lqr_gain_from(riccati_input_gain: Array, input_weight_diagonal: Array) -> Array:
     """K = R^-1 G'P (eq. 19; eq. 33 at lambda = 1), (N, 2, n), from G'P (N, 2, n) and R's diagonal (2,):
-    the gains of a plan at lambda = 1, which retime_feedback scales.
-    """
+    the gains of a plan at lambda = 1, which retime_feedback scales."""
     return riccati_input_gain * (1.0 / np.asarray(input_weight_diagonal, dtype=float))[None, :, None]
 
 
@@ -75,8 +73,7 @@ def retime_feedback(lqr_gain: Array, riccati_input_gain: Array, time_scale: floa
                     nq: int, n_lag: int = 0) -> tuple[Array, Array]:
     """The gains of eq. 33 of a plan made at lambda = 1, rescaled to lambda per sample (scalar or (N,)).
 
-    Returns
-    -------
+    Returns:
         lqr_gain: K = lambda R^-1 (G'P) Gamma, so that u = lambda^2 u_des - K x  (1/s^2 and 1/s units by block)
         riccati_input_gain: (G'P) Gamma = G_l' P_l, so that s = Mio^-1 G_l' P_l x (eq. 24)
     n_lag: the flow's lag states at the end of x (0: the ideal flow; 2: the circulatory one).

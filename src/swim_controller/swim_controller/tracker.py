@@ -186,8 +186,7 @@ class FoilRangeGuard:
     def bound(self, u: Sequence[float], psi: Sequence[float], psi_rate: Sequence[float],
               period_s: float) -> tuple[list[float], tuple[bool, bool]]:
         """(u bounded, whether each joint's was) for the (heave, pitch) acceleration u (rad/s^2) held over
-        period_s (s) from the measured psi (rad) and psidot (rad/s).
-        """
+        period_s (s) from the measured psi (rad) and psidot (rad/s)."""
         bounded, limited = [], []
         for acceleration, position, rate, (lower, upper), braking in zip(
                 u, psi, psi_rate, self.hard_limits_rad, self.braking_acceleration_rad_s2):
@@ -203,8 +202,7 @@ def _braking_bound(room_rad: float, rate_rad_s: float, braking_rad_s2: float, pe
     """The largest acceleration (rad/s^2) toward a stop room_rad ahead (rad, clipped at 0) of a joint moving toward
     it at rate_rad_s, after which, held over period_s, it can still come to rest there braking at braking_rad_s2
     (FoilRangeGuard); -rate / period_s (at rest at the period's end) where it would cover the room within the
-    period.
-    """
+    period."""
     a, h, room = braking_rad_s2, period_s, max(room_rad, 0.0)
     if rate_rad_s * h >= 2.0 * room:
         return -rate_rad_s / h
@@ -233,8 +231,7 @@ class CascadeTracker:
     lag states it estimates (LagEstimator); None (the ideal flow) for the paper's plans. A plan of the other flow
     model is refused by start().
     range_guard: bounds the law's foil acceleration near the joints' stops (FoilRangeGuard), in the tracking law,
-    the hold law and hold(); None: no bound (the paper's law).
-    """
+    the hold law and hold(); None: no bound (the paper's law)."""
 
     def __init__(self, io_linearization: IoLinearization, torque_limits_n_m: Array,
                  sliding_mode: SlidingMode = SlidingMode(), sliding_mode_enabled: bool = True,
@@ -267,8 +264,7 @@ class CascadeTracker:
         own lag states at t = 0: the tracker starts a plan with the vehicle taken to be on the plan's start, of
         which the lag states are part; a planned start from rest has z = 0 there, still water, so both readings
         agree, and a start elsewhere (a plan begun mid-stroke) is right where the plan is. PlanError if the plan
-        was made with another flow model than the tracker's.
-        """
+        was made with another flow model than the tracker's."""
         if trajectory.flow_model != self.flow_model:
             raise PlanError(f"the plan was made with the {trajectory.flow_model} flow model, this tracker runs the "
                             f"{self.flow_model} one")
@@ -331,8 +327,7 @@ class CascadeTracker:
 
     def hold(self, q: Array, qdot: Array, psi_target: Array) -> tuple[Array, tuple[bool, bool]]:
         """The torque that holds the foil still at psi_target (heave, pitch), with no plan involved. A state comes
-        without its time here, one a period: the lag estimate advances by sample_period_s.
-        """
+        without its time here, one a period: the lag estimate advances by sample_period_s."""
         lag = NO_LAG
         if self.lag_estimator is not None:
             lag = self.lag_estimator.update(self.sample_period_s, q, qdot)
@@ -350,8 +345,7 @@ class CascadeTracker:
 def model_io_linearization(model: VehicleModel) -> IoLinearization:
     """The I/O linearization of a swim_model VehicleModel, called on its compiled C entry point directly
     (VehicleModel.native_function: the same numbers; the checked numpy API costs ~15 us more per call and CasADi's
-    own call ~45 us, too much at 1 kHz; the tracker validates states itself).
-    """
+    own call ~45 us, too much at 1 kHz; the tracker validates states itself)."""
     function = model.native_function("io_linearization")
     (q_input, qdot_input, *lag_input), (mio_output, cio_output) = function.inputs, function.outputs
     mio_shape = function.function.size_out(0)
@@ -373,8 +367,7 @@ def model_io_linearization(model: VehicleModel) -> IoLinearization:
 
 def model_lag_rate(model: VehicleModel) -> Optional[LagRate]:
     """The lag rate zdot = g(q, qdot, z) of a circulatory VehicleModel on its compiled C entry point (as
-    model_io_linearization; one buffer set per model: the value returned is a copy); None for the ideal flow.
-    """
+    model_io_linearization; one buffer set per model: the value returned is a copy); None for the ideal flow."""
     if model.n_lag == 0:
         return None
     function = model.native_function("lag_rate")
@@ -388,14 +381,13 @@ def model_lag_rate(model: VehicleModel) -> Optional[LagRate]:
 
 
 def hold_acceleration(psi: Array, psi_rate: Array, psi_target: Array) -> Array:
-    """U = -kp (psi - psi_target) - kd psidot: a critically damped return to psi_target."""
+    """u = -kp (psi - psi_target) - kd psidot: a critically damped return to psi_target."""
     return -HOLD_STIFFNESS_PER_S2 * (psi - psi_target) - HOLD_DAMPING_PER_S * psi_rate
 
 
 def saturate(torque: Sequence[float] | Array, limits: Array) -> tuple[Array, tuple[bool, bool]]:
     """Clip the (heave, pitch) torque (N m) to +-limits (2,); a non-finite torque becomes zero and counts as
-    saturated.
-    """
+    saturated."""
     heave, pitch = float(torque[0]), float(torque[1])
     heave_limit, pitch_limit = float(limits[0]), float(limits[1])
     if not (math.isfinite(heave) and math.isfinite(pitch)):
@@ -408,7 +400,6 @@ def solve(matrix: Array, rhs: Array) -> Array:
     """matrix^-1 rhs for a square matrix (n, n) and rhs (n,): numpy.linalg.solve's own LAPACK kernel (gesv),
     the same numbers, without the argument checks and floating-point error state it sets up per call (most of the
     ~8 us it takes for a 2 x 2). For a matrix that cannot be singular, as Mio (an inertia, positive definite at
-    every finite state): a singular one gives non-finite entries and a RuntimeWarning, not LinAlgError.
-    """
+    every finite state): a singular one gives non-finite entries and a RuntimeWarning, not LinAlgError."""
     solution: Array = _umath_linalg.solve1(matrix, rhs, signature="dd->d")
     return solution

@@ -135,8 +135,7 @@ class ModelKey:
 
 def build_model(rig, key: ModelKey) -> VehicleModel:
     """The vehicle model of key with the compiled entry points the tracker calls loaded (compiled to C the first
-    time, cached on disk after).
-    """
+    time, cached on disk after)."""
     model = VehicleModel(rig, constrained=key.constrained, lane_radius_m=key.lane_radius_m, flow=key.flow_model)
     model_io_linearization(model)
     model_lag_rate(model)
@@ -146,8 +145,7 @@ def build_model(rig, key: ModelKey) -> VehicleModel:
 class ModelBuilder:
     """Builds vehicle models one at a time on a daemon thread of its own (a process that stops mid-compilation
     leaves no library behind: swim_model writes it under another name and renames it). on_built is called on that
-    thread after each build, to wake the thread that waits for it.
-    """
+    thread after each build, to wake the thread that waits for it."""
 
     def __init__(self, rig, on_built: Callable[[], None],
                  realtime: RealtimeSettings = NO_REALTIME_MEANS) -> None:
@@ -181,8 +179,7 @@ class ModelBuilder:
 
 class _Awaited:
     """A concurrent.futures.Future awaited in an rclpy coroutine: yields (the executor resumes the coroutine on its
-    next wake-up) until the future is done, giving True, or until give_up() holds, giving False.
-    """
+    next wake-up) until the future is done, giving True, or until give_up() holds, giving False."""
 
     def __init__(self, future: concurrent.futures.Future, give_up: Callable[[], bool]) -> None:
         self.future = future
@@ -278,14 +275,12 @@ class TrackerNode(Node):
 
     def _model_key(self, constrained: bool, lane_radius_m: float, flow_model: str) -> ModelKey:
         """One model per flow and lane for the constrained vehicle, one per flow for the free vehicle (its lane
-        is a coordinate, the model the same for every starting lane).
-        """
+        is a coordinate, the model the same for every starting lane)."""
         return ModelKey(constrained, lane_radius_m if constrained else self.rig.constrained_lane_radius_m, flow_model)
 
     async def _model(self, key: ModelKey, give_up: Callable[[], bool]) -> Optional[VehicleModel]:
         """The vehicle a plan runs on, built once, off this thread (ModelBuilder): awaiting it lets the executor
-        serve everything else meanwhile. None if give_up() holds first (the build goes on for the next goal).
-        """
+        serve everything else meanwhile. None if give_up() holds first (the build goes on for the next goal)."""
         model = self._models.get(key)
         if model is not None:
             return model
@@ -315,8 +310,7 @@ class TrackerNode(Node):
     def make_realtime(self) -> None:
         """The real-time means of the parameters for this process (main() calls it once the start-up's models are
         built): its threads at realtime_priority, memory locked, the collector between periods. Said once at info
-        level, or as one warning with what was refused and why.
-        """
+        level, or as one warning with what was refused and why."""
         settings = realtime_settings(self)
         outcome = make_process_realtime(settings)
         self._builder.realtime = settings
@@ -439,8 +433,7 @@ class TrackerNode(Node):
     # ----- the action ------------------------------------------------------------------------------
     def _on_cancel(self, handle) -> CancelResponse:
         """Cancel the active goal: hold the foil where it is now; or a goal still waiting for its vehicle model:
-        it never starts.
-        """
+        it never starts."""
         if any(waiting is handle for waiting in self._waiting_for_model):
             return CancelResponse.ACCEPT
         goal = self._goal
@@ -452,8 +445,7 @@ class TrackerNode(Node):
 
     async def _execute(self, handle) -> ExecutePlan.Result:
         """Validate the plan, make it the active one (preempting any other), await its end. A goal that waited for
-        its vehicle model while a newer goal arrived is preempted by that one, never the other way round.
-        """
+        its vehicle model while a newer goal arrived is preempted by that one, never the other way round."""
         request = handle.request
         self._goals_received += 1
         arrival = self._goals_received

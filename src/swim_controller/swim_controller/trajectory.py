@@ -95,8 +95,7 @@ class Trajectory:
     planned lag states (m/s), is required with the circulatory flow (n_lag = 2) and must be None with the ideal
     one. The gains act on the error state x = (int e_y, e_q, edot_q, e_z) of n = ny + 2 nq + n_lag entries.
     disturbance_bound: (N,) the sliding mode's bound D(t), N m, finite and >= 0, or None (the tracker's constant
-    bound).
-    """
+    bound)."""
 
     time_s: Array              # (N,) trajectory time, s, strictly increasing
     q: Array                   # (N, nq) rad, m
@@ -224,7 +223,7 @@ class Trajectory:
         return max(int(np.searchsorted(self._segment_start_s, time_s, side="right")) - 1, 0)
 
     def time_scale_at(self, time_s: float) -> float:
-        """Lambda of the segment running at time_s."""
+        """lambda of the segment running at time_s."""
         return self.segments[self.segment_index(time_s)].time_scale
 
     def sample(self, time_s: float) -> TrajectoryPoint:
@@ -251,8 +250,7 @@ class Trajectory:
 
     def foil_acceleration_at(self, time_s: float) -> tuple[float, float]:
         """u_des = psiddot (heave, pitch), rad/s^2, at time_s: sample(time_s).foil_acceleration, the same numbers,
-        without interpolating the rest of the row (the tracker's mid-period feed-forward).
-        """
+        without interpolating the rest of the row (the tracker's mid-period feed-forward)."""
         _, k, offset = self._interval(time_s)
         first = 2 * self._sizes[0]
         heave, pitch = self._rows[k, first:first + 2].tolist()
@@ -261,8 +259,7 @@ class Trajectory:
 
     def _interval(self, time_s: float) -> tuple[float, int, float]:
         """(t, k, t - t_k): time_s clamped to [0, T] as t, and the sample interval [t_k, t_(k+1)] holding it
-        (k in 0..N-2: the last interval holds T, the first a time before the first sample).
-        """
+        (k in 0..N-2: the last interval holds T, the first a time before the first sample)."""
         times = self._times
         t = min(max(time_s, 0.0), times[-1])
         k = max(min(bisect.bisect_right(times, t) - 1, len(times) - 2), 0)
@@ -272,8 +269,7 @@ class Trajectory:
         """This trajectory run time_scale (lambda) times faster: P3 and Theorem 1 (module docstring).
 
         torque_limits_n_m: the (heave, pitch) motor limits, N m (the rig's). Raises PlanError for a lambda that is
-        not positive and finite, or whose torques lambda^2 tau exceed the limits (naming the largest feasible).
-        """
+        not positive and finite, or whose torques lambda^2 tau exceed the limits (naming the largest feasible)."""
         if not (isinstance(time_scale, (int, float)) and math.isfinite(time_scale) and time_scale > 0.0):
             raise PlanError(f"time scale must be a positive finite number, got {time_scale!r}")
         peak = motor_limit_fraction(self.torque, torque_limits_n_m) * time_scale ** 2
@@ -295,9 +291,8 @@ class Trajectory:
 
 
 def motor_limit_fraction(torque_n_m: Array, torque_limits_n_m: npt.ArrayLike) -> float:
-    """Max over samples and motors of |tau| / limit, for torques (N, 2) against (heave, pitch) limits (N m):
-    1.0 is at the limits.
-    """
+    """max over samples and motors of |tau| / limit, for torques (N, 2) against (heave, pitch) limits (N m):
+    1.0 is at the limits."""
     limits = np.asarray(torque_limits_n_m, dtype=float)
     if limits.shape != (2,) or not np.all(np.isfinite(limits)) or np.any(limits <= 0.0):
         raise PlanError(f"torque limits must be two positive finite numbers (heave, pitch), got {limits!r}")

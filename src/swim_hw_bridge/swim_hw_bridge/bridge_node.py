@@ -136,8 +136,7 @@ class BridgeSettings:
 
 class BridgeNode(LifecycleNode):
     """owns_process: the node is its process's (main() makes it so) and applies the real-time means to it; a node
-    made in another's process (a test's, a benchmark's) leaves that process's scheduling and collector alone.
-    """
+    made in another's process (a test's, a benchmark's) leaves that process's scheduling and collector alone."""
 
     def __init__(self, owns_process: bool = False) -> None:
         super().__init__("bridge_node")
@@ -168,7 +167,7 @@ class BridgeNode(LifecycleNode):
                                                     self._publish_diagnostics)
 
     def _guard_change_state_service(self) -> None:
-        """Rclpy 7.1.6 raises out of the change_state service for a transition the current state does not have
+        """rclpy 7.1.6 raises out of the change_state service for a transition the current state does not have
         (activate while unconfigured), which ends spin() and the process; answer success=False instead.
 
         Why through a private attribute: there is no public way in this rclpy. The crash is ros2/rclpy#1209; its
@@ -178,8 +177,7 @@ class BridgeNode(LifecycleNode):
         methods, would mean serving change_state, get_state (7.1 has no public current-state getter: we would
         track it ourselves), get_available_states, get_available_transitions, get_transition_graph and the
         transition_event topic by hand: far more to get wrong than wrapping one callback. On an rclpy that has
-        the fix, or no such attribute, this does nothing harmful: the wrapper only catches what escapes.
-        """
+        the fix, or no such attribute, this does nothing harmful: the wrapper only catches what escapes."""
         service = getattr(self, "_service_change_state", None)
         if service is None:
             return
@@ -263,8 +261,7 @@ class BridgeNode(LifecycleNode):
 
     def _make_realtime(self) -> None:
         """The process's threads at realtime_priority while active (the I/O loop sets its own thread above them),
-        memory locked; said once at info level, or as one warning with what was refused and why.
-        """
+        memory locked; said once at info level, or as one warning with what was refused and why."""
         if not self.owns_process:
             return
         outcome = make_process_realtime(self._realtime())
@@ -275,8 +272,7 @@ class BridgeNode(LifecycleNode):
 
     def _reset_command_timing(self) -> None:
         """The command timing of an activation, from its start: the receipt of each command past the state it
-        answers (the latency) and past the command before less the period (the jitter).
-        """
+        answers (the latency) and past the command before less the period (the jitter)."""
         self.command_latency = LatencyHistogram()
         self.command_jitter = LatencyHistogram()
         self._state_samples: collections.OrderedDict[int, float] = collections.OrderedDict()
@@ -426,8 +422,7 @@ class BridgeNode(LifecycleNode):
 
     def _timing_values(self, snapshot: Snapshot) -> dict[str, object]:
         """How the periods went since the activation: overruns by cause and the worst one, the wake-up lateness,
-        the commands' latency and jitter (median and p99, ms), and the real-time means in effect.
-        """
+        the commands' latency and jitter (median and p99, ms), and the real-time means in effect."""
         loop = self.loop
         by_cause = dict(zip(("late_wakeup", "slow_read", "slow_write", "slow_work"), snapshot.overruns_by_cause))
         values: dict[str, object] = {f"overruns_{cause}": count for cause, count in by_cause.items()}

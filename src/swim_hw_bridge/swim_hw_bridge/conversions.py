@@ -205,8 +205,7 @@ def load_bridge_config(path: str | Path | None = None) -> BridgeConfig:
 
 def load_bridge_config_parameter(path: str) -> BridgeConfig:
     """load_bridge_config for a node's ``bridge_config_path`` parameter (empty: the shipped file). A file that does
-    not load is a ValueError naming the parameter: a start-up error (swim_ros.entry.run_node).
-    """
+    not load is a ValueError naming the parameter: a start-up error (swim_ros.entry.run_node)."""
     try:
         return load_bridge_config(path or None)
     except BridgeConfigError as err:
@@ -275,11 +274,11 @@ class Conversions:
                 h[2] + unwrapped_counts[2] * s[2], h[3] + unwrapped_counts[3] * s[3])
 
     def torques_to_currents(self, heave_n_m: float, pitch_n_m: float) -> tuple[float, float]:
-        """I = tau / (N Kt), amperes, for (heave, pitch) joint torques in N m."""
+        """i = tau / (N Kt), amperes, for (heave, pitch) joint torques in N m."""
         return (heave_n_m / self.torque_gains_n_m_per_a[0], pitch_n_m / self.torque_gains_n_m_per_a[1])
 
     def currents_to_torques(self, heave_a: float, pitch_a: float) -> tuple[float, float]:
-        """Tau = N Kt i, N m."""
+        """tau = N Kt i, N m."""
         return (heave_a * self.torque_gains_n_m_per_a[0], pitch_a * self.torque_gains_n_m_per_a[1])
 
     def currents_to_volts(self, heave_a: float, pitch_a: float) -> tuple[float, float]:

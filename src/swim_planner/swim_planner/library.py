@@ -125,8 +125,7 @@ class PrimitiveLibrary:
 
         lqr_weights: the weights gains are to be computed with (None: keep the library's own); primitives
         whose stored gains were computed with other weights then report ``needs_gains``.
-        flow_model: the model the primitives are solved with; an existing library of another is refused.
-        """
+        flow_model: the model the primitives are solved with; an existing library of another is refused."""
         if (Path(path) / MANIFEST).exists():
             library = cls.load(path, rig, flow_model)
             library.solver = solver
@@ -150,8 +149,7 @@ class PrimitiveLibrary:
 
     def add(self, primitive: Primitive) -> None:
         """Store one primitive (its array file first, then the manifest, each replaced atomically). A stored D(t)
-        is kept if the primitive's motion is the one it was measured along (new gains), else dropped.
-        """
+        is kept if the primitive's motion is the one it was measured along (new gains), else dropped."""
         spec = primitive.spec
         if (primitive.lag is not None) != (self.flow_model == "circulatory"):
             raise LibraryError(f"'{spec.primitive_id}' {'has' if primitive.lag is not None else 'has no'} lag "
@@ -180,8 +178,7 @@ class PrimitiveLibrary:
 
     def needs_disturbance_bound(self, primitive_id: str) -> bool:
         """True for a circulatory-flow primitive without a stored D(t), or with one measured in another wake than
-        swim_planner.disturbance's (ideal-flow ones have none).
-        """
+        swim_planner.disturbance's (ideal-flow ones have none)."""
         if self.flow_model != "circulatory":
             return False
         record = self.entry(primitive_id).get(DISTURBANCE_RECORD)
@@ -189,8 +186,7 @@ class PrimitiveLibrary:
 
     def add_disturbance_bound(self, primitive_id: str, bound_n_m: np.ndarray, measurement: dict) -> None:
         """Store D(t) of a stored circulatory primitive: bound_n_m (N,), N m, finite and >= 0, on its N samples;
-        measurement: how it was measured (JSON values, kept in the manifest's record). LibraryError otherwise.
-        """
+        measurement: how it was measured (JSON values, kept in the manifest's record). LibraryError otherwise."""
         primitive = self.get(primitive_id)
         bound = np.asarray(bound_n_m, dtype=float)
         if self.flow_model != "circulatory":
@@ -230,8 +226,7 @@ class PrimitiveLibrary:
         """Open a library, checking its format, rig, model and flow model (arrays are verified as they are read).
 
         flow_model: the flow model the library must have been made with (swim_model's FLOW_MODELS); None takes
-        the library's own, whichever it is (to list or show it).
-        """
+        the library's own, whichever it is (to list or show it)."""
         directory = Path(path)
         try:
             manifest = json.loads((directory / MANIFEST).read_text())
@@ -322,8 +317,7 @@ class PrimitiveLibrary:
 
     def disturbance_bound(self, primitive_id: str) -> Optional[np.ndarray]:
         """The stored D(t) of a primitive, (N,) N m on its samples, verified against the manifest (read once); None
-        if it has none (an ideal-flow primitive, a format-3 library, or not measured yet).
-        """
+        if it has none (an ideal-flow primitive, a format-3 library, or not measured yet)."""
         record = self.entry(primitive_id).get(DISTURBANCE_RECORD)
         if record is None:
             return None

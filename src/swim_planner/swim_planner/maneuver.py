@@ -51,8 +51,7 @@ JUNCTION_TOLERANCE = 1e-5
 
 def junction_mismatch(previous: Primitive, following: Primitive, lag_states: bool = True) -> float:
     """Largest difference between previous's end state and following's start state, alpha aside (and the lag
-    states, where both have them and ``lag_states``: Primitive.end_boundary_state, start_boundary_state).
-    """
+    states, where both have them and ``lag_states``: Primitive.end_boundary_state, start_boundary_state)."""
     q_end, qdot_end, *lag_end = previous.end_boundary_state
     q_start, qdot_start, *lag_start = following.start_boundary_state
     gaps = [np.abs(q_end[1:] - q_start[1:]).max(), np.abs(qdot_end - qdot_start).max()]
@@ -63,8 +62,7 @@ def junction_mismatch(previous: Primitive, following: Primitive, lag_states: boo
 
 def flow_model_of(primitives: Sequence[Primitive]) -> str:
     """The flow model the primitives were solved with: "circulatory" if they carry lag states, else "ideal";
-    ManeuverError if they mix the two.
-    """
+    ManeuverError if they mix the two."""
     flows = {"ideal" if p.lag is None else "circulatory" for p in primitives}
     if len(flows) != 1:
         raise ManeuverError("a plan cannot mix primitives of the ideal and the circulatory flow models "
@@ -132,8 +130,7 @@ DEFAULT_BOUNDS = PlanBounds()
 def check_plan_size(library: PlanLibrary, primitive_ids: Sequence[str], repeat_counts: Sequence[int],
                     time_scale: float, bounds: PlanBounds = DEFAULT_BOUNDS) -> None:
     """Refuse (ManeuverError) a sequence with an unknown primitive or whose plan would pass bounds, from the
-    library's specs alone: nothing is expanded or built. Mismatched lengths are left to expand_sequence.
-    """
+    library's specs alone: nothing is expanded or built. Mismatched lengths are left to expand_sequence."""
     check_time_scale(time_scale)
     check_known(library, primitive_ids)
     counts = list(repeat_counts) or [1] * len(primitive_ids)
@@ -247,8 +244,7 @@ def concatenate(library: PlanLibrary, rig: RigParameters, sequence: Sequence[tup
 
 def vary_time_scale(nominal: Trajectory, time_scale_of: Callable[[float], float], rig: RigParameters) -> Trajectory:
     """Re-time a plan made at lambda = 1 by a slowly varying lambda(s) of the nominal time s (a constant lambda:
-    Trajectory.time_scaled).
-    """
+    Trajectory.time_scaled)."""
     for segment in nominal.segments:
         if segment.time_scale != 1.0:
             raise ManeuverError("vary_time_scale re-times a plan made at time scale 1")

@@ -93,8 +93,7 @@ PARAMETERS = (
 
 class AnswerMemory:
     """Replies by request id, the latest ANSWERS_KEPT. A repeat that arrives while the first is still being
-    planned waits for that reply instead of planning again.
-    """
+    planned waits for that reply instead of planning again."""
 
     def __init__(self, size: int = ANSWERS_KEPT) -> None:
         self.size = size

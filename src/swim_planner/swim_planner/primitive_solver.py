@@ -117,15 +117,13 @@ def state_derivative_rows(model: VehicleModel) -> slice:
 
 def foil_velocity_rows(model: VehicleModel) -> slice:
     """Circulatory flow: the rows of (U, V, Omega), the foil frame's velocity in foil axes (eq. 40), m/s, m/s,
-    rad/s.
-    """
+    rad/s."""
     return slice(5 + model.nx, 8 + model.nx)
 
 
 def lateral_row(model: VehicleModel) -> int:
     """Circulatory flow: the row of the pitch axis's position across the lane, m: Lh sin(phi), less R for the free
-    vehicle (primitives.cruise_strouhal_number's lateral coordinate).
-    """
+    vehicle (primitives.cruise_strouhal_number's lateral coordinate)."""
     return 8 + model.nx
 
 
@@ -142,8 +140,7 @@ _POINTWISE: dict[tuple, PointwiseFunction] = {}
 
 def pointwise_function(model: VehicleModel) -> PointwiseFunction:
     """phi(y, theta) with y = (q, qdot, u), theta = (w_h, w_p): the rows above, compiled once per model.
-    With the circulatory flow y = (q, qdot, z, u) and phi gains zdot and the foil velocity (U, V, Omega).
-    """
+    With the circulatory flow y = (q, qdot, z, u) and phi gains zdot and the foil velocity (U, V, Omega)."""
     if model.circulatory_flow is not None:
         return _circulatory_pointwise_function(model)
     key = (model.rig.digest(), model.constrained, model.lane_radius_m)
@@ -179,8 +176,7 @@ def _circulatory_pointwise_function(model: VehicleModel) -> PointwiseFunction:
 @dataclasses.dataclass(frozen=True)
 class PrimitiveNlp:
     """One primitive's NLP (swim_planner.pointwise form), its initial guess and constraint bounds, and the
-    expressions of the solution's samples on the fine grid.
-    """
+    expressions of the solution's samples on the fine grid."""
 
     nlp: PointwiseNlp
     z0: Array
@@ -213,9 +209,7 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
         end: (q, qdot) it must reach (required for accelerate, cruise-to-cruise, lane change; alpha free);
             (q, qdot, lag) with the circulatory flow (Primitive.start_boundary_state).
         guess: a primitive of the same grid size to warm-start from (else a built-in guess).
-
-    Raises
-    ------
+    Raises:
         PrimitiveSolveError: IPOPT did not converge (in the continuation's last step); the message gives its status.
         ValueError: a continuation with the ideal flow, or one that is not descending from below 90 deg to above
             the bound of ``limits``; a Strouhal floor (PrimitiveSpec.min_strouhal) with the ideal flow.
@@ -272,8 +266,7 @@ def _solve_refined(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLim
                    guess: Optional[Primitive], settings: SolverSettings) -> Primitive:
     """solve_primitive of a spec with a coarser grid: on spec.coarse_intervals (continuation included) to
     settings.coarse_grid_tolerance, then on spec.intervals from the coarse solution interpolated, with the bound of
-    ``limits`` alone.
-    """
+    ``limits`` alone."""
     coarse_spec = dataclasses.replace(spec, intervals=cast(int, spec.coarse_intervals), coarse_intervals=None)
     coarse_settings = dataclasses.replace(settings, tolerance=max(settings.tolerance, settings.coarse_grid_tolerance))
     coarse = solve_primitive(model, coarse_spec, limits, start, end, guess, coarse_settings)
@@ -298,8 +291,7 @@ def _resampled(primitive: Primitive, spec: PrimitiveSpec) -> Primitive:
 
 def _interpolated_columns(time_s: Array, sample_time_s: Array, values: Array) -> Array:
     """Each column of ``values`` (samples at ``sample_time_s``) interpolated linearly at ``time_s``:
-    (len(time_s), columns).
-    """
+    (len(time_s), columns)."""
     return np.column_stack([np.interp(time_s, sample_time_s, column) for column in values.T])
 
 
@@ -307,8 +299,7 @@ def continuation_bounds(model: VehicleModel, spec: PrimitiveSpec, limits: Planni
     """The angle-of-attack bounds ``solve_primitive`` solves with, in order, rad (None: no bound): the bound of
     ``limits`` alone, or with the spec's continuation None, its looser bounds, then the bound of ``limits``.
 
-    Raises
-    ------
+    Raises:
         ValueError: a continuation with the ideal flow (which has no angle-of-attack bound), or bounds that do not
             descend strictly from below pi/2 to above ``limits.angle_of_attack_limit_rad``.
     """
@@ -330,8 +321,7 @@ def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimi
     """The NLP of one primitive (arguments as for ``solve_primitive``). ``bound_angle_of_attack`` False leaves the
     circulatory flow's angle-of-attack bound out (the first step of a continuation); the ideal flow has none.
 
-    Raises
-    ------
+    Raises:
         ValueError: a start or end state that is not (q, qdot) of finite numbers of the model's size
             ((q, qdot, lag) with the circulatory flow); a Strouhal floor with the ideal flow (its pointwise function
             has no lateral row).
@@ -421,8 +411,7 @@ def _check_circulatory_states(model: VehicleModel, spec: PrimitiveSpec, start, e
 def _angle_of_attack_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits,
                            grid, phi: ca.MX) -> None:
     """|atan2(-V, U)| <= a at the collocation points ``angle_of_attack_bounded`` names, as U tan(a) -+ V >= 0,
-    and the same at the three-quarter chord (module docstring).
-    """
+    and the same at the three-quarter chord (module docstring)."""
     if not 0.0 < limits.angle_of_attack_limit_rad < math.pi / 2:
         raise ValueError(f"{spec.primitive_id}: angle_of_attack_limit_rad must be in (0, pi/2), got "
                          f"{limits.angle_of_attack_limit_rad!r}")
@@ -442,8 +431,7 @@ def _stroke_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, grid,
     """A cruise's Strouhal number 2 A f / U (primitives.cruise_strouhal_number) at least spec.min_strouhal: the
     pitch axis's excursion across the lane from the cycle's start (a turn of the heave) to its middle at least
     St_min U / f = St_min R dalpha, with f one stroke per cycle and U = R dalpha / T. Affine in the NLP's
-    variables; a peak-to-peak excursion is at least this one.
-    """
+    variables; a peak-to-peak excursion is at least this one."""
     assert spec.min_strouhal is not None
     lateral_m = grid.fine(phi[lateral_row(model), :])
     middle = spec.intervals
@@ -455,8 +443,7 @@ def _stroke_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, grid,
 def _rest_window_rate_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits,
                             grid) -> None:
     """|heave rate| and |pitch rate| <= PrimitiveSpec.rest_window_foil_rate_limit_rad_s (rad/s) at the fine grid's
-    points inside the window next to rest, where the angle-of-attack bound is off (module docstring).
-    """
+    points inside the window next to rest, where the angle-of-attack bound is off (module docstring)."""
     assert spec.rest_window_foil_rate_limit_rad_s is not None
     nq = model.nq
     inside = np.flatnonzero(~angle_of_attack_bounded(spec, limits))
@@ -467,15 +454,13 @@ def _rest_window_rate_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveS
 
 def rest_window_s(spec: PrimitiveSpec, limits: PlanningLimits) -> float:
     """The window next to rest (an accelerate's start, a decelerate's end) where the angle-of-attack bound is off,
-    s: the spec's own (PrimitiveSpec.rest_window_s) or PlanningLimits.angle_of_attack_free_from_rest_s.
-    """
+    s: the spec's own (PrimitiveSpec.rest_window_s) or PlanningLimits.angle_of_attack_free_from_rest_s."""
     return limits.angle_of_attack_free_from_rest_s if spec.rest_window_s is None else spec.rest_window_s
 
 
 def angle_of_attack_bounded(spec: PrimitiveSpec, limits: PlanningLimits) -> npt.NDArray[np.bool_]:
     """Which of the fine grid's 2N + 1 points carry the angle-of-attack bound: all but those within
-    ``rest_window_s`` of rest (an accelerate's start, a decelerate's end).
-    """
+    ``rest_window_s`` of rest (an accelerate's start, a decelerate's end)."""
     times = fine_grid_times(spec.solved_duration_s, spec.intervals)
     if spec.primitive_type is PrimitiveType.ACCELERATE:
         from_rest_s = times
@@ -593,8 +578,7 @@ def _folded_cruise_guess(model: VehicleModel, spec: PrimitiveSpec, limits: Plann
     the foil pitched along its own velocity, the hub turning at the rate that holds the energy level, with a small
     stroke (pitch leading heave by 90 deg) and the lag states of that steady flow. The cruises this flow solves
     to are close to it (docs/circulatory_primitives.md): a built-in guess of the ideal cruise's gait swum from rest
-    took 112-157 IPOPT iterations to the constrained E = 0.05 cruise.
-    """
+    took 112-157 IPOPT iterations to the constrained E = 0.05 cruise."""
     nq = model.nq
     heave_rad = limits.heave_range_rad - FOLDED_GUESS_HEAVE_AMPLITUDE_RAD - FOLDED_GUESS_HEAVE_MARGIN_RAD
     q_mean = np.zeros(nq)
@@ -629,8 +613,7 @@ def _folded_cruise_guess(model: VehicleModel, spec: PrimitiveSpec, limits: Plann
 
 def _steady_lag(model: VehicleModel, q: Array, qdot: Array) -> Array:
     """The lag states of a steady flow at each sample (samples, n_lag), m/s: each at the three-quarter chord's
-    normal velocity -(V + Omega x_34), where its rate vanishes (swim_model.flow).
-    """
+    normal velocity -(V + Omega x_34), where its rate vanishes (swim_model.flow)."""
     assert model.circulatory_flow is not None
     x34 = model.circulatory_flow.three_quarter_chord_x_m
     normal = np.array([-(v + w * x34) for _, v, w in (model.foil_velocity_map(a) @ b for a, b in zip(q, qdot))])
@@ -653,8 +636,7 @@ def _still_foil_guess(model: VehicleModel, spec: PrimitiveSpec, limits: Planning
     between rest and that posture with the hub still. The guess neither thrusts nor brakes: IPOPT finds the
     stroke. The blend of the boundary states has the foil broadside to its motion: from the blend with the
     cruise's stroke IPOPT found the constrained E = 0.05 decelerate (also from the plain blend) and the E = 0.10
-    and 0.20 accelerates infeasible.
-    """
+    and 0.20 accelerates infeasible."""
     nq = model.nq
     q_moving, qdot_moving = np.asarray(moving[0], dtype=float), np.asarray(moving[1], dtype=float)
     window_s = min(rest_window_s(spec, limits), 0.5 * times[-1])
@@ -679,8 +661,7 @@ def _still_foil_guess(model: VehicleModel, spec: PrimitiveSpec, limits: Planning
 def _blend_guess(model: VehicleModel, spec: PrimitiveSpec, times: Array, start, end,
                  cruise: Optional[Primitive]) -> tuple[Array, Array]:
     """Blend between the boundary states; with a cruise given, fade its stroke in (accelerate), out
-    (decelerate), or keep it (between cruises), so the guess already swims in the right phase.
-    """
+    (decelerate), or keep it (between cruises), so the guess already swims in the right phase."""
     weight = (times / times[-1])[:, None]
     x_start, x_end = np.concatenate(start), np.concatenate(end)
     x_guess = (1 - weight) * x_start + weight * x_end

@@ -164,8 +164,7 @@ class Primitive:
     @property
     def start_boundary_state(self) -> tuple[Array, ...]:
         """The state a primitive joining this one's start must reach: (q, qdot), or (q, qdot, lag) with the
-        circulatory flow.
-        """
+        circulatory flow."""
         return self.start_state + (() if self.lag is None else (self.lag[0].copy(),))
 
     @property
@@ -187,8 +186,7 @@ class SolverSettings:
     Derivatives: "pointwise" assembles them from the model's pointwise function compiled to C
     (swim_planner.pointwise): 0.44 s for that cruise. "casadi" lets CasADi differentiate the whole NLP graph:
     3.4-3.8 s, 2.6 s of it in the Hessian (66 ms a call); with expand_to_sx it first expands the graph into one
-    SX graph, whose Hessian is fast to evaluate (30 ms) but took 9 s to build: 13.7 s in all.
-    """
+    SX graph, whose Hessian is fast to evaluate (30 ms) but took 9 s to build: 13.7 s in all."""
 
     tolerance: float = 1e-8
     coarse_grid_tolerance: float = 1e-6
@@ -216,8 +214,7 @@ def rest_state(model: VehicleModel, lane_radius_m: float) -> tuple[Array, Array]
 
 def rest_boundary_state(model: VehicleModel, lane_radius_m: float) -> tuple[Array, ...]:
     """Rest as a boundary state: (q, qdot), and with the circulatory flow the lag states of still water (the
-    steady lag of zero velocity: zero).
-    """
+    steady lag of zero velocity: zero)."""
     q, qdot = rest_state(model, lane_radius_m)
     if model.circulatory_flow is None:
         return q, qdot
@@ -233,8 +230,7 @@ def cruise_mean_speed_m_s(primitive: Primitive) -> float:
 def cruise_strouhal_number(primitive: Primitive, heave_link_length_m: float) -> float:
     """2 A f / U of a cruise: A the heave amplitude of the pitch axis (half its peak-to-peak excursion across the
     lane, Lh sin(phi), plus R for the free vehicle; swim_model.kinematics), f one stroke per solved cycle, U the
-    mean speed (``cruise_mean_speed_m_s``).
-    """
+    mean speed (``cruise_mean_speed_m_s``)."""
     spec = primitive.spec
     heave = primitive.q[:, 1] if spec.constrained else primitive.q[:, 2]
     lateral_m = heave_link_length_m * np.sin(heave) - (0.0 if spec.constrained else primitive.q[:, 1])

@@ -32,8 +32,7 @@ Check = Callable[[Any], Optional[str]]
 @dataclasses.dataclass(frozen=True)
 class ParameterSpec:
     """One parameter of a node: name, default (its type is the parameter's type), what it is (with its unit),
-    an inclusive range for numbers, read_only if it is fixed once the node has started, and an extra check.
-    """
+    an inclusive range for numbers, read_only if it is fixed once the node has started, and an extra check."""
 
     name: str
     default: ParameterValue
@@ -57,8 +56,7 @@ class ParameterSpec:
 
     def reason_invalid(self, value: Any) -> Optional[str]:
         """Why value is not valid for this parameter (range and check), or None. rclpy checks the range too;
-        this also serves the values a node is started with.
-        """
+        this also serves the values a node is started with."""
         if self.range is not None:
             low, high = self.range
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:
@@ -72,8 +70,7 @@ class ParameterSpec:
 
 def declare_parameters(node: Node, table: Sequence[ParameterSpec]) -> None:
     """Declare every parameter of table on node; ValueError naming the first start-up value that is not valid
-    (rclpy's own range refusal included), so run_node reports it as a fatal start-up error.
-    """
+    (rclpy's own range refusal included), so run_node reports it as a fatal start-up error."""
     from rclpy.exceptions import InvalidParameterValueException
     for spec in table:
         try:
@@ -87,8 +84,7 @@ def declare_parameters(node: Node, table: Sequence[ParameterSpec]) -> None:
 
 def check_parameters(table: Sequence[ParameterSpec], parameters: Sequence[Any]) -> SetParametersResult:
     """The on-set callback: refuses the whole set, with the first reason, if any value is not valid. Parameters
-    not in table (rclpy's own, such as use_sim_time) pass.
-    """
+    not in table (rclpy's own, such as use_sim_time) pass."""
     specs = {spec.name: spec for spec in table}
     for parameter in parameters:
         spec = specs.get(parameter.name)
@@ -117,8 +113,7 @@ def one_of(*choices: str) -> Check:
 
 def realtime_parameters(priority: int, thread: str) -> tuple[ParameterSpec, ...]:
     """The real-time means of a periodic node (swim_ros.realtime.RealtimeSettings), fixed at start; priority is
-    the default priority of thread (which of the node's threads it sets: "node's threads", ...).
-    """
+    the default priority of thread (which of the node's threads it sets: "node's threads", ...)."""
 
     def cpu_list(value: Any) -> Optional[str]:
         if value == "":

@@ -84,8 +84,7 @@ THIN_AEROFOIL_LIFT_SLOPE_PER_RAD = 2.0 * math.pi
 
 def wave_angle_of_attack_rad() -> float:
     """The angle of attack the waves' orbital velocity makes at the foil's mid-span, rad: u / v_ref with
-    u = a omega exp(-k z), deep-water waves (k = omega^2 / g), z half the foil's span below the surface.
-    """
+    u = a omega exp(-k z), deep-water waves (k = omega^2 / g), z half the foil's span below the surface."""
     omega_rad_s = 2.0 * math.pi * WAVE_FREQUENCY_HZ
     wavenumber_per_m = omega_rad_s ** 2 / GRAVITY_M_S2
     orbital_speed_m_s = WAVE_AMPLITUDE_M * omega_rad_s * math.exp(-wavenumber_per_m * 0.5 * _RIG.foil_span_m)
@@ -95,8 +94,7 @@ def wave_angle_of_attack_rad() -> float:
 @dataclasses.dataclass(frozen=True)
 class Disturbances:
     """Sizes of the disturbances; zero switches one off. The defaults are physical (module docstring); paper()
-    gives the ideal-flow pipeline's.
-    """
+    gives the ideal-flow pipeline's."""
 
     # rolling bearings: their friction is load-dependent (Coulomb, below); the speed-dependent lubricant drag at a
     # hub's < 1 rad/s and a platform's < 0.1 m/s is left out, and the water's drag is the drag terms below
@@ -150,8 +148,7 @@ class Disturbances:
         """The sizes of the paper's pipeline (ideal flow). The ideal-flow model the plans are made with has only
         added-mass thrust, far less than a real foil's lift, so the disturbances it can reject are small: these are
         the sizes under which the paper's constrained maneuver still tracks to centimetres (the paper's rig did,
-        Sec. 7.1); with a flat plate's 1.2 or a 0.1 degree tilt the vehicle loses the plan. All assumed.
-        """
+        Sec. 7.1); with a flat plate's 1.2 or a 0.1 degree tilt the vehicle loses the plan. All assumed."""
         return cls(
             hub_viscous_n_m_s=0.002,          # a ball-bearing hub, a few mN m at 1 rad/s
             hub_coulomb_n_m=0.003,            # sliding friction torque of the hub bearing and encoder

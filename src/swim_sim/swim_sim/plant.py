@@ -83,17 +83,15 @@ class PlantState:
 def vehicle_model(flow: str, rig: Optional[RigParameters] = None, constrained: bool = False,
                   lane_radius_m: Optional[float] = None) -> VehicleModel:
     """The VehicleModel a plant of this flow (FLOWS) integrates: the circulatory one for "circulatory", else the
-    ideal one (the wake's force is added by the plant). ValueError for another flow.
-    """
+    ideal one (the wake's force is added by the plant). ValueError for another flow."""
     if flow not in FLOWS:
         raise ValueError(f"flow must be one of {FLOWS}, got {flow!r}")
     return VehicleModel(rig, constrained=constrained, lane_radius_m=lane_radius_m, flow=MODEL_FLOWS[flow])
 
 
 def _parameter_vector(model: VehicleModel, disturbances: Disturbances, foil_drag: bool = True) -> Array:
-    """P = (b per coordinate, k_foil_U, k_foil_V, k_platform, m g sin(tilt), tilt direction); the foil's drag
-    factors k_foil zero without foil_drag (the circulatory flow carries its own).
-    """
+    """p = (b per coordinate, k_foil_U, k_foil_V, k_platform, m g sin(tilt), tilt direction); the foil's drag
+    factors k_foil zero without foil_drag (the circulatory flow carries its own)."""
     rig = model.rig
     viscous = np.zeros(model.nq)
     viscous[0] = disturbances.hub_viscous_n_m_s
@@ -113,8 +111,7 @@ def _parameter_vector(model: VehicleModel, disturbances: Disturbances, foil_drag
 def _dynamics(model: VehicleModel, substeps: int) -> list[ca.Function]:
     """The plant's compiled functions, symbolic: the RK4 step, the force holding stopped coordinates, the tilt's
     potential energy, the wave force's shape and the whole period with and without a lock mask. The state is
-    x = (q, qdot), or (q, qdot, z) with the circulatory flow (the flow's force in the bias, z's rate appended).
-    """
+    x = (q, qdot), or (q, qdot, z) with the circulatory flow (the flow's force in the bias, z's rate appended)."""
     s = model.symbolic
     nq = model.nq
     q, qdot, tau = s.q, s.qdot, s.tau
@@ -172,11 +169,10 @@ def _dynamics(model: VehicleModel, substeps: int) -> list[ca.Function]:
 
 
 def _period(step: ca.Function, name: str, nq: int, nx: int, substeps: int) -> ca.Function:
-    """Substeps steps with the inputs held: (x, tau, held, p, [lock,] h) -> (x at the end, crossing, highest,
+    """substeps steps with the inputs held: (x, tau, held, p, [lock,] h) -> (x at the end, crossing, highest,
     lowest), where crossing[i] is the smallest qdot_i(t_k) sign(qdot_i(t_0)) over the substeps: <= 0 where a
     velocity reached or crossed zero inside the period, and highest[i], lowest[i] are the largest and smallest
-    q_i(t_k) over the substeps (past a hard stop: the plant then redoes the period substep by substep).
-    """
+    q_i(t_k) over the substeps (past a hard stop: the plant then redoes the period substep by substep)."""
     x0 = ca.MX.sym("x", nx)
     held_inputs = [ca.MX.sym(n, *step.size_in(i)) for i, n in enumerate(step.name_in()) if i > 0]
     states = step.mapaccum(substeps)(x0, *(ca.repmat(v, 1, substeps) for v in held_inputs))
@@ -195,8 +191,7 @@ class Plant:
     wake: the vortex wake's coupling for flow "wake" (None: built with WakeCouplingParameters' defaults).
     hard_limits_rad: the joints' hard stops ((heave lower, upper), (pitch lower, upper)), rad; None: no stops.
     flow: one of FLOWS (module docstring); None: taken from the arguments ("circulatory" for a circulatory model,
-        "wake" with a wake, else "ideal"). A model or a wake that does not fit the flow is a ValueError.
-    """
+        "wake" with a wake, else "ideal"). A model or a wake that does not fit the flow is a ValueError."""
 
     def __init__(self, model: VehicleModel, disturbances: Disturbances = Disturbances(),
                  sample_period_s: Optional[float] = None, substeps: int = 8, seed: int = 0,
@@ -249,7 +244,7 @@ class Plant:
         self.reset(self.rest_positions(), np.zeros(model.nq))
 
     def rest_positions(self) -> Array:
-        """Q of the vehicle at rest at the origin: every coordinate zero, R (free vehicle) on its lane."""
+        """q of the vehicle at rest at the origin: every coordinate zero, R (free vehicle) on its lane."""
         q = np.zeros(self.model.nq)
         if not self.model.constrained:
             q[1] = self.model.lane_radius_m
@@ -266,8 +261,7 @@ class Plant:
         """Put the vehicle at (q, qdot) and the circulatory flow's lag states at lag (m/s; None: zeros, the flow at
         rest; the other flows have none); restarts the noise from the seed and the wake from rest, so runs repeat
         bit for bit. StateError for a non-finite entry, a wrong size or a joint past its hard stop; nothing changes
-        then.
-        """
+        then."""
         q, qdot = (self.model._vector(v, self.model.nq, n) for v, n in ((q, "q"), (qdot, "qdot")))
         lag = np.zeros(self.model.n_lag) if lag is None else self.model._vector(lag, self.model.n_lag, "lag")
         for i, (lower, upper) in self._stops.items():
@@ -328,8 +322,7 @@ class Plant:
         never on its torque; a caller that waits for the torque (sim_node in lock-step, after publishing the state)
         can step the wake while the controller computes. ``step`` then gives the same numbers bit for bit as
         without it (the same computations in the same order, the noise drawn in the same sequence); ``reset``
-        discards a prepared period. Once per period: a second call before ``step`` does nothing.
-        """
+        discards a prepared period. Once per period: a second call before ``step`` does nothing."""
         if self._prepared_force is None:
             self._prepared_force = self._period_force()
 
@@ -354,8 +347,7 @@ class Plant:
 
     def _fast_period(self, x: Array, torque: Array, wave: Array) -> Optional[Array]:
         """The whole period in one compiled call, unless a moving dry-friction coordinate's velocity reaches zero
-        in it or a joint passes a hard stop (None: redo the period substep by substep).
-        """
+        in it or a joint passes a hard stop (None: redo the period substep by substep)."""
         held, lock = self._friction(x, torque, wave)
         if lock.any():
             period = self._period_locked
@@ -375,8 +367,7 @@ class Plant:
 
     def _pin_stopped(self, x: Array, x_next: Array) -> Array:
         """Stopped coordinates (stuck by friction, held at a stop) exactly where they stopped (the constraint
-        leaves round-off, ~1e-20).
-        """
+        leaves round-off, ~1e-20)."""
         for i, _, _ in self._dry:
             if self.stuck[i]:
                 x_next[i], x_next[self.model.nq + i] = x[i], 0.0
@@ -387,8 +378,7 @@ class Plant:
 
     def _substep_period(self, x: Array, torque: Array, wave: Array) -> Array:
         """The period substep by substep: dry-friction coordinates stop where their velocity reaches zero, joints
-        stop where they reach a hard stop.
-        """
+        stop where they reach a hard stop."""
         nq = self.model.nq
         step = self._step
         for _ in range(self.substeps):
@@ -415,8 +405,7 @@ class Plant:
         """Stop coordinate indices[0] by a plastic impulse, the others (already stopped) staying stopped: for one
         coordinate i, qdot -= Mm^-1 e_i v_i / (Mm^-1)_ii; for a set S, qdot -= Mm^-1 E (E' Mm^-1 E)^-1 E' qdot
         (E the columns of I in S). The Mm-orthogonal projection onto v_S = 0, which never adds kinetic energy
-        (for one coordinate it removes v_i^2 / (2 (Mm^-1)_ii)).
-        """
+        (for one coordinate it removes v_i^2 / (2 (Mm^-1)_ii))."""
         nq = self.model.nq
         self._mass.inputs[0][:] = x[:nq]
         self._mass()
@@ -436,8 +425,7 @@ class Plant:
         them is within their static limit, else break away (against Coulomb friction); moving ones feel
         -Coulomb sign(v). A joint at a hard stop stays locked while the force holding it pushes back from the
         limit, and is released when it would have to pull. Mutates x only to give a breaking-away coordinate its
-        direction of motion.
-        """
+        direction of motion."""
         nq = self.model.nq
         held, lock = wave.copy(), np.zeros(nq)
         for i, _, _ in self._dry:

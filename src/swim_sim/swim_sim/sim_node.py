@@ -136,18 +136,16 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
 @dataclasses.dataclass(frozen=True)
 class StateBounds:
     """What set_state accepts, per coordinate name: (lower, upper) positions and the largest speed, each with
-    where the bound comes from (said in a refusal, with how to change it).
-    """
+    where the bound comes from (said in a refusal, with how to change it)."""
 
     positions: dict[str, tuple[float, float, str]]
     speeds: dict[str, tuple[float, str]]
 
     @classmethod
     def of(cls, plant: Plant, config: BridgeConfig) -> "StateBounds":
-        """Alpha within swim_planner's start-alpha bound (float64 keeps alpha to 1e-10 rad up to there), R inside
+        """alpha within swim_planner's start-alpha bound (float64 keeps alpha to 1e-10 rad up to there), R inside
         the tank, heave and pitch within their hard stops; speeds within the bridge file's physically possible
-        joint speeds.
-        """
+        joint speeds."""
         rig, where = plant.model.rig, f"the bridge file {config.source_path}"
         alpha = DEFAULT_BOUNDS.max_abs_start_alpha_rad
         positions = {"alpha": (-alpha, alpha, "swim_planner's PlanBounds.max_abs_start_alpha_rad"),
@@ -286,8 +284,7 @@ class SimNode(Node):
 
     def _republish_held_state(self) -> None:
         """Holding: the held state again, at most once a period of wall time and only once it was answered (a
-        zero command answered at once would otherwise make an idle loop as fast as the CPU allows).
-        """
+        zero command answered at once would otherwise make an idle loop as fast as the CPU allows)."""
         if self.holding and self._held_state_answered and self.failed is None:
             self._held_state_answered = False
             self._publish_state(advance=False)
@@ -309,8 +306,7 @@ class SimNode(Node):
 
     def _prepare_period(self) -> None:
         """The next period's wake and waves, computed while the controller computes its torque (they do not depend
-        on it: Plant.prepare_period).
-        """
+        on it: Plant.prepare_period)."""
         try:
             self.plant.prepare_period()
         except SwimModelError as err:   # the wake met a non-finite value

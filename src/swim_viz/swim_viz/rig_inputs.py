@@ -32,8 +32,7 @@ def rate_parameter(default_hz: float) -> ParameterSpec:
 
 def load_rig_and_lane(node: Node) -> tuple[RigParameters, float]:
     """The rig and the lane radius (m) of node's parameters (declared from PARAMETERS). Raises
-    swim_model.SwimModelError for a rig file that does not load.
-    """
+    swim_model.SwimModelError for a rig file that does not load."""
     rig = load_rig(node.get_parameter("rig_path").value or None)
     return rig, float(node.get_parameter("lane_radius_m").value) or rig.constrained_lane_radius_m
 
@@ -41,8 +40,7 @@ def load_rig_and_lane(node: Node) -> tuple[RigParameters, float]:
 class LatestJointState:
     """A best-effort subscription to joint_states that keeps only the latest message: what a node that publishes
     at its own rate needs, at the cost of one stored reference per message (a control loop is never held up:
-    best effort, so a slow reader is simply passed by).
-    """
+    best effort, so a slow reader is simply passed by)."""
 
     def __init__(self, node: Node, lane_radius_m: float,
                  each: Optional[Callable[[JointPositions], None]] = None) -> None:
@@ -70,8 +68,7 @@ class LatestJointState:
 
     def take(self) -> Optional[tuple[Any, JointPositions]]:
         """The latest message and its positions, once (None when none came since the last take, or it was
-        malformed: then counted and logged).
-        """
+        malformed: then counted and logged)."""
         message, self.latest = self.latest, None
         positions = None if message is None else self._positions(message)
         return None if positions is None else (message, positions)

@@ -61,8 +61,7 @@ DEFAULT_AXIAL_DRAG_COEFFICIENT = 0.01
 
 def _forced_step(model: VehicleModel) -> ca.Function:
     """One RK4 step of the ideal vehicle with a held generalized force and the foil's separation drag:
-    (x = (q, qdot), tau, held force per coordinate, drag factors (k_U, k_V) = 1/2 rho Cd A, h) -> x_next.
-    """
+    (x = (q, qdot), tau, held force per coordinate, drag factors (k_U, k_V) = 1/2 rho Cd A, h) -> x_next."""
     s = model.symbolic
     nq = model.nq
     held, factors, h = ca.SX.sym("held", nq), ca.SX.sym("factors", 2), ca.SX.sym("h")
@@ -252,8 +251,7 @@ class EmulatedDevice(Device):
 
     def _single_step(self, torque: np.ndarray, step_s: float) -> None:
         """One substep of step_s seconds with torque held (and, in the wake, the wake's force and the drag):
-        the model's RK4 step on x = (q, qdot[, lag]) through its native entry point.
-        """
+        the model's RK4 step on x = (q, qdot[, lag]) through its native entry point."""
         assert self._step is not None
         step, nq = self._step, len(self.q)
         step.inputs[0][:nq], step.inputs[0][nq:2 * nq], step.inputs[0][2 * nq:] = self.q, self.qdot, self.lag
@@ -276,8 +274,7 @@ class EmulatedDevice(Device):
 
     def _stop_at_hard_stops(self) -> None:
         """Joints past their stops held at them, their velocities into the stops removed by the plastic impulse
-        (see the module docstring).
-        """
+        (see the module docstring)."""
         assert self._mass is not None and self.hard_stops_rad is not None
         stopped = []
         for j, (lower, upper) in enumerate(self.hard_stops_rad):
