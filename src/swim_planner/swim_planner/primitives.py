@@ -165,7 +165,7 @@ class PrimitiveSpec:
     input_smoothness_weight: float = 1e-8     # w_u (assumed), rad/(rad/s^3)^2/s: see solve_primitive
     end_lag_free: bool = False
     # circulatory flow, a decelerate: its lag states at rest (its end) are left free, the wake its braking leaves
-    # (primitive_solver's module docstring); False: still water, rest_boundary_state
+    # (docs/circulatory_primitives.md, "The problem"); False: still water, rest_boundary_state
     angle_of_attack_continuation_rad: tuple[float, ...] = ()
     # circulatory flow: the looser angle-of-attack bounds, descending, solved in turn before
     # PlanningLimits.angle_of_attack_limit_rad, after a first solve without the bound, each from the last converged
@@ -183,7 +183,7 @@ class PrimitiveSpec:
     # (primitive_solver.rest_window_s); None: PlanningLimits.angle_of_attack_free_from_rest_s
     rest_window_foil_rate_limit_rad_s: Optional[float] = None
     # circulatory flow, an accelerate or a decelerate: |heave rate| and |pitch rate| at most this within that
-    # window (primitive_solver's module docstring); None: no bound but the foil accelerations'
+    # window (docs/circulatory_primitives.md, "The problem"); None: no bound but the foil accelerations'
 
     def __post_init__(self) -> None:
         # a library's manifest stores the continuation as a JSON list: the spec read back equals the one written
