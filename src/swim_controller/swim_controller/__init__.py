@@ -1,5 +1,4 @@
-"""The cascade tracker: time-varying LQR with time-scaled gains, input-output linearization and
-sliding mode.
+"""The cascade tracker: time-varying LQR with time-scaled gains, input-output linearization and sliding mode.
 
 Public API (ROS-free; tracker_node wraps it):
     CascadeTracker(io_linearization, torque_limits_n_m, ...)   the law for one plan at a time; .step -> ControlOutput

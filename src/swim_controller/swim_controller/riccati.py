@@ -1,5 +1,6 @@
-"""The time-varying LQ regulator about a planned trajectory (paper Sec. 6.1, eqs. 16-21;
-docs/model_and_method.md section 5.1).
+"""The time-varying LQ regulator about a planned trajectory (paper Sec. 6.1, eqs. 16-21).
+
+The method: docs/model_and_method.md section 5.1.
 
 Error state (n = ny + 2 nq: 10 for the free vehicle, 7 for the laterally constrained one)::
 

@@ -266,7 +266,7 @@ class StaleStateWatch:
         self.last_state_s = now_s
 
     def stale(self, now_s: float, limit_s: float) -> bool:
-        """The check: has no state arrived within limit_s of now_s?
+        """The check: whether no state arrived within limit_s of now_s.
 
         Parameters
         ----------

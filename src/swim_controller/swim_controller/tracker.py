@@ -224,6 +224,7 @@ class FoilRangeGuard:
     margin_rad: float = GUARD_MARGIN_RAD
 
     def __post_init__(self) -> None:
+        """Check the stops, the margin and the braking accelerations (Raises, above)."""
         if not (math.isfinite(self.margin_rad) and self.margin_rad >= 0.0):
             raise ValueError(f"FoilRangeGuard: margin_rad must be finite and >= 0, got {self.margin_rad!r}")
         for joint, ((lower, upper), braking) in zip(("heave", "pitch"),
@@ -269,10 +270,12 @@ class FoilRangeGuard:
 
 
 def _braking_bound(room_rad: float, rate_rad_s: float, braking_rad_s2: float, period_s: float) -> float:
-    """The largest acceleration (rad/s^2) toward a stop room_rad ahead (rad, clipped at 0) of a joint moving toward
-    it at rate_rad_s, after which, held over period_s, it can still come to rest there braking at braking_rad_s2
-    (FoilRangeGuard); -rate / period_s (at rest at the period's end) where it would cover the room within the
-    period."""
+    """The largest acceleration (rad/s^2) toward a stop after which the joint can still come to rest short of it.
+
+    The stop is room_rad ahead (rad, clipped at 0) of a joint moving toward it at rate_rad_s; after the acceleration,
+    held over period_s, it can still come to rest there braking at braking_rad_s2 (FoilRangeGuard); -rate / period_s
+    (at rest at the period's end) where it would cover the room within the period.
+    """
     a, h, room = braking_rad_s2, period_s, max(room_rad, 0.0)
     if rate_rad_s * h >= 2.0 * room:
         return -rate_rad_s / h

@@ -208,6 +208,7 @@ class Trajectory:
     _sizes: tuple[int, int, int] = dataclasses.field(init=False, repr=False)   # (nq, n_lag, n), read per sample
 
     def __post_init__(self) -> None:
+        """Check every field and build the interpolation rows (Raises, above)."""
         set_field = object.__setattr__   # frozen: fields are set here once, checked
         set_field(self, "time_s", np.asarray(self.time_s, dtype=float))
         samples = len(self.time_s)
@@ -392,15 +393,17 @@ class Trajectory:
         return heave + offset * heave_slope, pitch + offset * pitch_slope
 
     def _interval(self, time_s: float) -> tuple[float, int, float]:
-        """(t, k, t - t_k): time_s clamped to [0, T] as t, and the sample interval [t_k, t_(k+1)] holding it
-        (k in 0..N-2: the last interval holds T, the first a time before the first sample)."""
+        """(t, k, t - t_k): time_s clamped to [0, T] as t, and the sample interval [t_k, t_(k+1)] holding it.
+
+        k is in 0..N-2: the last interval holds T, the first a time before the first sample.
+        """
         times = self._times
         t = min(max(time_s, 0.0), times[-1])
         k = max(min(bisect.bisect_right(times, t) - 1, len(times) - 2), 0)
         return t, k, t - times[k]
 
     def time_scaled(self, time_scale: float, torque_limits_n_m: npt.ArrayLike) -> Trajectory:
-        """This trajectory run time_scale (lambda) times faster: P3 and Theorem 1 (module docstring).
+        """The trajectory run time_scale (lambda) times faster: P3 and Theorem 1 (module docstring).
 
         Parameters
         ----------

@@ -1,5 +1,4 @@
-"""Off-line optimal-control motion primitives, the primitive library, the lane/energy graph and the
-maneuver planner node.
+"""Optimal-control motion primitives, their library, the lane/energy graph and the maneuver planner node.
 
 Public API (ROS-free; planner_node wraps it):
     PrimitiveSpec, PrimitiveType, Primitive, PlanningLimits, SolverSettings   what a primitive is (primitives)

@@ -204,7 +204,7 @@ class PrimitiveLibrary:
         return library
 
     def needs_gains(self, primitive_id: str) -> bool:
-        """Does a primitive lack stored gains for the library's LQ weights?
+        """Whether a primitive lacks stored gains for the library's LQ weights.
 
         Parameters
         ----------
@@ -272,7 +272,7 @@ class PrimitiveLibrary:
         self._write_manifest()
 
     def needs_disturbance_bound(self, primitive_id: str) -> bool:
-        """Does a primitive need its sliding-mode bound D(t) measured?
+        """Whether a primitive needs its sliding-mode bound D(t) measured.
 
         Parameters
         ----------
@@ -419,9 +419,11 @@ class PrimitiveLibrary:
         return sorted(self._entries)
 
     def __contains__(self, primitive_id: str) -> bool:
+        """Whether the library holds a primitive of this id."""
         return primitive_id in self._entries
 
     def __len__(self) -> int:
+        """The number of primitives in the library."""
         return len(self._entries)
 
     def entry(self, primitive_id: str) -> dict:
@@ -576,6 +578,7 @@ class PrimitiveLibrary:
         return len(self.get(primitive_id).time_s)
 
     def __iter__(self) -> Iterator[Primitive]:
+        """Every primitive, read and verified, in id order."""
         return (self.get(i) for i in self.ids())
 
     def digest(self) -> str:

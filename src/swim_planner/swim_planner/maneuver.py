@@ -110,7 +110,9 @@ class PlanLibrary(Protocol):
     path: Path
     lqr_weights: LqrWeights
 
-    def __contains__(self, primitive_id: str) -> bool: ...
+    def __contains__(self, primitive_id: str) -> bool:
+        """Whether the library holds a primitive of this id."""
+        ...
 
     def spec(self, primitive_id: str) -> PrimitiveSpec:
         """The spec of a primitive.

@@ -154,8 +154,9 @@ def _circulatory_pointwise_function(model: VehicleModel) -> PointwiseFunction:
 
 @dataclasses.dataclass(frozen=True)
 class PrimitiveNlp:
-    """One primitive's NLP (swim_planner.pointwise form), its initial guess and constraint bounds, and the
-    expressions of the solution's samples on the fine grid (2N + 1 points for N intervals).
+    """One primitive's NLP (swim_planner.pointwise form), its initial guess, bounds and solution's expressions.
+
+    The expressions give the solution's samples on the fine grid (2N + 1 points for N intervals).
 
     Attributes
     ----------
@@ -290,9 +291,11 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
 
 def _solve_refined(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits, start, end,
                    guess: Optional[Primitive], settings: SolverSettings) -> Primitive:
-    """solve_primitive of a spec with a coarser grid: on spec.coarse_intervals (continuation included) to
-    settings.coarse_grid_tolerance, then on spec.intervals from the coarse solution interpolated, with the bound of
-    ``limits`` alone."""
+    """Solve a primitive of a spec with a coarser grid, then on its own grid.
+
+    On spec.coarse_intervals (continuation included) to settings.coarse_grid_tolerance, then on spec.intervals
+    from the coarse solution interpolated, with the bound of ``limits`` alone.
+    """
     coarse_spec = dataclasses.replace(spec, intervals=cast(int, spec.coarse_intervals), coarse_intervals=None)
     coarse_settings = dataclasses.replace(settings, tolerance=max(settings.tolerance, settings.coarse_grid_tolerance))
     coarse = solve_primitive(model, coarse_spec, limits, start, end, guess, coarse_settings)
@@ -316,8 +319,10 @@ def _resampled(primitive: Primitive, spec: PrimitiveSpec) -> Primitive:
 
 
 def _interpolated_columns(time_s: Array, sample_time_s: Array, values: Array) -> Array:
-    """Each column of ``values`` (samples at ``sample_time_s``) interpolated linearly at ``time_s``:
-    (len(time_s), columns)."""
+    """Each column of ``values`` (samples at ``sample_time_s``) interpolated linearly at ``time_s``.
+
+    The result has the shape (len(time_s), columns).
+    """
     return np.column_stack([np.interp(time_s, sample_time_s, column) for column in values.T])
 
 
@@ -476,8 +481,11 @@ def _check_circulatory_states(model: VehicleModel, spec: PrimitiveSpec, start, e
 
 def _angle_of_attack_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits,
                            grid, phi: ca.MX) -> None:
-    """|atan2(-V, U)| <= a at the collocation points ``angle_of_attack_bounded`` names, as U tan(a) -+ V >= 0,
-    and the same at the three-quarter chord (docs/circulatory_primitives.md, "The problem")."""
+    """Bound |atan2(-V, U)| <= a at the collocation points ``angle_of_attack_bounded`` names.
+
+    Written as U tan(a) -+ V >= 0, and the same at the three-quarter chord (docs/circulatory_primitives.md,
+    "The problem").
+    """
     if not 0.0 < limits.angle_of_attack_limit_rad < math.pi / 2:
         raise ValueError(f"{spec.primitive_id}: angle_of_attack_limit_rad must be in (0, pi/2), got "
                          f"{limits.angle_of_attack_limit_rad!r}")
@@ -494,10 +502,12 @@ def _angle_of_attack_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSp
 
 
 def _stroke_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, grid, phi: ca.MX) -> None:
-    """A cruise's Strouhal number 2 A f / U (primitives.cruise_strouhal_number) at least spec.min_strouhal: the
-    pitch axis's excursion across the lane from the cycle's start (a turn of the heave) to its middle at least
-    St_min U / f = St_min R dalpha, with f one stroke per cycle and U = R dalpha / T. Affine in the NLP's
-    variables; a peak-to-peak excursion is at least this one."""
+    """Bound a cruise's Strouhal number 2 A f / U (primitives.cruise_strouhal_number) below by spec.min_strouhal.
+
+    The pitch axis's excursion across the lane from the cycle's start (a turn of the heave) to its middle is at
+    least St_min U / f = St_min R dalpha, with f one stroke per cycle and U = R dalpha / T. Affine in the NLP's
+    variables; a peak-to-peak excursion is at least this one.
+    """
     assert spec.min_strouhal is not None
     lateral_m = grid.fine(phi[lateral_row(model), :])
     middle = spec.intervals
@@ -508,9 +518,11 @@ def _stroke_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, grid,
 
 def _rest_window_rate_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits,
                             grid) -> None:
-    """|heave rate| and |pitch rate| <= PrimitiveSpec.rest_window_foil_rate_limit_rad_s (rad/s) at the fine grid's
-    points inside the window next to rest, where the angle-of-attack bound is off (docs/circulatory_primitives.md,
-    "The problem")."""
+    """Bound |heave rate| and |pitch rate| by PrimitiveSpec.rest_window_foil_rate_limit_rad_s (rad/s) next to rest.
+
+    At the fine grid's points inside the window next to rest, where the angle-of-attack bound is off
+    (docs/circulatory_primitives.md, "The problem").
+    """
     assert spec.rest_window_foil_rate_limit_rad_s is not None
     nq = model.nq
     inside = np.flatnonzero(~angle_of_attack_bounded(spec, limits))
@@ -665,11 +677,14 @@ def _lag_columns(model: VehicleModel, primitive: Primitive) -> list[Array]:
 
 def _folded_cruise_guess(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits,
                          times: Array) -> tuple[Array, Array]:
-    """A circulatory cruise's guess: the heave link folded inward near its limit (which lowers the hub's inertia),
-    the foil pitched along its own velocity, the hub turning at the rate that holds the energy level, with a small
-    stroke (pitch leading heave by 90 deg) and the lag states of that steady flow. The cruises this flow solves
-    to are close to it (docs/circulatory_primitives.md): a built-in guess of the ideal cruise's gait swum from rest
-    took 112-157 IPOPT iterations to the constrained E = 0.05 cruise."""
+    """A circulatory cruise's guess: the folded posture, a small stroke and the steady flow's lag states.
+
+    The heave link is folded inward near its limit (which lowers the hub's inertia), the foil pitched along its own
+    velocity, the hub turning at the rate that holds the energy level, with a small stroke (pitch leading heave by
+    90 deg) and the lag states of that steady flow. The cruises this flow solves to are close to it
+    (docs/circulatory_primitives.md): a built-in guess of the ideal cruise's gait swum from rest took 112-157 IPOPT
+    iterations to the constrained E = 0.05 cruise.
+    """
     nq = model.nq
     heave_rad = limits.heave_range_rad - FOLDED_GUESS_HEAVE_AMPLITUDE_RAD - FOLDED_GUESS_HEAVE_MARGIN_RAD
     q_mean = np.zeros(nq)
@@ -703,8 +718,11 @@ def _folded_cruise_guess(model: VehicleModel, spec: PrimitiveSpec, limits: Plann
 
 
 def _steady_lag(model: VehicleModel, q: Array, qdot: Array) -> Array:
-    """The lag states of a steady flow at each sample (samples, n_lag), m/s: each at the three-quarter chord's
-    normal velocity -(V + Omega x_34), where its rate vanishes (swim_model.flow)."""
+    """The lag states of a steady flow at each sample (samples, n_lag), m/s.
+
+    Each is at the three-quarter chord's normal velocity -(V + Omega x_34), where its rate vanishes
+    (swim_model.flow).
+    """
     assert model.circulatory_flow is not None
     x34 = model.circulatory_flow.three_quarter_chord_x_m
     normal = np.array([-(v + w * x34) for _, v, w in (model.foil_velocity_map(a) @ b for a, b in zip(q, qdot))])
@@ -720,14 +738,15 @@ def _smoothstep(x: Array) -> tuple[Array, Array, Array]:
 
 def _still_foil_guess(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits, times: Array,
                       moving: tuple[Array, ...]) -> tuple[Array, Array]:
-    """A circulatory accelerate's or decelerate's guess inside the angle-of-attack bound. The foil is held still
-    in the posture of ``moving`` (the cruise's boundary state it joins; its stroke dropped), so it moves with
-    the hub only, along its own chord, while the hub's rate goes smoothly between 0 and the cruise's; in the
-    window next to rest where the bound is off (``rest_window_s``) the foil turns
-    between rest and that posture with the hub still. The guess neither thrusts nor brakes: IPOPT finds the
-    stroke. The blend of the boundary states has the foil broadside to its motion: from the blend with the
-    cruise's stroke IPOPT found the constrained E = 0.05 decelerate (also from the plain blend) and the E = 0.10
-    and 0.20 accelerates infeasible."""
+    """A circulatory accelerate's or decelerate's guess inside the angle-of-attack bound.
+
+    The foil is held still in the posture of ``moving`` (the cruise's boundary state it joins; its stroke dropped),
+    so it moves with the hub only, along its own chord, while the hub's rate goes smoothly between 0 and the
+    cruise's; in the window next to rest where the bound is off (``rest_window_s``) the foil turns between rest and
+    that posture with the hub still. The guess neither thrusts nor brakes: IPOPT finds the stroke. The blend of the
+    boundary states has the foil broadside to its motion: from the blend with the cruise's stroke IPOPT found the
+    constrained E = 0.05 decelerate (also from the plain blend) and the E = 0.10 and 0.20 accelerates infeasible.
+    """
     nq = model.nq
     q_moving, qdot_moving = np.asarray(moving[0], dtype=float), np.asarray(moving[1], dtype=float)
     window_s = min(rest_window_s(spec, limits), 0.5 * times[-1])
@@ -751,8 +770,11 @@ def _still_foil_guess(model: VehicleModel, spec: PrimitiveSpec, limits: Planning
 
 def _blend_guess(model: VehicleModel, spec: PrimitiveSpec, times: Array, start, end,
                  cruise: Optional[Primitive]) -> tuple[Array, Array]:
-    """Blend between the boundary states; with a cruise given, fade its stroke in (accelerate), out
-    (decelerate), or keep it (between cruises), so the guess already swims in the right phase."""
+    """Blend between the boundary states, with a given cruise's stroke faded in, out or kept.
+
+    With a cruise given, fade its stroke in (accelerate), out (decelerate), or keep it (between cruises), so the
+    guess already swims in the right phase.
+    """
     weight = (times / times[-1])[:, None]
     x_start, x_end = np.concatenate(start), np.concatenate(end)
     x_guess = (1 - weight) * x_start + weight * x_end

@@ -1,5 +1,7 @@
-"""Motion primitives, what they are: their types, specs and planning limits, a solved primitive's samples and
-gains, and the solver settings it was made with (paper Secs. 4-5; docs/model_and_method.md section 3).
+"""Motion primitives, what they are (paper Secs. 4-5; docs/model_and_method.md section 3).
+
+Their types, specs and planning limits, a solved primitive's samples and gains, and the solver settings it was
+made with.
 
 Plain data, no optimizer: the library, the graph and planner_node read primitives through this module;
 swim_planner.primitive_solver solves them (the optimal-control problem of each type is described there).
@@ -186,6 +188,7 @@ class PrimitiveSpec:
     # window (docs/circulatory_primitives.md, "The problem"); None: no bound but the foil accelerations'
 
     def __post_init__(self) -> None:
+        """Check the fields that depend on the type (Raises, above)."""
         # a library's manifest stores the continuation as a JSON list: the spec read back equals the one written
         object.__setattr__(self, "angle_of_attack_continuation_rad",
                            tuple(float(a) for a in self.angle_of_attack_continuation_rad))
@@ -287,8 +290,10 @@ class Primitive:
 
     @property
     def start_boundary_state(self) -> tuple[Array, ...]:
-        """The state a primitive joining this one's start must reach: (q, qdot), or (q, qdot, lag) with the
-        circulatory flow."""
+        """The state a primitive joining this one's start must reach.
+
+        (q, qdot), or (q, qdot, lag) with the circulatory flow.
+        """
         return self.start_state + (() if self.lag is None else (self.lag[0].copy(),))
 
     @property
@@ -304,8 +309,10 @@ CONVERGED_STATUSES = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 @dataclasses.dataclass(frozen=True)
 class SolverSettings:
-    """IPOPT's settings. The defaults were measured on the constrained E = 0.05 cruise (80 intervals):
-    IPOPT's monotone barrier took 99 iterations, the adaptive one 40-70 to the same J (to 1e-6).
+    """IPOPT's settings and the derivatives it is given.
+
+    The defaults were measured on the constrained E = 0.05 cruise (80 intervals): IPOPT's monotone barrier took 99
+    iterations, the adaptive one 40-70 to the same J (to 1e-6).
 
     Derivatives: "pointwise" assembles them from the model's pointwise function compiled to C
     (swim_planner.pointwise): 0.44 s for that cruise. "casadi" lets CasADi differentiate the whole NLP graph:
@@ -348,6 +355,7 @@ class SolverSettings:
     derivatives: str = "pointwise"       # "pointwise" or "casadi" (see above)
 
     def __post_init__(self) -> None:
+        """Check the derivatives setting (Raises, above)."""
         if self.derivatives not in ("pointwise", "casadi"):
             raise ValueError(f"derivatives must be 'pointwise' or 'casadi', got {self.derivatives!r}")
 
