@@ -105,7 +105,15 @@ def flow_model_of(primitives: Sequence[Primitive]) -> str:
 
 
 class PlanLibrary(Protocol):
-    """What concatenation reads of a library: a PrimitiveLibrary, or a gains.RetunedLibrary view of one."""
+    """What concatenation reads of a library: a PrimitiveLibrary, or a gains.RetunedLibrary view of one.
+
+    Attributes
+    ----------
+    path : Path
+        The library's directory (named in error messages).
+    lqr_weights : LqrWeights
+        The weights its stored gains were computed with (R gives K = R^-1 G'P).
+    """
 
     path: Path
     lqr_weights: LqrWeights
