@@ -341,11 +341,9 @@ def terminal_weight(linearization: Linearization, state_weight: Array, input_wei
     Parameters
     ----------
     linearization : Linearization
-        F (N, n, n) and G (N, n, 2) along the plan.
-    state_weight : (n, n) array
-        Q.
-    input_weight : (2, 2) array
-        R, 1/(rad/s^2)^2.
+        F (N, n, n) and G (N, n, 2) along the plan; their means over the samples are used.
+    state_weight, input_weight : (n, n) and (2, 2) array
+        Q and R (1/(rad/s^2)^2).
     weights : LqrWeights
         Gives the scale and the margin mu by which F_avg is shifted (F_avg - mu I).
 
@@ -532,14 +530,8 @@ def solve_riccati(time_s: Array, linearization: Linearization, state_weight: Arr
 
     Parameters
     ----------
-    time_s : (N,) array
-        The plan's sample times, s, strictly increasing.
-    linearization : Linearization
-        F (N, n, n) and G (N, n, 2) at those samples.
-    state_weight : (n, n) array
-        Q.
-    input_weight : (2, 2) array
-        R, 1/(rad/s^2)^2.
+    time_s, linearization, state_weight, input_weight
+        The sample times (N,), s, F and G, Q and R, as for ``backward_transitions``.
     terminal : (n, n) array
         S = P(T).
 

@@ -181,10 +181,8 @@ class Supervisor:
         ----------
         time_s : float
             The state's stamp, s: plan time is measured from the first state after ``begin``.
-        q : (nq,) array
-            Measured positions, rad and m.
-        qdot : (nq,) array
-            Measured velocities, rad/s and m/s.
+        q, qdot : (nq,) array
+            The validated measured state: positions (rad, m), velocities (rad/s, m/s).
 
         Returns
         -------

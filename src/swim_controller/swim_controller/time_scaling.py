@@ -69,12 +69,8 @@ def scaling_diagonal(time_scale: float | Array, ny: int, nq: int, n_lag: int = 0
     ----------
     time_scale : float or (N,) array
         lambda > 0, one or one per row.
-    ny : int
-        Unactuated coordinates with an integral error: 1 (constrained) or 2 (free).
-    nq : int
-        Generalized coordinates: 3 (constrained) or 4 (free).
-    n_lag : int, optional
-        The flow's lag states: 0 (ideal flow) or 2 (circulatory).
+    ny, nq, n_lag : int
+        The error state's blocks, as for ``scaling_matrix`` (n_lag optional, 0 by default).
 
     Returns
     -------
@@ -95,12 +91,8 @@ def scale_riccati(riccati: Array, time_scale: float, ny: int, nq: int, n_lag: in
         P(t_k) of the plan at lambda = 1 (eq. 20), in the units of x' P x (the cost's).
     time_scale : float
         lambda > 0.
-    ny : int
-        Unactuated coordinates with an integral error: 1 (constrained) or 2 (free).
-    nq : int
-        Generalized coordinates: 3 (constrained) or 4 (free).
-    n_lag : int, optional
-        The flow's lag states: 0 (ideal flow) or 2 (circulatory).
+    ny, nq, n_lag : int
+        The error state's blocks, as for ``scaling_matrix`` (n_lag optional, 0 by default).
 
     Returns
     -------
@@ -128,13 +120,9 @@ def scale_weights(state_weight: Array, input_weight: Array, terminal: Array, tim
     terminal : (n, n) array
         S.
     time_scale : float
-        lambda > 0.
-    ny : int
-        Unactuated coordinates with an integral error: 1 (constrained) or 2 (free).
-    nq : int
-        Generalized coordinates: 3 (constrained) or 4 (free).
-    n_lag : int, optional
-        The flow's lag states: 0 (ideal flow) or 2 (circulatory).
+        lambda > 0, the one the weights are scaled to.
+    ny, nq, n_lag : int
+        The sizes of x's blocks, as for ``scaling_matrix`` (n_lag optional, 0 by default).
 
     Returns
     -------
@@ -191,10 +179,8 @@ def retime_feedback(lqr_gain: Array, riccati_input_gain: Array, time_scale: floa
         G'P of the plan at its current time scale.
     time_scale : float or (N,) array
         lambda > 0, one for all samples or one per sample.
-    ny : int
-        Unactuated coordinates with an integral error: 1 (constrained) or 2 (free).
-    nq : int
-        Generalized coordinates: 3 (constrained) or 4 (free).
+    ny, nq : int
+        The unactuated and all generalized coordinates: 1 and 3 (constrained) or 2 and 4 (free).
     n_lag : int, optional
         The flow's lag states at the end of x: 0 (the ideal flow) or 2 (the circulatory one).
 

@@ -140,10 +140,8 @@ class LagEstimator:
         ----------
         elapsed_s : float
             Time since the previous measurement, s.
-        q : (nq,) array
-            Measured positions, rad and m.
-        qdot : (nq,) array
-            Measured velocities, rad/s and m/s.
+        q, qdot : (nq,) array
+            The measured state, rad and m, rad/s and m/s: the lag rate's coefficients are taken at it.
 
         Returns
         -------
@@ -481,10 +479,8 @@ class CascadeTracker:
 
         Parameters
         ----------
-        q : (nq,) array
-            Measured positions, rad and m.
-        qdot : (nq,) array
-            Measured velocities, rad/s and m/s.
+        q, qdot : (nq,) array
+            The measured positions (rad, m) and velocities (rad/s, m/s).
         psi_target : (2,) array
             The (heave, pitch) angles to hold, rad.
 

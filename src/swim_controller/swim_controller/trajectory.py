@@ -331,7 +331,7 @@ class Trajectory:
         Parameters
         ----------
         time_s : float
-            Trajectory time, s.
+            Trajectory time, s (clamped as in ``segment_index``).
 
         Returns
         -------
@@ -379,7 +379,7 @@ class Trajectory:
         Parameters
         ----------
         time_s : float
-            Trajectory time, s, clamped to [0, T].
+            Trajectory time, s, clamped to [0, T] (a period's midpoint, for the feed-forward).
 
         Returns
         -------

@@ -209,7 +209,7 @@ class PrimitiveLibrary:
         Parameters
         ----------
         primitive_id : str
-            The primitive's id.
+            The primitive whose gains are asked about.
 
         Returns
         -------
@@ -219,7 +219,7 @@ class PrimitiveLibrary:
         Raises
         ------
         LibraryError
-            If the library has no such primitive.
+            If no primitive of that id is in the library.
         """
         record = self.entry(primitive_id)
         stored = record.get("gains_lqr_weights")
@@ -277,7 +277,7 @@ class PrimitiveLibrary:
         Parameters
         ----------
         primitive_id : str
-            The primitive's id.
+            The primitive whose bound is asked about.
 
         Returns
         -------
@@ -288,7 +288,7 @@ class PrimitiveLibrary:
         Raises
         ------
         LibraryError
-            If the library has no such primitive.
+            For an id the library does not hold.
         """
         if self.flow_model != "circulatory":
             return False
@@ -301,7 +301,7 @@ class PrimitiveLibrary:
         Parameters
         ----------
         primitive_id : str
-            The primitive's id.
+            The stored primitive the bound belongs to.
         bound_n_m : (N,) array
             D(t), N m, finite and >= 0, on its N samples.
         measurement : dict
@@ -432,7 +432,7 @@ class PrimitiveLibrary:
         Parameters
         ----------
         primitive_id : str
-            The primitive's id.
+            The primitive's id, as the manifest keys it.
 
         Returns
         -------
@@ -455,7 +455,7 @@ class PrimitiveLibrary:
         Parameters
         ----------
         primitive_id : str
-            The primitive's id.
+            The primitive whose spec is read.
 
         Returns
         -------
@@ -465,7 +465,7 @@ class PrimitiveLibrary:
         Raises
         ------
         LibraryError
-            If the library has no such primitive.
+            As ``entry``.
         """
         return _spec_from_json(self.entry(primitive_id)["spec"])
 
@@ -475,7 +475,7 @@ class PrimitiveLibrary:
         Parameters
         ----------
         primitive_id : str
-            The primitive's id.
+            The primitive to read.
 
         Returns
         -------
@@ -523,7 +523,7 @@ class PrimitiveLibrary:
         Parameters
         ----------
         primitive_id : str
-            The primitive's id.
+            The primitive whose D(t) is read.
 
         Returns
         -------
@@ -563,7 +563,7 @@ class PrimitiveLibrary:
         Parameters
         ----------
         primitive_id : str
-            The primitive's id.
+            The primitive whose samples are counted.
 
         Returns
         -------

@@ -128,7 +128,7 @@ class PlanLibrary(Protocol):
         Parameters
         ----------
         primitive_id : str
-            The primitive's id.
+            The primitive whose spec is asked for.
 
         Returns
         -------
@@ -143,7 +143,7 @@ class PlanLibrary(Protocol):
         Parameters
         ----------
         primitive_id : str
-            The primitive's id.
+            The primitive wanted.
 
         Returns
         -------
@@ -158,7 +158,7 @@ class PlanLibrary(Protocol):
         Parameters
         ----------
         primitive_id : str
-            The primitive's id.
+            The primitive asked about.
 
         Returns
         -------
@@ -188,7 +188,7 @@ class DisturbanceBounds(Protocol):
         Parameters
         ----------
         primitive_id : str
-            The primitive's id.
+            The primitive whose D(t) is asked for.
 
         Returns
         -------

@@ -51,7 +51,7 @@ def state_derivative_rows(model: VehicleModel) -> slice:
     Parameters
     ----------
     model : VehicleModel
-        The vehicle, ideal or circulatory flow.
+        The vehicle, ideal or circulatory flow: nx is 2 nq, or 2 nq + n_lag with the circulatory flow.
 
     Returns
     -------
@@ -67,7 +67,7 @@ def foil_velocity_rows(model: VehicleModel) -> slice:
     Parameters
     ----------
     model : VehicleModel
-        A circulatory-flow vehicle.
+        A circulatory-flow vehicle (the ideal flow's pointwise function has no such rows).
 
     Returns
     -------
@@ -111,7 +111,7 @@ def pointwise_function(model: VehicleModel) -> PointwiseFunction:
     Parameters
     ----------
     model : VehicleModel
-        The vehicle, ideal or circulatory flow.
+        The vehicle; its rig, kind, lane and flow parameters key the compiled function.
 
     Returns
     -------

@@ -388,10 +388,8 @@ def rest_boundary_state(model: VehicleModel, lane_radius_m: float) -> tuple[Arra
 
     Parameters
     ----------
-    model : VehicleModel
-        The vehicle.
-    lane_radius_m : float
-        The lane's R, m (the free vehicle's).
+    model, lane_radius_m
+        As for ``rest_state``; the model's flow decides whether lag states are added.
 
     Returns
     -------
