@@ -10,9 +10,29 @@ import numpy.typing as npt
 
 
 def two_norm(time_s: npt.ArrayLike, error: npt.ArrayLike) -> float:
-    """||e||_2 = sqrt(int e(t)^2 dt) of the samples error (n,) taken at the increasing times time_s (n,), in s,
-    by the trapezoidal rule; in the error's unit times s^0.5 (0 for fewer than two samples: no interval).
-    ValueError if the two are not one-dimensional arrays of the same length."""
+    """The paper's tracking measure ||e||_2 = sqrt(int e(t)^2 dt), by the trapezoidal rule.
+
+    Parameters
+    ----------
+    time_s : (n,) array_like
+        The sample times, s, increasing.
+    error : (n,) array_like
+        The error signal at those times, in any unit.
+
+    Returns
+    -------
+    float
+        ||e||_2, in the error's unit times s^0.5; 0 for fewer than two samples (no interval).
+
+    Raises
+    ------
+    ValueError
+        If the two are not one-dimensional arrays of the same length.
+
+    References
+    ----------
+    Saimek & Li 2004, Sec. 7.
+    """
     times, values = np.asarray(time_s, dtype=float), np.asarray(error, dtype=float)
     if times.ndim != 1 or times.shape != values.shape:
         raise ValueError(f"two_norm takes times and errors of one shape (n,); got {times.shape} and {values.shape}")

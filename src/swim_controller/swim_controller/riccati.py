@@ -1,5 +1,6 @@
-"""The time-varying LQ regulator about a planned trajectory (paper Sec. 6.1, eqs. 16-21;
-docs/model_and_method.md section 5.1).
+"""The time-varying LQ regulator about a planned trajectory (paper Sec. 6.1, eqs. 16-21).
+
+The method: docs/model_and_method.md section 5.1.
 
 Error state (n = ny + 2 nq: 10 for the free vehicle, 7 for the laterally constrained one)::
 
@@ -63,7 +64,44 @@ class LqrWeights:
 
     The paper publishes the structure, not its numbers; every default here is assumed, tuned in simulation
     on the ideal model (swim_planner/test/test_closed_loop_ideal.py) for convergence within a few seconds without
-    saturating the motors.
+    saturating the motors. The comment at each field gives its reason.
+
+    Attributes
+    ----------
+    alpha_rate_per_s : float
+        l_alpha, 1/s: the rate at which the hub's error is asked to decay.
+    lateral_rate_per_s : float
+        l_R, 1/s: the same for the carriage's lateral error (the free vehicle).
+    heave_rate_per_s : float
+        l_phi, 1/s.
+    pitch_rate_per_s : float
+        l_theta, 1/s.
+    alpha_gain : float
+        Gg[alpha], 1/(rad/s)^2 (z_alpha is a rate).
+    lateral_gain : float
+        Gg[R], 1/(m/s)^2.
+    heave_gain : float
+        Gg[phi], 1/(rad/s)^2.
+    pitch_gain : float
+        Gg[theta], 1/(rad/s)^2.
+    heave_input_weight : float
+        R[phi_ddot], 1/(rad/s^2)^2.
+    pitch_input_weight : float
+        R[theta_ddot], 1/(rad/s^2)^2.
+    terminal_scale : float
+        S = terminal_scale P_are (Sec. 7, "a scaled version"), dimensionless.
+    terminal_margin_per_s : float
+        mu, 1/s, >= 0: the shift of the averaged F that makes the pair stabilizable.
+    cruise_lookahead_s : float
+        s, >= 0: a cruise's gains are the Riccati solution of the cruise continued this long (0: its own horizon).
+    rest_lateral_terminal_weight : float
+        1/m^2, >= 0: added to S's e_R entry at the end of a free primitive that ends at rest.
+    rest_alpha_terminal_weight : float
+        1/rad^2, >= 0: added to S's e_alpha entry at the end of a constrained primitive that ends at rest.
+
+    References
+    ----------
+    Saimek & Li 2004, Sec. 7 (the structure Q = Z' Gg Z and the scaled S); docs/model_and_method.md section 5.1.
     """
 
     alpha_rate_per_s: float = 1.5        # assumed: l_alpha, longitudinal error decays with ~0.7 s
@@ -102,7 +140,13 @@ class LqrWeights:
     rest_alpha_terminal_weight: float = 0.0
 
     def validate(self) -> None:
-        """Raise ValueError unless every weight is positive and finite (the margin may be zero)."""
+        """Check the weights.
+
+        Raises
+        ------
+        ValueError
+            Unless every weight is positive and finite (the margin, the lookahead and the rest weights may be zero).
+        """
         for field in dataclasses.fields(self):
             value = getattr(self, field.name)
             low_ok = (value >= 0.0 if field.name in ("terminal_margin_per_s", "cruise_lookahead_s",
@@ -112,18 +156,41 @@ class LqrWeights:
                 raise ValueError(f"LQR weight {field.name} must be a positive finite number, got {value!r}")
 
     def input_weight_matrix(self) -> Array:
-        """R, 2 x 2 diagonal, for u = (phi_ddot, theta_ddot)."""
+        """The input weight R of the LQ cost.
+
+        Returns
+        -------
+        (2, 2) array
+            R = diag(heave_input_weight, pitch_input_weight), 1/(rad/s^2)^2, for u = (phi_ddot, theta_ddot).
+        """
         return np.diag([self.heave_input_weight, self.pitch_input_weight])
 
     def state_weight_matrix(self, constrained: bool, n_lag: int = 0) -> Array:
-        """Q = Z' Gg Z (Sec. 7) on x = (int e_y, e_q, edot_q[, e_z]), n x n.
+        """The state weight Q = Z' Gg Z (Sec. 7) on x = (int e_y, e_q, edot_q[, e_z]).
 
         The flow's lag-state errors e_z (n_lag of them, the circulatory flow) get no weight: z is the flow's
         memory of the foil's motion, not a quantity the task asks to track, and the inputs cannot steer it apart
         from the motion (zdot = g(q, qdot, z) has no u). Its dynamics are stable (dg/dz < 0: a disturbance of
         the flow decays at the Wagner rates), so e_z -> 0 once the motion's errors do; weighting it would trade
         tracking error for a flow error no one asked to remove. Its effect on the motion is not ignored: F's
-        df/dz columns make P, and the gains, act on e_z as the disturbance of the motion it is."""
+        df/dz columns make P, and the gains, act on e_z as the disturbance of the motion it is.
+
+        Parameters
+        ----------
+        constrained : bool
+            The laterally constrained vehicle (nq = 3, ny = 1), else the free one (nq = 4, ny = 2).
+        n_lag : int, optional
+            The flow's lag states: 0 (ideal flow) or 2 (circulatory).
+
+        Returns
+        -------
+        (n, n) array
+            Q, n = ny + 2 nq + n_lag, symmetric positive semi-definite.
+
+        References
+        ----------
+        Saimek & Li 2004, Sec. 7; docs/model_and_method.md sections 5.1 and 5.5.
+        """
         nq, ny = (3, 1) if constrained else (4, 2)
         n = error_state_size(nq, ny, n_lag)
         rates_y = [self.alpha_rate_per_s] if constrained else [self.alpha_rate_per_s, self.lateral_rate_per_s]
@@ -149,14 +216,36 @@ HUB_ERROR_INDEX_CONSTRAINED = 1
 
 
 def error_state_size(nq: int, ny: int, n_lag: int = 0) -> int:
-    """n = ny + 2 nq + n_lag: integral errors of y, position errors, velocity errors, and the flow's lag-state
-    errors (n_lag = 0 for the ideal flow, 2 for the circulatory one)."""
+    """The size of the error state x = (int e_y, e_q, edot_q, e_z).
+
+    Parameters
+    ----------
+    nq : int
+        Generalized coordinates: 3 (constrained) or 4 (free).
+    ny : int
+        Unactuated coordinates with an integral error: 1 (constrained) or 2 (free).
+    n_lag : int, optional
+        The flow's lag states: 0 for the ideal flow, 2 for the circulatory one.
+
+    Returns
+    -------
+    int
+        n = ny + 2 nq + n_lag: integral errors of y, position errors, velocity errors and lag-state errors.
+    """
     return ny + 2 * nq + n_lag
 
 
 @dataclasses.dataclass(frozen=True)
 class Linearization:
-    """F(t_k) (N, n, n) and G(t_k) (N, n, 2) at the plan's samples, n = error_state_size(nq, ny, n_lag)."""
+    """The linearization of the shape dynamics about a plan, at its samples (eqs. 16-17).
+
+    Attributes
+    ----------
+    state_matrix : (N, n, n) array
+        F(t_k), n = error_state_size(nq, ny, n_lag); 1/s and 1/s^2 by block.
+    input_matrix : (N, n, 2) array
+        G(t_k): nonzero on the velocity rows only (df/du, dimensionless).
+    """
 
     state_matrix: Array
     input_matrix: Array
@@ -185,9 +274,33 @@ def linearize(model: VehicleModel, q: Array, qdot: Array, foil_acceleration: Arr
               lag: Optional[Array] = None) -> Linearization:
     """F and G of eq. 16 along a trajectory, by CasADi's exact derivatives (no finite differences).
 
-    q, qdot (N, nq); foil_acceleration (N, 2); lag (N, n_lag), m/s: the plan's lag states, required by a
-    circulatory model (model.n_lag = 2) and refused by the ideal one. F is (N, n, n), G (N, n, 2) with
-    n = error_state_size(nq, ny, n_lag) (module docstring)."""
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle, ideal or circulatory flow.
+    q : (N, nq) array
+        Planned positions, rad and m.
+    qdot : (N, nq) array
+        Planned velocities, rad/s and m/s.
+    foil_acceleration : (N, 2) array
+        Planned u = psiddot (heave, pitch), rad/s^2.
+    lag : (N, n_lag) array, optional
+        The plan's lag states, m/s: required by a circulatory model (model.n_lag = 2), refused by the ideal one.
+
+    Returns
+    -------
+    Linearization
+        F (N, n, n) and G (N, n, 2), n = error_state_size(nq, ny, n_lag) (module docstring).
+
+    Raises
+    ------
+    GainComputationError
+        If lag is given to an ideal model, missing for a circulatory one, or of the wrong shape.
+
+    References
+    ----------
+    Saimek & Li 2004, Sec. 6.1, eqs. 16-17; docs/model_and_method.md sections 5.1 and 5.5.
+    """
     samples, nq, ny, n_lag = len(q), model.nq, model.n_unactuated, model.n_lag
     if (lag is None) != (n_lag == 0):
         raise GainComputationError(f"linearize: the {model.flow} flow model "
@@ -223,7 +336,31 @@ def linearize(model: VehicleModel, q: Array, qdot: Array, foil_acceleration: Arr
 
 def terminal_weight(linearization: Linearization, state_weight: Array, input_weight: Array,
                     weights: LqrWeights) -> Array:
-    """S: the scaled algebraic Riccati solution for the time-averaged F, G, shifted by the margin mu."""
+    """The terminal weight S: the scaled algebraic Riccati solution for the time-averaged F, G.
+
+    Parameters
+    ----------
+    linearization : Linearization
+        F (N, n, n) and G (N, n, 2) along the plan; their means over the samples are used.
+    state_weight, input_weight : (n, n) and (2, 2) array
+        Q and R (1/(rad/s^2)^2).
+    weights : LqrWeights
+        Gives the scale and the margin mu by which F_avg is shifted (F_avg - mu I).
+
+    Returns
+    -------
+    (n, n) array
+        S = terminal_scale P_are, symmetric.
+
+    Raises
+    ------
+    GainComputationError
+        If the algebraic Riccati equation has no solution for the shifted averaged pair.
+
+    References
+    ----------
+    Saimek & Li 2004, Sec. 7 ("a scaled version" of the algebraic solution); docs/model_and_method.md section 5.1.
+    """
     state_avg = linearization.state_matrix.mean(axis=0)
     input_avg = linearization.input_matrix.mean(axis=0)
     shifted = state_avg - weights.terminal_margin_per_s * np.eye(len(state_avg))
@@ -264,12 +401,39 @@ def _commutator(a: Array, b: Array) -> Array:
 
 def backward_transitions(time_s: Array, linearization: Linearization, state_weight: Array, input_weight: Array,
                          steps_per_interval: int = MAGNUS_STEPS_PER_INTERVAL) -> Array:
-    """Psi_k, (N - 1, 2n, 2n): the Hamiltonian system's transition from the end of each interval between the
-    plan's samples back to its start, in time order (steps_per_interval Magnus steps each).
+    """The Hamiltonian system's transition over each interval between the plan's samples, backward.
 
     With X(T) = I, Y(T) = S and d/dt (X, Y) = H(t) (X, Y), H = [[F, -G R^-1 G'], [-Q, -F']], P = Y X^-1 solves
     eq. 20; so P at a step's start is (Psi21 + Psi22 P)(Psi11 + Psi12 P)^-1 of P at its end. F and G are taken
-    linear between the plan's samples."""
+    linear between the plan's samples.
+
+    Parameters
+    ----------
+    time_s : (N,) array
+        The plan's sample times, s, strictly increasing.
+    linearization : Linearization
+        F (N, n, n) and G (N, n, 2) at those samples.
+    state_weight : (n, n) array
+        Q.
+    input_weight : (2, 2) array
+        R, 1/(rad/s^2)^2.
+    steps_per_interval : int, optional
+        Sixth-order Magnus steps per interval (``MAGNUS_STEPS_PER_INTERVAL``).
+
+    Returns
+    -------
+    (N - 1, 2n, 2n) array
+        Psi_k, from the end of interval k back to its start, in time order.
+
+    Raises
+    ------
+    GainComputationError
+        If the time grid is not strictly increasing with at least two samples.
+
+    References
+    ----------
+    Saimek & Li 2004, eq. 20; Blanes, Casas & Ros, BIT 40(3), 2000 (the Magnus integrator).
+    """
     time_s = np.asarray(time_s, dtype=float)
     if time_s.ndim != 1 or len(time_s) < 2 or np.any(np.diff(time_s) <= 0.0):
         raise GainComputationError("the time grid must be strictly increasing with at least two samples")
@@ -295,9 +459,23 @@ def backward_transitions(time_s: Array, linearization: Linearization, state_weig
 
 
 def merge_transitions(transitions: Array, max_norm: float = MERGED_TRANSITION_MAX_NORM) -> list[Array]:
-    """The same span in fewer transitions: consecutive ones multiplied while the product's Frobenius norm
-    stays at most max_norm. A Hamiltonian transition is symplectic, so its condition number is its 2-norm
-    squared: the bound keeps each map's rounding error below max_norm^2 times the machine epsilon."""
+    """The same span in fewer transitions: consecutive ones multiplied while the product stays small.
+
+    A Hamiltonian transition is symplectic, so its condition number is its 2-norm squared: the bound keeps each
+    map's rounding error below max_norm^2 times the machine epsilon.
+
+    Parameters
+    ----------
+    transitions : (K, 2n, 2n) array
+        Backward transitions in time order (``backward_transitions``).
+    max_norm : float, optional
+        The largest Frobenius norm of a merged product.
+
+    Returns
+    -------
+    list of (2n, 2n) array
+        The merged transitions, in time order, spanning the same interval.
+    """
     merged = [transitions[-1]]
     for psi in transitions[-2::-1]:
         product = psi @ merged[-1]
@@ -309,7 +487,25 @@ def merge_transitions(transitions: Array, max_norm: float = MERGED_TRANSITION_MA
 
 
 def sweep_backward(transitions: Array | list[Array], terminal: Array) -> Array:
-    """P at every transition's ends, (len(transitions) + 1, n, n), from P = terminal at the last one."""
+    """Carry P backward through transitions as linear-fractional maps, from P = terminal at the last one.
+
+    Parameters
+    ----------
+    transitions : (K, 2n, 2n) array or list of (2n, 2n) array
+        Backward transitions in time order.
+    terminal : (n, n) array
+        P at the end of the last transition.
+
+    Returns
+    -------
+    (K + 1, n, n) array
+        P at every transition's ends, symmetric.
+
+    Raises
+    ------
+    GainComputationError
+        If the solution is not finite.
+    """
     n = terminal.shape[0]
     riccati = np.empty((len(transitions) + 1, n, n))
     riccati[-1] = p = terminal
@@ -327,21 +523,58 @@ def sweep_backward(transitions: Array | list[Array], terminal: Array) -> Array:
 
 def solve_riccati(time_s: Array, linearization: Linearization, state_weight: Array, input_weight: Array,
                   terminal: Array) -> Array:
-    """P(t_k), (N, n, n): eq. 20 solved backward from P(T) = S, F and G linear between samples.
+    """P(t_k): eq. 20 solved backward from P(T) = S, F and G linear between samples.
 
     Each interval's Hamiltonian transition is found by sixth-order Magnus steps (``backward_transitions``)
-    and P is carried back through them as a linear-fractional map (``sweep_backward``)."""
+    and P is carried back through them as a linear-fractional map (``sweep_backward``).
+
+    Parameters
+    ----------
+    time_s, linearization, state_weight, input_weight
+        The sample times (N,), s, F and G, Q and R, as for ``backward_transitions``.
+    terminal : (n, n) array
+        S = P(T).
+
+    Returns
+    -------
+    (N, n, n) array
+        P(t_k), symmetric.
+
+    Raises
+    ------
+    GainComputationError
+        If the time grid is bad or the solution is not finite.
+
+    References
+    ----------
+    Saimek & Li 2004, Sec. 6.1, eq. 20; docs/model_and_method.md section 5.1.
+    """
     transitions = backward_transitions(time_s, linearization, state_weight, input_weight)
     return sweep_backward(transitions, terminal)
 
 
 def continued_terminal(cycle_transitions: Array, cycle_duration_s: float, terminal: Array,
                        lookahead_s: float) -> Array:
-    """P at the start of a periodic motion's cycle when the motion continues for lookahead_s more (whole
-    cycles, rounded up) and ends with P = terminal: eq. 20 over the one cycle, backward, again and again.
+    """P at the start of a periodic motion's cycle when the motion continues for lookahead_s more.
 
-    cycle_transitions: the cycle's ``backward_transitions``, (K, 2n, 2n); merged once, so that each pass is
-    only a few linear-fractional maps."""
+    Eq. 20 over the one cycle, backward, again and again, for whole cycles (rounded up), from P = terminal.
+
+    Parameters
+    ----------
+    cycle_transitions : (K, 2n, 2n) array
+        The cycle's ``backward_transitions``; merged once, so that each pass is only a few linear-fractional maps.
+    cycle_duration_s : float
+        The cycle's period, s.
+    terminal : (n, n) array
+        P at the end of the continued motion.
+    lookahead_s : float
+        How long the motion continues, s.
+
+    Returns
+    -------
+    (n, n) array
+        P at the cycle's start.
+    """
     passes = int(np.ceil(lookahead_s / cycle_duration_s - 1e-9))
     merged = merge_transitions(cycle_transitions)
     for _ in range(passes):
@@ -351,7 +584,15 @@ def continued_terminal(cycle_transitions: Array, cycle_duration_s: float, termin
 
 @dataclasses.dataclass
 class TrackingGains:
-    """What the tracker needs along one primitive, at its samples: P(t) and G(t)' P(t)."""
+    """What the tracker needs along one primitive, at its samples: P(t) and G(t)' P(t).
+
+    Attributes
+    ----------
+    riccati : (N, n, n) array
+        P(t_k) of eq. 20.
+    riccati_input_gain : (N, 2, n) array
+        G'P: du = -R^-1 G'P x and s = Mio^-1 G'P x (eq. 24).
+    """
 
     riccati: Array              # P, (N, n, n)
     riccati_input_gain: Array   # G' P, (N, 2, n): du = -R^-1 G'P x and s = Mio^-1 G'P x (eq. 24)
@@ -360,19 +601,50 @@ class TrackingGains:
 def primitive_gains(model: VehicleModel, time_s: Array, q: Array, qdot: Array, foil_acceleration: Array,
                     weights: Optional[LqrWeights] = None, cycle_samples: Optional[int] = None,
                     lag: Optional[Array] = None, ends_at_rest: bool = False) -> TrackingGains:
-    """P(t) and G'P along a planned trajectory, for the weights given (the defaults if None).
+    """P(t) and G'P along a planned trajectory: the tracking gains of one primitive.
 
-    lag: the plan's lag states (N, n_lag), m/s, for a circulatory model (None for the ideal one); the gains are
-    then on the extended error state, n = ny + 2 nq + n_lag (module docstring).
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle the primitive was planned on.
+    time_s : (N,) array
+        Sample times, s, strictly increasing.
+    q : (N, nq) array
+        Planned positions, rad and m.
+    qdot : (N, nq) array
+        Planned velocities, rad/s and m/s.
+    foil_acceleration : (N, 2) array
+        Planned u = psiddot, rad/s^2.
+    weights : LqrWeights, optional
+        The LQ weights (None: the defaults).
+    cycle_samples : int, optional
+        A cruise, whose first cycle_samples samples are one period of it (the rest are copies): P(T) is then not
+        S but the solution of eq. 20 over ``weights.cruise_lookahead_s`` more seconds of the same cruise, found by
+        carrying P back through one cycle again and again (F, G are periodic: alpha does not enter them, Prop. 1).
+    lag : (N, n_lag) array, optional
+        The plan's lag states, m/s, for a circulatory model (None for the ideal one); the gains are then on the
+        extended error state, n = ny + 2 nq + n_lag (module docstring).
+    ends_at_rest : bool, optional
+        The primitive ends the vehicle at rest (a decelerate); S then gains ``weights.rest_lateral_terminal_weight``
+        on e_R, the carriage's position error, for the free vehicle, and ``weights.rest_alpha_terminal_weight`` on
+        e_alpha, the hub's, for the constrained one.
 
-    cycle_samples: a cruise, whose first cycle_samples samples are one period of it (the rest are copies):
-    P(T) is then not S but the solution of eq. 20 over ``weights.cruise_lookahead_s`` more seconds of the
-    same cruise, found by carrying P back through one cycle again and again (F, G are periodic: alpha does not
-    enter them, Prop. 1).
+    Returns
+    -------
+    TrackingGains
+        P (N, n, n) and G'P (N, 2, n) at the samples.
 
-    ends_at_rest: the primitive ends the vehicle at rest (a decelerate); S then gains
-    ``weights.rest_lateral_terminal_weight`` on e_R, the carriage's position error, for the free vehicle, and
-    ``weights.rest_alpha_terminal_weight`` on e_alpha, the hub's, for the constrained one."""
+    Raises
+    ------
+    ValueError
+        If a weight is invalid.
+    GainComputationError
+        If the lag states do not fit the model, or no Riccati solution exists.
+
+    References
+    ----------
+    Saimek & Li 2004, Sec. 6.1, eqs. 16-21, and Sec. 7; docs/model_and_method.md section 5.1.
+    """
     weights = weights or LqrWeights()
     weights.validate()
     linearization = linearize(model, q, qdot, foil_acceleration, lag)

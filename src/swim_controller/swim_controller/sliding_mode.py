@@ -36,7 +36,23 @@ Array = npt.NDArray[np.float64]
 
 @dataclasses.dataclass(frozen=True)
 class SlidingMode:
-    """eps = -D s / max(||s||, phi)."""
+    """The sliding-mode term eps = -D s / max(||s||, phi) with its boundary layer (eqs. 24-25).
+
+    Attributes
+    ----------
+    disturbance_bound_n_m : float
+        D, N m, >= 0: the constant bound on the matched torque disturbance, used where the plan carries none.
+        Assumed: about 5 % of the pitch motor's limit (0.52 N m).
+    boundary_layer : float
+        phi > 0, in the units of s = Mio^-1 G'P x: inside ||s|| < phi the term is linear in s.
+    disturbance_bound_margin : float
+        >= 1: the factor on a plan's own D(t). Assumed: the plan's D(t) is the mismatch along the planned motion
+        with the planned wake history, and the tracked vehicle moves a little off it.
+
+    References
+    ----------
+    Saimek & Li 2004, Sec. 6.3, eqs. 24-25; docs/model_and_method.md section 5.3.
+    """
 
     disturbance_bound_n_m: float = 0.02   # assumed: D, about 5 % of the pitch motor's limit (0.52 N m)
     boundary_layer: float = 1.0           # assumed: phi, in the units of s = Mio^-1 G'P x
@@ -46,6 +62,13 @@ class SlidingMode:
     # the bound used is 50 % above the measured one
 
     def validate(self) -> None:
+        """Check the settings.
+
+        Raises
+        ------
+        ValueError
+            If D is negative or not finite, phi is not positive and finite, or the margin is below 1.
+        """
         if not (math.isfinite(self.disturbance_bound_n_m) and self.disturbance_bound_n_m >= 0.0):
             raise ValueError(f"disturbance bound must be finite and >= 0, got {self.disturbance_bound_n_m!r}")
         if not (math.isfinite(self.boundary_layer) and self.boundary_layer > 0.0):
@@ -54,14 +77,39 @@ class SlidingMode:
             raise ValueError(f"disturbance bound margin must be finite and >= 1, got {self.disturbance_bound_margin!r}")
 
     def term(self, sliding_variable: Array, plan_bound_n_m: Optional[float] = None) -> Array:
-        """eps (N m, heave and pitch) for the sliding variable s (2,), with D = disturbance_bound_margin
-        plan_bound_n_m (the plan's D(t) at this instant, N m) or, when the plan has none (None), the constant
-        disturbance_bound_n_m."""
+        """The sliding-mode torque eps for the sliding variable s.
+
+        Parameters
+        ----------
+        sliding_variable : (2,) array
+            s = Mio^-1 G_l' P_l x (eq. 24), heave and pitch.
+        plan_bound_n_m : float, optional
+            The plan's D(t) at this instant, N m; D is then ``disturbance_bound_margin`` times it. None: the plan
+            has none, and D is the constant ``disturbance_bound_n_m``.
+
+        Returns
+        -------
+        (2,) array
+            eps = -D s / max(||s||, phi), N m (heave, pitch).
+        """
         return sliding_variable * self.term_factor(math.hypot(sliding_variable[0], sliding_variable[1]),
                                                    plan_bound_n_m)
 
     def term_factor(self, sliding_norm: float, plan_bound_n_m: Optional[float] = None) -> float:
-        """-D / max(||s||, phi), N m per unit of s: eps = term_factor s, for ||s|| = sliding_norm (D as in term)."""
+        """The factor -D / max(||s||, phi) with which eps = factor s.
+
+        Parameters
+        ----------
+        sliding_norm : float
+            ||s||, in the units of s.
+        plan_bound_n_m : float, optional
+            The plan's D(t) at this instant, N m, or None (D as in ``term``).
+
+        Returns
+        -------
+        float
+            -D / max(||s||, phi), N m per unit of s.
+        """
         bound = self.disturbance_bound_n_m if plan_bound_n_m is None else \
             self.disturbance_bound_margin * plan_bound_n_m
         return -bound / max(sliding_norm, self.boundary_layer)

@@ -22,6 +22,8 @@ Array = npt.NDArray[np.float64]
 
 
 class Mode(enum.Enum):
+    """What the supervisor commands: IDLE, TRACKING, HOLDING or STOPPED (module docstring)."""
+
     IDLE = "idle"
     TRACKING = "tracking"
     HOLDING = "holding"
@@ -41,7 +43,19 @@ class Outcome(enum.Enum):
 
 @dataclasses.dataclass
 class Step:
-    """One period's command and report."""
+    """One period's command and report.
+
+    Attributes
+    ----------
+    torque : (2,) array
+        The commanded (heave, pitch) torque, N m, after saturation.
+    saturated : tuple of bool
+        Whether the (heave, pitch) command was clipped at its motor limit.
+    output : ControlOutput or None
+        The tracking law's result; None unless TRACKING.
+    outcome : Outcome or None
+        Set on the period the plan's execution ended, else None.
+    """
 
     torque: Array
     saturated: tuple[bool, bool]
@@ -51,8 +65,19 @@ class Step:
 
 @dataclasses.dataclass(frozen=True)
 class Tolerances:
-    """Limits on the tracking errors, checked every period: |alpha error| (rad) and |R error| (m) along the plan
-    (path_*) and at its end (goal_*); 0 means not checked."""
+    """Limits on the tracking errors, checked every period; 0 means not checked.
+
+    Attributes
+    ----------
+    path_alpha_rad : float
+        Largest |alpha error| along the plan, rad, >= 0.
+    path_r_m : float
+        Largest |R error| along the plan, m, >= 0 (the free vehicle).
+    goal_alpha_rad : float
+        Largest |alpha error| at the plan's end, rad, >= 0.
+    goal_r_m : float
+        Largest |R error| at the plan's end, m, >= 0 (the free vehicle).
+    """
 
     path_alpha_rad: float = 0.0
     path_r_m: float = 0.0
@@ -60,6 +85,13 @@ class Tolerances:
     goal_r_m: float = 0.0
 
     def validate(self) -> None:
+        """Check the tolerances.
+
+        Raises
+        ------
+        ValueError
+            If a tolerance is negative or not finite.
+        """
         for field in dataclasses.fields(self):
             value = getattr(self, field.name)
             if not (math.isfinite(value) and value >= 0.0):
@@ -71,7 +103,24 @@ def _violates(error: float, tolerance: float) -> bool:
 
 
 class Supervisor:
-    """Runs one plan at a time through a CascadeTracker; owns no ROS objects and no clock."""
+    """Runs one plan at a time through a CascadeTracker; owns no ROS objects and no clock.
+
+    Parameters
+    ----------
+    tracker : CascadeTracker
+        The tracking law the plans run through.
+
+    Attributes
+    ----------
+    mode : Mode
+        What the supervisor commands now.
+    tolerances : Tolerances
+        The active plan's limits on the tracking errors.
+    last_errors : tuple of float
+        (alpha error, rad; R error, m) at the last tracked period.
+    elapsed_s : float
+        Plan time of the last tracked period, s.
+    """
 
     def __init__(self, tracker: CascadeTracker) -> None:
         self.tracker = tracker
@@ -83,7 +132,22 @@ class Supervisor:
         self.elapsed_s = 0.0
 
     def begin(self, trajectory: Trajectory, tolerances: Tolerances = Tolerances()) -> None:
-        """Start tracking trajectory at the next state (its stamp is plan time 0)."""
+        """Start tracking a plan at the next state (its stamp is plan time 0).
+
+        Parameters
+        ----------
+        trajectory : Trajectory
+            The plan.
+        tolerances : Tolerances, optional
+            Its limits on the tracking errors (default: none checked).
+
+        Raises
+        ------
+        ValueError
+            If a tolerance is negative or not finite.
+        PlanError
+            If the plan's flow model is not the tracker's.
+        """
         tolerances.validate()
         self.tracker.start(trajectory)
         self.tolerances = tolerances
@@ -93,7 +157,13 @@ class Supervisor:
         self.elapsed_s = 0.0
 
     def cancel(self, q: Optional[Array]) -> None:
-        """Stop the plan and hold the foil where it is (q: the last measured state, if any)."""
+        """Stop the plan and hold the foil where it is.
+
+        Parameters
+        ----------
+        q : (nq,) array or None
+            The last measured positions (rad, m); None: no state yet, so go IDLE (zero torque).
+        """
         if q is not None:
             self._hold_target = np.array(q[-2:], dtype=float)
             self.mode = Mode.HOLDING
@@ -105,7 +175,20 @@ class Supervisor:
         self.mode = Mode.STOPPED
 
     def on_state(self, time_s: float, q: Array, qdot: Array) -> Step:
-        """The command for the period that starts with this (validated) state."""
+        """The command for the period that starts with this (validated) state.
+
+        Parameters
+        ----------
+        time_s : float
+            The state's stamp, s: plan time is measured from the first state after ``begin``.
+        q, qdot : (nq,) array
+            The validated measured state: positions (rad, m), velocities (rad/s, m/s).
+
+        Returns
+        -------
+        Step
+            The torque, saturation, the law's output (TRACKING) and the outcome, if the plan ended.
+        """
         if self.mode is Mode.STOPPED:
             self.mode = Mode.IDLE   # fresh state again: stay passive until a new plan
         if self.mode is Mode.IDLE:
@@ -141,13 +224,26 @@ class Supervisor:
 
 
 class StaleStateWatch:
-    """Is the newest state older than limit_s? Asked every check_period_s by a timer; times in seconds on any
-    monotonic clock.
+    """Is the newest state older than limit_s? Asked every check_period_s by a timer.
 
     A check that comes more than late_periods check periods after the one before means the asker itself was held
     up (its process did not run, or a callback held its executor): states that arrived meanwhile are still unread,
     so that check does not judge. At most one check in a row is skipped, so a dead plant is caught on a host that
     is always late, at most one check period later than on time.
+
+    Parameters
+    ----------
+    now_s : float
+        The time the watch starts, s, on any monotonic clock (all times here are on it).
+    check_period_s : float
+        The period of the checks, s.
+    late_periods : float, optional
+        A check more than this many check periods after the one before does not judge.
+
+    Attributes
+    ----------
+    last_state_s : float
+        When the newest state arrived, s.
     """
 
     def __init__(self, now_s: float, check_period_s: float, late_periods: float = 3.0) -> None:
@@ -158,10 +254,30 @@ class StaleStateWatch:
         self._skipped = False
 
     def state_arrived(self, now_s: float) -> None:
+        """Record a state's arrival.
+
+        Parameters
+        ----------
+        now_s : float
+            The time it arrived, s.
+        """
         self.last_state_s = now_s
 
     def stale(self, now_s: float, limit_s: float) -> bool:
-        """The check: True if no state arrived within limit_s of now_s (and this check may judge)."""
+        """The check: whether no state arrived within limit_s of now_s.
+
+        Parameters
+        ----------
+        now_s : float
+            The time of this check, s.
+        limit_s : float
+            The largest age of the newest state, s.
+
+        Returns
+        -------
+        bool
+            True if the state is stale and this check may judge (it did not come late).
+        """
         came_late = now_s - self._last_check_s > self.late_periods * self.check_period_s
         skip = came_late and not self._skipped
         self._last_check_s, self._skipped = now_s, skip

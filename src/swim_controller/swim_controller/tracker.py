@@ -96,6 +96,22 @@ class LagEstimator:
     the lag's low-pass filter (corner a_i: 10 rad/s per m/s of |u| for the rig's fast state). A measurement
     whose lag rate is not finite, or whose normal velocity Q passes MAX_NORMAL_VELOCITY_M_S (a state no stroke
     makes: a glitch), leaves z^ as it was, and the next one restarts the integration from there.
+
+    Parameters
+    ----------
+    lag_rate : LagRate
+        (q, qdot, z) -> zdot (n_lag,), m/s^2: the circulatory flow's lag rate (``model_lag_rate``).
+    n_lag : int
+        The flow's lag states (2).
+
+    Attributes
+    ----------
+    estimate : (n_lag,) array
+        z^, m/s.
+
+    References
+    ----------
+    docs/flow_model.md, section 2 (the lag states and their rate).
     """
 
     def __init__(self, lag_rate: LagRate, n_lag: int) -> None:
@@ -107,12 +123,31 @@ class LagEstimator:
         self._forcing: Optional[list[float]] = None  # c = a Q at the previous measurement, m/s^2
 
     def reset(self, lag: Array) -> None:
-        """Start from z^ = lag (m/s) at the next measurement."""
+        """Start from a given estimate at the next measurement.
+
+        Parameters
+        ----------
+        lag : (n_lag,) array
+            z^ to start from, m/s.
+        """
         self.estimate = np.array(lag, dtype=float)
         self._slope = self._forcing = None
 
     def update(self, elapsed_s: float, q: Array, qdot: Array) -> Array:
-        """z^ at a measurement elapsed_s after the previous one (the first after reset: the reset value)."""
+        """z^ at a measurement, integrated from the previous one.
+
+        Parameters
+        ----------
+        elapsed_s : float
+            Time since the previous measurement, s.
+        q, qdot : (nq,) array
+            The measured state, rad and m, rad/s and m/s: the lag rate's coefficients are taken at it.
+
+        Returns
+        -------
+        (n_lag,) array
+            z^, m/s (the first after ``reset``: the reset value; after an implausible measurement: unchanged).
+        """
         # a handful of scalars: Python floats cost a fraction of numpy's per-call overhead here
         forcing = self._lag_rate(q, qdot, self._zero).tolist()
         probed = self._lag_rate(q, qdot, self._probe).tolist()
@@ -165,6 +200,21 @@ class FoilRangeGuard:
     acceleration it gives; under a large error (a gust of the wake at a time scale whose plan already uses the
     motors' whole torque) it drove the heave onto its stop, where the foil makes no stroke at all and the hub,
     which only the strokes move, ran away from its plan. On the rig a stop latches the bridge's HARD_LIMIT fault.
+
+    Parameters
+    ----------
+    hard_limits_rad : HardLimits
+        ((heave lower, upper), (pitch lower, upper)), rad: the joints' hard stops; finite, with
+        lower + 2 margin < upper.
+    braking_acceleration_rad_s2 : tuple of float, optional
+        a per joint (heave, pitch), rad/s^2, positive (``GUARD_BRAKING_ACCELERATION_RAD_S2``).
+    margin_rad : float, optional
+        How far short of each stop a joint is to come to rest, rad, >= 0 (``GUARD_MARGIN_RAD``).
+
+    Raises
+    ------
+    ValueError
+        If a stop, the margin or a braking acceleration is out of range.
     """
 
     hard_limits_rad: HardLimits   # ((heave lower, upper), (pitch lower, upper)), rad: the bridge file's stops
@@ -172,6 +222,7 @@ class FoilRangeGuard:
     margin_rad: float = GUARD_MARGIN_RAD
 
     def __post_init__(self) -> None:
+        """Check the stops, the margin and the braking accelerations (Raises, above)."""
         if not (math.isfinite(self.margin_rad) and self.margin_rad >= 0.0):
             raise ValueError(f"FoilRangeGuard: margin_rad must be finite and >= 0, got {self.margin_rad!r}")
         for joint, ((lower, upper), braking) in zip(("heave", "pitch"),
@@ -185,8 +236,26 @@ class FoilRangeGuard:
 
     def bound(self, u: Sequence[float], psi: Sequence[float], psi_rate: Sequence[float],
               period_s: float) -> tuple[list[float], tuple[bool, bool]]:
-        """(u bounded, whether each joint's was) for the (heave, pitch) acceleration u (rad/s^2) held over
-        period_s (s) from the measured psi (rad) and psidot (rad/s)."""
+        """Bound the law's foil acceleration so that each joint can still stop short of its hard stops.
+
+        Parameters
+        ----------
+        u : sequence of 2 float
+            The (heave, pitch) acceleration the law asks for, rad/s^2.
+        psi : sequence of 2 float
+            The measured (heave, pitch) angles, rad.
+        psi_rate : sequence of 2 float
+            The measured (heave, pitch) rates psidot, rad/s.
+        period_s : float
+            The period h over which u is held, s.
+
+        Returns
+        -------
+        bounded : list of 2 float
+            u bounded, rad/s^2.
+        limited : tuple of 2 bool
+            Whether each joint's (heave, pitch) acceleration was bounded.
+        """
         bounded, limited = [], []
         for acceleration, position, rate, (lower, upper), braking in zip(
                 u, psi, psi_rate, self.hard_limits_rad, self.braking_acceleration_rad_s2):
@@ -199,10 +268,12 @@ class FoilRangeGuard:
 
 
 def _braking_bound(room_rad: float, rate_rad_s: float, braking_rad_s2: float, period_s: float) -> float:
-    """The largest acceleration (rad/s^2) toward a stop room_rad ahead (rad, clipped at 0) of a joint moving toward
-    it at rate_rad_s, after which, held over period_s, it can still come to rest there braking at braking_rad_s2
-    (FoilRangeGuard); -rate / period_s (at rest at the period's end) where it would cover the room within the
-    period."""
+    """The largest acceleration (rad/s^2) toward a stop after which the joint can still come to rest short of it.
+
+    The stop is room_rad ahead (rad, clipped at 0) of a joint moving toward it at rate_rad_s; after the acceleration,
+    held over period_s, it can still come to rest there braking at braking_rad_s2 (FoilRangeGuard); -rate / period_s
+    (at rest at the period's end) where it would cover the room within the period.
+    """
     a, h, room = braking_rad_s2, period_s, max(room_rad, 0.0)
     if rate_rad_s * h >= 2.0 * room:
         return -rate_rad_s / h
@@ -211,7 +282,29 @@ def _braking_bound(room_rad: float, rate_rad_s: float, braking_rad_s2: float, pe
 
 @dataclasses.dataclass
 class ControlOutput:
-    """One period's result: the command and what went into it."""
+    """One period's result: the command and what went into it.
+
+    Attributes
+    ----------
+    torque : (2,) array
+        Commanded (heave, pitch) torque after saturation, N m.
+    saturated : tuple of 2 bool
+        Whether each was clipped at its motor limit.
+    unsaturated_torque : (2,) array
+        tau1 + eps before saturation, N m.
+    sliding_torque : (2,) array
+        eps, N m (zero when the sliding mode is off).
+    error_state : (n,) array
+        x = (int e_y, e_q, edot_q[, e_z]), rad s, m s, rad, m, rad/s, m/s and m/s by block.
+    reference : TrajectoryPoint
+        The plan at this period.
+    holding : bool
+        The plan has ended: the hold law is in charge.
+    lag_estimate : (n_lag,) array
+        z^, the flow's lag states in the law, m/s; empty for the ideal flow.
+    range_guarded : tuple of 2 bool
+        Whether the range guard bounded the (heave, pitch) acceleration.
+    """
 
     torque: Array               # commanded (heave, pitch) after saturation, N m
     saturated: tuple[bool, bool]
@@ -227,11 +320,35 @@ class ControlOutput:
 class CascadeTracker:
     """The tracking law for one plan at a time; no ROS (the tracker node wraps it).
 
-    lag_rate: the circulatory flow's lag rate (model_lag_rate) for a tracker of plans made with that model, whose
-    lag states it estimates (LagEstimator); None (the ideal flow) for the paper's plans. A plan of the other flow
-    model is refused by start().
-    range_guard: bounds the law's foil acceleration near the joints' stops (FoilRangeGuard), in the tracking law,
-    the hold law and hold(); None: no bound (the paper's law)."""
+    Parameters
+    ----------
+    io_linearization : IoLinearization
+        (q, qdot, lag) -> (Mio (2, 2), Cio qdot (2,)): the vehicle's I/O linearization (``model_io_linearization``).
+    torque_limits_n_m : (2,) array
+        The (heave, pitch) motor limits, N m.
+    sliding_mode : SlidingMode, optional
+        The sliding mode's settings.
+    sliding_mode_enabled : bool, optional
+        Add the sliding-mode term eps (False: the LQ stage and the I/O linearization alone).
+    sample_period_s : float, optional
+        The control period h, s, positive and finite: the zero-order hold's.
+    lag_rate : LagRate, optional
+        The circulatory flow's lag rate (``model_lag_rate``) for a tracker of plans made with that model, whose
+        lag states it estimates (``LagEstimator``); None (the ideal flow) for the paper's plans. A plan of the other
+        flow model is refused by ``start``.
+    range_guard : FoilRangeGuard, optional
+        Bounds the law's foil acceleration near the joints' stops, in the tracking law, the hold law and ``hold``;
+        None: no bound (the paper's law).
+
+    Raises
+    ------
+    ValueError
+        If the sample period is not positive and finite, or the sliding mode's settings are invalid.
+
+    References
+    ----------
+    Saimek & Li 2004, Sec. 6, Fig. 18, eqs. 19, 22-25, 33; docs/model_and_method.md section 5.
+    """
 
     def __init__(self, io_linearization: IoLinearization, torque_limits_n_m: Array,
                  sliding_mode: SlidingMode = SlidingMode(), sliding_mode_enabled: bool = True,
@@ -258,13 +375,23 @@ class CascadeTracker:
         return "ideal" if self._lag_rate is None else "circulatory"
 
     def start(self, trajectory: Trajectory, initial_lag: Optional[Array] = None) -> None:
-        """Track ``trajectory`` from plan time 0; the integral error restarts at zero.
+        """Track a plan from plan time 0; the integral error restarts at zero.
 
-        A circulatory plan's lag estimate starts at the first step from initial_lag (m/s), by default the plan's
-        own lag states at t = 0: the tracker starts a plan with the vehicle taken to be on the plan's start, of
-        which the lag states are part; a planned start from rest has z = 0 there, still water, so both readings
-        agree, and a start elsewhere (a plan begun mid-stroke) is right where the plan is. PlanError if the plan
-        was made with another flow model than the tracker's."""
+        Parameters
+        ----------
+        trajectory : Trajectory
+            The plan, made with the tracker's flow model.
+        initial_lag : (n_lag,) array, optional
+            Where a circulatory plan's lag estimate starts at the first step, m/s; by default the plan's own lag
+            states at t = 0: the tracker starts a plan with the vehicle taken to be on the plan's start, of which
+            the lag states are part; a planned start from rest has z = 0 there, still water, so both readings
+            agree, and a start elsewhere (a plan begun mid-stroke) is right where the plan is.
+
+        Raises
+        ------
+        PlanError
+            If the plan was made with another flow model than the tracker's.
+        """
         if trajectory.flow_model != self.flow_model:
             raise PlanError(f"the plan was made with the {trajectory.flow_model} flow model, this tracker runs the "
                             f"{self.flow_model} one")
@@ -277,7 +404,27 @@ class CascadeTracker:
             self.lag_estimator.reset(trajectory.lag[0] if initial_lag is None else initial_lag)
 
     def step(self, plan_time_s: float, q: Array, qdot: Array) -> ControlOutput:
-        """The torque for the period starting at plan_time_s, from the measured q and qdot (nq,)."""
+        """The torque for one control period: the cascade law (module docstring), or the hold law after the plan.
+
+        Parameters
+        ----------
+        plan_time_s : float
+            Plan time at the period's start, s.
+        q : (nq,) array
+            Measured positions, rad and m.
+        qdot : (nq,) array
+            Measured velocities, rad/s and m/s.
+
+        Returns
+        -------
+        ControlOutput
+            The command and what went into it.
+
+        Raises
+        ------
+        PlanError
+            If no plan was started.
+        """
         trajectory = self.trajectory
         if trajectory is None:
             raise PlanError("no plan: call start() first")
@@ -326,8 +473,24 @@ class CascadeTracker:
                              holding=holding, lag_estimate=lag, range_guarded=guarded)
 
     def hold(self, q: Array, qdot: Array, psi_target: Array) -> tuple[Array, tuple[bool, bool]]:
-        """The torque that holds the foil still at psi_target (heave, pitch), with no plan involved. A state comes
-        without its time here, one a period: the lag estimate advances by sample_period_s."""
+        """The torque that holds the foil still at a target, with no plan involved.
+
+        A state comes without its time here, one a period: the lag estimate advances by ``sample_period_s``.
+
+        Parameters
+        ----------
+        q, qdot : (nq,) array
+            The measured positions (rad, m) and velocities (rad/s, m/s).
+        psi_target : (2,) array
+            The (heave, pitch) angles to hold, rad.
+
+        Returns
+        -------
+        torque : (2,) array
+            The saturated (heave, pitch) command, N m.
+        saturated : tuple of 2 bool
+            Whether each was clipped at its motor limit.
+        """
         lag = NO_LAG
         if self.lag_estimator is not None:
             lag = self.lag_estimator.update(self.sample_period_s, q, qdot)
@@ -343,9 +506,21 @@ class CascadeTracker:
 
 
 def model_io_linearization(model: VehicleModel) -> IoLinearization:
-    """The I/O linearization of a swim_model VehicleModel, called on its compiled C entry point directly
-    (VehicleModel.native_function: the same numbers; the checked numpy API costs ~15 us more per call and CasADi's
-    own call ~45 us, too much at 1 kHz; the tracker validates states itself)."""
+    """The I/O linearization of a VehicleModel, called on its compiled C entry point directly.
+
+    VehicleModel.native_function gives the same numbers; the checked numpy API costs ~15 us more per call and
+    CasADi's own call ~45 us, too much at 1 kHz; the tracker validates states itself.
+
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle, ideal or circulatory flow.
+
+    Returns
+    -------
+    IoLinearization
+        (q (nq,), qdot (nq,), lag (n_lag,) m/s) -> (Mio (2, 2), Cio qdot (2,) N m) of eqs. 22-23.
+    """
     function = model.native_function("io_linearization")
     (q_input, qdot_input, *lag_input), (mio_output, cio_output) = function.inputs, function.outputs
     mio_shape = function.function.size_out(0)
@@ -366,8 +541,20 @@ def model_io_linearization(model: VehicleModel) -> IoLinearization:
 
 
 def model_lag_rate(model: VehicleModel) -> Optional[LagRate]:
-    """The lag rate zdot = g(q, qdot, z) of a circulatory VehicleModel on its compiled C entry point (as
-    model_io_linearization; one buffer set per model: the value returned is a copy); None for the ideal flow."""
+    """The lag rate zdot = g(q, qdot, z) of a circulatory VehicleModel on its compiled C entry point.
+
+    As ``model_io_linearization``; one buffer set per model: the value returned is a copy.
+
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle.
+
+    Returns
+    -------
+    LagRate or None
+        (q, qdot, z) -> zdot (n_lag,), m/s^2; None for the ideal flow.
+    """
     if model.n_lag == 0:
         return None
     function = model.native_function("lag_rate")
@@ -381,13 +568,42 @@ def model_lag_rate(model: VehicleModel) -> Optional[LagRate]:
 
 
 def hold_acceleration(psi: Array, psi_rate: Array, psi_target: Array) -> Array:
-    """u = -kp (psi - psi_target) - kd psidot: a critically damped return to psi_target."""
+    """The hold law's foil acceleration: a critically damped return to psi_target.
+
+    Parameters
+    ----------
+    psi : (2,) array
+        Measured (heave, pitch), rad.
+    psi_rate : (2,) array
+        Measured psidot, rad/s.
+    psi_target : (2,) array
+        The angles to hold, rad.
+
+    Returns
+    -------
+    (2,) array
+        u = -kp (psi - psi_target) - kd psidot, rad/s^2 (``HOLD_STIFFNESS_PER_S2``, ``HOLD_DAMPING_PER_S``).
+    """
     return -HOLD_STIFFNESS_PER_S2 * (psi - psi_target) - HOLD_DAMPING_PER_S * psi_rate
 
 
 def saturate(torque: Sequence[float] | Array, limits: Array) -> tuple[Array, tuple[bool, bool]]:
-    """Clip the (heave, pitch) torque (N m) to +-limits (2,); a non-finite torque becomes zero and counts as
-    saturated."""
+    """Clip a (heave, pitch) torque to the motor limits; a non-finite torque becomes zero and counts as saturated.
+
+    Parameters
+    ----------
+    torque : sequence of 2 float or (2,) array
+        (heave, pitch), N m.
+    limits : (2,) array
+        The motor limits, N m, positive.
+
+    Returns
+    -------
+    command : (2,) array
+        The torque clipped to +-limits, N m.
+    saturated : tuple of 2 bool
+        Whether each was clipped.
+    """
     heave, pitch = float(torque[0]), float(torque[1])
     heave_limit, pitch_limit = float(limits[0]), float(limits[1])
     if not (math.isfinite(heave) and math.isfinite(pitch)):
@@ -397,9 +613,23 @@ def saturate(torque: Sequence[float] | Array, limits: Array) -> tuple[Array, tup
 
 
 def solve(matrix: Array, rhs: Array) -> Array:
-    """matrix^-1 rhs for a square matrix (n, n) and rhs (n,): numpy.linalg.solve's own LAPACK kernel (gesv),
-    the same numbers, without the argument checks and floating-point error state it sets up per call (most of the
-    ~8 us it takes for a 2 x 2). For a matrix that cannot be singular, as Mio (an inertia, positive definite at
-    every finite state): a singular one gives non-finite entries and a RuntimeWarning, not LinAlgError."""
+    """matrix^-1 rhs by numpy.linalg.solve's own LAPACK kernel (gesv), without its per-call checks.
+
+    The same numbers, without the argument checks and floating-point error state numpy sets up per call (most of
+    the ~8 us it takes for a 2 x 2). For a matrix that cannot be singular, as Mio (an inertia, positive definite at
+    every finite state): a singular one gives non-finite entries and a RuntimeWarning, not LinAlgError.
+
+    Parameters
+    ----------
+    matrix : (n, n) array
+        Square, non-singular.
+    rhs : (n,) array
+        The right-hand side.
+
+    Returns
+    -------
+    (n,) array
+        The solution.
+    """
     solution: Array = _umath_linalg.solve1(matrix, rhs, signature="dd->d")
     return solution

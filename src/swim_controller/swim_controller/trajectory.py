@@ -49,7 +49,29 @@ MAX_TRACKED_SAMPLES = 1_000_000
 
 @dataclasses.dataclass(frozen=True)
 class Segment:
-    """One primitive as it was placed in a trajectory (swim_interfaces/PrimitiveSegment)."""
+    """One primitive as it was placed in a trajectory (swim_interfaces/PrimitiveSegment).
+
+    Attributes
+    ----------
+    primitive_id : str
+        The library's id of the primitive.
+    primitive_type : str
+        Its type (swim_planner.primitives.PrimitiveType's value).
+    repeat_index : int
+        Which repeat of the primitive in its run, from 0.
+    start_time_s : float
+        Trajectory time at which the segment starts, s.
+    duration_s : float
+        Its duration after time scaling, s, >= 0.
+    time_scale : float
+        lambda > 0; > 1 runs faster than stored.
+    alpha_offset_rad : float
+        Added to the stored alpha, rad (Prop. 1).
+    first_sample : int
+        Index of the segment's first sample in the trajectory's arrays.
+    sample_count : int
+        Samples that belong to the segment.
+    """
 
     primitive_id: str
     primitive_type: str
@@ -62,7 +84,13 @@ class Segment:
     sample_count: int         # samples that belong to the segment
 
     def validate(self) -> None:
-        """PlanError unless the times and lambda are finite (lambda and the duration positive)."""
+        """Check the segment's times and time scale.
+
+        Raises
+        ------
+        PlanError
+            Unless the times and lambda are finite, lambda positive and the duration non-negative.
+        """
         if not (math.isfinite(self.time_scale) and self.time_scale > 0.0):
             raise PlanError(f"segment '{self.primitive_id}': time scale must be positive and finite, "
                             f"got {self.time_scale!r}")
@@ -74,7 +102,29 @@ class Segment:
 
 @dataclasses.dataclass
 class TrajectoryPoint:
-    """A trajectory sampled at one time: the reference of one control period."""
+    """A trajectory sampled at one time: the reference of one control period.
+
+    Attributes
+    ----------
+    time_s : float
+        Trajectory time, s.
+    q : (nq,) array
+        Positions, rad and m.
+    qdot : (nq,) array
+        Velocities, rad/s and m/s.
+    foil_acceleration : (2,) array
+        u_des = psiddot (heave, pitch), rad/s^2.
+    torque : (2,) array
+        Feed-forward torque (heave, pitch), N m.
+    lqr_gain : (2, n) array
+        K of eq. 33, time-scaled.
+    riccati_input_gain : (2, n) array
+        G_l' P_l of eq. 24, time-scaled.
+    lag : (n_lag,) array
+        The flow's planned lag states, m/s; empty for the ideal flow.
+    disturbance_bound_n_m : float or None
+        D(t), N m; None: the plan has none (the tracker's constant bound).
+    """
 
     time_s: float
     q: Array                   # (nq,)
@@ -91,11 +141,48 @@ class TrajectoryPoint:
 class Trajectory:
     """A concatenated, time-scaled trajectory on its sample grid, N samples, nq = 3 (constrained) or 4 (free).
 
-    flow_model: the flow model the plan was made with, "ideal" (the paper's) or "circulatory"; lag, its (N, n_lag)
-    planned lag states (m/s), is required with the circulatory flow (n_lag = 2) and must be None with the ideal
-    one. The gains act on the error state x = (int e_y, e_q, edot_q, e_z) of n = ny + 2 nq + n_lag entries.
-    disturbance_bound: (N,) the sliding mode's bound D(t), N m, finite and >= 0, or None (the tracker's constant
-    bound)."""
+    The gains act on the error state x = (int e_y, e_q, edot_q, e_z) of n = ny + 2 nq + n_lag entries. Every field
+    is checked when the trajectory is made.
+
+    Parameters
+    ----------
+    time_s : (N,) array
+        Trajectory time, s, strictly increasing, N >= 2.
+    q : (N, nq) array
+        Positions, rad and m.
+    qdot : (N, nq) array
+        Velocities, rad/s and m/s.
+    foil_acceleration : (N, 2) array
+        u_des = psiddot (heave, pitch), rad/s^2.
+    torque : (N, 2) array
+        Feed-forward torque, N m (reported, not used by the law).
+    lqr_gain : (N, 2, n) array
+        K of eq. 33, time-scaled.
+    riccati_input_gain : (N, 2, n) array
+        G_l' P_l of eq. 24, time-scaled.
+    segments : tuple of Segment
+        In order, tiling the samples (a junction sample belongs to the earlier one).
+    lane_radius_m : float
+        R of the locked rails (constrained), or the starting lane (free), m, > 0.
+    library_digest : str, optional
+        The primitive library the trajectory came from.
+    flow_model : str, optional
+        The flow model the plan was made with: "ideal" (the paper's) or "circulatory"
+        (swim_model.flow.FLOW_MODELS).
+    lag : (N, n_lag) array, optional
+        The planned lag states, m/s: required with the circulatory flow (n_lag = 2), None with the ideal one.
+    disturbance_bound : (N,) array, optional
+        The sliding mode's bound D(t), N m, finite and >= 0, or None (the tracker's constant bound).
+
+    Raises
+    ------
+    PlanError
+        If a field has the wrong shape, a non-finite value, or does not fit the others (module docstring).
+
+    References
+    ----------
+    Saimek & Li 2004, Secs. 4.2-4.3 and 6.4, eqs. 24 and 33; docs/model_and_method.md sections 4 and 5.4.
+    """
 
     time_s: Array              # (N,) trajectory time, s, strictly increasing
     q: Array                   # (N, nq) rad, m
@@ -121,6 +208,7 @@ class Trajectory:
     _sizes: tuple[int, int, int] = dataclasses.field(init=False, repr=False)   # (nq, n_lag, n), read per sample
 
     def __post_init__(self) -> None:
+        """Check every field and build the interpolation rows (Raises, above)."""
         set_field = object.__setattr__   # frozen: fields are set here once, checked
         set_field(self, "time_s", np.asarray(self.time_s, dtype=float))
         samples = len(self.time_s)
@@ -194,10 +282,12 @@ class Trajectory:
 
     @property
     def nq(self) -> int:
+        """Generalized coordinates: 3 (constrained) or 4 (free)."""
         return int(self.q.shape[1])
 
     @property
     def ny(self) -> int:
+        """Unactuated coordinates with an integral error: 1 (constrained) or 2 (free)."""
         return self.nq - 2
 
     @property
@@ -212,22 +302,57 @@ class Trajectory:
 
     @property
     def joint_names(self) -> tuple[str, ...]:
+        """The names of q's entries, in order (swim_model.vehicle's joint names)."""
         return JOINT_NAMES_CONSTRAINED if self.constrained else JOINT_NAMES_UNCONSTRAINED
 
     @property
     def duration_s(self) -> float:
+        """The last sample's time T, s."""
         return self._times[-1]
 
     def segment_index(self, time_s: float) -> int:
-        """Index of the segment running at time_s."""
+        """Index of the segment running at a time.
+
+        Parameters
+        ----------
+        time_s : float
+            Trajectory time, s.
+
+        Returns
+        -------
+        int
+            Index into ``segments`` (0 before the first segment's start).
+        """
         return max(int(np.searchsorted(self._segment_start_s, time_s, side="right")) - 1, 0)
 
     def time_scale_at(self, time_s: float) -> float:
-        """lambda of the segment running at time_s."""
+        """The time scale of the segment running at a time.
+
+        Parameters
+        ----------
+        time_s : float
+            Trajectory time, s (clamped as in ``segment_index``).
+
+        Returns
+        -------
+        float
+            lambda of that segment.
+        """
         return self.segments[self.segment_index(time_s)].time_scale
 
     def sample(self, time_s: float) -> TrajectoryPoint:
-        """The trajectory at time_s (clamped to [0, T]): linear in every row, cubic Hermite in q (uses qdot)."""
+        """The trajectory at a time: linear in every row, cubic Hermite in q (uses qdot).
+
+        Parameters
+        ----------
+        time_s : float
+            Trajectory time, s, clamped to [0, T].
+
+        Returns
+        -------
+        TrajectoryPoint
+            The reference at that time.
+        """
         t, k, offset = self._interval(time_s)
         row = self._rows[k] + offset * self._slopes[k]
         nq, n_lag, n = self._sizes
@@ -249,8 +374,18 @@ class Trajectory:
             disturbance_bound_n_m=bound)
 
     def foil_acceleration_at(self, time_s: float) -> tuple[float, float]:
-        """u_des = psiddot (heave, pitch), rad/s^2, at time_s: sample(time_s).foil_acceleration, the same numbers,
-        without interpolating the rest of the row (the tracker's mid-period feed-forward)."""
+        """u_des = psiddot at a time, without interpolating the rest of the row (the tracker's mid-period feed-forward).
+
+        Parameters
+        ----------
+        time_s : float
+            Trajectory time, s, clamped to [0, T] (a period's midpoint, for the feed-forward).
+
+        Returns
+        -------
+        tuple of float
+            (heave, pitch) rad/s^2: sample(time_s).foil_acceleration, the same numbers.
+        """
         _, k, offset = self._interval(time_s)
         first = 2 * self._sizes[0]
         heave, pitch = self._rows[k, first:first + 2].tolist()
@@ -258,18 +393,41 @@ class Trajectory:
         return heave + offset * heave_slope, pitch + offset * pitch_slope
 
     def _interval(self, time_s: float) -> tuple[float, int, float]:
-        """(t, k, t - t_k): time_s clamped to [0, T] as t, and the sample interval [t_k, t_(k+1)] holding it
-        (k in 0..N-2: the last interval holds T, the first a time before the first sample)."""
+        """(t, k, t - t_k): time_s clamped to [0, T] as t, and the sample interval [t_k, t_(k+1)] holding it.
+
+        k is in 0..N-2: the last interval holds T, the first a time before the first sample.
+        """
         times = self._times
         t = min(max(time_s, 0.0), times[-1])
         k = max(min(bisect.bisect_right(times, t) - 1, len(times) - 2), 0)
         return t, k, t - times[k]
 
     def time_scaled(self, time_scale: float, torque_limits_n_m: npt.ArrayLike) -> Trajectory:
-        """This trajectory run time_scale (lambda) times faster: P3 and Theorem 1 (module docstring).
+        """The trajectory run time_scale (lambda) times faster: P3 and Theorem 1 (module docstring).
 
-        torque_limits_n_m: the (heave, pitch) motor limits, N m (the rig's). Raises PlanError for a lambda that is
-        not positive and finite, or whose torques lambda^2 tau exceed the limits (naming the largest feasible)."""
+        Parameters
+        ----------
+        time_scale : float
+            lambda > 0; scalings compose (lambda2 after lambda1 is lambda1 lambda2).
+        torque_limits_n_m : (2,) array_like
+            The (heave, pitch) motor limits, N m (the rig's).
+
+        Returns
+        -------
+        Trajectory
+            The re-timed trajectory: t / lambda, lambda qdot, lambda^2 u, lambda^2 tau, lambda z, lambda^2 D and the
+            gains by Theorem 1.
+
+        Raises
+        ------
+        PlanError
+            For a lambda that is not positive and finite, or whose torques lambda^2 tau exceed the limits (naming
+            the largest feasible one).
+
+        References
+        ----------
+        Saimek & Li 2004, Sec. 4.3 (P3) and Sec. 6.4 (Theorem 1); docs/model_and_method.md sections 4 and 5.4.
+        """
         if not (isinstance(time_scale, (int, float)) and math.isfinite(time_scale) and time_scale > 0.0):
             raise PlanError(f"time scale must be a positive finite number, got {time_scale!r}")
         peak = motor_limit_fraction(self.torque, torque_limits_n_m) * time_scale ** 2
@@ -291,8 +449,25 @@ class Trajectory:
 
 
 def motor_limit_fraction(torque_n_m: Array, torque_limits_n_m: npt.ArrayLike) -> float:
-    """max over samples and motors of |tau| / limit, for torques (N, 2) against (heave, pitch) limits (N m):
-    1.0 is at the limits."""
+    """The largest share of the motor limits a plan's torques use.
+
+    Parameters
+    ----------
+    torque_n_m : (N, 2) array
+        (heave, pitch) torques, N m.
+    torque_limits_n_m : (2,) array_like
+        (heave, pitch) motor limits, N m, positive and finite.
+
+    Returns
+    -------
+    float
+        max over samples and motors of |tau| / limit: 1.0 is at the limits.
+
+    Raises
+    ------
+    PlanError
+        If the limits are not two positive finite numbers.
+    """
     limits = np.asarray(torque_limits_n_m, dtype=float)
     if limits.shape != (2,) or not np.all(np.isfinite(limits)) or np.any(limits <= 0.0):
         raise PlanError(f"torque limits must be two positive finite numbers (heave, pitch), got {limits!r}")

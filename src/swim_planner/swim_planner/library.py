@@ -59,7 +59,23 @@ DISTURBANCE_RECORD = "disturbance_bound"
 
 
 def check_flow_model(flow_model: str) -> str:
-    """flow_model if it is one of swim_model's FLOW_MODELS, else a LibraryError naming them."""
+    """Check a flow model's name.
+
+    Parameters
+    ----------
+    flow_model : str
+        The name asked for.
+
+    Returns
+    -------
+    str
+        flow_model, one of swim_model's FLOW_MODELS.
+
+    Raises
+    ------
+    LibraryError
+        If it is not one of them (naming them).
+    """
     if flow_model not in FLOW_MODELS:
         raise LibraryError(f"unknown flow model {flow_model!r}: one of {', '.join(FLOW_MODELS)}")
     return flow_model
@@ -84,7 +100,18 @@ def _disturbance_file_name(primitive_id: str) -> str:
 
 
 def motion_digest(primitive: Primitive) -> str:
-    """SHA-256 of a primitive's motion (times, q, qdot and the lag states): what its D(t) was measured along."""
+    """The SHA-256 of a primitive's motion: what its D(t) was measured along.
+
+    Parameters
+    ----------
+    primitive : Primitive
+        The primitive (its times, q, qdot and lag states are hashed).
+
+    Returns
+    -------
+    str
+        The hex digest.
+    """
     digest = hashlib.sha256()
     for array in (primitive.time_s, primitive.q, primitive.qdot, *([] if primitive.lag is None else [primitive.lag])):
         digest.update(np.ascontiguousarray(array, dtype=np.float64).tobytes())
@@ -103,7 +130,26 @@ def _encode_arrays(primitive: Primitive) -> bytes:
 
 
 class PrimitiveLibrary:
-    """A library directory: write primitives into it, read them back verified."""
+    """A library directory: write primitives into it, read them back verified (module docstring).
+
+    Parameters
+    ----------
+    path : str or Path
+        The library's directory.
+    rig : RigParameters
+        The rig the primitives are for (its digest is recorded).
+    solver : SolverSettings, optional
+        The settings the primitives are solved with.
+    lqr_weights : LqrWeights, optional
+        The weights the stored gains are computed with.
+    flow_model : str, optional
+        The flow model the primitives are solved with: "ideal" or "circulatory".
+
+    Raises
+    ------
+    LibraryError
+        If the flow model is unknown.
+    """
 
     def __init__(self, path: str | Path, rig: RigParameters, solver: SolverSettings = SolverSettings(),
                  lqr_weights: LqrWeights = LqrWeights(), flow_model: str = "ideal") -> None:
@@ -123,9 +169,30 @@ class PrimitiveLibrary:
                        lqr_weights: Optional[LqrWeights] = None, flow_model: str = "ideal") -> "PrimitiveLibrary":
         """Open an existing library for adding to it (resuming a build), or start a new one.
 
-        lqr_weights: the weights gains are to be computed with (None: keep the library's own); primitives
-        whose stored gains were computed with other weights then report ``needs_gains``.
-        flow_model: the model the primitives are solved with; an existing library of another is refused."""
+        Parameters
+        ----------
+        path : str or Path
+            The library's directory.
+        rig : RigParameters
+            The rig the primitives are for.
+        solver : SolverSettings, optional
+            The settings new primitives are solved with.
+        lqr_weights : LqrWeights, optional
+            The weights gains are to be computed with (None: keep the library's own); primitives whose stored
+            gains were computed with other weights then report ``needs_gains``.
+        flow_model : str, optional
+            The model the primitives are solved with; an existing library of another is refused.
+
+        Returns
+        -------
+        PrimitiveLibrary
+            The library, its manifest written if new.
+
+        Raises
+        ------
+        LibraryError
+            If an existing library cannot be loaded for this rig and flow model (``load``).
+        """
         if (Path(path) / MANIFEST).exists():
             library = cls.load(path, rig, flow_model)
             library.solver = solver
@@ -137,7 +204,23 @@ class PrimitiveLibrary:
         return library
 
     def needs_gains(self, primitive_id: str) -> bool:
-        """True if the primitive has no stored gains for the library's LQ weights."""
+        """Whether a primitive lacks stored gains for the library's LQ weights.
+
+        Parameters
+        ----------
+        primitive_id : str
+            The primitive whose gains are asked about.
+
+        Returns
+        -------
+        bool
+            True if it has no stored gains, or gains computed with other weights.
+
+        Raises
+        ------
+        LibraryError
+            If no primitive of that id is in the library.
+        """
         record = self.entry(primitive_id)
         stored = record.get("gains_lqr_weights")
         if not record.get("has_gains") or not isinstance(stored, dict):
@@ -148,8 +231,20 @@ class PrimitiveLibrary:
             return True
 
     def add(self, primitive: Primitive) -> None:
-        """Store one primitive (its array file first, then the manifest, each replaced atomically). A stored D(t)
-        is kept if the primitive's motion is the one it was measured along (new gains), else dropped."""
+        """Store one primitive: its array file first, then the manifest, each replaced atomically.
+
+        A stored D(t) is kept if the primitive's motion is the one it was measured along (new gains), else dropped.
+
+        Parameters
+        ----------
+        primitive : Primitive
+            The primitive, of the library's flow model.
+
+        Raises
+        ------
+        LibraryError
+            If its lag states do not fit the library's flow model.
+        """
         spec = primitive.spec
         if (primitive.lag is not None) != (self.flow_model == "circulatory"):
             raise LibraryError(f"'{spec.primitive_id}' {'has' if primitive.lag is not None else 'has no'} lag "
@@ -177,16 +272,46 @@ class PrimitiveLibrary:
         self._write_manifest()
 
     def needs_disturbance_bound(self, primitive_id: str) -> bool:
-        """True for a circulatory-flow primitive without a stored D(t), or with one measured in another wake than
-        swim_planner.disturbance's (ideal-flow ones have none)."""
+        """Whether a primitive needs its sliding-mode bound D(t) measured.
+
+        Parameters
+        ----------
+        primitive_id : str
+            The primitive whose bound is asked about.
+
+        Returns
+        -------
+        bool
+            True for a circulatory-flow primitive without a stored D(t), or with one measured in another wake than
+            swim_planner.disturbance's; False for ideal-flow ones (they have none).
+
+        Raises
+        ------
+        LibraryError
+            For an id the library does not hold.
+        """
         if self.flow_model != "circulatory":
             return False
         record = self.entry(primitive_id).get(DISTURBANCE_RECORD)
         return record is None or record.get("wake") != wake_record(self.rig)
 
     def add_disturbance_bound(self, primitive_id: str, bound_n_m: np.ndarray, measurement: dict) -> None:
-        """Store D(t) of a stored circulatory primitive: bound_n_m (N,), N m, finite and >= 0, on its N samples;
-        measurement: how it was measured (JSON values, kept in the manifest's record). LibraryError otherwise."""
+        """Store the sliding-mode bound D(t) of a stored circulatory primitive.
+
+        Parameters
+        ----------
+        primitive_id : str
+            The stored primitive the bound belongs to.
+        bound_n_m : (N,) array
+            D(t), N m, finite and >= 0, on its N samples.
+        measurement : dict
+            How it was measured (JSON values, kept in the manifest's record).
+
+        Raises
+        ------
+        LibraryError
+            If the library is not circulatory, has no such primitive, or the bound is not N finite values >= 0.
+        """
         primitive = self.get(primitive_id)
         bound = np.asarray(bound_n_m, dtype=float)
         if self.flow_model != "circulatory":
@@ -225,8 +350,27 @@ class PrimitiveLibrary:
     def load(cls, path: str | Path, rig: RigParameters, flow_model: Optional[str] = "ideal") -> "PrimitiveLibrary":
         """Open a library, checking its format, rig, model and flow model (arrays are verified as they are read).
 
-        flow_model: the flow model the library must have been made with (swim_model's FLOW_MODELS); None takes
-        the library's own, whichever it is (to list or show it)."""
+        Parameters
+        ----------
+        path : str or Path
+            The library's directory.
+        rig : RigParameters
+            The rig it must have been built for.
+        flow_model : str or None, optional
+            The flow model the library must have been made with (swim_model's FLOW_MODELS); None takes the
+            library's own, whichever it is (to list or show it).
+
+        Returns
+        -------
+        PrimitiveLibrary
+            The library.
+
+        Raises
+        ------
+        LibraryError
+            For a missing or unparsable manifest, another format version, another rig, model version or flow
+            model, or unknown settings (module docstring).
+        """
         directory = Path(path)
         try:
             manifest = json.loads((directory / MANIFEST).read_text())
@@ -265,26 +409,84 @@ class PrimitiveLibrary:
         return library
 
     def ids(self) -> list[str]:
+        """The library's primitive ids.
+
+        Returns
+        -------
+        list of str
+            Sorted.
+        """
         return sorted(self._entries)
 
     def __contains__(self, primitive_id: str) -> bool:
+        """Whether the library holds a primitive of this id."""
         return primitive_id in self._entries
 
     def __len__(self) -> int:
+        """The number of primitives in the library."""
         return len(self._entries)
 
     def entry(self, primitive_id: str) -> dict:
-        """The manifest's record of one primitive."""
+        """The manifest's record of one primitive.
+
+        Parameters
+        ----------
+        primitive_id : str
+            The primitive's id, as the manifest keys it.
+
+        Returns
+        -------
+        dict
+            Its record (module docstring).
+
+        Raises
+        ------
+        LibraryError
+            If the library has no such primitive.
+        """
         try:
             return self._entries[primitive_id]
         except KeyError:
             raise LibraryError(f"no primitive '{primitive_id}' in {self.path}") from None
 
     def spec(self, primitive_id: str) -> PrimitiveSpec:
+        """The spec of one primitive, from the manifest (no array file is read).
+
+        Parameters
+        ----------
+        primitive_id : str
+            The primitive whose spec is read.
+
+        Returns
+        -------
+        PrimitiveSpec
+            What it is.
+
+        Raises
+        ------
+        LibraryError
+            As ``entry``.
+        """
         return _spec_from_json(self.entry(primitive_id)["spec"])
 
     def get(self, primitive_id: str) -> Primitive:
-        """Read one primitive, verifying its array file against the manifest (once; thread-safe)."""
+        """Read one primitive, verifying its array file against the manifest (once; thread-safe).
+
+        Parameters
+        ----------
+        primitive_id : str
+            The primitive to read.
+
+        Returns
+        -------
+        Primitive
+            Its samples, and its gains if stored for the library's weights.
+
+        Raises
+        ------
+        LibraryError
+            If there is no such primitive, or its array file is missing, altered or not a valid array file.
+        """
         with self._read_lock:
             if primitive_id not in self._cache:
                 self._cache[primitive_id] = self._read(primitive_id)
@@ -316,8 +518,24 @@ class PrimitiveLibrary:
                          iterations=record["iterations"], gains=gains, **data)
 
     def disturbance_bound(self, primitive_id: str) -> Optional[np.ndarray]:
-        """The stored D(t) of a primitive, (N,) N m on its samples, verified against the manifest (read once); None
-        if it has none (an ideal-flow primitive, a format-3 library, or not measured yet)."""
+        """The stored sliding-mode bound D(t) of a primitive, verified against the manifest (read once).
+
+        Parameters
+        ----------
+        primitive_id : str
+            The primitive whose D(t) is read.
+
+        Returns
+        -------
+        (N,) array or None
+            D(t), N m on its samples; None if it has none (an ideal-flow primitive, a format-3 library, or not
+            measured yet).
+
+        Raises
+        ------
+        LibraryError
+            If there is no such primitive, or its file is missing, altered or not a valid array file.
+        """
         record = self.entry(primitive_id).get(DISTURBANCE_RECORD)
         if record is None:
             return None
@@ -340,14 +558,37 @@ class PrimitiveLibrary:
             return self._bounds[primitive_id].copy()
 
     def sample_count(self, primitive_id: str) -> int:
-        """Samples of the primitive's arrays (read once and kept, as get)."""
+        """The samples of a primitive's arrays (read once and kept, as ``get``).
+
+        Parameters
+        ----------
+        primitive_id : str
+            The primitive whose samples are counted.
+
+        Returns
+        -------
+        int
+            N.
+
+        Raises
+        ------
+        LibraryError
+            As ``get``.
+        """
         return len(self.get(primitive_id).time_s)
 
     def __iter__(self) -> Iterator[Primitive]:
+        """Every primitive, read and verified, in id order."""
         return (self.get(i) for i in self.ids())
 
     def digest(self) -> str:
-        """SHA-256 over the manifest's primitive records: names the library a plan came from."""
+        """The SHA-256 over the manifest's primitive records: names the library a plan came from.
+
+        Returns
+        -------
+        str
+            The hex digest.
+        """
         return hashlib.sha256(json.dumps(self._entries, sort_keys=True).encode()).hexdigest()
 
 
@@ -358,7 +599,23 @@ def _atomic_write(path: Path, payload: bytes) -> None:
 
 
 def verify_all(library: PrimitiveLibrary) -> Iterable[str]:
-    """Read every primitive and its stored D(t) (raising LibraryError on the first bad one); yields the ids read."""
+    """Read every primitive and its stored D(t), verifying each.
+
+    Parameters
+    ----------
+    library : PrimitiveLibrary
+        The library.
+
+    Yields
+    ------
+    str
+        The id of each primitive read.
+
+    Raises
+    ------
+    LibraryError
+        On the first bad one.
+    """
     for primitive_id in library.ids():
         library.get(primitive_id)
         library.disturbance_bound(primitive_id)

@@ -50,8 +50,26 @@ JUNCTION_TOLERANCE = 1e-5
 
 
 def junction_mismatch(previous: Primitive, following: Primitive, lag_states: bool = True) -> float:
-    """Largest difference between previous's end state and following's start state, alpha aside (and the lag
-    states, where both have them and ``lag_states``: Primitive.end_boundary_state, start_boundary_state)."""
+    """The largest difference between one primitive's end state and the next one's start state, alpha aside.
+
+    Parameters
+    ----------
+    previous : Primitive
+        The earlier primitive (its ``end_boundary_state``).
+    following : Primitive
+        The later primitive (its ``start_boundary_state``).
+    lag_states : bool, optional
+        Compare the lag states too, where both have them.
+
+    Returns
+    -------
+    float
+        The largest absolute difference over q (alpha aside), qdot and the lag states: rad, m, rad/s, m/s.
+
+    References
+    ----------
+    Saimek & Li 2004, Sec. 4.2 and Prop. 1 (alpha is free up to a translation).
+    """
     q_end, qdot_end, *lag_end = previous.end_boundary_state
     q_start, qdot_start, *lag_start = following.start_boundary_state
     gaps = [np.abs(q_end[1:] - q_start[1:]).max(), np.abs(qdot_end - qdot_start).max()]
@@ -61,8 +79,23 @@ def junction_mismatch(previous: Primitive, following: Primitive, lag_states: boo
 
 
 def flow_model_of(primitives: Sequence[Primitive]) -> str:
-    """The flow model the primitives were solved with: "circulatory" if they carry lag states, else "ideal";
-    ManeuverError if they mix the two."""
+    """The flow model a plan's primitives were solved with.
+
+    Parameters
+    ----------
+    primitives : sequence of Primitive
+        The plan's primitives, at least one.
+
+    Returns
+    -------
+    str
+        "circulatory" if they carry lag states, else "ideal".
+
+    Raises
+    ------
+    ManeuverError
+        If they mix the two.
+    """
     flows = {"ideal" if p.lag is None else "circulatory" for p in primitives}
     if len(flows) != 1:
         raise ManeuverError("a plan cannot mix primitives of the ideal and the circulatory flow models "
@@ -72,31 +105,114 @@ def flow_model_of(primitives: Sequence[Primitive]) -> str:
 
 
 class PlanLibrary(Protocol):
-    """What concatenation reads of a library: a PrimitiveLibrary, or a gains.RetunedLibrary view of one."""
+    """What concatenation reads of a library: a PrimitiveLibrary, or a gains.RetunedLibrary view of one.
+
+    Attributes
+    ----------
+    path : Path
+        The library's directory (named in error messages).
+    lqr_weights : LqrWeights
+        The weights its stored gains were computed with (R gives K = R^-1 G'P).
+    """
 
     path: Path
     lqr_weights: LqrWeights
 
-    def __contains__(self, primitive_id: str) -> bool: ...
+    def __contains__(self, primitive_id: str) -> bool:
+        """Whether the library holds a primitive of this id."""
+        ...
 
-    def spec(self, primitive_id: str) -> PrimitiveSpec: ...
+    def spec(self, primitive_id: str) -> PrimitiveSpec:
+        """The spec of a primitive.
 
-    def get(self, primitive_id: str) -> Primitive: ...
+        Parameters
+        ----------
+        primitive_id : str
+            The primitive whose spec is asked for.
 
-    def sample_count(self, primitive_id: str) -> int: ...
+        Returns
+        -------
+        PrimitiveSpec
+            What the primitive is.
+        """
+        ...
 
-    def digest(self) -> str: ...
+    def get(self, primitive_id: str) -> Primitive:
+        """A primitive, read and verified.
+
+        Parameters
+        ----------
+        primitive_id : str
+            The primitive wanted.
+
+        Returns
+        -------
+        Primitive
+            Its samples and gains.
+        """
+        ...
+
+    def sample_count(self, primitive_id: str) -> int:
+        """The samples of a primitive's arrays.
+
+        Parameters
+        ----------
+        primitive_id : str
+            The primitive asked about.
+
+        Returns
+        -------
+        int
+            N.
+        """
+        ...
+
+    def digest(self) -> str:
+        """The library's digest, which names it in a plan.
+
+        Returns
+        -------
+        str
+            A SHA-256 hex digest.
+        """
+        ...
 
 
 @runtime_checkable
 class DisturbanceBounds(Protocol):
     """A library that stores the sliding mode's bound D(t) per primitive (PrimitiveLibrary)."""
 
-    def disturbance_bound(self, primitive_id: str) -> Optional[Array]: ...
+    def disturbance_bound(self, primitive_id: str) -> Optional[Array]:
+        """The stored D(t) of a primitive.
+
+        Parameters
+        ----------
+        primitive_id : str
+            The primitive whose D(t) is asked for.
+
+        Returns
+        -------
+        (N,) array or None
+            D(t), N m on the primitive's samples; None if none is stored.
+        """
+        ...
 
 
 def stored_disturbance_bounds(library: PlanLibrary, primitive_ids: Sequence[str]) -> Optional[list[Array]]:
-    """Each primitive's stored D(t) (N m on its samples), or None unless the library stores one for every one."""
+    """Each primitive's stored sliding-mode bound D(t), if the library stores one for every one.
+
+    Parameters
+    ----------
+    library : PlanLibrary
+        The library (one that is not a ``DisturbanceBounds`` stores none).
+    primitive_ids : sequence of str
+        The plan's primitives, in order.
+
+    Returns
+    -------
+    list of (N_i,) array or None
+        D(t), N m on each primitive's samples; None unless every one has one.
+    """
     if not isinstance(library, DisturbanceBounds):
         return None
     bounds = [library.disturbance_bound(pid) for pid in primitive_ids]
@@ -107,7 +223,17 @@ def stored_disturbance_bounds(library: PlanLibrary, primitive_ids: Sequence[str]
 
 @dataclasses.dataclass(frozen=True)
 class PlanBounds:
-    """The largest plan a request may ask for. A request past a bound is refused by name before any work."""
+    """The largest plan a request may ask for. A request past a bound is refused by name before any work.
+
+    Attributes
+    ----------
+    max_duration_s : float
+        The longest plan, s (assumed: two hours of swimming).
+    max_samples : int
+        The most samples a plan may have (the tracker's ``MAX_TRACKED_SAMPLES``).
+    max_abs_start_alpha_rad : float
+        The largest |alpha| a plan may start from, rad.
+    """
 
     max_duration_s: float = 7200.0
     # assumed: two hours of swimming, longer than any run on the rig; a 1000-cruise plan (5008 s) fits
@@ -117,7 +243,13 @@ class PlanBounds:
     # assumed: float64 keeps alpha to 1e-10 rad up to here (and swimming 1e6 rad would take weeks)
 
     def validate(self) -> None:
-        """ValueError unless every bound is positive and finite."""
+        """Check the bounds.
+
+        Raises
+        ------
+        ValueError
+            Unless every bound is positive and finite.
+        """
         for field in dataclasses.fields(self):
             value = getattr(self, field.name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
@@ -129,8 +261,28 @@ DEFAULT_BOUNDS = PlanBounds()
 
 def check_plan_size(library: PlanLibrary, primitive_ids: Sequence[str], repeat_counts: Sequence[int],
                     time_scale: float, bounds: PlanBounds = DEFAULT_BOUNDS) -> None:
-    """Refuse (ManeuverError) a sequence with an unknown primitive or whose plan would pass bounds, from the
-    library's specs alone: nothing is expanded or built. Mismatched lengths are left to expand_sequence."""
+    """Refuse a sequence with an unknown primitive or whose plan would pass the bounds, from the specs alone.
+
+    Nothing is expanded or built. Mismatched lengths are left to ``expand_sequence``.
+
+    Parameters
+    ----------
+    library : PlanLibrary
+        The library the primitives come from.
+    primitive_ids : sequence of str
+        The primitives, in order.
+    repeat_counts : sequence of int
+        How often each runs (empty: once each).
+    time_scale : float
+        lambda > 0.
+    bounds : PlanBounds, optional
+        The largest plan served.
+
+    Raises
+    ------
+    ManeuverError
+        For a bad time scale, an unknown primitive, or a plan past the duration or sample bound.
+    """
     check_time_scale(time_scale)
     check_known(library, primitive_ids)
     counts = list(repeat_counts) or [1] * len(primitive_ids)
@@ -146,25 +298,82 @@ def check_plan_size(library: PlanLibrary, primitive_ids: Sequence[str], repeat_c
 
 
 def check_known(library: PlanLibrary, primitive_ids: Sequence[str]) -> None:
-    """Refuse (ManeuverError) ids that are not in the library, naming them."""
+    """Refuse primitive ids that are not in the library, naming them.
+
+    Parameters
+    ----------
+    library : PlanLibrary
+        The library.
+    primitive_ids : sequence of str
+        The ids asked for.
+
+    Raises
+    ------
+    ManeuverError
+        If any id is not in the library.
+    """
     unknown = sorted({pid for pid in primitive_ids if pid not in library})
     if unknown:
         raise ManeuverError(f"unknown primitives: {', '.join(unknown)} (see `swim-primitives list`)")
 
 
 def check_start_alpha(start_alpha_rad: float, bounds: PlanBounds = DEFAULT_BOUNDS) -> None:
+    """Refuse a start alpha that is not finite or past the bound.
+
+    Parameters
+    ----------
+    start_alpha_rad : float
+        The alpha the plan starts from, rad.
+    bounds : PlanBounds, optional
+        Gives the largest |alpha|.
+
+    Raises
+    ------
+    ManeuverError
+        If it is not finite or |alpha| exceeds ``bounds.max_abs_start_alpha_rad``.
+    """
     if not (math.isfinite(start_alpha_rad) and abs(start_alpha_rad) <= bounds.max_abs_start_alpha_rad):
         raise ManeuverError(f"start alpha must be finite and within +-{bounds.max_abs_start_alpha_rad:g} rad, "
                             f"got {start_alpha_rad!r}")
 
 
 def check_time_scale(time_scale: float) -> None:
+    """Refuse a time scale that is not a positive finite number.
+
+    Parameters
+    ----------
+    time_scale : float
+        lambda.
+
+    Raises
+    ------
+    ManeuverError
+        Unless lambda is a positive finite number.
+    """
     if not (isinstance(time_scale, (int, float)) and math.isfinite(time_scale) and time_scale > 0.0):
         raise ManeuverError(f"time scale must be a positive finite number, got {time_scale!r}")
 
 
 def expand_sequence(primitive_ids: Sequence[str], repeat_counts: Sequence[int]) -> list[tuple[str, int]]:
-    """[(id, repeat_index), ...] from ids and repeat counts (an empty counts list means once each)."""
+    """The sequence of a request: each primitive with its repeat index.
+
+    Parameters
+    ----------
+    primitive_ids : sequence of str
+        The primitives, in order, at least one.
+    repeat_counts : sequence of int
+        How often each runs, each >= 1, as many as ids (empty: once each).
+
+    Returns
+    -------
+    list of (str, int)
+        [(id, repeat_index), ...], repeat_index from 0.
+
+    Raises
+    ------
+    ManeuverError
+        If the sequence is empty, the counts' length differs from the ids', or a count is below 1.
+    """
     counts = list(repeat_counts) or [1] * len(primitive_ids)
     if len(counts) != len(primitive_ids):
         raise ManeuverError(f"{len(primitive_ids)} primitive ids but {len(counts)} repeat counts")
@@ -177,7 +386,37 @@ def expand_sequence(primitive_ids: Sequence[str], repeat_counts: Sequence[int]) 
 
 def concatenate(library: PlanLibrary, rig: RigParameters, sequence: Sequence[tuple[str, int]],
                 time_scale: float = 1.0, start_alpha_rad: float = 0.0) -> Trajectory:
-    """The plan that runs the primitives of ``sequence`` one after another at time scale lambda."""
+    """The plan that runs primitives one after another at one time scale (module docstring).
+
+    Parameters
+    ----------
+    library : PlanLibrary
+        The primitives and their gains.
+    rig : RigParameters
+        Gives the motor torque limits the time-scaled plan must keep.
+    sequence : sequence of (str, int)
+        (id, repeat_index) in order (``expand_sequence``).
+    time_scale : float, optional
+        lambda > 0.
+    start_alpha_rad : float, optional
+        The alpha the plan starts from, rad.
+
+    Returns
+    -------
+    Trajectory
+        The concatenated plan, time-scaled.
+
+    Raises
+    ------
+    ManeuverError
+        For a bad time scale or start, an unknown or ungained primitive, mixed constrained and free primitives or
+        flow models, a junction whose states differ by more than ``JUNCTION_TOLERANCE``, an unreadable library, or
+        a lambda whose torques exceed the motor limits.
+
+    References
+    ----------
+    Saimek & Li 2004, Secs. 4.2-4.3, Prop. 1, P3 and Theorem 1; docs/model_and_method.md section 4.
+    """
     check_time_scale(time_scale)
     check_start_alpha(start_alpha_rad)
     check_known(library, [pid for pid, _ in sequence])
@@ -243,8 +482,33 @@ def concatenate(library: PlanLibrary, rig: RigParameters, sequence: Sequence[tup
 
 
 def vary_time_scale(nominal: Trajectory, time_scale_of: Callable[[float], float], rig: RigParameters) -> Trajectory:
-    """Re-time a plan made at lambda = 1 by a slowly varying lambda(s) of the nominal time s (a constant lambda:
-    Trajectory.time_scaled)."""
+    """Re-time a plan made at lambda = 1 by a slowly varying lambda(s) of the nominal time s (module docstring).
+
+    A constant lambda is ``Trajectory.time_scaled``.
+
+    Parameters
+    ----------
+    nominal : Trajectory
+        A plan made at time scale 1.
+    time_scale_of : callable
+        lambda(s) > 0 of the nominal time s (s).
+    rig : RigParameters
+        Gives the motor torque limits.
+
+    Returns
+    -------
+    Trajectory
+        The re-timed plan.
+
+    Raises
+    ------
+    ManeuverError
+        If the plan is not at time scale 1, lambda(s) is not positive and finite, or the torques exceed the limits.
+
+    References
+    ----------
+    Saimek & Li 2004, Sec. 4.3.
+    """
     for segment in nominal.segments:
         if segment.time_scale != 1.0:
             raise ManeuverError("vary_time_scale re-times a plan made at time scale 1")

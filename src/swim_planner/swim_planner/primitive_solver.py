@@ -1,82 +1,17 @@
-"""Motion primitives solved by optimal control (paper Secs. 4-5; docs/model_and_method.md section 3).
+"""Motion primitives solved by optimal control (paper Secs. 4-5, eqs. 9-15): the optimizer of swim_planner.primitives.
 
-The data model (PrimitiveSpec, Primitive, ...) is swim_planner.primitives; this module is its optimizer.
+Every primitive maximizes s alpha(Tf) - int_0^Tf (w_h tau_h^2 + w_p tau_p^2) dt (eqs. 10, 12, 13) over the state
+x = (q, qdot) and the input u = psiddot (the planning input of eq. 16), subject to the equations of motion (eqs.
+14-15), the planning limits (PlanningLimits) and the boundary conditions of its type. Transcription:
+Hermite-Simpson collocation (swim_planner.collocation), solved by IPOPT with exact derivatives of the pointwise
+function (swim_planner.pointwise).
 
-Every primitive solves, for the free or the laterally constrained vehicle, with state x = (q, qdot) and
-the foil accelerations u = psiddot as input (the planning input of eq. 16):
-
-    maximize  s alpha(Tf) - int_0^Tf (w_h tau_h^2 + w_p tau_p^2) dt          (eqs. 10, 12, 13)
-    subject to  the equations of motion (eq. 14, torques from eq. 15), heave/pitch ranges, torque limits,
-                and the boundary conditions of its type:
-
-    cruise           alpha(0) = 0, p_alpha(0) = 0, psi(0) = psi(Tf), qdot(0) = qdot(Tf), mean T = E  (eq. 9),
-                     alphadot(0) >= v_min (the cycle is cut where the vehicle moves forward, so that the
-                     decelerate's alphadot >= v_min can hold from its first instant). u is not periodic: tiled
-                     cycles may jump in u where they join. With u(0) = u(Tf) imposed the free R = 0.43 m,
-                     E = 0.10 decelerate is infeasible, with the cut at v_min and at v_min + 0.02 rad/s
-                     alike (the cruise then ends at a pitch rate of -11 rad/s).
-    accelerate       from rest (q = (0, R_lane, 0, 0), qdot = 0) to a cruise's start state
-    decelerate       from a cruise's end state to rest, alphadot >= v_min                         (eq. 12)
-    cruise_to_cruise from cruise i's end state to cruise j's start state                        (eq. 13)
-    lane_change      cruise_to_cruise between lanes, R(t) in [R1 - Rb, R2 + Rb]
-
-with s = +1, except decelerate (s = -1) and a cruise-to-cruise that slows down (s = -1). States are
-matched up to a translation of alpha (the symmetry of Prop. 1), which concatenation adds back. In-lane
-primitives of the free vehicle keep R(0) = R(Tf) = R_lane. Transcription: Hermite-Simpson collocation,
-solved by IPOPT with exact derivatives from CasADi.
-
-Flow models. With ``VehicleModel(..., flow="circulatory")`` the state is x = (q, qdot, z), z the flow's two lag
-states (swim_model.flow), collocated with their own dynamics zdot = g(Q2 qdot, z). Then:
-
-    - a cruise is periodic in (psi, qdot, z), and p_alpha(0) is free: the fluid's force changes p_alpha, so rest
-      reaches a cruise whatever its p_alpha (with the ideal flow p_alpha is conserved and must be 0);
-    - start and end states are (q, qdot, z); rest has the lag states of still water (z = 0), except at the end of a
-      decelerate whose spec leaves them free (PrimitiveSpec.end_lag_free). Rest is zero motion; there the lag
-      states put no force on the vehicle (each term of the flow's force has a factor of the foil's velocity) and
-      do not change (their rate has a factor of its speed), so the wake a braking foil leaves stays in the state.
-      Braking by lift sheds circulation of one sign, and within the angle-of-attack bound the free decelerates
-      cannot wash it out before the vehicle stops (R = 0.43 m, E = 0.05 in 5 s: with the end lag pinned to half
-      the value it comes to when free, IPOPT finds the problem infeasible; docs/circulatory_primitives.md). Such a
-      decelerate and an accelerate (from still water) do not join at rest: a plan never holds the two in a row
-      (concatenation compares the lag states and refuses it), a maneuver ends there;
-    - at every collocation point (knots and midpoints) |angle of attack| <= PlanningLimits.angle_of_attack_limit_rad,
-      the angle atan2(-V, U) of the foil frame's velocity in foil axes (eq. 40, swim_model.flow.angle_of_attack),
-      written smoothly as U tan(a) -+ V >= 0 (the same set for a < 90 deg, rest included; atan2 itself has no
-      derivative at rest). Points within ``rest_window_s`` of rest (an accelerate's start, a decelerate's end:
-      PlanningLimits.angle_of_attack_free_from_rest_s, or the spec's PrimitiveSpec.rest_window_s) are left out: from
-      rest the foil's first velocities are linear in the two foil accelerations, and V = 0 with Q = 0 (below) leaves
-      only u = 0, so no accelerate from rest is feasible with the bound at every point (IPOPT:
-      Infeasible_Problem_Detected). The foil first turns about its pitch axis to a posture from which it can swim
-      inside the bound (PlanningLimits gives the numbers).
-    - a spec may bound the foil's rates in that window (PrimitiveSpec.rest_window_foil_rate_limit_rad_s): |heave
-      rate| and |pitch rate| at most that at its points, so that the foil turns back to rest more slowly than the
-      bang-bang of the planning torque a decelerate makes there without it (docs/experiments.md measures both).
-    - the same bound on the incidence at the three-quarter chord, U tan(a) -+ Q >= 0 with Q = -(V + Omega x_34)
-      (swim_model.flow's normal velocity, whose lagged value sets the circulation and the stall transition).
-      The bound at F alone admits U = V = 0, where the angle at F has no value: the optimizer then held F still
-      and turned the foil about it (Omega 4 rad/s, the three-quarter chord broadside), paddling with the separated
-      flat plate's drag (measured on the constrained E = 0.05 accelerate). With both bounds, F at rest means the
-      foil at rest.
-    - a spec may name an angle-of-attack continuation (PrimitiveSpec.angle_of_attack_continuation_rad): the NLP is
-      solved without the bound first, then with looser bounds down to the limit, each step from the last solution
-      (``solve_primitive``, ``continuation_bounds``). From the still-foil guess the free decelerates are infeasible
-      with the bound at 20 deg; from the unbounded solution the tightened bounds converge.
-    - a spec may name a coarser grid (PrimitiveSpec.coarse_intervals): the NLP, its continuation included, is
-      solved on that many intervals first, to SolverSettings.coarse_grid_tolerance, then once on its own grid from
-      that solution interpolated, with the bound of ``limits`` (mesh refinement: the coarse grid's iterations are
-      cheaper, and from its solution the fine grid converges in far fewer than the continuation on it alone takes).
-    - a cruise's spec may name a least Strouhal number (PrimitiveSpec.min_strouhal): the pitch axis's excursion
-      across the lane, Lh sin(phi) (less R for the free vehicle, a row of the pointwise function), falls from the
-      cycle's start (a turn of the heave) to its middle by at least St_min R dalpha, which is St_min U / f for one
-      stroke per cycle. The NLP's constraints must be affine in the pointwise values, so this one takes those two
-      samples and not the cycle's peak to peak, which is at least as large.
-
-Energy level of a cruise: the paper fixes E = T(q(Tf), qdot(Tf)), the kinetic energy at the cycle's end.
-Over a periodic cycle the kinetic energy oscillates, so that end-point value only selects where the cycle is
-cut, not how fast the vehicle swims (we found E = 0.05 and E = 0.1 cruises of equal speed with it). We fix
-instead the cycle's mean kinetic energy (1/Tf) int T dt = E, which orders cruises by speed as the paper's
-graph intends. A cruise is solved over one cycle of ``cycle_s`` and repeated (the paper's Fourier series
-have period T with Tf a multiple of T).
+- The problem of each type, the cruise's cut and energy level (the cycle's mean kinetic energy, not eq. 9's end
+  value) and the transcription: docs/model_and_method.md, section 3.1 "The optimal-control problem of each type".
+- With ``VehicleModel(..., flow="circulatory")`` the state is x = (q, qdot, z), z the flow's two lag states, with
+  a periodic cruise in (psi, qdot, z), the angle-of-attack bound at F and at the three-quarter chord, its window
+  next to rest, the Strouhal floor, a decelerate's free end lag, the continuation and the coarser grid:
+  docs/circulatory_primitives.md, "The problem".
 """
 
 from __future__ import annotations
@@ -111,19 +46,51 @@ STATE_DERIVATIVE_ROWS = slice(5, None)   # the ideal flow's; state_derivative_ro
 
 
 def state_derivative_rows(model: VehicleModel) -> slice:
-    """The rows of xdot = (qdot, qddot[, zdot]) in the model's pointwise function."""
+    """The rows of xdot = (qdot, qddot[, zdot]) in the model's pointwise function.
+
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle, ideal or circulatory flow: nx is 2 nq, or 2 nq + n_lag with the circulatory flow.
+
+    Returns
+    -------
+    slice
+        Rows 5 to 5 + nx.
+    """
     return slice(5, 5 + model.nx)
 
 
 def foil_velocity_rows(model: VehicleModel) -> slice:
-    """Circulatory flow: the rows of (U, V, Omega), the foil frame's velocity in foil axes (eq. 40), m/s, m/s,
-    rad/s."""
+    """Circulatory flow: the rows of (U, V, Omega), the foil frame's velocity in foil axes (eq. 40).
+
+    Parameters
+    ----------
+    model : VehicleModel
+        A circulatory-flow vehicle (the ideal flow's pointwise function has no such rows).
+
+    Returns
+    -------
+    slice
+        The three rows, in m/s, m/s and rad/s.
+    """
     return slice(5 + model.nx, 8 + model.nx)
 
 
 def lateral_row(model: VehicleModel) -> int:
-    """Circulatory flow: the row of the pitch axis's position across the lane, m: Lh sin(phi), less R for the free
-    vehicle (primitives.cruise_strouhal_number's lateral coordinate)."""
+    """Circulatory flow: the row of the pitch axis's position across the lane.
+
+    Parameters
+    ----------
+    model : VehicleModel
+        A circulatory-flow vehicle.
+
+    Returns
+    -------
+    int
+        The row of Lh sin(phi), less R for the free vehicle, m (primitives.cruise_strouhal_number's lateral
+        coordinate).
+    """
     return 8 + model.nx
 
 
@@ -139,8 +106,20 @@ _POINTWISE: dict[tuple, PointwiseFunction] = {}
 
 
 def pointwise_function(model: VehicleModel) -> PointwiseFunction:
-    """phi(y, theta) with y = (q, qdot, u), theta = (w_h, w_p): the rows above, compiled once per model.
-    With the circulatory flow y = (q, qdot, z, u) and phi gains zdot and the foil velocity (U, V, Omega)."""
+    """The pointwise function phi(y, theta) of every primitive's NLP, compiled once per model.
+
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle; its rig, kind, lane and flow parameters key the compiled function.
+
+    Returns
+    -------
+    PointwiseFunction
+        phi(y, theta) with y = (q, qdot, u), theta = (w_h, w_p): the rows ``EFFORT_ROW`` .. ``state_derivative_rows``.
+        With the circulatory flow y = (q, qdot, z, u), and phi gains zdot, the foil velocity (U, V, Omega) and the
+        lateral row.
+    """
     if model.circulatory_flow is not None:
         return _circulatory_pointwise_function(model)
     key = (model.rig.digest(), model.constrained, model.lane_radius_m)
@@ -175,8 +154,29 @@ def _circulatory_pointwise_function(model: VehicleModel) -> PointwiseFunction:
 
 @dataclasses.dataclass(frozen=True)
 class PrimitiveNlp:
-    """One primitive's NLP (swim_planner.pointwise form), its initial guess and constraint bounds, and the
-    expressions of the solution's samples on the fine grid."""
+    """One primitive's NLP (swim_planner.pointwise form), its initial guess, bounds and solution's expressions.
+
+    The expressions give the solution's samples on the fine grid (2N + 1 points for N intervals).
+
+    Attributes
+    ----------
+    nlp : PointwiseNlp
+        The NLP.
+    z0 : (nz,) array
+        The initial guess of its variables.
+    lbg : (ng,) array
+        The constraints' lower bounds.
+    ubg : (ng,) array
+        The constraints' upper bounds.
+    states : casadi.MX
+        x at the fine grid's points, nx x (2N + 1).
+    inputs : casadi.MX
+        u = psiddot, 2 x (2N + 1), rad/s^2.
+    torques : casadi.MX
+        (tau_h, tau_p), 2 x (2N + 1), N m, in terms of Phi.
+    effort : casadi.MX
+        int (w_h tau_h^2 + w_p tau_p^2) dt over the solved horizon, in terms of Phi.
+    """
 
     nlp: PointwiseNlp
     z0: Array
@@ -191,7 +191,7 @@ class PrimitiveNlp:
 def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits = PlanningLimits(),
                     start: Optional[tuple[Array, ...]] = None, end: Optional[tuple[Array, ...]] = None,
                     guess: Optional[Primitive] = None, settings: SolverSettings = SolverSettings()) -> Primitive:
-    """Solve one primitive.
+    """Solve one primitive: its NLP by IPOPT, and a cruise's cycle tiled ``spec.cycles`` times.
 
     With the circulatory flow and a spec that names an angle-of-attack continuation
     (``PrimitiveSpec.angle_of_attack_continuation_rad``), the NLP is solved in steps (``continuation_bounds``): first
@@ -202,17 +202,44 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
     spec's own grid once, from the coarse solution interpolated. The primitive's iterations and solve time are the
     sums over the steps. Without either: one solve.
 
-    Args:
-        start: (q, qdot) the primitive starts from (required for decelerate, cruise-to-cruise, lane change;
-            alpha is ignored: it starts at 0); (q, qdot, lag) with the circulatory flow
-            (Primitive.end_boundary_state).
-        end: (q, qdot) it must reach (required for accelerate, cruise-to-cruise, lane change; alpha free);
-            (q, qdot, lag) with the circulatory flow (Primitive.start_boundary_state).
-        guess: a primitive of the same grid size to warm-start from (else a built-in guess).
-    Raises:
-        PrimitiveSolveError: IPOPT did not converge (in the continuation's last step); the message gives its status.
-        ValueError: a continuation with the ideal flow, or one that is not descending from below 90 deg to above
-            the bound of ``limits``; a Strouhal floor (PrimitiveSpec.min_strouhal) with the ideal flow.
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle, constrained or free, ideal or circulatory flow (it must match ``spec.constrained``).
+    spec : PrimitiveSpec
+        What to solve.
+    limits : PlanningLimits, optional
+        The ranges and limits the primitive respects.
+    start : tuple of array, optional
+        (q (nq,), qdot (nq,)) the primitive starts from (required for decelerate, cruise-to-cruise, lane change;
+        alpha is ignored: it starts at 0); (q, qdot, lag (n_lag,) m/s) with the circulatory flow
+        (Primitive.end_boundary_state). rad, m, rad/s, m/s.
+    end : tuple of array, optional
+        (q, qdot) it must reach (required for accelerate, cruise-to-cruise, lane change; alpha free);
+        (q, qdot, lag) with the circulatory flow (Primitive.start_boundary_state).
+    guess : Primitive, optional
+        A primitive of the same grid size to warm-start from (else a built-in guess).
+    settings : SolverSettings, optional
+        IPOPT's settings.
+
+    Returns
+    -------
+    Primitive
+        The solved primitive on the fine grid, without gains.
+
+    Raises
+    ------
+    PrimitiveSolveError
+        IPOPT did not converge (in the continuation's last step), or CasADi refused the NLP; the message gives the
+        status.
+    ValueError
+        A continuation with the ideal flow, or one that is not descending from below 90 deg to above the bound of
+        ``limits``; a Strouhal floor (PrimitiveSpec.min_strouhal) with the ideal flow; a bad start or end state.
+
+    References
+    ----------
+    Saimek & Li 2004, Secs. 4-5, eqs. 9-15; docs/model_and_method.md section 3.1; docs/circulatory_primitives.md,
+    "The problem".
     """
     if spec.coarse_intervals is not None:
         return _solve_refined(model, spec, limits, start, end, guess, settings)
@@ -264,9 +291,11 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
 
 def _solve_refined(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits, start, end,
                    guess: Optional[Primitive], settings: SolverSettings) -> Primitive:
-    """solve_primitive of a spec with a coarser grid: on spec.coarse_intervals (continuation included) to
-    settings.coarse_grid_tolerance, then on spec.intervals from the coarse solution interpolated, with the bound of
-    ``limits`` alone."""
+    """Solve a primitive of a spec with a coarser grid, then on its own grid.
+
+    On spec.coarse_intervals (continuation included) to settings.coarse_grid_tolerance, then on spec.intervals
+    from the coarse solution interpolated, with the bound of ``limits`` alone.
+    """
     coarse_spec = dataclasses.replace(spec, intervals=cast(int, spec.coarse_intervals), coarse_intervals=None)
     coarse_settings = dataclasses.replace(settings, tolerance=max(settings.tolerance, settings.coarse_grid_tolerance))
     coarse = solve_primitive(model, coarse_spec, limits, start, end, guess, coarse_settings)
@@ -290,18 +319,36 @@ def _resampled(primitive: Primitive, spec: PrimitiveSpec) -> Primitive:
 
 
 def _interpolated_columns(time_s: Array, sample_time_s: Array, values: Array) -> Array:
-    """Each column of ``values`` (samples at ``sample_time_s``) interpolated linearly at ``time_s``:
-    (len(time_s), columns)."""
+    """Each column of ``values`` (samples at ``sample_time_s``) interpolated linearly at ``time_s``.
+
+    The result has the shape (len(time_s), columns).
+    """
     return np.column_stack([np.interp(time_s, sample_time_s, column) for column in values.T])
 
 
 def continuation_bounds(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits) -> list[Optional[float]]:
-    """The angle-of-attack bounds ``solve_primitive`` solves with, in order, rad (None: no bound): the bound of
-    ``limits`` alone, or with the spec's continuation None, its looser bounds, then the bound of ``limits``.
+    """The angle-of-attack bounds ``solve_primitive`` solves with, in order.
 
-    Raises:
-        ValueError: a continuation with the ideal flow (which has no angle-of-attack bound), or bounds that do not
-            descend strictly from below pi/2 to above ``limits.angle_of_attack_limit_rad``.
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle.
+    spec : PrimitiveSpec
+        Its ``angle_of_attack_continuation_rad`` names the looser bounds, if any.
+    limits : PlanningLimits
+        Its ``angle_of_attack_limit_rad`` is the last bound.
+
+    Returns
+    -------
+    list of float or None
+        rad (None: no bound): the bound of ``limits`` alone, or with the spec's continuation None, its looser
+        bounds, then the bound of ``limits``.
+
+    Raises
+    ------
+    ValueError
+        A continuation with the ideal flow (which has no angle-of-attack bound), or bounds that do not descend
+        strictly from below pi/2 to above ``limits.angle_of_attack_limit_rad``.
     """
     looser = spec.angle_of_attack_continuation_rad
     if not looser:
@@ -318,13 +365,37 @@ def continuation_bounds(model: VehicleModel, spec: PrimitiveSpec, limits: Planni
 def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits = PlanningLimits(),
                   start: Optional[tuple[Array, ...]] = None, end: Optional[tuple[Array, ...]] = None,
                   guess: Optional[Primitive] = None, *, bound_angle_of_attack: bool = True) -> PrimitiveNlp:
-    """The NLP of one primitive (arguments as for ``solve_primitive``). ``bound_angle_of_attack`` False leaves the
-    circulatory flow's angle-of-attack bound out (the first step of a continuation); the ideal flow has none.
+    """The NLP of one primitive (docs/model_and_method.md section 3.1).
 
-    Raises:
-        ValueError: a start or end state that is not (q, qdot) of finite numbers of the model's size
-            ((q, qdot, lag) with the circulatory flow); a Strouhal floor with the ideal flow (its pointwise function
-            has no lateral row).
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle.
+    spec : PrimitiveSpec
+        What to solve.
+    limits : PlanningLimits, optional
+        The ranges and limits.
+    start : tuple of array, optional
+        As for ``solve_primitive``.
+    end : tuple of array, optional
+        As for ``solve_primitive``.
+    guess : Primitive, optional
+        As for ``solve_primitive``.
+    bound_angle_of_attack : bool, optional
+        False leaves the circulatory flow's angle-of-attack bound out (the first step of a continuation); the ideal
+        flow has none.
+
+    Returns
+    -------
+    PrimitiveNlp
+        The NLP, its initial guess and bounds, and the solution's expressions.
+
+    Raises
+    ------
+    ValueError
+        A start or end state that is not (q, qdot) of finite numbers of the model's size ((q, qdot, lag) with the
+        circulatory flow); a Strouhal floor with the ideal flow (its pointwise function has no lateral row); a rest
+        window with the ideal flow; bad boundary conditions for the type.
     """
     if model.n_lag:
         _check_circulatory_states(model, spec, start, end)
@@ -410,8 +481,11 @@ def _check_circulatory_states(model: VehicleModel, spec: PrimitiveSpec, start, e
 
 def _angle_of_attack_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits,
                            grid, phi: ca.MX) -> None:
-    """|atan2(-V, U)| <= a at the collocation points ``angle_of_attack_bounded`` names, as U tan(a) -+ V >= 0,
-    and the same at the three-quarter chord (module docstring)."""
+    """Bound |atan2(-V, U)| <= a at the collocation points ``angle_of_attack_bounded`` names.
+
+    Written as U tan(a) -+ V >= 0, and the same at the three-quarter chord (docs/circulatory_primitives.md,
+    "The problem").
+    """
     if not 0.0 < limits.angle_of_attack_limit_rad < math.pi / 2:
         raise ValueError(f"{spec.primitive_id}: angle_of_attack_limit_rad must be in (0, pi/2), got "
                          f"{limits.angle_of_attack_limit_rad!r}")
@@ -428,10 +502,12 @@ def _angle_of_attack_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSp
 
 
 def _stroke_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, grid, phi: ca.MX) -> None:
-    """A cruise's Strouhal number 2 A f / U (primitives.cruise_strouhal_number) at least spec.min_strouhal: the
-    pitch axis's excursion across the lane from the cycle's start (a turn of the heave) to its middle at least
-    St_min U / f = St_min R dalpha, with f one stroke per cycle and U = R dalpha / T. Affine in the NLP's
-    variables; a peak-to-peak excursion is at least this one."""
+    """Bound a cruise's Strouhal number 2 A f / U (primitives.cruise_strouhal_number) below by spec.min_strouhal.
+
+    The pitch axis's excursion across the lane from the cycle's start (a turn of the heave) to its middle is at
+    least St_min U / f = St_min R dalpha, with f one stroke per cycle and U = R dalpha / T. Affine in the NLP's
+    variables; a peak-to-peak excursion is at least this one.
+    """
     assert spec.min_strouhal is not None
     lateral_m = grid.fine(phi[lateral_row(model), :])
     middle = spec.intervals
@@ -442,8 +518,11 @@ def _stroke_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, grid,
 
 def _rest_window_rate_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits,
                             grid) -> None:
-    """|heave rate| and |pitch rate| <= PrimitiveSpec.rest_window_foil_rate_limit_rad_s (rad/s) at the fine grid's
-    points inside the window next to rest, where the angle-of-attack bound is off (module docstring)."""
+    """Bound |heave rate| and |pitch rate| by PrimitiveSpec.rest_window_foil_rate_limit_rad_s (rad/s) next to rest.
+
+    At the fine grid's points inside the window next to rest, where the angle-of-attack bound is off
+    (docs/circulatory_primitives.md, "The problem").
+    """
     assert spec.rest_window_foil_rate_limit_rad_s is not None
     nq = model.nq
     inside = np.flatnonzero(~angle_of_attack_bounded(spec, limits))
@@ -453,14 +532,38 @@ def _rest_window_rate_bound(opti: ca.Opti, model: VehicleModel, spec: PrimitiveS
 
 
 def rest_window_s(spec: PrimitiveSpec, limits: PlanningLimits) -> float:
-    """The window next to rest (an accelerate's start, a decelerate's end) where the angle-of-attack bound is off,
-    s: the spec's own (PrimitiveSpec.rest_window_s) or PlanningLimits.angle_of_attack_free_from_rest_s."""
+    """The window next to rest (an accelerate's start, a decelerate's end) where the angle-of-attack bound is off.
+
+    Parameters
+    ----------
+    spec : PrimitiveSpec
+        Its ``rest_window_s``, if set, is the window.
+    limits : PlanningLimits
+        Else its ``angle_of_attack_free_from_rest_s``.
+
+    Returns
+    -------
+    float
+        The window, s.
+    """
     return limits.angle_of_attack_free_from_rest_s if spec.rest_window_s is None else spec.rest_window_s
 
 
 def angle_of_attack_bounded(spec: PrimitiveSpec, limits: PlanningLimits) -> npt.NDArray[np.bool_]:
-    """Which of the fine grid's 2N + 1 points carry the angle-of-attack bound: all but those within
-    ``rest_window_s`` of rest (an accelerate's start, a decelerate's end)."""
+    """Which of the fine grid's points carry the angle-of-attack bound.
+
+    Parameters
+    ----------
+    spec : PrimitiveSpec
+        The primitive (its type, horizon and intervals N).
+    limits : PlanningLimits
+        Gives the window next to rest (``rest_window_s``).
+
+    Returns
+    -------
+    (2N + 1,) bool array
+        True at every point but those within ``rest_window_s`` of rest (an accelerate's start, a decelerate's end).
+    """
     times = fine_grid_times(spec.solved_duration_s, spec.intervals)
     if spec.primitive_type is PrimitiveType.ACCELERATE:
         from_rest_s = times
@@ -514,7 +617,7 @@ def _boundary_conditions(opti: ca.Opti, model: VehicleModel, spec: PrimitiveSpec
             opti.subject_to(x0[2 * nq - 2] == 0.0)
         # cut the cycle where the vehicle moves forward: a decelerate from here can keep alphadot >= v_min
         opti.subject_to(x0[nq] >= limits.min_alpha_rate_rad_s)
-        # energy level: the cycle's mean kinetic energy (see the module docstring)
+        # energy level: the cycle's mean kinetic energy (docs/model_and_method.md section 3.1)
         mean_energy = simpson_integral(grid, phi[ENERGY_ROW, :]) / spec.solved_duration_s
         opti.subject_to(mean_energy == spec.energy_j)
         if not model.constrained:
@@ -574,11 +677,14 @@ def _lag_columns(model: VehicleModel, primitive: Primitive) -> list[Array]:
 
 def _folded_cruise_guess(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits,
                          times: Array) -> tuple[Array, Array]:
-    """A circulatory cruise's guess: the heave link folded inward near its limit (which lowers the hub's inertia),
-    the foil pitched along its own velocity, the hub turning at the rate that holds the energy level, with a small
-    stroke (pitch leading heave by 90 deg) and the lag states of that steady flow. The cruises this flow solves
-    to are close to it (docs/circulatory_primitives.md): a built-in guess of the ideal cruise's gait swum from rest
-    took 112-157 IPOPT iterations to the constrained E = 0.05 cruise."""
+    """A circulatory cruise's guess: the folded posture, a small stroke and the steady flow's lag states.
+
+    The heave link is folded inward near its limit (which lowers the hub's inertia), the foil pitched along its own
+    velocity, the hub turning at the rate that holds the energy level, with a small stroke (pitch leading heave by
+    90 deg) and the lag states of that steady flow. The cruises this flow solves to are close to it
+    (docs/circulatory_primitives.md): a built-in guess of the ideal cruise's gait swum from rest took 112-157 IPOPT
+    iterations to the constrained E = 0.05 cruise.
+    """
     nq = model.nq
     heave_rad = limits.heave_range_rad - FOLDED_GUESS_HEAVE_AMPLITUDE_RAD - FOLDED_GUESS_HEAVE_MARGIN_RAD
     q_mean = np.zeros(nq)
@@ -612,8 +718,11 @@ def _folded_cruise_guess(model: VehicleModel, spec: PrimitiveSpec, limits: Plann
 
 
 def _steady_lag(model: VehicleModel, q: Array, qdot: Array) -> Array:
-    """The lag states of a steady flow at each sample (samples, n_lag), m/s: each at the three-quarter chord's
-    normal velocity -(V + Omega x_34), where its rate vanishes (swim_model.flow)."""
+    """The lag states of a steady flow at each sample (samples, n_lag), m/s.
+
+    Each is at the three-quarter chord's normal velocity -(V + Omega x_34), where its rate vanishes
+    (swim_model.flow).
+    """
     assert model.circulatory_flow is not None
     x34 = model.circulatory_flow.three_quarter_chord_x_m
     normal = np.array([-(v + w * x34) for _, v, w in (model.foil_velocity_map(a) @ b for a, b in zip(q, qdot))])
@@ -629,14 +738,15 @@ def _smoothstep(x: Array) -> tuple[Array, Array, Array]:
 
 def _still_foil_guess(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits, times: Array,
                       moving: tuple[Array, ...]) -> tuple[Array, Array]:
-    """A circulatory accelerate's or decelerate's guess inside the angle-of-attack bound. The foil is held still
-    in the posture of ``moving`` (the cruise's boundary state it joins; its stroke dropped), so it moves with
-    the hub only, along its own chord, while the hub's rate goes smoothly between 0 and the cruise's; in the
-    window next to rest where the bound is off (``rest_window_s``) the foil turns
-    between rest and that posture with the hub still. The guess neither thrusts nor brakes: IPOPT finds the
-    stroke. The blend of the boundary states has the foil broadside to its motion: from the blend with the
-    cruise's stroke IPOPT found the constrained E = 0.05 decelerate (also from the plain blend) and the E = 0.10
-    and 0.20 accelerates infeasible."""
+    """A circulatory accelerate's or decelerate's guess inside the angle-of-attack bound.
+
+    The foil is held still in the posture of ``moving`` (the cruise's boundary state it joins; its stroke dropped),
+    so it moves with the hub only, along its own chord, while the hub's rate goes smoothly between 0 and the
+    cruise's; in the window next to rest where the bound is off (``rest_window_s``) the foil turns between rest and
+    that posture with the hub still. The guess neither thrusts nor brakes: IPOPT finds the stroke. The blend of the
+    boundary states has the foil broadside to its motion: from the blend with the cruise's stroke IPOPT found the
+    constrained E = 0.05 decelerate (also from the plain blend) and the E = 0.10 and 0.20 accelerates infeasible.
+    """
     nq = model.nq
     q_moving, qdot_moving = np.asarray(moving[0], dtype=float), np.asarray(moving[1], dtype=float)
     window_s = min(rest_window_s(spec, limits), 0.5 * times[-1])
@@ -660,8 +770,11 @@ def _still_foil_guess(model: VehicleModel, spec: PrimitiveSpec, limits: Planning
 
 def _blend_guess(model: VehicleModel, spec: PrimitiveSpec, times: Array, start, end,
                  cruise: Optional[Primitive]) -> tuple[Array, Array]:
-    """Blend between the boundary states; with a cruise given, fade its stroke in (accelerate), out
-    (decelerate), or keep it (between cruises), so the guess already swims in the right phase."""
+    """Blend between the boundary states, with a given cruise's stroke faded in, out or kept.
+
+    With a cruise given, fade its stroke in (accelerate), out (decelerate), or keep it (between cruises), so the
+    guess already swims in the right phase.
+    """
     weight = (times / times[-1])[:, None]
     x_start, x_end = np.concatenate(start), np.concatenate(end)
     x_guess = (1 - weight) * x_start + weight * x_end

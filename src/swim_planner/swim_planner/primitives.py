@@ -1,5 +1,7 @@
-"""Motion primitives, what they are: their types, specs and planning limits, a solved primitive's samples and
-gains, and the solver settings it was made with (paper Secs. 4-5; docs/model_and_method.md section 3).
+"""Motion primitives, what they are (paper Secs. 4-5; docs/model_and_method.md section 3).
+
+Their types, specs and planning limits, a solved primitive's samples and gains, and the solver settings it was
+made with.
 
 Plain data, no optimizer: the library, the graph and planner_node read primitives through this module;
 swim_planner.primitive_solver solves them (the optimal-control problem of each type is described there).
@@ -21,6 +23,8 @@ Array = npt.NDArray[np.float64]
 
 
 class PrimitiveType(str, enum.Enum):
+    """The five primitive types of the paper (Secs. 4-5; docs/model_and_method.md section 3)."""
+
     ACCELERATE = "accelerate"
     CRUISE = "cruise"
     DECELERATE = "decelerate"
@@ -30,7 +34,29 @@ class PrimitiveType(str, enum.Enum):
 
 @dataclasses.dataclass(frozen=True)
 class PlanningLimits:
-    """Limits every primitive respects. The paper gives no ranges; these are assumed values."""
+    """Limits every primitive respects. The paper gives no ranges; these are assumed values.
+
+    The comment at each field gives its reason.
+
+    Attributes
+    ----------
+    heave_range_rad : float
+        |phi| bound, rad.
+    pitch_range_rad : float
+        |theta| bound, rad.
+    torque_fraction : float
+        The share of the motor limits a plan may use, in (0, 1].
+    foil_acceleration_limit_rad_s2 : float
+        |u| bound, rad/s^2.
+    lane_band_m : float
+        Rb, the lateral band around the lanes, m.
+    min_alpha_rate_rad_s : float
+        v_min of eq. 12, rad/s.
+    angle_of_attack_limit_rad : float
+        |angle of attack| bound of the foil frame (eq. 40), rad, circulatory flow only.
+    angle_of_attack_free_from_rest_s : float
+        The window next to rest where the angle-of-attack bound is left out, s, circulatory flow only.
+    """
 
     heave_range_rad: float = math.radians(50.0)    # assumed: |phi| <= 50 deg keeps the peduncle off the hull
     pitch_range_rad: float = math.radians(70.0)    # assumed: |theta| <= 70 deg, the belt drive's travel
@@ -61,7 +87,68 @@ class PlanningLimits:
 
 @dataclasses.dataclass(frozen=True)
 class PrimitiveSpec:
-    """What one primitive is. ``start_from``/``end_at`` name the primitives whose states it joins."""
+    """What one primitive is. ``start_from``/``end_at`` name the primitives whose states it joins.
+
+    The comment at a field gives its reason where it has one.
+
+    Attributes
+    ----------
+    primitive_id : str
+        The library's id, e.g. "constrained/cruise/E0.05".
+    primitive_type : PrimitiveType
+        Its type.
+    constrained : bool
+        The laterally constrained vehicle, else the free one.
+    duration_s : float
+        Tf, s (a cruise: all its cycles).
+    lane_radius_m : float
+        R of the lane it starts on, m.
+    end_lane_radius_m : float
+        R of the lane it ends on, m.
+    energy_j : float or None
+        A cruise's level E, J (the cycle's mean kinetic energy).
+    start_from : str or None
+        Id of the primitive whose end state is its start.
+    end_at : str or None
+        Id of the primitive whose start state is its end.
+    speeding_up : bool
+        Cruise-to-cruise: the sign of alpha(Tf) in the index (eq. 13).
+    intervals : int
+        Collocation intervals (per cycle for a cruise).
+    cycles : int
+        A cruise's cycle is solved once and repeated this often.
+    heave_effort_weight : float
+        w_h of eq. 10 (assumed), rad/(N^2 m^2 s).
+    pitch_effort_weight : float
+        w_p of eq. 10 (assumed), rad/(N^2 m^2 s).
+    input_smoothness_weight : float
+        w_u (assumed), rad/(rad/s^3)^2/s, on the rate of u.
+    end_lag_free : bool
+        Circulatory flow, a decelerate: its lag states at rest are left free (else still water).
+    angle_of_attack_continuation_rad : tuple of float
+        Circulatory flow: looser angle-of-attack bounds, rad, descending, solved in turn before the limit
+        (``primitive_solver.solve_primitive``); empty: one solve.
+    coarse_intervals : int or None
+        Intervals of a coarser grid solved first, below ``intervals``; None: none.
+    min_strouhal : float or None
+        Circulatory flow, a cruise: the least Strouhal number of its stroke; None: none.
+    rest_window_s : float or None
+        Circulatory flow, an accelerate or a decelerate: the window next to rest without the angle-of-attack
+        bound, s; None: ``PlanningLimits.angle_of_attack_free_from_rest_s``.
+    rest_window_foil_rate_limit_rad_s : float or None
+        Circulatory flow, an accelerate or a decelerate: |heave rate| and |pitch rate| bound in that window, rad/s;
+        None: none.
+
+    Raises
+    ------
+    ValueError
+        If coarse_intervals, the rest window, its rate limit or min_strouhal do not fit the type or are out of range.
+
+    References
+    ----------
+    Saimek & Li 2004, Secs. 4-5, eqs. 9-13; docs/model_and_method.md section 3; docs/circulatory_primitives.md,
+    "The problem".
+    """
 
     primitive_id: str
     primitive_type: PrimitiveType
@@ -80,7 +167,7 @@ class PrimitiveSpec:
     input_smoothness_weight: float = 1e-8     # w_u (assumed), rad/(rad/s^3)^2/s: see solve_primitive
     end_lag_free: bool = False
     # circulatory flow, a decelerate: its lag states at rest (its end) are left free, the wake its braking leaves
-    # (primitive_solver's module docstring); False: still water, rest_boundary_state
+    # (docs/circulatory_primitives.md, "The problem"); False: still water, rest_boundary_state
     angle_of_attack_continuation_rad: tuple[float, ...] = ()
     # circulatory flow: the looser angle-of-attack bounds, descending, solved in turn before
     # PlanningLimits.angle_of_attack_limit_rad, after a first solve without the bound, each from the last converged
@@ -98,9 +185,10 @@ class PrimitiveSpec:
     # (primitive_solver.rest_window_s); None: PlanningLimits.angle_of_attack_free_from_rest_s
     rest_window_foil_rate_limit_rad_s: Optional[float] = None
     # circulatory flow, an accelerate or a decelerate: |heave rate| and |pitch rate| at most this within that
-    # window (primitive_solver's module docstring); None: no bound but the foil accelerations'
+    # window (docs/circulatory_primitives.md, "The problem"); None: no bound but the foil accelerations'
 
     def __post_init__(self) -> None:
+        """Check the fields that depend on the type (Raises, above)."""
         # a library's manifest stores the continuation as a JSON list: the spec read back equals the one written
         object.__setattr__(self, "angle_of_attack_continuation_rad",
                            tuple(float(a) for a in self.angle_of_attack_continuation_rad))
@@ -128,6 +216,13 @@ class PrimitiveSpec:
         return self.duration_s / self.cycles
 
     def index_sign(self) -> float:
+        """The sign s of alpha(Tf) in the index J = s alpha(Tf) - effort (eqs. 10, 12, 13).
+
+        Returns
+        -------
+        float
+            -1 for a decelerate and a cruise-to-cruise or lane change that slows down, else +1.
+        """
         if self.primitive_type is PrimitiveType.DECELERATE:
             return -1.0
         if self.primitive_type in (PrimitiveType.CRUISE_TO_CRUISE, PrimitiveType.LANE_CHANGE):
@@ -137,7 +232,37 @@ class PrimitiveSpec:
 
 @dataclasses.dataclass
 class Primitive:
-    """A solved primitive on the fine grid (knots and midpoints of the collocation, 2N + 1 samples)."""
+    """A solved primitive on the fine grid (knots and midpoints of the collocation: N = 2 * intervals + 1 samples).
+
+    Attributes
+    ----------
+    spec : PrimitiveSpec
+        What it is.
+    time_s : (N,) array
+        Sample times from 0, s.
+    q : (N, nq) array
+        Positions, rad and m.
+    qdot : (N, nq) array
+        Velocities, rad/s and m/s.
+    foil_acceleration : (N, 2) array
+        u = psiddot, rad/s^2.
+    torque : (N, 2) array
+        (tau_h, tau_p), N m.
+    index_j : float
+        J = s alpha(Tf) - effort.
+    effort : float
+        int (w_h tau_h^2 + w_p tau_p^2) dt.
+    solver_status : str
+        IPOPT's return status.
+    solve_time_s : float
+        IPOPT's wall time, s.
+    iterations : int
+        IPOPT's iterations.
+    gains : TrackingGains or None
+        P(t) and G'P for the tracker.
+    lag : (N, 2) array or None
+        The flow's lag states z, m/s: circulatory flow only.
+    """
 
     spec: PrimitiveSpec
     time_s: Array
@@ -155,16 +280,20 @@ class Primitive:
 
     @property
     def start_state(self) -> tuple[Array, Array]:
+        """(q, qdot) at the first sample, copies."""
         return self.q[0].copy(), self.qdot[0].copy()
 
     @property
     def end_state(self) -> tuple[Array, Array]:
+        """(q, qdot) at the last sample, copies."""
         return self.q[-1].copy(), self.qdot[-1].copy()
 
     @property
     def start_boundary_state(self) -> tuple[Array, ...]:
-        """The state a primitive joining this one's start must reach: (q, qdot), or (q, qdot, lag) with the
-        circulatory flow."""
+        """The state a primitive joining this one's start must reach.
+
+        (q, qdot), or (q, qdot, lag) with the circulatory flow.
+        """
         return self.start_state + (() if self.lag is None else (self.lag[0].copy(),))
 
     @property
@@ -180,13 +309,38 @@ CONVERGED_STATUSES = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 @dataclasses.dataclass(frozen=True)
 class SolverSettings:
-    """IPOPT's settings. The defaults were measured on the constrained E = 0.05 cruise (80 intervals):
-    IPOPT's monotone barrier took 99 iterations, the adaptive one 40-70 to the same J (to 1e-6).
+    """IPOPT's settings and the derivatives it is given.
+
+    The defaults were measured on the constrained E = 0.05 cruise (80 intervals): IPOPT's monotone barrier took 99
+    iterations, the adaptive one 40-70 to the same J (to 1e-6).
 
     Derivatives: "pointwise" assembles them from the model's pointwise function compiled to C
     (swim_planner.pointwise): 0.44 s for that cruise. "casadi" lets CasADi differentiate the whole NLP graph:
     3.4-3.8 s, 2.6 s of it in the Hessian (66 ms a call); with expand_to_sx it first expands the graph into one
-    SX graph, whose Hessian is fast to evaluate (30 ms) but took 9 s to build: 13.7 s in all."""
+    SX graph, whose Hessian is fast to evaluate (30 ms) but took 9 s to build: 13.7 s in all.
+
+    Attributes
+    ----------
+    tolerance : float
+        IPOPT's tol.
+    coarse_grid_tolerance : float
+        IPOPT's tol on a coarser grid solved first (``PrimitiveSpec.coarse_intervals``; at least ``tolerance``).
+    max_iterations : int
+        IPOPT's max_iter.
+    print_level : int
+        IPOPT's print_level.
+    barrier_strategy : str
+        IPOPT's mu_strategy: "adaptive" or "monotone".
+    expand_to_sx : bool
+        Derivatives "casadi" only: CasADi's expand into one SX graph.
+    derivatives : str
+        "pointwise" or "casadi" (above).
+
+    Raises
+    ------
+    ValueError
+        If derivatives is neither.
+    """
 
     tolerance: float = 1e-8
     coarse_grid_tolerance: float = 1e-6
@@ -201,11 +355,28 @@ class SolverSettings:
     derivatives: str = "pointwise"       # "pointwise" or "casadi" (see above)
 
     def __post_init__(self) -> None:
+        """Check the derivatives setting (Raises, above)."""
         if self.derivatives not in ("pointwise", "casadi"):
             raise ValueError(f"derivatives must be 'pointwise' or 'casadi', got {self.derivatives!r}")
 
 
 def rest_state(model: VehicleModel, lane_radius_m: float) -> tuple[Array, Array]:
+    """The vehicle at rest on a lane: alpha = phi = theta = 0, R = the lane's (free vehicle), qdot = 0.
+
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle.
+    lane_radius_m : float
+        The lane's R, m (the free vehicle's).
+
+    Returns
+    -------
+    q : (nq,) array
+        Positions, rad and m.
+    qdot : (nq,) array
+        Zero velocities.
+    """
     q = np.zeros(model.nq)
     if not model.constrained:
         q[1] = lane_radius_m
@@ -213,8 +384,19 @@ def rest_state(model: VehicleModel, lane_radius_m: float) -> tuple[Array, Array]
 
 
 def rest_boundary_state(model: VehicleModel, lane_radius_m: float) -> tuple[Array, ...]:
-    """Rest as a boundary state: (q, qdot), and with the circulatory flow the lag states of still water (the
-    steady lag of zero velocity: zero)."""
+    """Rest as a boundary state, with the circulatory flow's lag states of still water.
+
+    Parameters
+    ----------
+    model, lane_radius_m
+        As for ``rest_state``; the model's flow decides whether lag states are added.
+
+    Returns
+    -------
+    tuple of array
+        (q (nq,), qdot (nq,)) as ``rest_state``, and with the circulatory flow the lag states (n_lag,) of still
+        water, m/s (the steady lag of zero velocity: zero).
+    """
     q, qdot = rest_state(model, lane_radius_m)
     if model.circulatory_flow is None:
         return q, qdot
@@ -222,15 +404,41 @@ def rest_boundary_state(model: VehicleModel, lane_radius_m: float) -> tuple[Arra
 
 
 def cruise_mean_speed_m_s(primitive: Primitive) -> float:
-    """A cruise's mean speed along its lane, m/s: its mean alpha rate times the lane radius."""
+    """A cruise's mean speed along its lane.
+
+    Parameters
+    ----------
+    primitive : Primitive
+        A cruise.
+
+    Returns
+    -------
+    float
+        Its mean alpha rate times the lane radius, m/s.
+    """
     duration_s = float(primitive.time_s[-1] - primitive.time_s[0])
     return float((primitive.q[-1, 0] - primitive.q[0, 0]) / duration_s * primitive.spec.lane_radius_m)
 
 
 def cruise_strouhal_number(primitive: Primitive, heave_link_length_m: float) -> float:
-    """2 A f / U of a cruise: A the heave amplitude of the pitch axis (half its peak-to-peak excursion across the
-    lane, Lh sin(phi), plus R for the free vehicle; swim_model.kinematics), f one stroke per solved cycle, U the
-    mean speed (``cruise_mean_speed_m_s``)."""
+    """The Strouhal number 2 A f / U of a cruise's stroke.
+
+    A is the heave amplitude of the pitch axis (half its peak-to-peak excursion across the lane, Lh sin(phi), plus
+    R for the free vehicle; swim_model.kinematics), f one stroke per solved cycle, U the mean speed
+    (``cruise_mean_speed_m_s``).
+
+    Parameters
+    ----------
+    primitive : Primitive
+        A cruise.
+    heave_link_length_m : float
+        Lh, m (the rig's).
+
+    Returns
+    -------
+    float
+        2 A f / U, dimensionless.
+    """
     spec = primitive.spec
     heave = primitive.q[:, 1] if spec.constrained else primitive.q[:, 2]
     lateral_m = heave_link_length_m * np.sin(heave) - (0.0 if spec.constrained else primitive.q[:, 1])
