@@ -119,7 +119,8 @@ def class_problems(where: str, cls: type) -> list[str]:
         return [f"{where}: no docstring"]
     problems = []
     init = cls.__dict__.get("__init__")
-    if inspect.isfunction(init):
+    # a Protocol's __init__ is typing's placeholder (*args, **kwargs), not an interface of the class
+    if inspect.isfunction(init) and not getattr(cls, "_is_protocol", False):
         init_docstring = init.__doc__ and inspect.getdoc(init) or ""
         headings = FIELD_SECTIONS if dataclasses.is_dataclass(cls) else ARGUMENT_SECTIONS
         problems += argument_problems(where, argument_names(init), docstring + "\n" + init_docstring, headings)
