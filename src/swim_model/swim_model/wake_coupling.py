@@ -1,5 +1,6 @@
 """The free-vortex wake (swim_model.wake) as a generalized force on a simulated vehicle, and the flat-plate
-separation drag the wake lacks. No ROS. Used by swim_sim's plant and swim_hw_bridge's emulated rig (flow "wake").
+separation drag the wake lacks. No ROS. Used by swim_model.plant (flow "wake"), the simulator's and the emulated
+rig's.
 
 What it adds. The plant's equations of motion already hold the ideal-flow (added-mass, Kirchhoff) force of the
 foil through Mm = M + Q2' M_A Q2. ``Wake.step`` returns only what that leaves out, the vortical force
@@ -39,9 +40,7 @@ force. A simulated vehicle in the wake's water adds it as the quadratic drag ``F
 foil's chordwise (U) and normal (V) velocities (``separation_drag``; a flat plate broadside has Cd 1.2, Hoerner),
 mapped to q by Q2(q)'.
 
-Flows (``FLOWS``): the water a simulated vehicle swims in, the same choice for swim_sim's plant and the emulated
-rig: "ideal" (the paper's added mass only), "circulatory" (``VehicleModel(flow="circulatory")``, swim_model.flow)
-and "wake" (the ideal model plus this module's wake force and separation drag).
+The flows a simulated vehicle swims in, this module's "wake" among them, are swim_model.flow's ``FLOWS``.
 """
 from __future__ import annotations
 
@@ -59,10 +58,6 @@ from swim_model.vehicle import VehicleModel
 from swim_model.wake import Wake, WakeParameters
 
 Array = npt.NDArray[np.float64]
-
-#: the water a simulated vehicle swims in (module docstring), and the VehicleModel flow each integrates
-FLOWS = ("ideal", "circulatory", "wake")
-MODEL_FLOWS = {"ideal": "ideal", "circulatory": "circulatory", "wake": "ideal"}
 
 
 # The clip limits. The plans move the foil at up to 0.6 m/s (trailing edge, constrained maneuver); the largest

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from swim_model import VehicleModel
-from swim_sim.disturbances import GRAVITY_M_S2, Disturbances
-from swim_sim.plant import Plant, SimulationError
+from swim_model.disturbances import GRAVITY_M_S2, Disturbances
+from swim_model.plant import Plant, SimulationError
 from swim_sim.sensors import SensorNoise, Sensors, counts_per_unit
 
 PERIODS_30_S = 3750   # the paper's maneuver length at 8 ms
