@@ -38,8 +38,8 @@ joint reaching its stop meets an inelastic stop. Its position is held at the lim
 removed by the same plastic impulse that stops a dry-friction coordinate (the Mm-orthogonal projection onto
 qdot_j = 0, which only removes kinetic energy); then it is locked at the stop while the force holding it pushes it
 back from the limit (a stop pushes, never pulls), and released into its range as soon as that force would have to
-pull. A period in which a joint reaches a stop, or starts at one, runs substep
-by substep; a run that never reaches a stop is integrated exactly as without stops.
+pull. A period in which a joint reaches a stop, or starts at one, runs substep by substep; a run that never
+reaches a stop is integrated exactly as without stops.
 
 Speed. Each compiled function is called through its C entry point on preallocated buffers (swim_model.codegen's
 NativeFunction): CasADi's own Python call costs ~45 us whatever the function does, while the arithmetic of a
