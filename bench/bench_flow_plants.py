@@ -1,4 +1,4 @@
-"""Benchmark: the simulator's three flow models (swim_sim.plant FLOWS: ideal, circulatory, wake) in closed loop at
+"""Benchmark: the simulator's three flow models (swim_model.flow FLOWS: ideal, circulatory, wake) in closed loop at
 the 8 ms control period (125 Hz), constrained and free (target: the wake plant at >= 5x real time in closed loop).
 
 Each plant runs one of the paper's maneuvers under the tracker (swim_controller.testing.closed_loop, in one process,
@@ -23,8 +23,9 @@ from swim_model import VehicleModel, load_rig
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.maneuver import concatenate, expand_sequence
 from swim_planner.paths import default_library_path
-from swim_sim.disturbances import Disturbances
-from swim_sim.plant import FLOWS, Plant, vehicle_model
+from swim_model.disturbances import Disturbances
+from swim_model.flow import FLOWS
+from swim_model.plant import Plant, vehicle_model
 from swim_sim.sim_node import DEFAULT_VORTICES_PERIOD_S
 
 #: the issue's target for the wake plant in closed loop

@@ -1,6 +1,6 @@
 """Benchmark: simulated seconds per wall second of swim_sim, alone and in the closed loop over DDS.
 
-1. The plant alone: swim_sim.plant.Plant.step, the call sim_node makes each period, no ROS. The free and the
+1. The plant alone: swim_model.plant.Plant.step, the call sim_node makes each period, no ROS. The free and the
    constrained vehicle, default disturbances, 8 ms periods of 8 RK4 substeps, sinusoidal torques computed in
    advance but handed over one period at a time, 3750 periods (the paper's 30 s maneuver). Target >= 100x real
    time. Best and median of PLANT_REPEATS runs.
@@ -28,8 +28,8 @@ from pathlib import Path
 import numpy as np
 
 from swim_model import VehicleModel
-from swim_sim.disturbances import Disturbances
-from swim_sim.plant import Plant
+from swim_model.disturbances import Disturbances
+from swim_model.plant import Plant
 
 PLANT_TARGET, LOOP_TARGET = 100.0, 10.0
 PLANT_REPEATS, LOOP_REPEATS = 5, 3

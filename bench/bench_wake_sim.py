@@ -22,8 +22,8 @@ from swim_model.wake import compile_kernels
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.maneuver import concatenate, expand_sequence
 from swim_planner.paths import default_library_path
-from swim_sim.disturbances import Disturbances
-from swim_sim.plant import Plant
+from swim_model.disturbances import Disturbances
+from swim_model.plant import Plant
 from swim_sim.wake_coupling import WakeCoupling
 
 TARGET_REALTIME_FACTOR = 1.0

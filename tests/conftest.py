@@ -84,7 +84,7 @@ def track_plan(library, sequence: tuple[list[str], list[int]], time_scale: float
     from swim_controller.tracker import CascadeTracker, model_io_linearization, model_lag_rate
     from swim_model import load_rig
     from swim_planner.maneuver import concatenate, expand_sequence
-    from swim_sim.plant import vehicle_model
+    from swim_model.plant import vehicle_model
     rig = load_rig()
     plan = concatenate(library, rig, expand_sequence(*sequence), time_scale)
     model = vehicle_model("circulatory", rig, constrained, rig.lane_1_radius_m)

@@ -58,8 +58,8 @@ def runs(tmp_path_factory):
     from swim_planner.library import PrimitiveLibrary
     from swim_planner.maneuver import concatenate, expand_sequence
     from swim_planner.paths import default_library_path
-    from swim_sim.disturbances import Disturbances
-    from swim_sim.plant import Plant, vehicle_model
+    from swim_model.disturbances import Disturbances
+    from swim_model.plant import Plant, vehicle_model
     from swim_sim.wake_coupling import WakeCoupling
     rig = load_rig()
     shipped = PrimitiveLibrary.load(default_library_path("circulatory"), rig, "circulatory")

@@ -23,8 +23,8 @@ from swim_hw_bridge.conversions import load_bridge_config
 from swim_model import load_rig
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.paths import default_library_path
-from swim_sim.disturbances import Disturbances
-from swim_sim.plant import Plant, vehicle_model
+from swim_model.disturbances import Disturbances
+from swim_model.plant import Plant, vehicle_model
 from swim_sim.wake_coupling import WakeCoupling
 
 SEED = 43

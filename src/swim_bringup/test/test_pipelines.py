@@ -67,7 +67,7 @@ def test_every_parameter_is_declared_by_its_node_with_a_valid_value(pipeline):
 
 
 def test_the_papers_sim_sets_exactly_the_papers_disturbance_sizes_and_ideal_flow():
-    from swim_sim.disturbances import Disturbances
+    from swim_model.disturbances import Disturbances
     sim = flat_parameters(config_dir("paper") / "sim.yaml")["sim_node"]
     sizes = {name.split(".", 1)[1]: value for name, value in sim.items() if name.startswith("disturbances.")}
     assert Disturbances(**sizes) == Disturbances.paper()   # every field set (no default slips in), each exact

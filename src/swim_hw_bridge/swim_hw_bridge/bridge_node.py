@@ -32,7 +32,8 @@ from swim_hw_bridge.safety import Command, FaultCode, SafetyLayer, SafetyLimits,
 from swim_hw_bridge.timing import LatencyHistogram
 from swim_model import load_rig
 from swim_model.vehicle import JOINT_NAMES_UNCONSTRAINED
-from swim_model.wake_coupling import FLOWS
+from swim_model.flow import FLOWS
+from swim_model.plant import PlantSettings
 from swim_ros.codecs import MessageError, torque_from_command
 from swim_ros.entry import run_node
 from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, one_of, realtime_parameters
@@ -168,7 +169,7 @@ class BridgeNode(LifecycleNode):
             config = load_bridge_config(self.settings.config_path or None)
             device_config = config.device_config(self.settings.backend)
             if self.settings.backend == "emulated":
-                device_config["flow"] = self.settings.flow
+                device_config["plant"] = PlantSettings.flow_only(self.settings.flow)
             device = make_device(self.settings.backend, device_config)
             device.open()
         except (ValueError, BridgeConfigError, UnknownBackend, DeviceError) as err:

@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 from swim_model import VehicleModel, load_rig
+from swim_model.plant import PlantSettings
 
 from conftest import PERIOD_S, READ_FAILURE_LIMIT, STALE_READ_LIMIT, WATCHDOG_PERIODS
 from swim_hw_bridge.backends.emulated import EmulatedDevice
@@ -58,11 +59,11 @@ def rig_at(config, limits, joint, position_rad, stops=False):
     (incremental encoders count from where it stands, so the bridge's home is that position). stops: the emulated
     rig's hard stops on (off: nothing but the bridge keeps the links within their limits)."""
     placed = dataclasses.replace(config, **{f"{joint}_home_position_rad": position_rad})
-    device = VirtualClockDevice({**config.device_config("emulated"), "hard_stops": stops})
+    device = VirtualClockDevice({**config.device_config("emulated"), "plant": PlantSettings(hard_stops=stops)})
     device.open()
     device.enable()
     device.home = np.array(placed.home_positions)
-    device.q, device.qdot = device.home.copy(), np.zeros(4)
+    device.plant.reset(device.home, np.zeros(4))
     return IoLoop(device, Conversions(placed), SafetyLayer(limits), PERIOD_S, 3), device
 
 
@@ -232,7 +233,7 @@ def test_a_fast_link_whose_commands_stop_is_braked_while_the_watchdog_holds_zero
     loop, device = rig_at(config, braking, "heave", -0.9 * upper)
     while not loop.safety.braking_count:
         hold(loop, device, [50.0, 0.0], 1)
-    assert device.qdot[2] > 4.0
+    assert device.plant.qdot[2] > 4.0
     braked_before = loop.safety.braking_count
     positions = []
     for _ in range(HELD_PERIODS):   # no command: the last one expires after WATCHDOG_PERIODS
@@ -251,10 +252,10 @@ def test_without_the_braking_bound_the_stop_holds_the_link_at_its_limit(config, 
     upper = config.heave_upper_hard_limit_rad
     loop, device = rig_at(config, limits, "heave", 0.0, stops=True)
     positions = hold(loop, device, [50.0, 0.0], HELD_PERIODS)[:, 2]
-    assert device.q[2] == upper and device.qdot[2] == 0.0
+    assert device.q[2] == upper and device.plant.qdot[2] == 0.0
     assert positions.max() <= upper and positions.max() > upper - 1e-3   # the encoder reads it at the limit
     back = hold(loop, device, [-0.5, 0.0], 10)[:, 2]
-    assert back[-1] < upper - 0.01 and device.qdot[2] < 0.0
+    assert back[-1] < upper - 0.01 and device.plant.qdot[2] < 0.0
 
 
 def test_the_stop_is_inelastic_and_runs_inside_the_limits_are_unchanged(config, limits):
@@ -262,17 +263,18 @@ def test_the_stop_is_inelastic_and_runs_inside_the_limits_are_unchanged(config, 
     plastic impulse, and with it v^2 / (2 (M^-1)_jj) of kinetic energy (the rest of the vehicle moves on); a run
     that stays within the limits is the same bit for bit with the stops on and off."""
     upper = config.pitch_upper_hard_limit_rad
-    device = VirtualClockDevice({**config.device_config("emulated"), "hard_stops": True})
+    device = VirtualClockDevice({**config.device_config("emulated"), "plant": PlantSettings(hard_stops=True)})
     device.open()
-    model = device.model
-    device.q, device.qdot = np.array([0.0, 0.43, 0.2, upper - 0.002]), np.array([0.1, 0.0, 0.5, 4.0])
-    energy = model.kinetic_energy(device.q, device.qdot)
+    plant = device.plant
+    model = plant.model
+    plant.reset(np.array([0.0, 0.43, 0.2, upper - 0.002]), np.array([0.1, 0.0, 0.5, 4.0]))
+    energy = model.kinetic_energy(plant.q, plant.qdot)
     device.now_s = 0.001   # one substep of 1 ms: the pitch reaches its stop in it
     device.read_counters()
-    assert device.q[3] == upper and device.qdot[3] == 0.0 and np.abs(device.qdot[:3]).max() > 0.0
+    assert plant.q[3] == upper and plant.qdot[3] == 0.0 and np.abs(plant.qdot[:3]).max() > 0.0
     impact_rate = 4.0   # within one substep the velocity terms change it by well under a percent
-    removed = impact_rate ** 2 / (2 * np.linalg.inv(model.mass_matrix(device.q))[3, 3])
-    assert energy - model.kinetic_energy(device.q, device.qdot) == pytest.approx(removed, rel=0.01)
+    removed = impact_rate ** 2 / (2 * np.linalg.inv(model.mass_matrix(plant.q))[3, 3])
+    assert energy - model.kinetic_energy(plant.q, plant.qdot) == pytest.approx(removed, rel=0.01)
     runs = []
     for stops in (True, False):
         loop, device = rig_at(config, limits, "heave", 0.0, stops=stops)

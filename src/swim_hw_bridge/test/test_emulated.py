@@ -27,9 +27,11 @@ def test_registry_names_the_backends(config):
 def test_counts_are_floor_quantized_and_wrap(config):
     device = EmulatedDevice({**config.device_config("emulated"), "counter_bits": 12,
                              "initial_counts": (4090, 0, 0, 0)})
+    assert device.counts() == (4090, 0, 0, 0)   # before open(): at the home pose
+    device.open()
     per_rad = config.counts_per_unit
-    device.q = np.array(config.home_positions) + np.array([10.5 / per_rad[0], 2.5 / per_rad[1], -0.5 / per_rad[2],
-                                                           -3.2 / per_rad[3]])
+    device.plant.reset(np.array(config.home_positions) + np.array([10.5 / per_rad[0], 2.5 / per_rad[1],
+                                                                   -0.5 / per_rad[2], -3.2 / per_rad[3]]), np.zeros(4))
     assert device.counts() == ((4090 + 10) % 4096, 2, 4095, 4092)   # floor: -0.5 -> -1, -3.2 -> -4
 
 
@@ -63,7 +65,7 @@ def test_current_moves_the_joint_only_while_enabled(device):
         device.toggle_enable()
         time.sleep(0.005)
         sample = device.read_counters()
-    assert device.qdot[3] > 0.0 and sample.counts[3] > 0   # positive current: positive pitch torque
+    assert device.plant.qdot[3] > 0.0 and sample.counts[3] > 0   # positive current: positive pitch torque
 
 
 def test_sequence_and_fault_injection(device):

@@ -1,12 +1,15 @@
-"""The emulated rig's flow option against independent integrations: the circulatory flow is swim_model's RK4 of
-VehicleModel(flow="circulatory") with its lag states; the wake flow is the ideal model with the wake's held force
-and the foil's separation drag, integrated here by an RK4 of our own on the model's forward dynamics; an unknown
-flow is refused. Each test advances the rig over one read interval of set length (no wall clock)."""
+"""The emulated rig's water (PlantSettings.flow_only) against independent integrations: the ideal flow is
+swim_model's RK4 of the ideal VehicleModel, the circulatory flow that of VehicleModel(flow="circulatory") with its
+lag states; the wake flow is the ideal model with the wake's held force and the foil's separation drag, integrated
+here by an RK4 of our own on the model's forward dynamics; the plant's settings given as device options are
+refused. Each test advances the rig over one read interval of set length (no wall clock)."""
 import numpy as np
 import pytest
 
 from swim_hw_bridge.backends import make_device
 from swim_model import VehicleModel
+from swim_model.disturbances import FLAT_PLATE_BROADSIDE_DRAG_COEFFICIENT, THIN_SECTION_AXIAL_DRAG_COEFFICIENT
+from swim_model.plant import PlantSettings
 from swim_model.wake_coupling import WakeCoupling
 
 READ_INTERVAL_S = 0.008
@@ -19,10 +22,11 @@ ROUND_OFF = 1e-12
 
 def advanced_device(config, flow):
     """An emulated rig of this flow, opened and moving, after one read interval with CURRENTS_A flowing."""
-    device = make_device("emulated", {**config.device_config("emulated"), "flow": flow})
+    device = make_device("emulated", {**config.device_config("emulated"), "plant": PlantSettings.flow_only(flow)})
     device.open()
-    device.qdot = START_VELOCITIES.copy()
-    start = (device.q.copy(), device.qdot.copy(), device.lag.copy())
+    plant = device.plant
+    plant.reset(plant.q, START_VELOCITIES)
+    start = (plant.q.copy(), plant.qdot.copy(), plant.lag.copy())
     device.enable()
     device.toggle_enable()
     device.write_currents(*CURRENTS_A)
@@ -40,14 +44,15 @@ def joint_torques(config):
 
 def test_circulatory_rig_is_the_circulatory_models_rk4_with_its_lag_states(config):
     device, (q, qdot, lag) = advanced_device(config, "circulatory")
-    assert device.model.flow == "circulatory" and np.array_equal(lag, np.zeros(2))   # the flow at rest at open
-    torques = np.tile(joint_torques(config), (device.substeps, 1))
+    plant = device.plant
+    assert plant.model.flow == "circulatory" and np.array_equal(lag, np.zeros(2))   # the flow at rest at open
+    torques = np.tile(joint_torques(config), (plant.substeps, 1))
     model = VehicleModel(constrained=False, flow="circulatory")
-    q_ref, qdot_ref, lag_ref = model.integrate_rk4(q, qdot, torques, READ_INTERVAL_S / device.substeps, lag=lag)
-    np.testing.assert_allclose(device.q, q_ref[-1], rtol=0.0, atol=ROUND_OFF)
-    np.testing.assert_allclose(device.qdot, qdot_ref[-1], rtol=0.0, atol=ROUND_OFF)
-    np.testing.assert_allclose(device.lag, lag_ref[-1], rtol=0.0, atol=ROUND_OFF)
-    assert np.abs(device.lag).max() > 1e-4   # the foil's motion drove the lag states
+    q_ref, qdot_ref, lag_ref = model.integrate_rk4(q, qdot, torques, READ_INTERVAL_S / plant.substeps, lag=lag)
+    np.testing.assert_allclose(plant.q, q_ref[-1], rtol=0.0, atol=ROUND_OFF)
+    np.testing.assert_allclose(plant.qdot, qdot_ref[-1], rtol=0.0, atol=ROUND_OFF)
+    np.testing.assert_allclose(plant.lag, lag_ref[-1], rtol=0.0, atol=ROUND_OFF)
+    assert np.abs(plant.lag).max() > 1e-4   # the foil's motion drove the lag states
 
 
 def test_wake_rig_is_the_ideal_model_with_the_wakes_force_and_the_separation_drag(config):
@@ -56,11 +61,9 @@ def test_wake_rig_is_the_ideal_model_with_the_wakes_force_and_the_separation_dra
     wake = WakeCoupling(model)
     held = wake.step(q, qdot, READ_INTERVAL_S)   # the first interval: the wake stepped over it, at its start
     assert np.abs(held).max() > 1e-3   # the shed vortex's force is there: the comparison includes it
-    options = config.backend_options["emulated"]
     rig = model.rig
     half_rho_area = 0.5 * rig.water_density_kg_m3 * rig.foil_chord_m * rig.foil_span_m
-    factors = half_rho_area * np.array([options["foil_axial_drag_coefficient"],
-                                        options["foil_normal_drag_coefficient"]])
+    factors = half_rho_area * np.array([THIN_SECTION_AXIAL_DRAG_COEFFICIENT, FLAT_PLATE_BROADSIDE_DRAG_COEFFICIENT])
     tau = joint_torques(config)
 
     def rate(x):
@@ -72,30 +75,33 @@ def test_wake_rig_is_the_ideal_model_with_the_wakes_force_and_the_separation_dra
                  + np.linalg.solve(model.mass_matrix(position), drag + held))
         return np.concatenate([velocity, qddot])
 
-    x, h = np.concatenate([q, qdot]), READ_INTERVAL_S / device.substeps
-    for _ in range(device.substeps):
+    plant = device.plant
+    x, h = np.concatenate([q, qdot]), READ_INTERVAL_S / plant.substeps
+    for _ in range(plant.substeps):
         k1 = rate(x)
         k2 = rate(x + 0.5 * h * k1)
         k3 = rate(x + 0.5 * h * k2)
         k4 = rate(x + h * k3)
         x = x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-    np.testing.assert_allclose(device.q, x[:4], rtol=0.0, atol=ROUND_OFF)
-    np.testing.assert_allclose(device.qdot, x[4:], rtol=0.0, atol=ROUND_OFF)
-    assert device.wake.wake.vortex_count() == 1 and device.lag.size == 0
+    np.testing.assert_allclose(plant.q, x[:4], rtol=0.0, atol=ROUND_OFF)
+    np.testing.assert_allclose(plant.qdot, x[4:], rtol=0.0, atol=ROUND_OFF)
+    assert plant.wake is not None and plant.wake.wake.vortex_count() == 1 and plant.lag.size == 0
 
 
 def test_ideal_rig_has_no_wake_and_no_lag_states(config):
     device, (q, qdot, _) = advanced_device(config, "ideal")
-    assert device.wake is None and device.lag.size == 0 and device.model.flow == "ideal"
-    torques = np.tile(joint_torques(config), (device.substeps, 1))
+    plant = device.plant
+    assert plant.wake is None and plant.lag.size == 0 and plant.model.flow == "ideal"
+    torques = np.tile(joint_torques(config), (plant.substeps, 1))
     q_ref, qdot_ref = VehicleModel(constrained=False).integrate_rk4(q, qdot, torques,
-                                                                    READ_INTERVAL_S / device.substeps)
-    np.testing.assert_array_equal(device.q, q_ref[-1])   # the same compiled call as before the flow option
-    np.testing.assert_array_equal(device.qdot, qdot_ref[-1])
+                                                                    READ_INTERVAL_S / plant.substeps)
+    np.testing.assert_allclose(plant.q, q_ref[-1], rtol=0.0, atol=ROUND_OFF)
+    np.testing.assert_allclose(plant.qdot, qdot_ref[-1], rtol=0.0, atol=ROUND_OFF)
 
 
-def test_an_unknown_flow_is_refused_naming_the_choices(config):
+def test_an_unknown_flow_and_the_plants_settings_as_device_options_are_refused(config):
     with pytest.raises(ValueError, match="ideal, circulatory, wake"):
-        make_device("emulated", {**config.device_config("emulated"), "flow": "potential"})
-    with pytest.raises(ValueError, match="drag coefficients"):
-        make_device("emulated", {**config.device_config("emulated"), "foil_normal_drag_coefficient": -1.0})
+        PlantSettings.flow_only("potential")
+    for option in ("flow", "substeps", "hard_stops", "foil_normal_drag_coefficient"):
+        with pytest.raises(ValueError, match=f"{option} are the plant's settings"):
+            make_device("emulated", {**config.device_config("emulated"), option: 1})

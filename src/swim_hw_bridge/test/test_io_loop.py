@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 
 from conftest import PERIOD_S, READ_FAILURE_LIMIT, STALE_READ_LIMIT
+from swim_model.plant import PlantSettings
+
 from swim_hw_bridge.backends.emulated import EmulatedDevice
 from swim_hw_bridge import io_loop
 from swim_hw_bridge.io_loop import IoLoop
@@ -219,8 +221,7 @@ def test_positions_follow_the_rig_across_the_counter_wrap(config, conversions, l
     home = np.array(config.home_positions)
     path = np.linspace(0.0, 1.0, 40)
     for s in path:   # both directions: out and back, through several 4096-count wraps on alpha and theta
-        device.q = home + np.array([0.6, 0.02, 0.1, -0.9]) * math.sin(math.pi * s)
-        device.qdot = np.zeros(4)
+        device.plant.reset(home + np.array([0.6, 0.02, 0.1, -0.9]) * math.sin(math.pi * s), np.zeros(4))
         snapshot = step(loop, sleep_s=0.02)
         assert np.allclose(snapshot.positions, device.q, atol=1.01 * max(1 / np.array(config.counts_per_unit)))
     assert not snapshot.faults and snapshot.jump_channels == 0
@@ -229,18 +230,20 @@ def test_positions_follow_the_rig_across_the_counter_wrap(config, conversions, l
 def test_an_impossible_encoder_jump_faults(config, conversions, limits):
     loop, device = make_loop(config, conversions, limits)
     step(loop)
-    device.q = device.q + np.array([0.0, 0.0, 0.0, 1.0])   # 1 rad of pitch in one period: 125 rad/s
+    device.plant.reset(device.q + np.array([0.0, 0.0, 0.0, 1.0]), np.zeros(4))   # 1 rad of pitch in one period:
+    # 125 rad/s
     snapshot = step(loop)
     assert snapshot.faults == FaultCode.ENCODER_JUMP and snapshot.jump_channels == 0b1000
 
 
 def test_soft_limit_then_hard_limit_through_the_loop(config, conversions, limits):
-    loop, device = make_loop(config, conversions, limits, hard_stops=False)   # the link is placed past the limit
+    # the link is placed past the limit: the emulated rig without its stops
+    loop, device = make_loop(config, conversions, limits, plant=PlantSettings(hard_stops=False))
     upper, margin = config.heave_upper_hard_limit_rad, config.heave_soft_limit_margin_rad
     home = np.array(config.home_positions)
     heave_currents = []
     for phi in np.arange(0.0, upper + 0.05, 0.02):   # 0.02 rad per 8 ms: well below the jump bound
-        device.q, device.qdot = home + np.array([0.0, 0.0, phi, 0.0]), np.zeros(4)
+        device.plant.reset(home + np.array([0.0, 0.0, phi, 0.0]), np.zeros(4))
         loop.set_command(Command(0.5, 0.0, time.monotonic()))
         snapshot = step(loop)
         heave_currents.append((snapshot.positions[2], snapshot.currents_a[0]))
@@ -260,7 +263,7 @@ class RampDevice(RecordingDevice):
     rate = np.array([0.1, 0.01, 1.0, -2.0])
 
     def _advance(self, now_s):
-        self.q = self.home + self.rate * (now_s - self.start_s)
+        self.plant.reset(self.home + self.rate * (now_s - self.start_s), self.rate)
 
 
 def test_velocities_from_filtered_differences(config, conversions, limits):

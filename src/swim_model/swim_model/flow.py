@@ -34,7 +34,12 @@ from swim_model.leading_edge import (CRITICAL_LEADING_EDGE_SUCTION, SPEED_REGULA
 Array = npt.NDArray[np.float64]
 
 LAG_STATE_NAMES = ("wagner_lag_slow", "wagner_lag_fast")
-FLOW_MODELS = ("ideal", "circulatory")
+#: the water a simulated vehicle swims in (swim_model.plant: the simulator's and the emulated rig's), each with the
+#: VehicleModel flow model it integrates: "ideal" (the paper's added mass only), "circulatory" (this module's
+#: force and lag states) and "wake" (the ideal model plus swim_model.wake_coupling's wake force and separation drag)
+FLOWS = {"ideal": "ideal", "circulatory": "circulatory", "wake": "ideal"}
+#: the flow models a VehicleModel (and a plan made with it) has: FLOWS' models
+FLOW_MODELS = tuple(dict.fromkeys(FLOWS.values()))
 
 KINEMATIC_VISCOSITY_WATER_M2_S = 1.0e-6
 # fresh water at 20 C (1.00e-6 m^2/s; ITTC fresh water tables), the rig's water as rig.yaml's density
@@ -472,5 +477,5 @@ class CirculatoryFlow:
 # the towed-foil experiment lives in its own module and imports CirculatoryFlow from here
 from swim_model.towed_foil import OscillatingFoilResult, oscillating_foil  # noqa: E402
 
-__all__ = ["CirculatoryFlow", "FLOW_MODELS", "FlowParameters", "FlowTerms", "LAG_STATE_NAMES",
+__all__ = ["CirculatoryFlow", "FLOWS", "FLOW_MODELS", "FlowParameters", "FlowTerms", "LAG_STATE_NAMES",
            "OscillatingFoilResult", "angle_of_attack", "laminar_profile_drag_coefficient", "oscillating_foil"]

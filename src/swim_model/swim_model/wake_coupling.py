@@ -9,8 +9,8 @@ returns only the vortical force ``F_v = -dI_v/dt``, so adding it counts nothing 
 
 The wake is stepped once per control period and its force held over the next (docs/wake_study.md, Sec. 2,
 "Timing"), clipped to force_limit_n and moment_limit_n_m ("Limits"). The frames, the separation drag and the
-flows (``FLOWS``) a simulated vehicle swims in: docs/wake_study.md, Sec. 2.1. No random numbers: a run with the
-wake repeats bit for bit.
+flows a simulated vehicle swims in (swim_model.flow's ``FLOWS``): docs/wake_study.md, Sec. 2.1. No random
+numbers: a run with the wake repeats bit for bit.
 """
 from __future__ import annotations
 
@@ -28,10 +28,6 @@ from swim_model.vehicle import VehicleModel
 from swim_model.wake import Wake, WakeParameters
 
 Array = npt.NDArray[np.float64]
-
-#: the water a simulated vehicle swims in (docs/wake_study.md, Sec. 2.1), and the VehicleModel flow each integrates
-FLOWS = ("ideal", "circulatory", "wake")
-MODEL_FLOWS = {"ideal": "ideal", "circulatory": "circulatory", "wake": "ideal"}
 
 
 # The clip limits. The plans move the foil at up to 0.6 m/s (trailing edge, constrained maneuver); the largest

@@ -1,4 +1,4 @@
-"""sim_node: the simulated rig (swim_sim.plant) behind the same topics the hardware bridge serves.
+"""sim_node: the simulated rig (swim_model.plant) behind the same topics the hardware bridge serves.
 
 Topics, services, flows, hard stops, modes (lock-step, real time), the held start and the parameters: see
 src/swim_sim/README.md, section "sim_node". Why the per-period path reuses its messages and creates its topics
@@ -23,16 +23,17 @@ from swim_interfaces.srv import SetVehicleState
 
 from swim_hw_bridge.conversions import BridgeConfig, load_bridge_config_parameter
 from swim_model import StateError, SwimModelError, load_rig
+from swim_model.disturbances import Disturbances
+from swim_model.flow import FLOWS
+from swim_model.plant import Plant, PlantSettings, SimulationError, make_plant
 from swim_planner.maneuver import DEFAULT_BOUNDS
 from swim_ros.codecs import MessageError, float_array, joint_state_arrays, stamp_of, torque_from_command
 from swim_ros.entry import run_node
 from swim_ros.parameters import (ParameterSpec, ParameterValue, check_parameters, declare_parameters, finite,
                                  one_of)
 from swim_ros.qos import per_period_publisher, per_period_subscription
-from swim_sim.disturbances import Disturbances
-from swim_sim.plant import FLOWS, Plant, SimulationError, vehicle_model
 from swim_sim.sensors import SensorNoise, Sensors
-from swim_sim.wake_coupling import WakeCoupling, parameter_defaults, parameters_from_values
+from swim_sim.wake_coupling import parameter_defaults, parameters_from_values
 
 
 def finite_entries(value: Any) -> Optional[str]:
@@ -78,7 +79,7 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec("hold_until_torque", False, "lock-step: hold the initial state until the first nonzero torque",
                   read_only=True),
     *(ParameterSpec(f"disturbances.{f.name}", float(cast(float, f.default)),
-                    f"swim_sim.disturbances.Disturbances.{f.name}", check=finite, read_only=True)
+                    f"swim_model.disturbances.Disturbances.{f.name}", check=finite, read_only=True)
       for f in dataclasses.fields(Disturbances)),
     *(ParameterSpec(f"sensors.{f.name}", cast(ParameterValue, f.default), f"swim_sim.sensors.SensorNoise.{f.name}",
                     range=None if isinstance(f.default, bool) else (0.0, SENSOR_PARAMETER_BOUND))
@@ -137,14 +138,15 @@ class SimNode(Node):
         rig = load_rig(value("rig_path") or None)
         bridge_config = load_bridge_config_parameter(value("bridge_config_path"))
         flow = value("flow")
-        model = vehicle_model(flow, rig, value("constrained"), value("lane_radius_m") or None)
         fields = dataclasses.fields
         disturbances = Disturbances(**{f.name: value(f"disturbances.{f.name}") for f in fields(Disturbances)})
-        wake = None
+        wake_parameters = None
         if flow == "wake":
-            wake = WakeCoupling(model, parameters_from_values({n: value(f"wake.{n}") for n in parameter_defaults()}))
-        self.plant = Plant(model, disturbances, value("sample_period_s"), value("substeps"), value("seed"), wake,
-                           bridge_config.hard_limits_rad, flow=flow)
+            wake_parameters = parameters_from_values({n: value(f"wake.{n}") for n in parameter_defaults()})
+        self.plant = make_plant(PlantSettings(flow, value("substeps"), disturbances), rig,
+                                bridge_config.hard_limits_rad, value("constrained"), value("lane_radius_m") or None,
+                                value("sample_period_s"), value("seed"), wake_parameters)
+        model = self.plant.model
         self.state_bounds = StateBounds.of(self.plant, bridge_config)
         self.sensors = Sensors(model, self._sensor_noise({}), self.plant.sample_period_s)
         self.start_time_s = float(value("start_time_s"))
@@ -168,9 +170,9 @@ class SimNode(Node):
         self.state_publisher = per_period_publisher(self, JointState, "joint_states")
         self.clock_publisher = per_period_publisher(self, Clock, "/clock", 10)
         self.wake_publisher = per_period_publisher(self, WakeStatistics, "wake_statistics") \
-            if wake is not None else None
+            if self.plant.wake is not None else None
         self.vortices_publisher = per_period_publisher(self, WakeVortices, "wake_vortices") \
-            if wake is not None else None
+            if self.plant.wake is not None else None
         self._vortices_period_s = float(value("wake.vortices_period_s"))
         self._vortices_due_s = -math.inf   # simulated time from which the next wake_vortices is sent
         per_period_subscription(self, JointState, "joint_commands", self._on_command)

@@ -6,8 +6,8 @@ import pytest
 
 from swim_hw_bridge.conversions import load_bridge_config
 from swim_model import StateError
-from swim_sim.disturbances import Disturbances
-from swim_sim.plant import Plant
+from swim_model.disturbances import Disturbances
+from swim_model.plant import Plant
 from swim_sim.sensors import Sensors
 
 HARD_LIMITS = load_bridge_config().hard_limits_rad

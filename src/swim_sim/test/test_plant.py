@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from swim_model import VehicleModel
-from swim_sim.disturbances import GRAVITY_M_S2, Disturbances
-from swim_sim.plant import Plant, SimulationError
+from swim_model.disturbances import GRAVITY_M_S2, Disturbances
+from swim_model.plant import Plant, SimulationError
 from swim_sim.sensors import SensorNoise, Sensors, counts_per_unit
 
 PERIODS_30_S = 3750   # the paper's maneuver length at 8 ms
@@ -97,6 +97,27 @@ def test_runs_repeat_bit_for_bit_for_a_seed(rig):
     first, second, other = run(7), run(7), run(8)
     assert np.array_equal(first, second)
     assert not np.array_equal(first, other)
+
+
+def test_a_period_of_its_own_length_is_a_plant_of_that_period_bit_for_bit(rig):
+    """step(torque, period_s), as the emulated rig steps its reads, integrates as a plant whose sample period is
+    period_s, disturbances and noise included; the clock adds the periods; a period that is not > 0 is refused."""
+    model = VehicleModel(rig, constrained=False)
+    torques = 0.3 * np.sin(np.arange(50)[:, None] * np.array([0.05, 0.07]))
+    reference, varied = Plant(model, Disturbances(), sample_period_s=0.004), Plant(model, Disturbances())
+    for plant in (reference, varied):
+        plant.reset(*swinging_start(plant))
+    for torque in torques:
+        reference.step(torque)
+        varied.step(torque, 0.004)
+        assert np.array_equal(reference.q, varied.q) and np.array_equal(reference.qdot, varied.qdot)
+    assert varied.time_s == pytest.approx(50 * 0.004, abs=1e-12)
+    before = varied.state
+    varied.step(torques[0])   # back to its own 8 ms: a different period than 4 ms
+    assert varied.time_s == pytest.approx(before.time_s + 0.008, abs=1e-12)
+    for bad in (0.0, -0.008, math.nan):
+        with pytest.raises(ValueError, match="period"):
+            varied.step(torques[0], bad)
 
 
 def test_torque_is_held_clipped_and_reported(model):

@@ -8,8 +8,9 @@ import pytest
 from scipy.integrate import simpson
 
 from swim_model import StateError, VehicleModel
-from swim_sim.disturbances import Disturbances
-from swim_sim.plant import FLOWS, Plant, vehicle_model
+from swim_model.disturbances import Disturbances
+from swim_model.flow import FLOWS
+from swim_model.plant import Plant, vehicle_model
 from swim_sim.wake_coupling import WakeCoupling, WakeCouplingParameters
 
 #: 2 s of a swinging foil: the flow's lift and lag states change sign several times

@@ -25,8 +25,8 @@ def library_run(flow, seed, torques, after_step):
     (disturbances, sensors drawing on the plant's generator, the shipped bridge file's hard stops). Returns
     ([after_step(plant, positions measured) after each step], the plant)."""
     from swim_hw_bridge.conversions import load_bridge_config
-    from swim_sim.disturbances import Disturbances
-    from swim_sim.plant import Plant, vehicle_model
+    from swim_model.disturbances import Disturbances
+    from swim_model.plant import Plant, vehicle_model
     from swim_sim.sensors import Sensors
     model = vehicle_model(flow, constrained=True)
     plant = Plant(model, Disturbances(), seed=seed, hard_limits_rad=load_bridge_config().hard_limits_rad,

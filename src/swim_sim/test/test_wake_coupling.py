@@ -19,8 +19,8 @@ from scipy.special import hankel2
 
 from swim_model import StateError, VehicleModel
 from swim_model.wake import WakeParameters
-from swim_sim.disturbances import Disturbances
-from swim_sim.plant import Plant
+from swim_model.disturbances import Disturbances
+from swim_model.plant import Plant
 from swim_sim.wake_coupling import WakeCoupling, WakeCouplingParameters, parameter_defaults, parameters_from_values
 from test_plant import swinging_start
 

@@ -22,7 +22,7 @@ Array = npt.NDArray[np.float64]
 
 
 class SteppedState(Protocol):
-    """The state a Stepper reaches at a period's end (swim_sim.plant.PlantState is one)."""
+    """The state a Stepper reaches at a period's end (swim_model.plant.PlantState is one)."""
 
     @property
     def q(self) -> Array: ...
@@ -31,7 +31,7 @@ class SteppedState(Protocol):
 
 
 class Stepper(Protocol):
-    """A plant stepped by control periods (swim_sim.plant.Plant is one)."""
+    """A plant stepped by control periods (swim_model.plant.Plant is one)."""
 
     def reset(self, q: Array, qdot: Array) -> None: ...
 

@@ -1,4 +1,8 @@
-"""The simulated vehicle: swim_model's dynamics plus the disturbances, one control period at a time.
+"""The simulated vehicle: swim_model's dynamics plus the disturbances, one control period at a time. No ROS.
+
+The one plant of the workspace: swim_sim's simulator steps it a fixed control period at a time, swim_hw_bridge's
+emulated rig one read interval at a time (``step``'s period_s). ``PlantSettings`` are what either builds it with
+(``make_plant``).
 
 Over a period the commanded torque is held (zero-order hold, as a DAC holds it) and clipped at the motor
 limits (paper Sec. 2). The period is integrated by ``substeps`` classical RK4 steps of
@@ -12,7 +16,8 @@ F = -(W^-1 a0) (a0 its acceleration without that force, W the stuck block of Mm^
 the static limit; beyond it the coordinate breaks away with Coulomb friction opposing its motion.
 A period with no stopped coordinate and no velocity sign change runs as one compiled call (the fast path).
 
-Flow models (``flow``): how the water acts on the foil beyond the disturbances' platform, friction, tilt and waves.
+Flow models (``flow``, swim_model.flow's FLOWS): how the water acts on the foil beyond the disturbances' platform,
+friction, tilt and waves.
 
 - ``"ideal"``: the paper's potential flow, the added mass in Mm only (``VehicleModel(flow="ideal")``), plus the
   quadratic foil drag of Disturbances (``foil_axial_drag_coefficient``, ``foil_normal_drag_coefficient``).
@@ -28,13 +33,13 @@ Flow models (``flow``): how the water acts on the foil beyond the disturbances' 
 
 The lag states hold no energy and no momentum (swim_model.vehicle): ``energy`` is T + V for every flow model.
 
-Hard stops (hard_limits_rad: the rig's (lower, upper) heave and pitch limits, as swim_hw_bridge's bridge file and
-its safety layer name them): a joint reaching its stop meets an inelastic stop. Its position is held at the limit
-and its velocity into the stop removed by the same plastic impulse that stops a dry-friction coordinate (the
-Mm-orthogonal projection onto qdot_j = 0, which only removes kinetic energy); then it is locked at the stop while
-the force holding it pushes it back from the limit (a stop pushes, never pulls), and released into its range as
-soon as that force would have to pull. A period in which a joint reaches a stop, or starts at one, runs substep
-by substep; a run that never reaches a stop is integrated exactly as without stops.
+Hard stops (hard_limits_rad, swim_model.limits.HardLimits: the rig's (lower, upper) heave and pitch stops): a
+joint reaching its stop meets an inelastic stop. Its position is held at the limit and its velocity into the stop
+removed by the same plastic impulse that stops a dry-friction coordinate (the Mm-orthogonal projection onto
+qdot_j = 0, which only removes kinetic energy); then it is locked at the stop while the force holding it pushes it
+back from the limit (a stop pushes, never pulls), and released into its range as soon as that force would have to
+pull. A period in which a joint reaches a stop, or starts at one, runs substep by substep; a run that never
+reaches a stop is integrated exactly as without stops.
 
 Speed. Each compiled function is called through its C entry point on preallocated buffers (swim_model.codegen's
 NativeFunction): CasADi's own Python call costs ~45 us whatever the function does, while the arithmetic of a
@@ -53,10 +58,11 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
-from swim_model.limits import HardLimits
 from swim_model import RigParameters, StateError, VehicleModel, codegen
-from swim_model.wake_coupling import FLOWS, MODEL_FLOWS, WakeCoupling, separation_drag
-from swim_sim.disturbances import GRAVITY_M_S2, Disturbances
+from swim_model.disturbances import GRAVITY_M_S2, Disturbances
+from swim_model.flow import FLOWS
+from swim_model.limits import HardLimits
+from swim_model.wake_coupling import WakeCoupling, WakeCouplingParameters, separation_drag
 
 Array = npt.NDArray[np.float64]
 
@@ -84,9 +90,14 @@ def vehicle_model(flow: str, rig: Optional[RigParameters] = None, constrained: b
                   lane_radius_m: Optional[float] = None) -> VehicleModel:
     """The VehicleModel a plant of this flow (FLOWS) integrates: the circulatory one for "circulatory", else the
     ideal one (the wake's force is added by the plant). ValueError for another flow."""
+    _check_flow(flow)
+    return VehicleModel(rig, constrained=constrained, lane_radius_m=lane_radius_m, flow=FLOWS[flow])
+
+
+def _check_flow(flow: str) -> None:
+    """ValueError naming FLOWS unless flow is one of them."""
     if flow not in FLOWS:
-        raise ValueError(f"flow must be one of {FLOWS}, got {flow!r}")
-    return VehicleModel(rig, constrained=constrained, lane_radius_m=lane_radius_m, flow=MODEL_FLOWS[flow])
+        raise ValueError(f"flow must be one of {', '.join(FLOWS)}, got {flow!r}")
 
 
 def _parameter_vector(model: VehicleModel, disturbances: Disturbances, foil_drag: bool = True) -> Array:
@@ -200,11 +211,10 @@ class Plant:
         disturbances.validate()
         if flow is None:
             flow = "circulatory" if model.flow == "circulatory" else "wake" if wake is not None else "ideal"
-        if flow not in FLOWS:
-            raise ValueError(f"flow must be one of {FLOWS}, got {flow!r}")
-        if model.flow != MODEL_FLOWS[flow]:
-            raise ValueError(f"flow {flow!r} integrates VehicleModel(flow={MODEL_FLOWS[flow]!r}), got a model of "
-                             f"flow {model.flow!r} (swim_sim.plant.vehicle_model makes the right one)")
+        _check_flow(flow)
+        if model.flow != FLOWS[flow]:
+            raise ValueError(f"flow {flow!r} integrates VehicleModel(flow={FLOWS[flow]!r}), got a model of "
+                             f"flow {model.flow!r} (vehicle_model makes the right one)")
         if wake is not None and flow != "wake":
             raise ValueError(f"a wake coupling is for flow 'wake', not {flow!r}")
         if flow == "wake" and wake is None:
@@ -229,11 +239,11 @@ class Plant:
         (self._step, self._forward, self._potential, self._wave, self._period_locked, self._period_unlocked,
          self._mass) = (native[n] for n in ("sim_rk4_step", "sim_forward", "sim_potential", "sim_wave_force",
                                             "sim_period_locked", "sim_period_unlocked", "sim_mass_matrix"))
-        # the inputs that never change: parameters, substep length, the wave's coefficient
-        step_s = self.sample_period_s / self.substeps
-        for function in (self._step, self._period_locked):
-            function.inputs[3][:], function.inputs[5][0] = self._parameters, step_s
-        self._period_unlocked.inputs[3][:], self._period_unlocked.inputs[4][0] = self._parameters, step_s
+        # the inputs that never change: parameters, the wave's coefficient; the substep length is the period's
+        for function in (self._step, self._period_locked, self._period_unlocked):
+            function.inputs[3][:] = self._parameters
+        self._period_s = 0.0   # the period the substep length in the compiled inputs is for
+        self._set_period(self.sample_period_s)
         self._forward.inputs[3][:] = self._parameters
         self._potential.inputs[1][:] = self._parameters
         self._wave.inputs[2][0] = disturbances.wave_force_per_speed2_n_s2_m2
@@ -279,6 +289,7 @@ class Plant:
         if self.wake is not None:
             self.wake.reset()   # the fluid at rest again
         self._prepared_force: Optional[Array] = None   # the next period's, if prepare_period made it
+        self._last_period_s: Optional[float] = None   # the length of the period that ended last, s
 
     @property
     def state(self) -> PlantState:
@@ -293,14 +304,24 @@ class Plant:
         return self.model.kinetic_energy(self.q, self.qdot) + potential
 
     # ----- one period ----------------------------------------------------------------------------
-    def step(self, torque: npt.ArrayLike) -> PlantState:
-        """Hold torque (clipped at the motor limits; non-finite -> zero) over one period and integrate."""
+    def step(self, torque: npt.ArrayLike, period_s: Optional[float] = None) -> PlantState:
+        """Hold torque (clipped at the motor limits; non-finite -> zero) over one period and integrate.
+
+        period_s: this period's length, s (None: sample_period_s), for a caller whose periods vary (the emulated
+        rig's reads); the disturbances held over it are stepped over the period that ended last (the first: over
+        this one). ValueError unless it is finite and > 0."""
+        if period_s is None:
+            period_s = self.sample_period_s
+        elif not (math.isfinite(period_s) and period_s > 0.0):
+            raise ValueError(f"a period must be finite and > 0 s, got {period_s!r}")
+        if period_s != self._period_s:
+            self._set_period(period_s)
         command = np.asarray(torque, dtype=float).reshape(-1)
         if command.shape != (2,) or not np.isfinite(command).all():
             command = np.zeros(2)
         applied = np.clip(command, -self._limits, self._limits)
         self.saturated = (bool(abs(command[0]) > self._limits[0]), bool(abs(command[1]) > self._limits[1]))
-        wave = self._prepared_force if self._prepared_force is not None else self._period_force()
+        wave = self._prepared_force if self._prepared_force is not None else self._period_force(period_s)
         self._prepared_force = None
         x = np.concatenate([self.q, self.qdot, self.lag])
         x_next = None if any(self.at_stop.values()) else self._fast_period(x, applied, wave)
@@ -312,8 +333,15 @@ class Plant:
                                   f"try more substeps or smaller disturbances")
         self.q, self.qdot, self.lag = x_next[:nq], x_next[nq:2 * nq], x_next[2 * nq:]
         self.torque = applied
-        self.time_s += self.sample_period_s
+        self.time_s += period_s
+        self._last_period_s = period_s
         return self.state
+
+    def _set_period(self, period_s: float) -> None:
+        """The compiled steps' substep length for periods of period_s seconds."""
+        step_s = period_s / self.substeps
+        self._step.inputs[5][0] = self._period_locked.inputs[5][0] = self._period_unlocked.inputs[4][0] = step_s
+        self._period_s = period_s
 
     def prepare_period(self) -> None:
         """Compute the next period's held disturbance forces now, ahead of its torque, for ``step`` to use.
@@ -324,21 +352,24 @@ class Plant:
         without it (the same computations in the same order, the noise drawn in the same sequence); ``reset``
         discards a prepared period. Once per period: a second call before ``step`` does nothing."""
         if self._prepared_force is None:
-            self._prepared_force = self._period_force()
+            self._prepared_force = self._period_force(self.sample_period_s)
 
-    def _period_force(self) -> Array:
-        """The generalized force held over the period from the current state: the waves', plus the wake's."""
-        force = self._wave_force()
+    def _period_force(self, period_s: float) -> Array:
+        """The generalized force held over the period of period_s seconds from the current state: the waves', plus
+        the wake's, each stepped over the period that ended last (the first period: over period_s)."""
+        interval_s = period_s if self._last_period_s is None else self._last_period_s
+        force = self._wave_force(interval_s)
         if self.wake is not None:
-            force = force + self.wake.step(self.q, self.qdot, self.sample_period_s)
+            force = force + self.wake.step(self.q, self.qdot, interval_s)
         return force
 
-    def _wave_force(self) -> Array:
-        """The surface-wave generalized force for this period: std ~ |v_foil|^2, first-order filtered noise."""
+    def _wave_force(self, interval_s: float) -> Array:
+        """The surface-wave generalized force for this period, the filter stepped over interval_s: std ~
+        |v_foil|^2, first-order filtered noise."""
         coefficient = self.disturbances.wave_force_per_speed2_n_s2_m2
         if coefficient == 0.0:
             return np.zeros(self.model.nq)
-        decay = math.exp(-2.0 * math.pi * self.disturbances.wave_bandwidth_hz * self.sample_period_s)
+        decay = math.exp(-2.0 * math.pi * self.disturbances.wave_bandwidth_hz * interval_s)
         self._wave_state = decay * self._wave_state + math.sqrt(1.0 - decay ** 2) * self.rng.standard_normal()
         wave = self._wave
         wave.inputs[0][:], wave.inputs[1][:], wave.inputs[3][0] = self.q, self.qdot, self._wave_state
@@ -450,3 +481,44 @@ class Plant:
                 held[i] -= coulomb * math.copysign(1.0, x[nq + i])
         return held, lock
 
+
+
+@dataclasses.dataclass(frozen=True)
+class PlantSettings:
+    """What a plant integrates beyond its vehicle: the water (flow, one of swim_model.flow's FLOWS), RK4 steps per
+    period (substeps), the disturbances, and whether the joints meet their hard stops (hard_stops; the stops'
+    values are the rig's, make_plant's hard_limits_rad)."""
+
+    flow: str = "ideal"
+    substeps: int = 8
+    disturbances: Disturbances = dataclasses.field(default_factory=Disturbances.none)   # the water's model alone
+    hard_stops: bool = True
+
+    def __post_init__(self) -> None:
+        _check_flow(self.flow)
+        if not (isinstance(self.substeps, int) and self.substeps >= 1):
+            raise ValueError(f"substeps must be an integer >= 1, got {self.substeps!r}")
+        self.disturbances.validate()
+
+    @classmethod
+    def flow_only(cls, flow: str) -> "PlantSettings":
+        """The water of flow and none of the rig's own disturbances (friction, tilt, waves): the emulated rig's, on
+        which a dry run on hardware adds the rig's own. The wake's water holds the separation drag the attached
+        wake lacks (Disturbances.separation_drag, swim_model.wake_coupling); the other flows' water adds nothing."""
+        return cls(flow, disturbances=Disturbances.separation_drag() if flow == "wake" else Disturbances.none())
+
+
+def make_plant(settings: PlantSettings, rig: Optional[RigParameters], hard_limits_rad: HardLimits,
+               constrained: bool = False, lane_radius_m: Optional[float] = None,
+               sample_period_s: Optional[float] = None, seed: int = 0,
+               wake_parameters: Optional[WakeCouplingParameters] = None) -> Plant:
+    """The plant of settings for the rig's vehicle (None: the shipped rig; constrained and lane_radius_m as
+    VehicleModel takes them), with the joints' hard stops at hard_limits_rad while settings.hard_stops, the wake of
+    wake_parameters in flow "wake" (None: WakeCouplingParameters' defaults), periods of sample_period_s (None: the
+    rig's) and the noise of seed."""
+    model = vehicle_model(settings.flow, rig, constrained, lane_radius_m)
+    wake = None
+    if settings.flow == "wake":
+        wake = WakeCoupling(model, wake_parameters or WakeCouplingParameters())
+    return Plant(model, settings.disturbances, sample_period_s, settings.substeps, seed, wake,
+                 hard_limits_rad if settings.hard_stops else None, flow=settings.flow)

@@ -4,7 +4,7 @@ Every disturbance is a generalized force on q = (alpha, [R,] phi, theta):
 
 - friction in the hub (alpha) and the rails (R): viscous b qdot plus Coulomb with stiction (a coordinate at rest
   stays at rest while the force needed to hold it is below the static limit; the paper saw the lateral velocity
-  stick at 0, Sec. 7.3), handled by the plant's stick-slip logic (plant.py);
+  stick at 0, Sec. 7.3), handled by the plant's stick-slip logic (swim_model.plant);
 - quadratic drag on the foil, F = -1/2 rho Cd A |v| v on its chordwise (U) and normal (V) velocities in the foil
   frame, A = chord x span, mapped to q by Q2(q)' (eq. 40), and on the platform's parts that move in water
   (tangential R alphadot, radial Rdot);
@@ -12,14 +12,15 @@ Every disturbance is a generalized force on q = (alpha, [R,] phi, theta):
   platform's mass at radius R: Q_alpha = m g sin(tilt) R sin(alpha - beta), Q_R = -m g sin(tilt) cos(alpha - beta);
 - surface waves whose force grows with speed: band-limited noise on the foil's normal force with standard deviation
   wave_force_per_speed2 |v_foil|^2 (first-order filtered white noise, seeded);
-- encoder quantization and measurement noise are in sensors.py.
+- encoder quantization and measurement noise are the simulator's sensors' (swim_sim.sensors).
 
 Two sets of sizes. The defaults (``Disturbances()``) are the physical ones: bearing friction from the bearings'
 published friction coefficients and the loads of the shipped rig file, the foil's drag from a flat plate's and a
 laminar section's coefficients, a platform levelled with a spirit level, waves of a small tank; each constant
 below names its source or the reason it was assumed (docs/disturbances.md puts them side by side).
 ``Disturbances.paper()`` are the small sizes the ideal-flow plans survive, which the paper's pipeline
-(swim_bringup's config/paper) runs with.
+(swim_bringup's config/paper) runs with. ``Disturbances.separation_drag()`` is the foil's drag alone, what a vehicle
+in the vortex wake's water adds to the wake (swim_model.wake_coupling).
 """
 from __future__ import annotations
 
@@ -69,6 +70,8 @@ LINEAR_BUSHING_BREAKAWAY_RATIO = 1.0
 #: Hoerner, Fluid-Dynamic Drag (1965), Ch. 3: a rectangular flat plate broadside to the flow, aspect ratio about 5
 #: (the foil's 0.3 m span over its 0.06 m chord): C_D about 1.2 (1.17 square, 1.98 two-dimensional)
 FLAT_PLATE_BROADSIDE_DRAG_COEFFICIENT = 1.2
+#: assumed: skin friction of a thin section, per planform area (the paper's pipeline and the separation drag)
+THIN_SECTION_AXIAL_DRAG_COEFFICIENT = 0.01
 #: assumed: the foil's speed through the water, the middle of the 0.1-0.3 m/s of the paper's maneuvers, m/s
 FOIL_REFERENCE_SPEED_M_S = 0.2
 
@@ -157,12 +160,19 @@ class Disturbances:
             rail_coulomb_n=0.3,               # about 2 % of the platform's weight
             rail_static_n=0.5,                # breakaway force, above the Coulomb level
             foil_normal_drag_coefficient=0.05,   # shrunk, see above (a flat plate broadside: 1.2, Hoerner)
-            foil_axial_drag_coefficient=0.01,  # skin friction of a thin section
+            foil_axial_drag_coefficient=THIN_SECTION_AXIAL_DRAG_COEFFICIENT,
             platform_drag_area_m2=0.0005,      # Cd A of the submerged peduncle and brackets
             tilt_rad=0.0002,                   # a platform level to about 0.01 degree
             tilt_direction_rad=0.0,            # the tilt's downhill direction in the tank frame
             wave_force_per_speed2_n_s2_m2=0.05,  # std of the wave force on the foil per (m/s)^2
             wave_bandwidth_hz=2.0)             # surface waves of a 1.75 m tank, up to ~2 Hz
+
+    @classmethod
+    def separation_drag(cls) -> "Disturbances":
+        """Every disturbance off but the foil's quadratic drag: a flat plate broadside normal to the chord and a
+        thin section's skin friction along it, the separated flow the attached vortex wake lacks."""
+        return dataclasses.replace(cls.none(), foil_normal_drag_coefficient=FLAT_PLATE_BROADSIDE_DRAG_COEFFICIENT,
+                                   foil_axial_drag_coefficient=THIN_SECTION_AXIAL_DRAG_COEFFICIENT)
 
     def coulomb_and_static(self, constrained: bool) -> list[tuple[int, float, float]]:
         """(coordinate index, Coulomb level, static limit) of each coordinate with dry friction."""

@@ -1,5 +1,5 @@
 """The default disturbances are sized from physics: each size recomputed here from the rig file's raw entries and
-the published coefficients it names (not through swim_sim.disturbances' own arithmetic), and the paper's sizes
+the published coefficients it names (not through swim_model.disturbances' own arithmetic), and the paper's sizes
 kept as the ideal-flow pipeline runs them."""
 import dataclasses
 import math
@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from swim_model.rig import default_rig_path
-from swim_sim.disturbances import Disturbances
+from swim_model.disturbances import Disturbances
 
 G_M_S2 = 9.80665            # standard gravity
 DEEP_GROOVE_MU = 0.0015     # SKF Rolling bearings catalogue, "Friction", Table 1: open deep groove ball bearings
