@@ -11,7 +11,7 @@ Parameters: the table PARAMETERS (description and range of each, checked when se
 ``flow_model``, ``library_path`` and ``rig_path`` are read-only. ``flow_model`` ("ideal", the paper's, or
 "circulatory") is the flow model plans are made with: the library (default: the one shipped for that model) must
 have been built with it, or the node does not start. ``default_time_scale`` is used when
-a request's time_scale is 0. Setting ``lqr_weights_path`` (a YAML of swim_controller LqrWeights fields; empty: the
+a request's time_scale is 0. Setting ``lqr_weights_path`` (a YAML of swim_control LqrWeights fields; empty: the
 gains stored in the library) at run time retunes the plans made after it: each primitive's gains for the new
 weights are computed on its first use (0.1-0.3 s each) and kept, while other requests are answered; a file that
 does not load is refused and changes nothing. ``max_plan_duration_s`` and ``max_plan_samples``
@@ -36,8 +36,7 @@ from rclpy.node import Node
 from swim_interfaces.msg import PlannedTrajectory, PrimitiveInfo
 from swim_interfaces.srv import ListPrimitives, RequestManeuver
 
-from swim_controller.messages import trajectory_to_message
-from swim_controller.trajectory import Trajectory
+from swim_control.trajectory import Trajectory
 from swim_model import SwimModelError, load_rig
 from swim_model.flow import FLOW_MODELS
 from swim_planner.errors import PlannerError
@@ -50,6 +49,7 @@ from swim_planner.paths import default_library_path
 from swim_ros.entry import run_node
 from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, one_of, positive
 from swim_ros.qos import LATCHED_QOS
+from swim_ros.trajectory_messages import trajectory_to_message
 
 #: threads serving requests at once: a request whose primitives need new gains does not hold up the others
 SERVICE_THREADS = 4
@@ -82,7 +82,7 @@ PARAMETERS = (
     ParameterSpec("rig_path", "", "rig YAML file (empty: the shipped rig)", read_only=True),
     ParameterSpec("default_time_scale", 1.0, "lambda for requests whose time_scale is 0 (Theorem 1)",
                   range=(0.1, 10.0)),
-    ParameterSpec("lqr_weights_path", "", "YAML of swim_controller LqrWeights fields (empty: the gains stored "
+    ParameterSpec("lqr_weights_path", "", "YAML of swim_control LqrWeights fields (empty: the gains stored "
                   "in the library); applies to the plans made after it is set", check=_weights_file_loads),
     ParameterSpec("max_plan_duration_s", DEFAULT_BOUNDS.max_duration_s, "longest plan served, s",
                   range=(0.0, MAX_PLAN_DURATION_CEILING_S), check=positive),
