@@ -70,8 +70,8 @@ from swim_controller.sliding_mode import SlidingMode
 from swim_controller.supervisor import Mode, Outcome, StaleStateWatch, Step, Supervisor, Tolerances
 from swim_controller.tracker import CascadeTracker, FoilRangeGuard, model_io_linearization, model_lag_rate
 from swim_hw_bridge.conversions import load_bridge_config_parameter
-from swim_model import SwimModelError, VehicleModel, load_rig
 from swim_model.velocity_filter import DEFAULT_CUTOFF_HZ, VelocityEstimator
+from swim_model import SwimModelError, VehicleModel, load_rig
 from swim_ros.codecs import ACTUATED_JOINTS, float_array
 from swim_ros.entry import run_node
 from swim_ros.parameters import (ParameterSpec, check_parameters, declare_parameters, positive, realtime_parameters,
