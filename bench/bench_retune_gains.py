@@ -1,7 +1,7 @@
 """Benchmark: tracking gains of every shipped primitive for new LQ weights (target <= 1 s each).
 
 What planner_node does when ``lqr_weights_path`` is set: ``RetunedLibrary.get`` computes a primitive's P(t),
-G'P for the new weights on its first use (swim_controller.riccati; a cruise with its 30 s lookahead). The
+G'P for the new weights on its first use (swim_control.riccati; a cruise with its 30 s lookahead). The
 weights here are the library's with a 4x heave input weight. Prints one JSON line: the slowest primitive's
 time (best of 3, each with a fresh RetunedLibrary), the median over the library, and the load average.
 """

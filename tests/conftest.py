@@ -21,8 +21,8 @@ from swim_ros.testing.fixtures import (MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, rcl
                                        ros_domain, running_node)
 
 WORKSPACE = Path(__file__).resolve().parents[1]
-PACKAGES = ("swim_model", "swim_ros", "swim_planner", "swim_controller", "swim_sim", "swim_hw_bridge", "swim_bringup",
-            "swim_viz", "swim_interfaces")
+PACKAGES = ("swim_model", "swim_control", "swim_ros", "swim_planner", "swim_controller", "swim_sim", "swim_hw_bridge",
+            "swim_bringup", "swim_viz", "swim_interfaces")
 
 #: a whole swim-demo process (bring-up, maneuver, recording, analysis, stop): about 10-20 s (bench_demo_walltime:
 #: 17 s at load ~5), more on a busier host; 300 s only stops a hung run (the demo's --timeout bounds the maneuver)

@@ -36,7 +36,7 @@ import numpy as np
 from swim_bringup.bag import RUN_TOPICS, BagError, BagInfo, bag_info, read_messages, undecodable_topics
 from swim_ros.typestore import swim_typestore
 from swim_bringup.reports import BridgeMeasures, RunAnalysis, RunMeasures
-from swim_controller.measures import two_norm
+from swim_control.measures import two_norm
 from swim_hw_bridge.conversions import BridgeConfigError, load_bridge_config
 from swim_model.limits import HardLimits
 

@@ -463,7 +463,7 @@ def latest_vehicle(session: Any, timeout_s: float) -> Optional[VehicleState]:
         raise CommandError(f"a plant runs, or joint_states has a publisher, but no joint_states arrived within "
                            f"{timeout_s:g} s")
     from swim_bringup.maneuver_node import vehicle_of
-    from swim_controller.errors import StateMessageError
+    from swim_control.errors import StateMessageError
     try:
         return vehicle_of(latest[-1])
     except StateMessageError as err:

@@ -19,8 +19,7 @@ from swim_interfaces.action import ExecutePlan, PerformManeuver
 from swim_interfaces.srv import ListPrimitives, RequestManeuver
 
 from swim_bringup.maneuver import ManeuverGoal, ManeuverGoalError, NotAtRest, RestBounds, VehicleState, start_state
-from swim_controller.errors import StateMessageError
-from swim_controller.messages import state_from_message
+from swim_control.errors import StateMessageError
 from swim_controller.supervisor import Tolerances
 from swim_model.vehicle import JOINT_NAMES_CONSTRAINED, JOINT_NAMES_UNCONSTRAINED
 from swim_model.velocity_filter import VelocityEstimator
@@ -29,6 +28,7 @@ from swim_ros.calls import (CallFailed, GoalStatusWatch, RetryPolicy, ServedElse
 from swim_ros.entry import run_node
 from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, positive
 from swim_ros.qos import per_period_subscription
+from swim_ros.trajectory_messages import state_from_message
 
 Result = PerformManeuver.Result
 Feedback = PerformManeuver.Feedback
@@ -303,7 +303,7 @@ class ManeuverNode(Node):
 
 
 def vehicle_of(message) -> VehicleState:
-    """The vehicle a sensor_msgs/JointState gives, by swim_controller.messages.state_from_message's checks (the
+    """The vehicle a sensor_msgs/JointState gives, by swim_ros.trajectory_messages.state_from_message's checks (the
     vehicle's joints in any order, finite values, lengths that agree); its speeds zero when the message carries none.
     StateMessageError otherwise."""
     _, q, qdot = state_from_message(message, None, VelocityEstimator(), 0.0)

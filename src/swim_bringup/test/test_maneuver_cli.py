@@ -127,9 +127,9 @@ def library():
 def plan_message(library, ids, counts, time_scale=1.0, start_alpha_rad=0.0):
     """The planner's plan of the sequence as planner_node sends it, and the Trajectory it came from."""
     from builtin_interfaces.msg import Time
-    from swim_controller.messages import trajectory_to_message
     from swim_model import load_rig
     from swim_planner.maneuver import concatenate, expand_sequence
+    from swim_ros.trajectory_messages import trajectory_to_message
     trajectory = concatenate(library, load_rig(), expand_sequence(ids, counts), time_scale, start_alpha_rad)
     return trajectory_to_message(trajectory, Time(sec=1)), trajectory
 

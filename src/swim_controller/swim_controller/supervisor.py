@@ -15,8 +15,8 @@ from typing import Optional
 import numpy as np
 import numpy.typing as npt
 
+from swim_control.trajectory import Trajectory
 from swim_controller.tracker import CascadeTracker, ControlOutput
-from swim_controller.trajectory import Trajectory
 
 Array = npt.NDArray[np.float64]
 

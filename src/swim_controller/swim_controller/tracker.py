@@ -33,9 +33,9 @@ import numpy as np
 import numpy.typing as npt
 from numpy.linalg import _umath_linalg
 
-from swim_controller.errors import PlanError
+from swim_control.errors import PlanError
+from swim_control.trajectory import Trajectory, TrajectoryPoint
 from swim_controller.sliding_mode import SlidingMode
-from swim_controller.trajectory import Trajectory, TrajectoryPoint
 from swim_model.limits import HardLimits
 from swim_model.flow import LAG_STATE_NAMES
 

@@ -26,8 +26,7 @@ from swim_interfaces.action import ExecutePlan
 from swim_interfaces.msg import TrackingState
 from trajectory_msgs.msg import JointTrajectoryPoint
 
-from swim_controller.errors import PlanError, StateMessageError
-from swim_controller.messages import state_from_message, trajectory_from_message
+from swim_control.errors import PlanError, StateMessageError
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.supervisor import Mode, Outcome, StaleStateWatch, Step, Supervisor, Tolerances
 from swim_controller.tracker import CascadeTracker, FoilRangeGuard, model_io_linearization, model_lag_rate
@@ -41,6 +40,7 @@ from swim_ros.parameters import (ParameterSpec, check_parameters, declare_parame
 from swim_ros.qos import per_period_publisher, per_period_subscription
 from swim_ros.realtime import (NO_REALTIME_MEANS, PeriodicCollector, RealtimeSettings, make_process_realtime,
                                make_thread_background)
+from swim_ros.trajectory_messages import state_from_message, trajectory_from_message
 
 RESULT_CODES = {
     Outcome.SUCCEEDED: ExecutePlan.Result.SUCCESSFUL,

@@ -9,11 +9,11 @@ import pytest
 from builtin_interfaces.msg import Time
 from hypothesis import given, settings, strategies as st
 
-from swim_controller.errors import PlanError
-from swim_controller.messages import MAX_PLAN_MAGNITUDE, trajectory_from_message, trajectory_to_message
+from swim_control.errors import PlanError
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.tracker import CascadeTracker
 from swim_ros.codecs import float_array
+from swim_ros.trajectory_messages import MAX_PLAN_MAGNITUDE, trajectory_from_message, trajectory_to_message
 
 LIMITS_N_M = np.array([1.25, 0.524])
 SAMPLES = 6

@@ -8,7 +8,7 @@ malformed one never is (the well-formed state sent after it is answered, and no 
 one's stamp); every command is finite and within the motor limits.
 
 execute_plan goals, against test_tracker_node's lock-step plant: the plan of test_tracker_node (a real trajectory,
-encoded by swim_controller.messages.trajectory_to_message) re-made in ways that keep it valid (cut short, re-timed
+encoded by swim_ros.trajectory_messages.trajectory_to_message) re-made in ways that keep it valid (cut short, re-timed
 by Theorem 1, moved to another lane and alpha, its segment split, any unicode in its labels, gains and single
 values huge but within MAX_PLAN_MAGNITUDE), then broken in one way or none (PLAN_DEFECTS), with any tolerances.
 A broken goal ends INVALID_PLAN with a reason within its deadline, and a plan being tracked goes on as before (it is
@@ -163,12 +163,12 @@ SEGMENT_FIELDS = {"time scale": "time_scale", "duration": "duration_s", "start":
 #: float64's largest
 LARGEST_FLOAT = 1.7976931348623157e308
 #: what a broken plan has, each invalid by PlannedTrajectory's and ExecutePlan's contracts (their .msg and .action
-#: comments, swim_controller.messages.trajectory_from_message's documented checks, the rig's tank): the ways each
+#: comments, swim_ros.trajectory_messages.trajectory_from_message's documented checks, the rig's tank): the ways each
 #: is made, (where, value). The first of each runs in every run (AS_PLANNED): among them times from 1e-9 s, an
 #: infinite end time, a value whose rates overflow, steps of 1e-300 s and a lane of 1e300 m, plans a Trajectory's
 #: own checks pass and only the decoder's range check and tracker_node's tank check refuse.
 PLAN_DEFECTS = {
-    # every version but those the tracker reads (swim_controller.messages.READABLE_INTERFACE_VERSIONS, 4 and 5):
+    # every version but those the tracker reads (swim_ros.trajectory_messages.READABLE_INTERFACE_VERSIONS, 4 and 5):
     # the older ones, the next one and the largest uint32
     "interface version": tuple(("", v) for v in (1.0, 0.0, 2.0, 3.0, 6.0, 4294967295.0)),
     "too many samples": (("", 0.0),),
@@ -256,7 +256,7 @@ def index_at(at, size):
 
 def remake(edit, plan, torque_limits):
     """The plan re-made by edit's valid steps (a Trajectory: each step checked as it is made)."""
-    from swim_controller.trajectory import Trajectory
+    from swim_control.trajectory import Trajectory
     if edit.samples is not None and edit.samples < len(plan.time_s):
         k = edit.samples
         segment = dataclasses.replace(plan.segments[0], duration_s=float(plan.time_s[k - 1]), sample_count=k)
@@ -292,7 +292,7 @@ def break_plan(defect, edit, message, tolerances):
     """The defect (a key of PLAN_DEFECTS) made in the encoded plan (message, PlannedTrajectory) or the tolerances
     (a list), the way edit.variant picks; False if that way happens to leave the plan valid (unicode joint names
     that are the plan's own), else True."""
-    from swim_controller.trajectory import MAX_TRACKED_SAMPLES
+    from swim_control.trajectory import MAX_TRACKED_SAMPLES
     from swim_ros.codecs import float_array
     variants = PLAN_DEFECTS[defect]
     where, value = variants[edit.variant % len(variants)]
@@ -362,7 +362,7 @@ def break_plan(defect, edit, message, tolerances):
 @pytest.fixture(scope="module")
 def base_plan(plan_message):
     """The module's plan as a Trajectory, to re-make."""
-    from swim_controller.messages import trajectory_from_message
+    from swim_ros.trajectory_messages import trajectory_from_message
     return trajectory_from_message(plan_message)
 
 
@@ -430,7 +430,7 @@ def check_published(tracker, plant, tracking, feedback, torque_limits):
 def fresh_plan(plant, tracking, edit, base_plan, torque_limits):
     """The plant at rest at the origin, nothing recorded; the plan edit re-makes, encoded."""
     from builtin_interfaces.msg import Time
-    from swim_controller.messages import trajectory_to_message
+    from swim_ros.trajectory_messages import trajectory_to_message
     plant.q, plant.qdot = np.zeros(3), np.zeros(3)
     plant.torques.clear()
     tracking.clear()
@@ -468,7 +468,7 @@ def test_fuzzed_valid_plans_preempt_and_are_tracked_within_the_limits(tracker, r
 
 def test_no_interface_version_defect_is_a_readable_version():
     """A version bump must move the defects too: a plan of a version the tracker reads is no defect."""
-    from swim_controller.messages import READABLE_INTERFACE_VERSIONS
+    from swim_ros.trajectory_messages import READABLE_INTERFACE_VERSIONS
     assert all(value not in READABLE_INTERFACE_VERSIONS for _, value in PLAN_DEFECTS["interface version"])
 
 

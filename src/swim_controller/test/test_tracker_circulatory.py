@@ -10,7 +10,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from swim_controller.errors import PlanError
+from swim_control.errors import PlanError
 from swim_controller.testing.circulatory import gait_run, plan_from_run
 from swim_controller.tracker import CascadeTracker, LagEstimator, model_io_linearization, model_lag_rate
 from swim_model import VehicleModel

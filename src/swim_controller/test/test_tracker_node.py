@@ -5,7 +5,7 @@ waits for the node's torque command for that state, integrates one 8 ms period (
 repeats, so runs are deterministic and faster than real time. The plan is made here, not by the planner (a
 package above this one): swim_model's sinusoidal gait faded in from rest, the unactuated alpha integrated under it
 (swim_model.simulate_gait: a motion the vehicle can make, with the torques that make it) and the LQ gains along it
-(swim_controller.riccati), as a planner's accelerate-then-cruise plan has them.
+(swim_control.riccati), as a planner's accelerate-then-cruise plan has them.
 """
 import dataclasses
 import math
@@ -100,11 +100,11 @@ class RampedGait:
 @pytest.fixture(scope="module")
 def plan_message():
     from builtin_interfaces.msg import Time
-    from swim_controller.messages import trajectory_to_message
-    from swim_controller.riccati import LqrWeights, primitive_gains
-    from swim_controller.time_scaling import lqr_gain_from
-    from swim_controller.trajectory import Segment, Trajectory
+    from swim_control.riccati import LqrWeights, primitive_gains
+    from swim_control.time_scaling import lqr_gain_from
+    from swim_control.trajectory import Segment, Trajectory
     from swim_model import SinusoidalGait, VehicleModel, load_rig, simulate_gait
+    from swim_ros.trajectory_messages import trajectory_to_message
     model = VehicleModel(load_rig(), constrained=True)
     gait = RampedGait(SinusoidalGait(heave_amplitude_rad=PLAN_HEAVE_AMPLITUDE_RAD,
                                      pitch_amplitude_rad=PLAN_PITCH_AMPLITUDE_RAD), PLAN_RAMP_S)
@@ -446,7 +446,7 @@ def test_the_node_takes_its_real_time_means_once_started(ros_domain, tmp_path, p
 
 
 def test_a_time_scale_past_the_motor_limits_refuses_the_goal(rig_loop, plan_message):
-    """time_scale re-times each new goal's plan by the one time scaling (swim_controller.trajectory): past the motor
+    """time_scale re-times each new goal's plan by the one time scaling (swim_control.trajectory): past the motor
     limits the goal is refused with the largest feasible time scale named; within them the plan runs re-timed."""
     from rclpy.parameter import Parameter
     from swim_interfaces.action import ExecutePlan

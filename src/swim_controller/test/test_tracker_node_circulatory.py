@@ -99,9 +99,9 @@ def test_a_circulatory_plan_is_tracked_on_its_estimated_lag_states(circulatory_t
     from builtin_interfaces.msg import Time
     from swim_interfaces.action import ExecutePlan
 
-    from swim_controller.messages import trajectory_to_message
-    from swim_controller.riccati import error_state_size
+    from swim_control.riccati import error_state_size
     from swim_controller.testing.circulatory import plan_from_run
+    from swim_ros.trajectory_messages import trajectory_to_message
 
     samples = round(PLAN_S / circulatory_run.step_s / 4) + 1
     zero_gains = np.zeros((samples, 2, error_state_size(3, 1, 2)))
@@ -149,8 +149,8 @@ def test_a_goal_canceled_while_its_model_is_built_never_starts(circulatory_track
     from builtin_interfaces.msg import Time
     from swim_interfaces.action import ExecutePlan
 
-    from swim_controller.messages import trajectory_to_message
     from swim_controller.testing.circulatory import plan_from_run
+    from swim_ros.trajectory_messages import trajectory_to_message
 
     plan = dataclasses.replace(plan_from_run(circulatory_run, PLAN_S), lane_radius_m=0.48)   # the rig's second lane
     node, executor, plant, tracking, client = _plant_and_client("tracker_circulatory_canceler", rclpy_context,

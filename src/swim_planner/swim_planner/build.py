@@ -18,7 +18,7 @@ import multiprocessing
 import os
 from typing import Callable, Optional, Sequence, cast
 
-from swim_controller.riccati import LqrWeights
+from swim_control.riccati import LqrWeights
 from swim_model import RigParameters, VehicleModel
 from swim_planner.disturbance import disturbance_job, lead_in_ids
 from swim_planner.errors import ManeuverError, PrimitiveSolveError

@@ -14,7 +14,7 @@ import dataclasses
 import itertools
 import math
 
-from swim_controller.riccati import LqrWeights
+from swim_control.riccati import LqrWeights
 from swim_model import RigParameters
 from swim_planner.primitives import PrimitiveSpec, PrimitiveType
 

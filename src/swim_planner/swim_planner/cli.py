@@ -22,7 +22,7 @@ model's primitive set (catalog.default_specs or catalog.circulatory_specs) and r
 other model. LIBRARY defaults to the library shipped with swim_planner for that flow model; list, show and plot
 of a LIBRARY named read it whatever its flow model. Builds are resumable: primitives already in
 the library are kept. Jobs run in local processes, or on a Dask cluster when --scheduler names one. Each
-primitive is stored with its tracking gains (the Riccati solution P(t) and G'P, swim_controller.riccati);
+primitive is stored with its tracking gains (the Riccati solution P(t) and G'P, swim_control.riccati);
 when the LQ weights change, a build recomputes only the gains.
 """
 from __future__ import annotations
@@ -58,7 +58,7 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("--workers", type=int, default=2, help="local worker processes")
     build.add_argument("--scheduler", default=None, help="Dask scheduler address (tcp://host:port)")
     build.add_argument("--lqr-weights", type=Path, default=None,
-                       help="YAML of swim_controller LqrWeights fields for the stored tracking gains "
+                       help="YAML of swim_control LqrWeights fields for the stored tracking gains "
                             "(default: the flow's, catalog.lqr_weights); changed weights recompute the gains only")
     listing = commands.add_parser("list", help="one line per primitive", parents=[flow])
     listing.add_argument("library", type=Path, nargs="?", default=None)

@@ -1,4 +1,4 @@
-"""Tracking gains for a library's primitives (swim_controller.riccati), and LQ weights from YAML.
+"""Tracking gains for a library's primitives (swim_control.riccati), and LQ weights from YAML.
 
 The gains P(t), G'P of every primitive are computed once, off-line, for the library's LQ weights and stored
 with it. To compare tunings (paper Sec. 7) without rebuilding, ``RetunedLibrary`` shows the same library with
@@ -17,8 +17,8 @@ from typing import Optional
 import numpy as np
 import yaml
 
-from swim_controller.errors import GainComputationError
-from swim_controller.riccati import LqrWeights, primitive_gains
+from swim_control.errors import GainComputationError
+from swim_control.riccati import LqrWeights, primitive_gains
 from swim_model import RigParameters, VehicleModel
 from swim_planner.errors import PlannerError, PrimitiveSolveError
 from swim_planner.library import PrimitiveLibrary
@@ -26,7 +26,7 @@ from swim_planner.primitives import Primitive, PrimitiveSpec, PrimitiveType
 
 
 def gains_job(rig: RigParameters, primitive: Primitive, lqr_weights: LqrWeights) -> Primitive:
-    """The primitive with its LQ gains P(t), G'P computed (swim_controller.riccati), once, off-line.
+    """The primitive with its LQ gains P(t), G'P computed (swim_control.riccati), once, off-line.
 
     A primitive with lag states was solved with the circulatory flow model: its gains are for that model, on the
     extended error state (int e_y, e_q, edot_q, e_z)."""

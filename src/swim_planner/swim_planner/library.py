@@ -37,7 +37,7 @@ from typing import Any, Iterable, Iterator, Optional
 
 import numpy as np
 
-from swim_controller.riccati import LqrWeights, TrackingGains
+from swim_control.riccati import LqrWeights, TrackingGains
 from swim_model import MODEL_VERSION, RigParameters
 from swim_model.flow import FLOW_MODELS
 from swim_planner.disturbance import wake_record

@@ -8,7 +8,7 @@ only u = psiddot may jump. Primitives solved with the circulatory flow model car
 (m/s), which join like the velocities (within JUNCTION_TOLERANCE) and make a plan with flow_model "circulatory";
 a plan never mixes primitives of the two flow models.
 
-The plan is a swim_controller.trajectory.Trajectory: made at lambda = 1 (each sample carries K = R^-1 G'P and
+The plan is a swim_control.trajectory.Trajectory: made at lambda = 1 (each sample carries K = R^-1 G'P and
 the Riccati input gain G'P of its primitive), then time-scaled by ``Trajectory.time_scaled`` (P3 and Theorem 1:
 t -> t / lambda, q(t) -> q(lambda t), qdot -> lambda qdot, u -> lambda^2 u, tau -> lambda^2 tau, z -> lambda z,
 K -> lambda R^-1 (G'P) Gamma(lambda), G'P -> (G'P) Gamma(lambda)), which refuses a lambda whose torques exceed
@@ -22,7 +22,7 @@ none and the tracker uses its constant bound.
 A slowly varying lambda (Sec. 4.3): with s the nominal (lambda = 1) plan time and lambda(s) given,
 the plan runs t(s) = int_0^s ds' / lambda(s'), q(t) = q_nom(s), qdot = lambda qdot_nom(s),
 u = lambda^2 u_nom(s) + lambdadot qdot_nom, tau = lambda^2 tau_nom(s), z = lambda z_nom(s) and D = lambda^2 D_nom(s)
-(the flow forces at the velocities lambda qdot_nom; swim_controller.trajectory); the torque the
+(the flow forces at the velocities lambda qdot_nom; swim_control.trajectory); the torque the
 lambdadot term would need (lambdadot Mm qdot_nom) is left to feedback, as in the paper.
 """
 from __future__ import annotations
@@ -35,10 +35,11 @@ from typing import Callable, Optional, Protocol, Sequence, runtime_checkable
 import numpy as np
 import numpy.typing as npt
 
-from swim_controller.errors import PlanError
-from swim_controller.riccati import LqrWeights
-from swim_controller.time_scaling import lqr_gain_from, retime_feedback
-from swim_controller.trajectory import MAX_TRACKED_SAMPLES, Segment, Trajectory, motor_limit_fraction
+from swim_control.errors import PlanError
+from swim_control.riccati import LqrWeights
+from swim_control.time_scaling import lqr_gain_from, retime_feedback
+from swim_control.trajectory import MAX_ABS_START_ALPHA_RAD, MAX_TRACKED_SAMPLES, Segment, Trajectory, \
+    motor_limit_fraction
 from swim_model import RigParameters
 from swim_planner.errors import LibraryError, ManeuverError
 from swim_planner.primitives import Primitive, PrimitiveSpec
@@ -239,8 +240,8 @@ class PlanBounds:
     # assumed: two hours of swimming, longer than any run on the rig; a 1000-cruise plan (5008 s) fits
     max_samples: int = MAX_TRACKED_SAMPLES
     # the largest plan the tracker accepts (its reason is there)
-    max_abs_start_alpha_rad: float = 1.0e6
-    # assumed: float64 keeps alpha to 1e-10 rad up to here (and swimming 1e6 rad would take weeks)
+    max_abs_start_alpha_rad: float = MAX_ABS_START_ALPHA_RAD
+    # the largest start the simulator sets too (its reason is there)
 
     def validate(self) -> None:
         """Check the bounds.

@@ -18,8 +18,7 @@ from rclpy.node import Node
 from swim_interfaces.msg import PlannedTrajectory, PrimitiveInfo
 from swim_interfaces.srv import ListPrimitives, RequestManeuver
 
-from swim_controller.messages import trajectory_to_message
-from swim_controller.trajectory import Trajectory
+from swim_control.trajectory import Trajectory
 from swim_model import SwimModelError, load_rig
 from swim_model.flow import FLOW_MODELS
 from swim_planner.errors import PlannerError
@@ -32,6 +31,7 @@ from swim_planner.paths import default_library_path
 from swim_ros.entry import run_node
 from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, one_of, positive
 from swim_ros.qos import LATCHED_QOS
+from swim_ros.trajectory_messages import trajectory_to_message
 
 #: threads serving requests at once: a request whose primitives need new gains does not hold up the others
 SERVICE_THREADS = 4
@@ -64,7 +64,7 @@ PARAMETERS = (
     ParameterSpec("rig_path", "", "rig YAML file (empty: the shipped rig)", read_only=True),
     ParameterSpec("default_time_scale", 1.0, "lambda for requests whose time_scale is 0 (Theorem 1)",
                   range=(0.1, 10.0)),
-    ParameterSpec("lqr_weights_path", "", "YAML of swim_controller LqrWeights fields (empty: the gains stored "
+    ParameterSpec("lqr_weights_path", "", "YAML of swim_control LqrWeights fields (empty: the gains stored "
                   "in the library); applies to the plans made after it is set", check=_weights_file_loads),
     ParameterSpec("max_plan_duration_s", DEFAULT_BOUNDS.max_duration_s, "longest plan served, s",
                   range=(0.0, MAX_PLAN_DURATION_CEILING_S), check=positive),

@@ -16,7 +16,7 @@ from typing import Optional
 import numpy as np
 import numpy.typing as npt
 
-from swim_controller.riccati import TrackingGains
+from swim_control.riccati import TrackingGains
 from swim_model import VehicleModel
 
 Array = npt.NDArray[np.float64]
@@ -275,7 +275,7 @@ class Primitive:
     solver_status: str
     solve_time_s: float
     iterations: int
-    gains: Optional[TrackingGains] = None   # P(t) and G'P for the tracker (swim_controller.riccati)
+    gains: Optional[TrackingGains] = None   # P(t) and G'P for the tracker (swim_control.riccati)
     lag: Optional[Array] = None             # the flow's lag states z, m/s, (samples, 2): circulatory flow only
 
     @property

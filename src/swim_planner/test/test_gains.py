@@ -4,7 +4,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from swim_controller.riccati import LqrWeights
+from swim_control.riccati import LqrWeights
 from swim_planner.errors import PlannerError
 from swim_planner.gains import RetunedLibrary, load_lqr_weights
 from swim_planner.maneuver import concatenate, expand_sequence
@@ -105,7 +105,7 @@ def test_one_primitives_gains_being_computed_holds_up_only_those_asking_for_it(l
 
 
 def test_stored_riccati_input_gain_is_g_transpose_p(library, rig):
-    from swim_controller.riccati import linearize
+    from swim_control.riccati import linearize
     from swim_model import VehicleModel
     primitive = library.get("free/cruise_to_cruise/R0.43/E0.05-E0.10")
     model = VehicleModel(rig, constrained=False, lane_radius_m=primitive.spec.lane_radius_m)
@@ -136,7 +136,7 @@ def test_the_circulatory_library_weights_its_decelerates_task_at_rest(circulator
     """The circulatory library's gains are for its catalog weights; a decelerate's P at its end has the rest weight
     beyond the gains without the rest weights, on e_R for a free one and on e_alpha for a constrained one; a
     cruise's does not."""
-    from swim_controller.riccati import HUB_ERROR_INDEX_CONSTRAINED, LATERAL_ERROR_INDEX
+    from swim_control.riccati import HUB_ERROR_INDEX_CONSTRAINED, LATERAL_ERROR_INDEX
     from swim_planner.catalog import CIRCULATORY_LQR_WEIGHTS
     assert circulatory_library.lqr_weights == CIRCULATORY_LQR_WEIGHTS
     assert CIRCULATORY_LQR_WEIGHTS.rest_lateral_terminal_weight > 0.0

@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from swim_controller.riccati import LqrWeights, error_state_size, linearize, primitive_gains
-from swim_controller.time_scaling import scaling_diagonal
+from swim_control.riccati import LqrWeights, error_state_size, linearize, primitive_gains
+from swim_control.time_scaling import scaling_diagonal
 from swim_model import VehicleModel
 from swim_planner.catalog import constrained_specs
 from swim_planner.errors import ManeuverError, PlannerError
@@ -133,7 +133,7 @@ def test_concatenation_carries_the_lag_states(memory_library, rig, circulatory_c
 
 @pytest.mark.parametrize("time_scale", [0.8, 1.2])
 def test_a_time_scaled_circulatory_plan(memory_library, rig, time_scale):
-    """lambda z, and the gains by Theorem 1 with Gamma's lag block I (swim_controller.time_scaling)."""
+    """lambda z, and the gains by Theorem 1 with Gamma's lag block I (swim_control.time_scaling)."""
     sequence = expand_sequence([CRUISE], [2])
     nominal, scaled = concatenate(memory_library, rig, sequence), concatenate(memory_library, rig, sequence,
                                                                              time_scale)

@@ -166,7 +166,7 @@ def test_a_library_of_another_flow_model_stops_the_planner_at_start(overrides, e
 def test_the_circulatory_planner_serves_plans_of_its_flow_model():
     import rclpy
     from swim_interfaces.srv import RequestManeuver
-    from swim_controller.messages import trajectory_from_message
+    from swim_ros.trajectory_messages import trajectory_from_message
     try:
         node = _planner_with("flow_model:=circulatory")
         assert node.library.flow_model == "circulatory"

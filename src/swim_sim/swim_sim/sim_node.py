@@ -21,12 +21,12 @@ from std_srvs.srv import Trigger
 from swim_interfaces.msg import WakeStatistics, WakeVortices
 from swim_interfaces.srv import SetVehicleState
 
+from swim_control.trajectory import MAX_ABS_START_ALPHA_RAD
 from swim_hw_bridge.conversions import BridgeConfig, load_bridge_config_parameter
 from swim_model import StateError, SwimModelError, load_rig
 from swim_model.disturbances import Disturbances
 from swim_model.flow import FLOWS
 from swim_model.plant import Plant, PlantSettings, SimulationError, make_plant
-from swim_planner.maneuver import DEFAULT_BOUNDS
 from swim_ros.codecs import MessageError, float_array, joint_state_arrays, stamp_of, torque_from_command
 from swim_ros.entry import run_node
 from swim_ros.parameters import (ParameterSpec, ParameterValue, check_parameters, declare_parameters, finite,
@@ -102,12 +102,12 @@ class StateBounds:
 
     @classmethod
     def of(cls, plant: Plant, config: BridgeConfig) -> "StateBounds":
-        """alpha within swim_planner's start-alpha bound (float64 keeps alpha to 1e-10 rad up to there), R inside
+        """alpha within the plans' start-alpha bound (float64 keeps alpha to 1e-10 rad up to there), R inside
         the tank, heave and pitch within their hard stops; speeds within the bridge file's physically possible
         joint speeds."""
         rig, where = plant.model.rig, f"the bridge file {config.source_path}"
-        alpha = DEFAULT_BOUNDS.max_abs_start_alpha_rad
-        positions = {"alpha": (-alpha, alpha, "swim_planner's PlanBounds.max_abs_start_alpha_rad"),
+        alpha = MAX_ABS_START_ALPHA_RAD
+        positions = {"alpha": (-alpha, alpha, "swim_control.trajectory.MAX_ABS_START_ALPHA_RAD"),
                      "R": (0.0, 0.5 * rig.tank_diameter_m, f"the tank's radius (tank_diameter in {rig.source_path})")}
         for (name, (lower, upper)), joint in zip(plant.hard_limits_rad.items(), ("heave", "pitch")):
             positions[name] = (lower, upper, f"the hard stops ({joint}_lower_hard_limit, {joint}_upper_hard_limit "

@@ -56,13 +56,13 @@ def set_state(driver):
 @pytest.fixture(scope="module")
 def limits():
     """(torque limits, hard limits, set_state's bounds) from the rig and bridge files, not from the node."""
+    from swim_control.trajectory import MAX_ABS_START_ALPHA_RAD
     from swim_hw_bridge.conversions import load_bridge_config
     from swim_model import load_rig
-    from swim_planner.maneuver import DEFAULT_BOUNDS
     config = load_bridge_config()
     hard = {"phi": (config.heave_lower_hard_limit_rad, config.heave_upper_hard_limit_rad),
             "theta": (config.pitch_lower_hard_limit_rad, config.pitch_upper_hard_limit_rad)}
-    alpha = DEFAULT_BOUNDS.max_abs_start_alpha_rad
+    alpha = MAX_ABS_START_ALPHA_RAD
     speeds = {"alpha": config.hub_max_speed_rad_s, "phi": config.heave_max_speed_rad_s,
               "theta": config.pitch_max_speed_rad_s}
     return np.array(load_rig().torque_limits_n_m), hard, {"alpha": (-alpha, alpha), **hard}, speeds

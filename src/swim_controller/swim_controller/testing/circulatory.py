@@ -11,8 +11,8 @@ from typing import Optional
 import numpy as np
 import numpy.typing as npt
 
-from swim_controller.riccati import error_state_size
-from swim_controller.trajectory import Segment, Trajectory
+from swim_control.riccati import error_state_size
+from swim_control.trajectory import Segment, Trajectory
 from swim_model import SinusoidalGait, VehicleModel
 
 Array = npt.NDArray[np.float64]

@@ -13,9 +13,9 @@ from typing import Callable, Optional, Protocol
 import numpy as np
 import numpy.typing as npt
 
-from swim_controller.measures import two_norm
+from swim_control.measures import two_norm
+from swim_control.trajectory import Trajectory
 from swim_controller.tracker import CascadeTracker
-from swim_controller.trajectory import Trajectory
 from swim_model import VehicleModel
 
 Array = npt.NDArray[np.float64]

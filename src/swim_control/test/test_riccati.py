@@ -1,11 +1,11 @@
-"""The LQ stage against closed forms and independent computations (swim_controller.riccati)."""
+"""The LQ stage against closed forms and independent computations (swim_control.riccati)."""
 import numpy as np
 import pytest
 import scipy.linalg
 from hypothesis import given, settings, strategies as st
 
-from swim_controller.errors import GainComputationError
-from swim_controller.riccati import Linearization, LqrWeights, linearize, solve_riccati, terminal_weight
+from swim_control.errors import GainComputationError
+from swim_control.riccati import Linearization, LqrWeights, linearize, solve_riccati, terminal_weight
 
 
 def test_scalar_riccati_matches_its_closed_form():
@@ -64,7 +64,7 @@ def test_time_varying_riccati_matches_an_independent_integration():
 def test_merged_transitions_carry_p_as_the_single_ones():
     """merge_transitions multiplies consecutive maps; P carried through them equals P carried one by one, and
     the product's norm bound splits a long span into several maps."""
-    from swim_controller.riccati import backward_transitions, merge_transitions, sweep_backward
+    from swim_control.riccati import backward_transitions, merge_transitions, sweep_backward
     time_s = np.linspace(0.0, 2.0, 81)
     q, r, s = np.eye(4), np.diag([0.3, 0.1]), 0.2 * np.eye(4)
     transitions = backward_transitions(time_s, _time_varying(time_s), q, r)
@@ -163,7 +163,7 @@ def test_weights_are_validated():
 
 def test_continued_terminal_is_one_integration_over_the_tiled_cycles():
     """The pass-by-pass backward sweep of a periodic F(t), G(t) equals one integration over the cycles tiled."""
-    from swim_controller.riccati import backward_transitions, continued_terminal
+    from swim_control.riccati import backward_transitions, continued_terminal
     rng = np.random.default_rng(5)
     f0, f1, g0 = rng.normal(size=(3, 3)), rng.normal(size=(3, 3)), rng.normal(size=(3, 1))
     period, samples, cycles = 0.7, 41, 5
@@ -182,8 +182,8 @@ def test_continued_terminal_is_one_integration_over_the_tiled_cycles():
 def test_cruise_gains_are_periodic_with_the_lookahead(model_for):
     """A cruise's P(T) is eq. 20 over cruise_lookahead_s more of the same cruise, so its gains nearly repeat
     from cycle to cycle; with the primitive's own horizon only, P(T) is S."""
-    from conftest import StrokeSpec, make_stroke
-    from swim_controller.riccati import primitive_gains
+    from swim_control.riccati import primitive_gains
+    from swim_control.testing.strokes import StrokeSpec, make_stroke
     spec = StrokeSpec("free cruise", False, 0.43, 40)
     model = model_for(spec)
     stroke = make_stroke(model, spec, cycles=1, cycle_samples=True)
@@ -203,9 +203,9 @@ def test_a_primitive_ending_at_rest_weights_the_task_at_its_end(model_for, const
     """ends_at_rest adds rest_lateral_terminal_weight to S's e_R entry for the free vehicle and
     rest_alpha_terminal_weight to S's e_alpha entry for the constrained one, and nothing else (the other weight does
     nothing to either). Without the flag the weights do nothing."""
-    from conftest import StrokeSpec, make_stroke
-    from swim_controller.riccati import (HUB_ERROR_INDEX_CONSTRAINED, LATERAL_ERROR_INDEX, error_state_size,
-                                         primitive_gains)
+    from swim_control.riccati import (HUB_ERROR_INDEX_CONSTRAINED, LATERAL_ERROR_INDEX, error_state_size,
+                                      primitive_gains)
+    from swim_control.testing.strokes import StrokeSpec, make_stroke
     spec = StrokeSpec("free stroke" if not constrained else "constrained stroke", constrained, 0.43, 40)
     model = model_for(spec)
     stroke = make_stroke(model, spec, cycles=1)

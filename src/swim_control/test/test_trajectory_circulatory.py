@@ -4,10 +4,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from swim_controller.errors import PlanError
-from swim_controller.riccati import error_state_size
-from swim_controller.time_scaling import scaling_diagonal
-from swim_controller.trajectory import Segment, Trajectory
+from swim_control.errors import PlanError
+from swim_control.riccati import error_state_size
+from swim_control.time_scaling import scaling_diagonal
+from swim_control.trajectory import Segment, Trajectory
 
 LIMITS_N_M = np.array([1.25, 0.524])
 N_LAG = 2

@@ -13,12 +13,12 @@ import numpy as np
 import numpy.typing as npt
 from swim_interfaces.msg import PlannedTrajectory, PrimitiveSegment
 
-from swim_controller.errors import PlanError, StateMessageError
-from swim_controller.riccati import error_state_size
-from swim_controller.trajectory import MAX_TRACKED_SAMPLES, Segment, Trajectory
+from swim_control.errors import PlanError, StateMessageError
+from swim_control.riccati import error_state_size
+from swim_control.trajectory import MAX_TRACKED_SAMPLES, Segment, Trajectory
 from swim_model.flow import FLOW_MODELS, LAG_STATE_NAMES
-from swim_model.velocity_filter import VelocityEstimator
 from swim_model.vehicle import JOINT_NAMES_CONSTRAINED, JOINT_NAMES_UNCONSTRAINED
+from swim_model.velocity_filter import VelocityEstimator
 from swim_ros.codecs import MessageError, float_array, joint_state_arrays, seconds_of
 
 Array = npt.NDArray[np.float64]
@@ -78,7 +78,7 @@ def trajectory_from_message(plan: PlannedTrajectory) -> Trajectory:
     samples = len(plan.time_from_start_s)
     if samples > MAX_TRACKED_SAMPLES:
         raise PlanError(f"the plan has {samples} samples, more than the largest plan this tracker accepts "
-                        f"({MAX_TRACKED_SAMPLES}, swim_controller.trajectory.MAX_TRACKED_SAMPLES)")
+                        f"({MAX_TRACKED_SAMPLES}, swim_control.trajectory.MAX_TRACKED_SAMPLES)")
     joint_names = JOINT_NAMES_CONSTRAINED if plan.constrained else JOINT_NAMES_UNCONSTRAINED
     if tuple(plan.joint_names) != joint_names:
         vehicle = "constrained" if plan.constrained else "free"

@@ -8,7 +8,7 @@ the scaled system, -Pdot_l = lambda Gamma (-Pdot)(lambda t) Gamma, shows that P_
     Q_l = lambda Gamma Q Gamma,   R_l = R / lambda,   S_l = Gamma S Gamma.
 
 The paper's eq. 30 prints Q_l = Gamma Q Gamma; the factor lambda is needed for the substitution to close
-(swim_controller/test/test_time_scaling.py: the printed form misses by the factor, ours agrees to 1e-6).
+(swim_control/test/test_time_scaling.py: the printed form misses by the factor, ours agrees to 1e-6).
 With Q = Z' Gg Z it is
 the same structure with every rate l scaled to lambda l and Gg to lambda Gg: a faster plan is tracked with
 proportionally faster error dynamics. The scaled control law is eq. 33:

@@ -1,8 +1,8 @@
-"""Errors a user of swim_controller can cause, each with a message that says what is wrong."""
+"""Errors a user of swim_control can cause, each with a message that says what is wrong."""
 
 
 class ControllerError(Exception):
-    """Base class of swim_controller's errors."""
+    """Base class of swim_control's errors."""
 
 
 class GainComputationError(ControllerError):

@@ -5,10 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from swim_controller.errors import PlanError
-from swim_controller.riccati import LqrWeights
-from swim_controller.time_scaling import lqr_gain_from, scaling_diagonal
-from swim_controller.trajectory import Segment, Trajectory
+from swim_control.errors import PlanError
+from swim_control.riccati import LqrWeights
+from swim_control.time_scaling import lqr_gain_from, scaling_diagonal
+from swim_control.trajectory import Segment, Trajectory
 
 LIMITS_N_M = np.array([1.25, 0.524])   # the (heave, pitch) limits the scaling tests check against
 

@@ -3,7 +3,7 @@
 A trajectory is N samples of q, qdot, u = psiddot and the feed-forward torque tau (and, planned with the
 circulatory flow model, the flow's n_lag = 2 lag states z; swim_model.flow), with the tracking gains of
 eq. 33 at each sample: K = lambda R^-1 (G'P) Gamma(lambda) and the Riccati input gain G_l'P_l = (G'P) Gamma(lambda)
-(eq. 24), already time-scaled (swim_controller.time_scaling). Its segments say which primitive each run of samples
+(eq. 24), already time-scaled (swim_control.time_scaling). Its segments say which primitive each run of samples
 came from (paper Sec. 4.2); a trajectory is checked when it is made, so one that exists is well formed.
 
 Time scaling by lambda > 0 (paper P3, Sec. 4.3; Theorem 1, Sec. 6.4) is ``Trajectory.time_scaled``, the one place
@@ -31,9 +31,9 @@ from typing import Optional
 import numpy as np
 import numpy.typing as npt
 
-from swim_controller.errors import PlanError
-from swim_controller.riccati import error_state_size
-from swim_controller.time_scaling import retime_feedback
+from swim_control.errors import PlanError
+from swim_control.riccati import error_state_size
+from swim_control.time_scaling import retime_feedback
 from swim_model.flow import FLOW_MODELS, LAG_STATE_NAMES
 from swim_model.vehicle import JOINT_NAMES_CONSTRAINED, JOINT_NAMES_UNCONSTRAINED
 
@@ -45,6 +45,9 @@ Array = npt.NDArray[np.float64]
 #: Python floats add 80-96 B a sample); a 1000-cruise plan (0.8 M samples) fits. The planner serves no larger plan by
 #: default (swim_planner.maneuver.PlanBounds.max_samples).
 MAX_TRACKED_SAMPLES = 1_000_000
+#: the largest |alpha| a plan may start from, rad: the planner's request bound and the simulator's set_state bound.
+#: Assumed: float64 keeps alpha to 1e-10 rad up to here (and swimming 1e6 rad would take weeks).
+MAX_ABS_START_ALPHA_RAD = 1.0e6
 
 
 @dataclasses.dataclass(frozen=True)

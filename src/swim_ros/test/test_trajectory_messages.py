@@ -4,10 +4,10 @@ import pytest
 from builtin_interfaces.msg import Time
 from swim_interfaces.msg import PlannedTrajectory
 
-from swim_controller.errors import PlanError
-from swim_controller.messages import SUPPORTED_INTERFACE_VERSION, trajectory_from_message, trajectory_to_message
-from swim_controller.trajectory import MAX_TRACKED_SAMPLES, Trajectory
+from swim_control.errors import PlanError
+from swim_control.trajectory import MAX_TRACKED_SAMPLES, Trajectory
 from swim_ros.codecs import float_array
+from swim_ros.trajectory_messages import SUPPORTED_INTERFACE_VERSION, trajectory_from_message, trajectory_to_message
 
 ARRAYS = ("time_s", "q", "qdot", "foil_acceleration", "torque", "lqr_gain", "riccati_input_gain")
 

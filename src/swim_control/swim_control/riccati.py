@@ -52,7 +52,7 @@ import numpy as np
 import numpy.typing as npt
 import scipy.linalg
 
-from swim_controller.errors import GainComputationError
+from swim_control.errors import GainComputationError
 from swim_model import VehicleModel
 
 Array = npt.NDArray[np.float64]

@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from swim_controller.riccati import LqrWeights, linearize, solve_riccati, terminal_weight
-from swim_controller.time_scaling import lqr_gain_from, retime_feedback, scale_riccati, scale_weights, \
+from swim_control.riccati import LqrWeights, linearize, solve_riccati, terminal_weight
+from swim_control.time_scaling import lqr_gain_from, retime_feedback, scale_riccati, scale_weights, \
     scaling_diagonal, scaling_matrix
 
 PRIMITIVES = ["constrained", "free"]
