@@ -19,7 +19,7 @@ import pytest
 
 #: the package that holds the trajectory type, time scaling, Riccati gains, measures and plan errors; change this
 #: one name when those modules move to their own package
-CONTROL_CORE_PACKAGE = "swim_controller"
+CONTROL_CORE_PACKAGE = "swim_control"
 CONTROL_CORE_MODULES = tuple(f"{CONTROL_CORE_PACKAGE}.{name}"
                              for name in ("trajectory", "time_scaling", "riccati", "measures", "errors"))
 
