@@ -14,7 +14,7 @@ import json
 import os
 import time
 
-from swim_bringup.recorded_run import PAPER_CONSTRAINED, PAPER_LANE_KEEPING
+from swim_bringup.experiments import PAPER_CONSTRAINED, PAPER_LANE_KEEPING
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.testing.closed_loop import simulate
 from swim_controller.tracker import CascadeTracker, model_io_linearization

@@ -63,7 +63,8 @@ class Observer(threading.Thread):
 
 def one_run(with_foxglove: bool, folder: Path) -> tuple[float, list[float]]:
     """(plan seconds per wall second of the maneuver, latencies in s) of one run."""
-    from swim_bringup.recorded_run import PAPER_CONSTRAINED, run_maneuver
+    from swim_bringup.experiments import PAPER_CONSTRAINED
+    from swim_bringup.recorded_run import run_maneuver
     from swim_bringup.system import System, closed_loop_specs, config_dir
     from swim_ros.processes import NodeSpec
     specs = closed_loop_specs(config_dir("realistic"), plant="sim")

@@ -64,7 +64,8 @@ def stop_busy(processes: list[subprocess.Popen]) -> None:
 
 def one_run(work: Path, busy: int, realtime: bool, index: int) -> dict:
     """One lane-keeping run beside busy processes; its figures."""
-    from swim_bringup.recorded_run import PAPER_LANE_KEEPING, RUN_TOLERANCES, run_recorded
+    from swim_bringup.experiments import PAPER_LANE_KEEPING
+    from swim_bringup.recorded_run import RUN_TOLERANCES, run_recorded
     from swim_bringup.run_client import RunError
     from swim_bringup.system import closed_loop_specs, config_dir
     overrides = () if realtime else WITHOUT_REALTIME

@@ -29,7 +29,8 @@ import time
 from pathlib import Path
 
 from swim_bringup.bag import RUN_TOPICS, read_messages
-from swim_bringup.recorded_run import PAPER_CONSTRAINED, RUN_TOLERANCES
+from swim_bringup.experiments import PAPER_CONSTRAINED
+from swim_bringup.recorded_run import RUN_TOLERANCES
 from swim_bringup.run_client import LOOP_TOPICS, RunClient
 from swim_bringup.system import System, closed_loop_specs, config_dir
 from swim_ros.processes import interrupt_on_sigterm, start_child

@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from swim_bringup.demo import PAPER_CONSTRAINED
+from swim_bringup.experiments import PAPER_CONSTRAINED
 from swim_controller.testing.closed_loop import simulate
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.tracker import CascadeTracker, model_io_linearization

@@ -17,7 +17,7 @@ import dataclasses
 import pytest
 from conftest import track_plan
 
-from swim_bringup.recorded_run import PAPER_CONSTRAINED
+from swim_bringup.experiments import PAPER_CONSTRAINED
 from swim_hw_bridge.conversions import load_bridge_config
 from swim_model import load_rig
 from swim_planner.catalog import CIRCULATORY_LQR_WEIGHTS

@@ -26,8 +26,8 @@ setup(
     entry_points={
         'console_scripts': [
             'swim-demo = swim_bringup.demo:main',
-            'swim-analyze = swim_bringup.analysis:main',
-            'swim-experiments = swim_bringup.experiments:main',
+            'swim-analyze = swim_bringup.analysis_cli:main',
+            'swim-experiments = swim_bringup.experiments_cli:main',
             'swim-record = swim_bringup.record:main',
             'swim-bringup = swim_bringup.bringup:main',
             'swim-maneuver = swim_bringup.maneuver_cli:main',

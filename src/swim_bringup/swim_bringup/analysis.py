@@ -1,138 +1,56 @@
-"""swim-analyze: the paper's measures of a recorded run (Sec. 7), a JSON report, figures, side-by-side tables.
+"""The paper's measures of a recorded run (Sec. 7), what a bag holds, and the tables swim-analyze, swim-demo and
+swim-maneuver print (no ROS, no files written, no figures: analysis_cli is swim-analyze, figures draws).
 
 From the tracking_state topic (reference and measured q each control period) and the plan:
 - two-norms of the errors, ||e||_2 = sqrt(int e(t)^2 dt): longitudinal R_d (alpha - alpha_d) in m, lateral
   R - R_d in m, Cartesian |p - p_d| of the platform's position p = R (cos alpha, sin alpha) in m;
 - the final lateral offset and final alpha error, the duration, peak |torque| per motor, the fraction of
-  periods with a saturated motor, the periods with the heave or the pitch at a hard limit (at the rig's stop: by
-  default the shipped bridge file's limits, which sim_node's stops also take; --bridge-config for another rig's),
-  and the energy used, int (|tau_h phidot| + |tau_p thetadot|) dt in J (motors do not take energy back, so
-  negative power is counted as spent too).
+  periods with a saturated motor, the periods with the heave or the pitch at a hard limit (at the rig's stop:
+  rig_hard_limits), and the energy used, int (|tau_h phidot| + |tau_p thetadot|) dt in J (motors do not take
+  energy back, so negative power is counted as spent too).
 
-Any rosbag2 bag opens (swim-demo's, swim-record's, one recorded by `ros2 bag record`, Humble's included; MCAP or
-sqlite3): its topics are listed with their types and message counts, and those whose messages cannot be decoded (a
-type neither the bag defines nor this environment knows: rosbag2 records no definition of a type it could not find)
-named with why; from joint_states alone, each joint's range and peak speed and the messages' rate; the measures
-above when the bag has what they need (tracking_state, and for the constrained vehicle the plan). A topic is found
-under its full name (/joint_states: swim-demo's, swim-record's and rosbag2's), a relative one (joint_states, as
-other recorders may give it) or one namespace (/test/joint_states). What a bag lacks is named, with why.
-
-Exit status: 0 every bag analysed in full; 1 some bag lacked what the run's measures need (what it holds is
-analysed, what it lacks named); 2 some bag could not be read (no bag at the path, a corrupt file) or the output
-not written, or the arguments were wrong. Nothing a bag holds ends in a traceback.
+Of any rosbag2 bag (run_record.read_bag reads it once): its topics with their types and message counts, and those
+whose messages cannot be decoded named with why; from joint_states alone, each joint's range and peak speed and the
+messages' rate; the measures above when the bag has what they need (tracking_state, and for the constrained
+vehicle the plan). What a bag lacks is named, with why.
 """
 from __future__ import annotations
 
-import argparse
 import dataclasses
-import json
-import math
-import sys
 from pathlib import Path
 from typing import Any, Mapping, Optional
 
 import numpy as np
 
-from swim_bringup.bag import RUN_TOPICS, BagError, BagInfo, bag_info, read_messages, undecodable_topics
-from swim_ros.typestore import swim_typestore
-from swim_bringup.reports import BridgeMeasures, RunAnalysis, RunMeasures
+from swim_bringup.bag import BagError, BagInfo
+from swim_bringup.reports import RunAnalysis, RunMeasures
+from swim_bringup.run_record import JointStates, MissingTopic, RecordedBag, Run, read_bag
 from swim_control.measures import two_norm
-from swim_hw_bridge.conversions import BridgeConfigError, load_bridge_config
+from swim_hw_bridge.conversions import load_bridge_config
 from swim_model.limits import HardLimits
-
-
-@dataclasses.dataclass
-class Run:
-    time_s: np.ndarray            # plan time of each tracked period
-    q: np.ndarray                 # measured, (n, nq)
-    qdot: np.ndarray
-    q_reference: np.ndarray
-    torque: np.ndarray            # commanded (heave, pitch), (n, 2)
-    saturated: np.ndarray         # (n, 2) bool
-    joint_names: list[str]
-    lane_radius_m: float
-    sliding_mode_enabled: bool
-
+from swim_ros.typestore import swim_typestore
 
 #: a foil joint within this of a hard limit is at its stop: about one encoder count there (the heave's 512 lines, x4,
 #: through 43:1: 7.1e-5 rad; the pitch's through 25:1: 1.2e-4 rad); the simulator's stops hold a joint at the limit
 HARD_STOP_TOLERANCE_RAD = 1.0e-4
 
-#: swim-analyze's exit status: every bag analysed in full (the run's measures) ...
-EXIT_FULL_REPORT = 0
-#: ... some bag lacked what the run's measures need: what it holds was analysed, what it lacks named
-EXIT_PARTIAL_REPORT = 1
-#: ... some bag could not be read (or the output not written, or the arguments were wrong: argparse's status)
-EXIT_UNREADABLE = 2
 
-
-class MissingTopic(ValueError):
-    """A topic the analysis needs that a bag lacks, or holds in a form it cannot use: which, and why."""
-
-    def __init__(self, bag_path: Path, topic: str, reason: str) -> None:
-        super().__init__(f"{bag_path}: {topic}: {reason}")
-        self.topic, self.reason = topic, reason
-
-
-def find_topic(info: BagInfo, name: str) -> str:
-    """The bag's name for the run topic `name` (a key of bag.RUN_TOPICS, /joint_states): the topic recorded under
-    that full name (swim-demo's, swim-record's and rosbag2's) or its relative one (joint_states) or, failing both,
-    under one namespace (/test/joint_states). MissingTopic if there is none, several, one of another type than
-    RUN_TOPICS gives, or one without messages."""
-    bare = name.lstrip("/")
-    candidates = ([topic for topic in info.topics if topic.name.lstrip("/") == bare]
-                  or [topic for topic in info.topics if topic.name.endswith("/" + bare)])
-    if not candidates:
-        raise MissingTopic(info.path, name, "not in the bag")
-    if len(candidates) > 1:
-        raise MissingTopic(info.path, name, f"several topics could be it ({', '.join(t.name for t in candidates)})")
-    topic = candidates[0]
-    if topic.msgtype != RUN_TOPICS[name]:
-        raise MissingTopic(info.path, name, f"{topic.name} is {topic.msgtype}, not {RUN_TOPICS[name]}")
-    if topic.message_count == 0:
-        raise MissingTopic(info.path, name, f"{topic.name} was recorded without messages")
-    return topic.name
-
-
-def load_run(bag_path: Path) -> Run:
-    """The tracked periods of the last plan executed in the bag. MissingTopic if the bag has no tracking_state, or,
-    for the constrained vehicle, no plan; BagError if the bag cannot be read."""
-    info = bag_info(bag_path)
-    tracking_topic = find_topic(info, "/tracking_state")
-    try:
-        topics: tuple[str, ...] = (tracking_topic, find_topic(info, "/plan"))
-        no_plan = ""
-    except MissingTopic as err:
-        topics, no_plan = (tracking_topic,), err.reason
-    rows: list[Any] = []   # the tracking_state messages (the typestore's class)
-    lane_radius_m = None
-    for topic, _, message in read_messages(bag_path, topics):
-        if topic != tracking_topic:
-            lane_radius_m = message.lane_radius_m
-            continue
-        if rows and message.plan_time_s < rows[-1].plan_time_s:
-            rows = []   # a new plan started: keep the last one
-        rows.append(message)
-    if not rows:
-        raise MissingTopic(bag_path, "/tracking_state", f"no message of {tracking_topic} could be read")
-    if "alpha" not in rows[0].joint_names:
-        raise MissingTopic(bag_path, "/tracking_state", f"its joints {list(rows[0].joint_names)} have no alpha")
-    if lane_radius_m is None and "R" not in rows[0].joint_names:
-        raise MissingTopic(bag_path, "/plan", f"no plan message ({no_plan}): the constrained vehicle's lane "
-                                              f"radius, which turns its alpha errors into metres, is unknown")
-    return Run(time_s=np.array([r.plan_time_s for r in rows]),
-               q=np.array([r.feedback.positions for r in rows]),
-               qdot=np.array([r.feedback.velocities for r in rows]),
-               q_reference=np.array([r.reference.positions for r in rows]),
-               torque=np.array([r.output_torques for r in rows]),
-               saturated=np.array([r.torque_saturated for r in rows], dtype=bool),
-               joint_names=list(rows[0].joint_names),
-               lane_radius_m=float(lane_radius_m or 0.0),
-               sliding_mode_enabled=bool(rows[-1].sliding_mode_enabled))
+def rig_hard_limits(bridge_config_path: Optional[Path] = None) -> HardLimits:
+    """The rig's hard stops ((heave lower, upper), (pitch lower, upper), rad) that hard_stop_periods counts: the
+    bridge file's at bridge_config_path, by default the shipped one (which sim_node's stops also take).
+    BridgeConfigError if the file does not read."""
+    return load_bridge_config(bridge_config_path).hard_limits_rad
 
 
 def _radius(run: Run, q: np.ndarray) -> np.ndarray:
     return q[:, run.joint_names.index("R")] if "R" in run.joint_names else np.full(len(q), run.lane_radius_m)
+
+
+def platform_xy_m(run: Run, q: np.ndarray) -> np.ndarray:
+    """The platform's position p = R (cos alpha, sin alpha) in the tank's plane, m, (n, 2), at the run's joint
+    positions q (n, nq): run.q or run.q_reference."""
+    alpha = q[:, run.joint_names.index("alpha")]
+    return _radius(run, q)[:, None] * np.column_stack([np.cos(alpha), np.sin(alpha)])
 
 
 def hard_stop_periods(run: Run, hard_limits_rad: HardLimits) -> int:
@@ -146,15 +64,13 @@ def hard_stop_periods(run: Run, hard_limits_rad: HardLimits) -> int:
 
 
 def measures(run: Run, hard_limits_rad: Optional[HardLimits] = None) -> RunMeasures:
-    """The run's measures; its hard stops are hard_limits_rad's, by default the shipped bridge file's."""
+    """The run's measures; its hard stops are hard_limits_rad's, by default the rig's (rig_hard_limits)."""
     if hard_limits_rad is None:
-        hard_limits_rad = load_bridge_config().hard_limits_rad
+        hard_limits_rad = rig_hard_limits()
     alpha = run.joint_names.index("alpha")
     radius, radius_reference = _radius(run, run.q), _radius(run, run.q_reference)
     alpha_error = run.q[:, alpha] - run.q_reference[:, alpha]
-    position = radius[:, None] * np.column_stack([np.cos(run.q[:, alpha]), np.sin(run.q[:, alpha])])
-    reference = radius_reference[:, None] * np.column_stack([np.cos(run.q_reference[:, alpha]),
-                                                             np.sin(run.q_reference[:, alpha])])
+    position, reference = platform_xy_m(run, run.q), platform_xy_m(run, run.q_reference)
     power = np.abs(run.torque * run.qdot[:, -2:]).sum(axis=1)
     return RunMeasures(
         duration_s=float(run.time_s[-1] - run.time_s[0]),
@@ -173,60 +89,23 @@ def measures(run: Run, hard_limits_rad: Optional[HardLimits] = None) -> RunMeasu
     )
 
 
-def bridge_measures(bag_path: Path) -> Optional[BridgeMeasures]:
-    """From a bridge_node's /diagnostics in the bag (None without any): the faults it latched during the run (a
-    latched fault holds the motors at zero until reset: the vehicle did not swim as commanded from then on) and
-    its count of overrun periods."""
-    try:
-        topic = find_topic(bag_info(bag_path), "/diagnostics")
-    except MissingTopic:
-        return None
-    faults: set[str] = set()
-    overruns = None
-    timing: dict[str, str] = {}
-    for _, _, array in read_messages(bag_path, (topic,)):
-        for status in array.status:
-            if status.name.endswith("bridge_node: I/O loop"):
-                values = {pair.key: pair.value for pair in status.values}
-                faults.update(name for name in values.get("faults", "NONE").split("|") if name != "NONE")
-                overruns = int(values.get("overruns", overruns or 0))
-                if "worst_lateness_ms" in values:
-                    timing = values
-    if overruns is None:
-        return None
-
-    def number(key: str) -> Optional[float]:
-        try:
-            value = float(timing[key])
-        except (KeyError, ValueError):
-            return None
-        return value if math.isfinite(value) else None
-
-    return BridgeMeasures(
-        bridge_faults="|".join(sorted(faults)) or "NONE", bridge_overruns=overruns,
-        bridge_worst_lateness_ms=number("worst_lateness_ms"),
-        bridge_overrun_cause=timing.get("worst_lateness_cause"),
-        bridge_wake_lateness_p99_ms=number("wake_lateness_p99_ms"),
-        bridge_command_latency_p50_ms=number("command_latency_p50_ms"),
-        bridge_command_latency_p99_ms=number("command_latency_p99_ms"),
-        bridge_command_jitter_p50_ms=number("command_jitter_p50_ms"),
-        bridge_command_jitter_p99_ms=number("command_jitter_p99_ms"))
+def run_analysis(record: RecordedBag, hard_limits_rad: Optional[HardLimits] = None) -> RunAnalysis:
+    """The measures of the last plan tracked in the bag read (hard_limits_rad: as measures'), and the bridge's if a
+    bridge ran. The record's run_error (MissingTopic, BagError, ValueError) if it holds no run, its bridge_error if
+    the bridge's reports could not be read."""
+    if record.run is None:
+        assert record.run_error is not None, "a RecordedBag without run has its run_error"
+        raise record.run_error
+    run_measures = measures(record.run, hard_limits_rad)
+    if record.bridge_error is not None:
+        raise record.bridge_error
+    return RunAnalysis(run_measures, record.bridge)
 
 
 def analyze(bag_path: Path, hard_limits_rad: Optional[HardLimits] = None) -> RunAnalysis:
-    """The measures of the last plan tracked in the bag (hard_limits_rad: as measures'), and the bridge's if a
-    bridge ran."""
-    return RunAnalysis(measures(load_run(bag_path), hard_limits_rad), bridge_measures(bag_path))
-
-
-@dataclasses.dataclass(frozen=True)
-class JointSeries:
-    """One joint's samples in a bag's joint_states: log time (when the recorder received the message) in s from
-    the topic's first message, position and velocity in the joint's unit (rad for a revolute joint, m for a
-    prismatic one such as R; per s for the velocity), each (n,); velocity is empty when the messages carry none."""
-    time_s: np.ndarray
-    position: np.ndarray
-    velocity: np.ndarray
+    """run_analysis of the bag at bag_path. BagError if the bag cannot be read; MissingTopic if it lacks what the
+    measures need."""
+    return run_analysis(read_bag(bag_path), hard_limits_rad)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -250,35 +129,10 @@ class JointStatesSummary:
     joints: tuple[JointMotion, ...]
 
 
-def read_joint_states(bag_path: Path, topic: str) -> tuple[np.ndarray, dict[str, JointSeries]]:
-    """The log times (s, from the first message) of the sensor_msgs/JointState messages on topic, (messages,),
-    and each joint's samples by name, in the order the joints first appear. A message whose position (velocity)
-    list is shorter than its names gives no position (velocity) for the joints past its end."""
-    log_ns: list[int] = []
-    samples: dict[str, tuple[list[int], list[float], list[float]]] = {}
-    for _, stamp_ns, message in read_messages(bag_path, (topic,)):
-        log_ns.append(stamp_ns)
-        for k, name in enumerate(message.name):
-            if k < len(message.position):
-                times, positions, velocities = samples.setdefault(name, ([], [], []))
-                times.append(stamp_ns)
-                positions.append(float(message.position[k]))
-                if k < len(message.velocity):
-                    velocities.append(float(message.velocity[k]))
-    start_ns = min(log_ns, default=0)
-
-    def seconds(stamps: list[int]) -> np.ndarray:
-        return (np.array(stamps, dtype=np.int64) - start_ns) * 1e-9
-    return seconds(log_ns), {name: JointSeries(seconds(times), np.array(positions),
-                                               np.array(velocities) if len(velocities) == len(times) else
-                                               np.zeros(0))
-                             for name, (times, positions, velocities) in samples.items()}
-
-
-def joint_states_summary(topic: str, message_time_s: np.ndarray,
-                         joints: Mapping[str, JointSeries]) -> JointStatesSummary:
+def joint_states_summary(joint_states: JointStates) -> JointStatesSummary:
     """The messages' count, span, rate and longest gap, and each joint's range and peak speed."""
-    times = np.sort(message_time_s)
+    topic, joints = joint_states.topic, joint_states.joints
+    times = np.sort(joint_states.message_time_s)
     duration_s = float(times[-1] - times[0]) if len(times) else 0.0
     return JointStatesSummary(
         topic=topic, messages=len(times), duration_s=duration_s,
@@ -315,31 +169,35 @@ class BagAnalysis:
                 "missing": list(self.missing)}
 
 
-def analyze_bag(bag_path: Path, hard_limits_rad: Optional[HardLimits] = None) -> BagAnalysis:
-    """All that swim-analyze can tell of the bag at bag_path (a bag folder, or one .mcap or .db3 file; hard_limits_rad:
-    as measures'). BagError if there is no readable bag there; anything else the bag lacks or holds unreadably is
-    named in `missing`."""
-    info = bag_info(bag_path)
+def bag_analysis(record: RecordedBag, hard_limits_rad: Optional[HardLimits] = None) -> BagAnalysis:
+    """All that swim-analyze can tell of the bag read (hard_limits_rad: as measures'): what it lacks or holds
+    unreadably is named in `missing`."""
     known_types = swim_typestore().fielddefs
     missing = []
     joints = None
-    try:
-        topic = find_topic(info, "/joint_states")
-        joints = joint_states_summary(topic, *read_joint_states(bag_path, topic))
-    except MissingTopic as err:
-        missing.append(f"/joint_states: {err.reason} (no joint motion)")
-    except BagError as err:
-        missing.append(f"/joint_states: {err} (no joint motion)")
+    if record.joint_states is not None:
+        joints = joint_states_summary(record.joint_states)
+    elif isinstance(record.joint_states_error, MissingTopic):
+        missing.append(f"/joint_states: {record.joint_states_error.reason} (no joint motion)")
+    else:
+        missing.append(f"/joint_states: {record.joint_states_error} (no joint motion)")
     run = None
     try:
-        run = analyze(bag_path, hard_limits_rad)
+        run = run_analysis(record, hard_limits_rad)
     except MissingTopic as err:
         hint = ": the tracker publishes it while it executes a plan" if err.topic == "/tracking_state" else ""
         missing.append(f"{err.topic}: {err.reason} (no run measures{hint})")
     except (ValueError, BagError) as err:   # ValueError: tracking_state messages that do not make a run
         missing.append(f"run measures: {err}")
+    info = record.info
     return BagAnalysis(info, tuple(sorted({t.msgtype for t in info.topics if t.msgtype not in known_types})),
-                       joints, run, tuple(missing), tuple(sorted(undecodable_topics(bag_path).items())))
+                       joints, run, tuple(missing), record.undecodable)
+
+
+def analyze_bag(bag_path: Path, hard_limits_rad: Optional[HardLimits] = None) -> BagAnalysis:
+    """bag_analysis of the bag at bag_path (a bag folder, or one .mcap or .db3 file). BagError if there is no
+    readable bag there."""
+    return bag_analysis(read_bag(bag_path), hard_limits_rad)
 
 
 def bag_section(label: str, analysis: BagAnalysis) -> str:
@@ -376,80 +234,6 @@ def bag_section(label: str, analysis: BagAnalysis) -> str:
     return "\n".join(lines)
 
 
-def write_joint_figure(joints: Mapping[str, JointSeries], path: Path) -> Path:
-    """Each joint's position against log time, one panel per joint."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    figure, axes = plt.subplots(max(len(joints), 1), 1, sharex=True, figsize=(8, 1.0 + 1.8 * max(len(joints), 1)),
-                                squeeze=False)
-    for axis, (name, series) in zip(axes[:, 0], joints.items()):
-        axis.plot(series.time_s, series.position)
-        axis.set_ylabel(name)
-    axes[-1, 0].set_xlabel("log time [s]")
-    return save_figure(figure, path)
-
-
-def write_figures(bag_path: Path, output_dir: Path) -> list[Path]:
-    """Desired vs actual alpha and alphadot (Figs. 19-20 style), heave and pitch, the Cartesian path; with the vortex
-    wake recorded, its last vortices over the path (wake.png)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    run = load_run(bag_path)
-    output_dir.mkdir(parents=True, exist_ok=True)
-    alpha = run.joint_names.index("alpha")
-    paths = []
-    figure, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 6))
-    axes[0].plot(run.time_s, run.q_reference[:, alpha], "--", label="desired")
-    axes[0].plot(run.time_s, run.q[:, alpha], label="actual")
-    axes[0].set_ylabel("alpha [rad]")
-    axes[0].legend()
-    axes[1].plot(run.time_s, run.qdot[:, alpha], label="actual")
-    axes[1].set_ylabel("alphadot [rad/s]")
-    axes[1].set_xlabel("plan time [s]")
-    paths.append(save_figure(figure, output_dir / "displacement.png"))
-    figure, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 6))
-    for axis, column, name in ((axes[0], -2, "phi (heave)"), (axes[1], -1, "theta (pitch)")):
-        axis.plot(run.time_s, run.q_reference[:, column], "--", label="desired")
-        axis.plot(run.time_s, run.q[:, column], label="actual")
-        axis.set_ylabel(f"{name} [rad]")
-    axes[0].legend()
-    axes[1].set_xlabel("plan time [s]")
-    paths.append(save_figure(figure, output_dir / "heave_pitch.png"))
-    figure, axis = plt.subplots(figsize=(6, 6))
-    for q, style, label in ((run.q_reference, "--", "desired"), (run.q, "-", "actual")):
-        radius = _radius(run, q)
-        axis.plot(radius * np.cos(q[:, alpha]), radius * np.sin(q[:, alpha]), style, label=label)
-    axis.set_aspect("equal")
-    axis.set_xlabel("x [m]")
-    axis.set_ylabel("y [m]")
-    axis.legend()
-    paths.append(save_figure(figure, output_dir / "cartesian_path.png"))
-    wake = [message for _, _, message in read_messages(bag_path, ("/wake_vortices",))]
-    if wake:   # a run in the vortex wake (sim_node's flow: wake): its last vortices over the path
-        from swim_bringup.wake_figure import write_wake_figure
-        from swim_model import load_rig
-
-        def tank_xy(q: np.ndarray) -> np.ndarray:
-            radius = _radius(run, q)
-            return np.column_stack([radius * np.cos(q[:, alpha]), radius * np.sin(q[:, alpha])])
-        last = wake[-1]
-        paths.append(write_wake_figure(output_dir / "wake.png", tank_xy(run.q),
-                                       np.column_stack([last.x_m, last.y_m]), np.asarray(last.circulations_m2_s),
-                                       reference_xy_m=tank_xy(run.q_reference),
-                                       tank_radius_m=0.5 * load_rig().tank_diameter_m))
-    return paths
-
-
-def save_figure(figure, path: Path) -> Path:
-    figure.tight_layout()
-    figure.savefig(path, dpi=100)
-    import matplotlib.pyplot as plt
-    plt.close(figure)
-    return path
-
-
 def summary_table(reports: Mapping[str, RunAnalysis]) -> str:
     """The measures of several runs (a RunReport is one) side by side, one column per run; a measure that only
     some runs have (the bridge's) is blank for the others."""
@@ -463,72 +247,5 @@ def summary_table(reports: Mapping[str, RunAnalysis]) -> str:
     return "\n".join(lines)
 
 
-def _format(value) -> str:
+def _format(value: Any) -> str:
     return f"{value:.4g}" if isinstance(value, float) else str(value)
-
-
-def _label(bag: Path) -> str:
-    return bag.parent.name if bag.name == "bag" else str(bag)   # a run folder's bag is named for its folder
-
-
-def write_outputs(bag_path: Path, analysis: BagAnalysis, output_dir: Path) -> list[Path]:
-    """bag_summary.json always; joint_states.png with joint_states; with the run's measures, report.json and the
-    run's figures (write_figures)."""
-    output_dir.mkdir(parents=True, exist_ok=True)
-    paths = [output_dir / "bag_summary.json"]
-    paths[0].write_text(json.dumps(analysis.to_json(), indent=2))
-    if analysis.joint_states is not None:
-        _, joints = read_joint_states(bag_path, analysis.joint_states.topic)
-        paths.append(write_joint_figure(joints, output_dir / "joint_states.png"))
-    if analysis.run is not None:
-        paths.append(output_dir / "report.json")
-        paths[-1].write_text(json.dumps(analysis.run.to_json(), indent=2))
-        paths.extend(write_figures(bag_path, output_dir))
-    return paths
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="swim-analyze", description=__doc__.splitlines()[0],
-        epilog=f"exit status: {EXIT_FULL_REPORT} every bag analysed in full; {EXIT_PARTIAL_REPORT} some bag lacked "
-               f"what the run's measures need (the rest analysed, what it lacks named); {EXIT_UNREADABLE} some bag "
-               f"could not be read, or the output not written")
-    parser.add_argument("bags", type=Path, nargs="+",
-                        help="rosbag2 bags: folders, or single .mcap or .db3 files (several: a side-by-side table)")
-    parser.add_argument("--output", type=Path, default=None,
-                        help="folder for bag_summary.json, report.json and figures (one bag)")
-    parser.add_argument("--bridge-config", type=Path, default=None,
-                        help="the rig's bridge file, whose hard limits hard_stop_periods counts (default: the shipped "
-                             "one, which sim_node's stops also take)")
-    args = parser.parse_args(argv)
-    try:
-        hard_limits_rad = load_bridge_config(args.bridge_config).hard_limits_rad
-    except BridgeConfigError as err:
-        print(f"swim-analyze: --bridge-config: {err}", file=sys.stderr)
-        return EXIT_UNREADABLE
-    status = EXIT_FULL_REPORT
-    analyses: dict[str, BagAnalysis] = {}
-    for bag in args.bags:
-        try:
-            analyses[_label(bag)] = analysis = analyze_bag(bag, hard_limits_rad)
-        except BagError as err:
-            print(f"swim-analyze: {err}", file=sys.stderr)
-            status = max(status, EXIT_UNREADABLE)
-            continue
-        print(bag_section(_label(bag), analysis) + "\n")
-        if analysis.run is None:
-            status = max(status, EXIT_PARTIAL_REPORT)
-    runs = {label: analysis.run for label, analysis in analyses.items() if analysis.run is not None}
-    if runs:
-        print(summary_table(runs))
-    if args.output is not None and len(args.bags) == 1 and analyses:
-        try:
-            write_outputs(args.bags[0], next(iter(analyses.values())), args.output)
-        except (OSError, BagError) as err:
-            print(f"swim-analyze: {args.output}: not written: {err}", file=sys.stderr)
-            status = EXIT_UNREADABLE
-    return status
-
-
-if __name__ == "__main__":
-    sys.exit(main())

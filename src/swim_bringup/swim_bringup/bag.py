@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
-from typing import Any, Iterator, Sequence
+from typing import Any, Callable, Iterator, Sequence, Union
 
 from rosbags.interfaces import MessageDefinition, MessageDefinitionFormat, Qos
 from rosbags.rosbag2 import Reader, ReaderError, StoragePlugin, Writer
@@ -248,10 +248,16 @@ def bag_info(path: Path) -> BagInfo:
 def undecodable_topics(path: Path) -> dict[str, str]:
     """The topics of the bag at path whose messages cannot be decoded, each with why: of a type that neither the bag
     defines (in a definition that parses) nor this environment knows. BagError if there is no readable bag there."""
-    _, definitions = _bag_topics(path)
+    return bag_contents(path)[1]
+
+
+def bag_contents(path: Path) -> tuple[BagInfo, dict[str, str]]:
+    """bag_info and undecodable_topics of the bag at path, from one read of its index. BagError if there is no
+    readable bag there."""
+    info, definitions = _bag_topics(path)
     decoder = BagDecoder(Path(path))
-    return {topic: why for topic, (msgtype, definition) in definitions.items()
-            if (why := decoder.why_undecodable(msgtype, definition))}
+    return info, {topic: why for topic, (msgtype, definition) in definitions.items()
+                  if (why := decoder.why_undecodable(msgtype, definition))}
 
 
 #: MCAP schema encodings (rosbag2's) as rosbags names the formats of message definitions
@@ -337,41 +343,84 @@ class BagDecoder:
                            f"({type(err).__name__}: {err})") from err
 
 
+#: a message as the bag stores it: (topic, log time ns, type name, the definition of its type the bag carries, CDR)
+RawMessage = tuple[str, int, str, MessageDefinition, bytes]
+#: called with (topic, type name, definition) for each topic asked that the bag lists, before any message is read
+TopicCheck = Callable[[str, str, MessageDefinition], object]
+
+
 def read_messages(path: Path, topics: tuple[str, ...]) -> Iterator[tuple[str, int, Any]]:
     """(topic, log time ns, decoded message: the typestore's class of its type) for the topics asked (names exactly
     as recorded; a topic not in the bag gives nothing), in log-time order; of a bag cut before close() (no
     metadata.yaml), the messages of its complete chunks in the order written. BagError if the bag cannot be read
     or a message asked for cannot be decoded (its type neither defined in the bag nor known here, its bytes not of
     its type). Each message is decoded by its type's definition in the bag (BagDecoder)."""
+    decoder = BagDecoder(Path(path))
+    for topic, timestamp, msgtype, definition, raw in _raw_messages(Path(path), topics, decoder.store):
+        yield topic, timestamp, decoder.decode(topic, timestamp, msgtype, definition, raw)
+
+
+#: a topic's messages as read_topics gives them: (log time ns, decoded message) each, or why they cannot be read
+TopicMessages = Union[list[tuple[int, Any]], BagError]
+
+
+def read_topics(path: Path, topics: tuple[str, ...]) -> dict[str, TopicMessages]:
+    """Each topic asked (names exactly as recorded) with its messages, (log time ns, decoded message) in
+    read_messages' order, from one read of the bag; a topic not in the bag has none. A topic whose messages cannot
+    be decoded gets the BagError that says why, and the others their messages; a bag whose messages cannot be read
+    gives that BagError to every topic not already failed."""
     path = Path(path)
     decoder = BagDecoder(path)
+    read: dict[str, TopicMessages] = {topic: [] for topic in topics}
+
+    def check(topic: str, msgtype: str, definition: MessageDefinition) -> None:
+        try:
+            decoder.store(topic, msgtype, definition)
+        except BagError as err:
+            read[topic] = err
+    try:
+        for topic, timestamp, msgtype, definition, raw in _raw_messages(path, topics, check):
+            messages = read[topic]
+            if isinstance(messages, list):
+                try:
+                    messages.append((timestamp, decoder.decode(topic, timestamp, msgtype, definition, raw)))
+                except BagError as err:
+                    read[topic] = err
+    except BagError as err:
+        return {topic: messages if isinstance(messages, BagError) else err for topic, messages in read.items()}
+    return read
+
+
+def _raw_messages(path: Path, topics: tuple[str, ...], check: TopicCheck) -> Iterator[RawMessage]:
+    """The stored messages of the topics asked, in log-time order (of a cut bag: in the order written); check is
+    called for each topic asked that the bag's index lists, before any message is read (a cut bag has no index).
+    BagError if the bag cannot be read."""
     if _is_cut_bag(path):
         for topic, msgtype, timestamp, raw, definition in _cut_bag_records(path):
             if raw is not None and topic in topics:
-                yield topic, timestamp, decoder.decode(topic, timestamp, msgtype, definition, raw)
+                yield topic, timestamp, msgtype, definition, raw
         return
     reader = _open_reader(path)
     if reader is None:
-        yield from _mcap_messages(path, topics, decoder)
+        yield from _mcap_messages(path, topics, check)
         return
     try:
         connections = [c for c in reader.connections if c.topic in topics]
         if not connections:   # rosbags reads every message when given no connection
             return
         for connection in connections:
-            decoder.store(connection.topic, connection.msgtype, connection.msgdef)
+            check(connection.topic, connection.msgtype, connection.msgdef)
         try:
             for connection, timestamp, raw in reader.messages(connections=connections):
-                yield connection.topic, timestamp, decoder.decode(connection.topic, timestamp, connection.msgtype,
-                                                                  connection.msgdef, raw)
+                yield connection.topic, timestamp, connection.msgtype, connection.msgdef, raw
         except ReaderError as err:
             raise BagError(f"{path}: cannot read its messages: {err}") from err
     finally:
         reader.close()
 
 
-def _mcap_messages(path: Path, topics: tuple[str, ...], decoder: BagDecoder) -> Iterator[tuple[str, int, Any]]:
-    """read_messages of an MCAP bag rosbags cannot open, with the mcap library: by its index in log-time order;
+def _mcap_messages(path: Path, topics: tuple[str, ...], check: TopicCheck) -> Iterator[RawMessage]:
+    """_raw_messages of an MCAP bag rosbags cannot open, with the mcap library: by its index in log-time order;
     without summary, linearly in the order written."""
     from mcap.exceptions import McapError
     from mcap.reader import make_reader
@@ -380,18 +429,16 @@ def _mcap_messages(path: Path, topics: tuple[str, ...], decoder: BagDecoder) -> 
     if summary is None or not summary.chunk_indexes:
         for topic, msgtype, timestamp, raw, definition in _mcap_records(file):
             if raw is not None and topic in topics:
-                yield topic, timestamp, decoder.decode(topic, timestamp, msgtype, definition, raw)
+                yield topic, timestamp, msgtype, definition, raw
         return
-    for channel in summary.channels.values():   # every topic asked decodes, before any message is read
+    for channel in summary.channels.values():   # every topic asked is checked before any message is read
         if channel.topic in topics:
-            decoder.store(channel.topic, *_schema_definition(summary.schemas.get(channel.schema_id)))
+            check(channel.topic, *_schema_definition(summary.schemas.get(channel.schema_id)))
     with open(file, "rb") as stream:
         try:
             for schema, channel, message in make_reader(stream).iter_messages(topics=list(topics),
                                                                              log_time_order=True):
-                msgtype, definition = _schema_definition(schema)
-                yield channel.topic, message.log_time, decoder.decode(channel.topic, message.log_time, msgtype,
-                                                                      definition, message.data)
+                yield (channel.topic, message.log_time, *_schema_definition(schema), message.data)
         except (McapError, ValueError) as err:
             raise BagError(f"{file}: cannot read its messages: {type(err).__name__}: {err}") from err
 

@@ -18,8 +18,9 @@ import sys
 from pathlib import Path
 
 from swim_bringup.analysis import summary_table
-from swim_bringup.recorded_run import (PAPER_CONSTRAINED, PAPER_LANE_KEEPING, parse_with_tolerances, run_failures,
-                                       run_recorded)
+from swim_bringup.experiments import PAPER_CONSTRAINED, PAPER_LANE_KEEPING
+from swim_bringup.recorded_run import parse_with_tolerances, run_recorded
+from swim_bringup.reports import run_failures
 from swim_bringup.run_client import RunError
 from swim_bringup.system import PIPELINES, PLANTS, closed_loop_specs, config_dir
 from swim_ros.processes import interrupt_on_sigterm

@@ -1,11 +1,8 @@
-"""swim-experiments: the paper's experiments in closed loop over DDS, in simulation, over seeds
-(Sec. 7; docs/model_and_method.md section 6).
+"""The paper's experiments (Sec. 7; docs/model_and_method.md section 6) and the comparison of their runs over seeds
+with the paper's (no ROS, no files written, no figures: experiments_cli is swim-experiments, figures draws).
 
 Every experiment runs with and without the sliding-mode term for each seed 1..N (sim_node's ``seed``: its
-disturbances' and sensors' noise), each run in a fresh bring-up (sim_node in lock-step, planner_node,
-tracker_node) with the parameter files of a pipeline (system.config_dir: "realistic", the physical plant, or
-"paper", the paper's ideal flow), recorded and analysed like the demo. Runs go side by side, each in a process
-and ROS domain of its own (swim_bringup.parallel), on this host or a Dask cluster. Experiments:
+disturbances' and sensors' noise). Experiments:
 
 - constrained {accelerate1, cruise1 x2, cruise-to-cruise(1,2), cruise2 x2, decelerate2}, lambda 1, 1.2, 1.67, 0.8
   (Sec. 7.1: 30 s nominal);
@@ -13,34 +10,28 @@ and ROS domain of its own (swim_bringup.parallel), on this host or a Dask cluste
 - free lane change {accelerate, 5 x cruise, lane change 0.43 -> 0.48 m, 10 x cruise, decelerate}, lambda 1 and
   1.25 (Sec. 7.3: 23 s).
 
-The results (experiments.json, results.md, errors.png) set our numbers beside the paper's: the scaled maneuver's
-duration (nominal / lambda), the final lane offset (paper: within 0.5 cm), and the change in the error two-norms
-that sliding mode brings (paper: 5-14 % lower) with its paired 95 % interval over the seeds (statistics.py).
+compare sets our numbers beside the paper's: the scaled maneuver's duration (nominal / lambda), the final lane
+offset (paper: within 0.5 cm), and the change in the error two-norms that sliding mode brings (paper: 5-14 % lower)
+with its paired 95 % interval over the seeds (statistics.py); results_table gives them as results.md's Markdown.
 """
 from __future__ import annotations
 
-import argparse
-import concurrent.futures
 import dataclasses
-import datetime
-import os
-import sys
-import time
-from pathlib import Path
 from typing import Any, Mapping, Optional, Sequence, Union
 
-from swim_bringup.parallel import Outcome, run_all
-from swim_bringup.recorded_run import (PAPER_CONSTRAINED, PAPER_LANE_KEEPING, RUN_TOLERANCES,
-                                       parse_with_tolerances, run_failures, run_recorded)
-from swim_bringup.reports import (ExperimentRow, ExperimentsSummary, FailedRun, NormComparison, RunReport, SeedRuns,
-                                  SlidingModePair)
-from swim_bringup.run_client import DRAIN_TIMEOUT_S, STARTUP_TIMEOUT_S
+from swim_bringup.reports import (ExperimentRow, FailedRun, NormComparison, RunReport, SeedRuns, SlidingModePair,
+                                  run_failures)
 from swim_bringup.statistics import NormStatistics, PairedChange, largest_magnitude
-from swim_bringup.system import PIPELINES, closed_loop_specs, config_dir
-from swim_controller.supervisor import Tolerances
-from swim_ros.processes import STOP_GRACE_S, interrupt_on_sigterm
 
 NORMS = ("longitudinal_error_two_norm_m_s05", "lateral_error_two_norm_m_s05", "cartesian_error_two_norm_m_s05")
+#: the paper's constrained maneuver (Sec. 7.1): accelerate to E1, cruise x2, cruise-to-cruise, cruise x2, stop
+PAPER_CONSTRAINED = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05",
+                      "constrained/cruise_to_cruise/E0.05-E0.10", "constrained/cruise/E0.10",
+                      "constrained/decelerate/E0.10"], [1, 2, 1, 2, 1])
+#: the paper's free lane keeping (Sec. 7.2) at R = 0.43 m: accelerate, 14 cruises, decelerate (20 s); the default
+#: on the bridge, whose emulated rig is the free vehicle
+PAPER_LANE_KEEPING = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/decelerate/R0.43/E0.05"],
+                      [1, 14, 1])
 #: the paper's lane change (Sec. 7.3) at E = 0.05: accelerate, 5 cruises in lane 1, the change, 10 in lane 2, stop
 PAPER_LANE_CHANGE = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/lane_change/R0.43-R0.48/E0.05",
                       "free/cruise/R0.48/E0.05", "free/decelerate/R0.48/E0.05"], [1, 5, 1, 10, 1])
@@ -80,46 +71,9 @@ def paper_experiments() -> list[Experiment]:
     return experiments
 
 
-#: cores one run keeps busy (assumed): the lock-step loop's sim_node and tracker_node take turns on about one, the
-#: run's client (recording, then analysis and figures) and the visualization nodes about another
-CORES_PER_RUN = 2.0
-#: a run's process, beyond its maneuver's --timeout: the bring-up, the bag's drain, the nodes' stop and the
-#: analysis with its figures (assumed: 60 s for the analysis of the longest run on a loaded host)
-RUN_OVERHEAD_S = STARTUP_TIMEOUT_S + DRAIN_TIMEOUT_S + STOP_GRACE_S + 60.0
-
-
-def default_jobs() -> int:
-    """The runs this host's cores (those this process may use) take at once: at least one."""
-    return max(1, int(len(os.sched_getaffinity(0)) // CORES_PER_RUN))
-
-
-@dataclasses.dataclass(frozen=True)
-class RunTask:
-    """One run of an experiment (picklable: it goes to the run's process, on this host or a Dask worker)."""
-    experiment: Experiment
-    sliding_mode: bool
-    seed: int                        # sim_node's seed
-    run_dir: Path                    # the run's own folder: logs, bag, report.json, figures
-    config: Path                     # the folder of sim/planner/tracker YAML files
-    timeout_s: float                 # wall-time limit of the maneuver
-    tolerances: Tolerances = RUN_TOLERANCES
-
-
 def run_label(experiment: str, seed: int, sliding_mode: bool) -> str:
     """A run's name, also its folder under the results folder: <experiment>/seed<k>/sliding_<on|off>."""
     return f"{experiment}/seed{seed}/sliding_{'on' if sliding_mode else 'off'}"
-
-
-def run_one(task: RunTask) -> RunReport:
-    """One closed-loop run in a fresh bring-up on the current ROS domain; its report (analysis measures, the
-    action's result, wall time)."""
-    task.run_dir.mkdir(parents=True, exist_ok=True)
-    specs = closed_loop_specs(
-        task.config, sim_overrides=(f"constrained:={str(task.experiment.constrained).lower()}", f"seed:={task.seed}"),
-        tracker_overrides=(f"sliding_mode_enabled:={str(task.sliding_mode).lower()}",))
-    return run_recorded(specs, task.run_dir, list(task.experiment.primitive_ids),
-                        list(task.experiment.repeat_counts), task.experiment.time_scale, task.timeout_s,
-                        task.tolerances)
 
 
 #: what a run gave: its report, or why it gave none
@@ -244,116 +198,3 @@ def results_table(rows: Sequence[ExperimentRow], pipeline: str) -> str:
                          f"| {_spread(statistics, True)} | {_spread(statistics, False)} | {per_seed} | {interval} "
                          f"| {excludes} | {_percent(statistics.paper_change)} |")
     return "\n".join(lines)
-
-
-def write_errors_figure(rows: Sequence[ExperimentRow], path: Path) -> Path:
-    """The two-norms of every seed with and without sliding mode: one row of panels per experiment, one column per
-    two-norm, each seed's pair joined by a line; the panel's title gives the mean change and its interval."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    figure, axes = plt.subplots(max(len(rows), 1), len(NORMS), figsize=(4.0 * len(NORMS), 1.0 + 2.2 * len(rows)),
-                                squeeze=False)
-    for axis_row, row in zip(axes, rows):
-        for axis, name in zip(axis_row, NORMS):
-            pair, seeds = row.per_seed.two_norms[name], row.per_seed.seeds
-            for seed, on, off in zip(seeds, pair.sliding_on, pair.sliding_off):
-                if on is not None and off is not None:
-                    axis.plot([seed, seed], [off, on], color="0.7", linewidth=1)
-            for side, marker, label in ((pair.sliding_on, "o", "with sliding"), (pair.sliding_off, "x", "without")):
-                present = [(seed, value) for seed, value in zip(seeds, side) if value is not None]
-                axis.plot([p[0] for p in present], [p[1] for p in present], marker, label=label)
-            change = row.statistics[name].change
-            title = f"{row.experiment}\n{name.split('_error')[0]}"
-            if change is not None:
-                title += f": {change_text(change)}"
-            axis.set_title(title, fontsize=8)
-            axis.set_xticks(seeds)
-            axis.set_ylabel("two-norm [m s^0.5]", fontsize=8)
-        axis_row[-1].legend(fontsize=7)
-    for axis in axes[-1]:
-        axis.set_xlabel("seed")
-    figure.tight_layout()
-    figure.savefig(path, dpi=100)
-    plt.close(figure)
-    return path
-
-
-def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
-    names = [e.name for e in paper_experiments()]
-    parser = argparse.ArgumentParser(prog="swim-experiments", description=__doc__.splitlines()[0])
-    parser.add_argument("--only", nargs="+", choices=names, default=None, help="these experiments (default: all)")
-    parser.add_argument("--seeds", type=int, default=5, help="run seeds 1..N of each experiment (default 5)")
-    parser.add_argument("--pipeline", choices=PIPELINES, default=PIPELINES[0],
-                        help="the parameter files' pipeline (default %(default)s)")
-    parser.add_argument("--run-dir", type=Path, default=None, help="output folder (default runs/experiments-<time>)")
-    parser.add_argument("--config", type=Path, default=None,
-                        help="folder of sim/planner/tracker YAML files (default: the pipeline's)")
-    parser.add_argument("--timeout", type=float, default=600.0, help="wall-time limit of one run's maneuver, s")
-    parser.add_argument("--jobs", type=int, default=None,
-                        help=f"runs at once on this host (default: the cores / {CORES_PER_RUN:g}, at least 1)")
-    parser.add_argument("--scheduler", default=None,
-                        help="Dask scheduler address (tcp://host:port): the runs go to its workers instead")
-    args = parse_with_tolerances(parser, argv)
-    if args.seeds < 1:
-        parser.error(f"--seeds must be at least 1, got {args.seeds}")
-    if args.jobs is not None and args.jobs < 1:
-        parser.error(f"--jobs must be at least 1, got {args.jobs}")
-    return args
-
-
-def executor_for(args: argparse.Namespace) -> concurrent.futures.Executor:
-    """The Dask cluster's executor with --scheduler, else threads on this host, each waiting on one run's process."""
-    if args.scheduler:
-        from distributed import Client
-        return Client(args.scheduler).get_executor()
-    return concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs or default_jobs())
-
-
-def main(argv: Optional[list[str]] = None) -> int:
-    interrupt_on_sigterm()   # SIGTERM stops the runs as Ctrl-C does
-    args = parse_arguments(argv)
-    run_dir = (args.run_dir or Path("runs") / datetime.datetime.now().strftime("experiments-%Y%m%d-%H%M%S")).resolve()
-    if (run_dir / "experiments.json").exists():
-        print(f"swim-experiments: {run_dir} holds results already; choose another --run-dir", file=sys.stderr)
-        return 2
-    config = args.config.resolve() if args.config else config_dir(args.pipeline)
-    experiments = [e for e in paper_experiments() if args.only is None or e.name in args.only]
-    seeds = list(range(1, args.seeds + 1))
-    tasks = {run_label(e.name, seed, on): RunTask(e, on, seed, run_dir / run_label(e.name, seed, on), config,
-                                                  args.timeout, args.tolerances)
-             for e in experiments for seed in seeds for on in (True, False)}
-    from tqdm import tqdm
-    started = time.monotonic()
-    with tqdm(total=len(tasks), unit="run", file=sys.stderr) as bar, executor_for(args) as executor:
-        def done(run: str, outcome: Outcome[RunReport]) -> None:
-            bar.update(1)
-            if outcome.failure is not None:
-                bar.write(f"swim-experiments: {run} gave no report: {outcome.failure.reason}")
-        outcomes = run_all(run_one, tasks, executor, args.timeout + RUN_OVERHEAD_S, done)
-    failed = {run: FailedRun(run, outcome.failure.reason) for run, outcome in outcomes.items()
-              if outcome.failure is not None}
-
-    def seed_run(experiment: Experiment, seed: int, sliding_mode: bool) -> SeedRun:
-        label = run_label(experiment.name, seed, sliding_mode)
-        result = outcomes[label].result
-        return result if result is not None else failed[label]
-    rows = [row for row in (compare(e, {seed: SlidingModePair(seed_run(e, seed, True), seed_run(e, seed, False))
-                                        for seed in seeds}) for e in experiments) if row is not None]
-    summary = ExperimentsSummary(args.pipeline, seeds, rows, time.monotonic() - started, list(failed.values()))
-    run_dir.mkdir(parents=True, exist_ok=True)
-    summary.write(run_dir / "experiments.json")
-    table = results_table(rows, args.pipeline)
-    (run_dir / "results.md").write_text(table + "\n")
-    if rows:
-        write_errors_figure(rows, run_dir / "errors.png")
-    print(table)
-    for failure in failed.values():
-        print(f"swim-experiments: {failure.run} gave no report: {failure.reason}", file=sys.stderr)
-    print(f"swim-experiments: {len(tasks)} runs of {len(experiments)} experiments ({args.pipeline} pipeline, seeds "
-          f"1-{args.seeds}) in {summary.wall_time_s:.0f} s, {len(failed)} without a report; results in {run_dir}")
-    return 0 if not failed and len(rows) == len(experiments) and all(row.succeeded for row in rows) else 1
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -42,10 +42,12 @@ from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
 
-from swim_bringup.analysis import MissingTopic, summary_table
+from swim_bringup.analysis import summary_table
 from swim_bringup.maneuver import (MODE_GOAL, MODE_SEQUENCE, ManeuverGoal, ManeuverGoalError, VehicleState,
                                    rest_state_of)
-from swim_bringup.recorded_run import add_tolerance_arguments, run_failures, tolerances_of, write_run_report
+from swim_bringup.recorded_run import add_tolerance_arguments, tolerances_of, write_run_report
+from swim_bringup.reports import run_failures
+from swim_bringup.run_record import MissingTopic
 from swim_bringup.run_client import PLANNER_POLICY, STARTUP_TIMEOUT_S, RunError
 from swim_controller.supervisor import Tolerances
 
@@ -406,13 +408,9 @@ class PlanSummary:
 def write_plan_figure(plan: Any, torque_limits_n_m: Sequence[float], path: Path) -> Path:
     """The plan drawn: alpha and alphadot, heave and pitch, the feed-forward torques against the motors' limits,
     against plan time, the primitives' junctions marked."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from swim_bringup.analysis import save_figure
+    from swim_bringup.figures import pyplot, save_figure
     arrays = PlanArrays.of(plan)
-    figure, axes = plt.subplots(4, 1, sharex=True, figsize=(8, 10))
+    figure, axes = pyplot().subplots(4, 1, sharex=True, figsize=(8, 10))
     alpha = arrays.joint_names.index("alpha")
     axes[0].plot(arrays.time_s, arrays.q[:, alpha])
     axes[0].set_ylabel("alpha [rad]")

@@ -2,10 +2,11 @@
 
 run_recorded brings up the nodes (system.System), requests and executes the maneuver while the run's topics are
 recorded to a bag (run_client.RunClient), stops the nodes, and writes report.json (reports.RunReport) and the
-figures (analysis). run_failures says why a report is not a success. The tracker's tolerances of a run default to
-RUN_TOLERANCES; add_tolerance_arguments and parse_with_tolerances give a CLI the options for them (tolerances_of
-reads them from a parser of subcommands). write_run_report analyses a recorded run's bag and writes its report and
-figures: run_recorded's last step, and swim-maneuver's after a run it recorded.
+figures. The tracker's tolerances of a run default to RUN_TOLERANCES; add_tolerance_arguments and
+parse_with_tolerances give a CLI the options for them (tolerances_of reads them from a parser of subcommands).
+write_run_report reads a recorded run's bag once (run_record.read_bag), analyses it (analysis.run_analysis) and
+writes its report and figures (figures.write_run_figures): run_recorded's last step, and swim-maneuver's after a
+run it recorded.
 """
 from __future__ import annotations
 
@@ -15,21 +16,15 @@ import time
 from pathlib import Path
 from typing import Callable, Optional
 
-from swim_bringup.analysis import analyze, write_figures
+from swim_bringup.analysis import run_analysis
+from swim_bringup.figures import write_run_figures
 from swim_bringup.reports import RunReport, TrackerResult
 from swim_bringup.run_client import STARTUP_TIMEOUT_S, RunClient, RunError
+from swim_bringup.run_record import read_bag
 from swim_bringup.system import System
 from swim_controller.supervisor import Tolerances
 from swim_ros.processes import NodeSpec
 
-#: the paper's constrained maneuver (Sec. 7.1): accelerate to E1, cruise x2, cruise-to-cruise, cruise x2, stop
-PAPER_CONSTRAINED = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05",
-                      "constrained/cruise_to_cruise/E0.05-E0.10", "constrained/cruise/E0.10",
-                      "constrained/decelerate/E0.10"], [1, 2, 1, 2, 1])
-#: the paper's free lane keeping (Sec. 7.2) at R = 0.43 m: accelerate, 14 cruises, decelerate (20 s); the default
-#: on the bridge, whose emulated rig is the free vehicle
-PAPER_LANE_KEEPING = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/decelerate/R0.43/E0.05"],
-                      [1, 14, 1])
 #: what the tracker checks on every run (0: not checked), so that a vehicle that lost its plan is not reported
 #: as a success. All assumed: a vehicle a radian behind or ahead of its plan (43 cm of hub travel at R = 0.43 m)
 #: is lost; at the end, within 0.25 rad (11 cm of travel; the slowed constrained maneuver at lambda = 0.8 ends
@@ -77,24 +72,15 @@ def run_recorded(specs: list[NodeSpec], run_dir: Path, primitive_ids: list[str],
 
 
 def write_run_report(run_dir: Path, result: TrackerResult, started_s: float) -> RunReport:
-    """Analyse the run's bag (run_dir/bag) and write report.json and the figures into run_dir; the report, with
-    the tracker's result and the wall time from started_s (time.monotonic) to now. MissingTopic (analysis) if the
-    bag holds no tracked period."""
-    analysis = analyze(run_dir / "bag")
+    """Read the run's bag (run_dir/bag) once, analyse it and write report.json and the figures into run_dir; the
+    report, with the tracker's result and the wall time from started_s (time.monotonic) to now. MissingTopic
+    (run_record) if the bag holds no tracked period."""
+    record = read_bag(run_dir / "bag")
+    analysis = run_analysis(record)
     report = RunReport(analysis.measures, analysis.bridge, result, time.monotonic() - started_s)
     report.write(run_dir / "report.json")
-    write_figures(run_dir / "bag", run_dir)
+    write_run_figures(record, run_dir)
     return report
-
-
-def run_failures(report: RunReport) -> list[str]:
-    """Why a run's report is not a success (empty if it is): the tracker's result, the bridge's latched faults."""
-    failures = []
-    if report.result.error_code != 0:
-        failures.append(f"the tracker ended with {report.result.error_string or report.result.error_code}")
-    if report.bridge is not None and report.bridge.bridge_faults != "NONE":
-        failures.append(f"the bridge latched {report.bridge.bridge_faults}: the motors were off from then on")
-    return failures
 
 
 def add_tolerance_arguments(parser: argparse.ArgumentParser) -> None:

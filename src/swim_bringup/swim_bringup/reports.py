@@ -32,6 +32,12 @@ def _field_names(cls: type) -> list[str]:
     return [field.name for field in dataclasses.fields(cls)]
 
 
+def _record(cls: type[T], data: Mapping[str, Any], what: str) -> T:
+    """The dataclass cls of a JSON object that holds exactly its fields (ReportError otherwise, naming what)."""
+    _checked_keys(data, _field_names(cls), what)
+    return cls(**data)
+
+
 @dataclasses.dataclass(frozen=True)
 class RunMeasures:
     """The paper's measures of one tracked plan (analysis.measures)."""
@@ -109,8 +115,7 @@ class TrackerResult:
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> TrackerResult:
-        _checked_keys(data, _field_names(cls), "a tracker result")
-        return cls(**data)
+        return _record(cls, data, "a tracker result")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -176,22 +181,18 @@ class SeedRuns:
 
 
 def _pair(value: Mapping[str, Any]) -> SlidingModePair[Any]:
-    _checked_keys(value, _field_names(SlidingModePair), "a pair of runs")
-    return SlidingModePair(**value)
+    return _record(SlidingModePair, value, "a pair of runs")
 
 
 def _norm_statistics(data: Mapping[str, Any]) -> NormStatistics:
     _checked_keys(data, _field_names(NormStatistics), "a two-norm's statistics")
-
-    def spread(value: Mapping[str, Any]) -> Spread:
-        _checked_keys(value, _field_names(Spread), "a mean and standard deviation")
-        return Spread(**value)
     change = data["change"]
     if change is not None:
         _checked_keys(change, _field_names(PairedChange), "a paired change")
         interval = None if change["interval"] is None else tuple(change["interval"])
         change = PairedChange(change["per_seed"], change["mean"], interval, change["excludes_zero"])
-    return NormStatistics(spread(data["sliding_on"]), spread(data["sliding_off"]), change, data["paper_change"])
+    on, off = (_record(Spread, data[side], "a mean and standard deviation") for side in ("sliding_on", "sliding_off"))
+    return NormStatistics(on, off, change, data["paper_change"])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -220,14 +221,11 @@ class ExperimentRow:
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> ExperimentRow:
         _checked_keys(data, _field_names(cls), "an experiment's row")
-
-        def norm(value: Mapping[str, Any]) -> NormComparison:
-            _checked_keys(value, _field_names(NormComparison), "a two-norm comparison")
-            return NormComparison(**value)
         return cls(data["experiment"], data["time_scale"], data["duration_s"], data["paper_duration_s"],
                    _pair(data["final_lateral_offset_m"]), _pair(data["final_alpha_error_rad"]),
                    _pair(data["saturated_fraction"]), _pair(data["hard_stop_periods"]),
-                   {name: norm(v) for name, v in data["two_norms"].items()},
+                   {name: _record(NormComparison, value, "a two-norm comparison")
+                    for name, value in data["two_norms"].items()},
                    data["succeeded"], _pair(data["outcome"]), SeedRuns.from_json(data["per_seed"]),
                    data["paired_seeds"], {name: _norm_statistics(v) for name, v in data["statistics"].items()})
 
@@ -257,12 +255,8 @@ class ExperimentsSummary:
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> ExperimentsSummary:
         _checked_keys(data, _field_names(cls), "experiments' results")
-
-        def failed(value: Mapping[str, Any]) -> FailedRun:
-            _checked_keys(value, _field_names(FailedRun), "a failed run")
-            return FailedRun(**value)
         return cls(data["pipeline"], data["seeds"], [ExperimentRow.from_json(row) for row in data["experiments"]],
-                   data["wall_time_s"], [failed(value) for value in data["failed_runs"]])
+                   data["wall_time_s"], [_record(FailedRun, value, "a failed run") for value in data["failed_runs"]])
 
     def write(self, path: Path) -> None:
         path.write_text(json.dumps(self.to_json(), indent=2))
@@ -270,3 +264,13 @@ class ExperimentsSummary:
     @classmethod
     def load(cls, path: Path) -> ExperimentsSummary:
         return cls.from_json(json.loads(path.read_text()))
+
+
+def run_failures(report: RunReport) -> list[str]:
+    """Why a run's report is not a success (empty if it is): the tracker's result, the bridge's latched faults."""
+    failures = []
+    if report.result.error_code != 0:
+        failures.append(f"the tracker ended with {report.result.error_string or report.result.error_code}")
+    if report.bridge is not None and report.bridge.bridge_faults != "NONE":
+        failures.append(f"the bridge latched {report.bridge.bridge_faults}: the motors were off from then on")
+    return failures

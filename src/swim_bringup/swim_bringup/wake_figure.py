@@ -12,7 +12,7 @@ from typing import Optional
 import numpy as np
 import numpy.typing as npt
 
-from swim_bringup.analysis import save_figure
+from swim_bringup.figures import pyplot, save_figure
 
 #: the marker area of the strongest vortex, pt^2; the others scale with |circulation| (area, so a vortex of half the
 #: strength looks half as big). Chosen to stay readable with a thousand vortices on a 6-inch figure
@@ -64,10 +64,7 @@ def write_wake_figure(output_path: Path, path_xy_m: npt.ArrayLike, vortices_xy_m
         raise ValueError(f"circulations_m2_s must hold one finite value per vortex ({len(vortices)}), got shape "
                          f"{circulations.shape}")
     reference = None if reference_xy_m is None else _points("reference_xy_m", reference_xy_m)
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    figure, axis = plt.subplots(figsize=(6, 6))
+    figure, axis = pyplot().subplots(figsize=(6, 6))
     if tank_radius_m is not None:
         angle = np.linspace(0.0, 2.0 * np.pi, 361)
         axis.plot(tank_radius_m * np.cos(angle), tank_radius_m * np.sin(angle), color="0.6", linewidth=0.8,

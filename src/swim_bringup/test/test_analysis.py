@@ -5,8 +5,9 @@ import numpy as np
 import pytest
 from conftest import tracking_state_cdr
 
-from swim_bringup.analysis import HARD_STOP_TOLERANCE_RAD, Run, measures, summary_table
+from swim_bringup.analysis import HARD_STOP_TOLERANCE_RAD, measures, summary_table
 from swim_bringup.reports import RunAnalysis
+from swim_bringup.run_record import Run
 from swim_ros.processes import NodeSpec
 
 
@@ -87,13 +88,15 @@ def test_node_command_is_what_ros2_run_takes():
 def test_a_constrained_run_without_its_plan_is_refused_not_measured_at_radius_zero(tmp_path):
     """The constrained vehicle's lane radius comes only with the plan: a bag that lacks it (a recorder stopped
     before the plan's fragments arrived) must not give two-norms of zero."""
-    from swim_bringup.analysis import load_run
     from swim_bringup.bag import BagWriter
+    from swim_bringup.run_record import read_bag
     writer = BagWriter(tmp_path / "bag")
     for k in range(3):
         writer.write("/tracking_state", k + 1,
                      tracking_state_cdr(writer.store, ["alpha", "phi", "theta"], 1_000_000_000 + 8_000_000 * k,
                                         0.008 * k, feedback=[0.01 * k, 0.0, 0.0], reference=[0.0] * 3))
     writer.close()
+    record = read_bag(tmp_path / "bag")
+    assert record.run is None
     with pytest.raises(ValueError, match="no plan message"):
-        load_run(tmp_path / "bag")
+        raise record.run_error

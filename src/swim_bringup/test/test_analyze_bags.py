@@ -13,8 +13,8 @@ from conftest import tracking_state_cdr
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import get_types_from_msg
 
-from swim_bringup.analysis import (EXIT_FULL_REPORT, EXIT_PARTIAL_REPORT, EXIT_UNREADABLE, analyze, analyze_bag,
-                                   main)
+from swim_bringup.analysis import analyze, analyze_bag
+from swim_bringup.analysis_cli import EXIT_FULL_REPORT, EXIT_PARTIAL_REPORT, EXIT_UNREADABLE, main
 from swim_bringup.bag import RUN_TOPICS, BagWriter, bag_info, read_messages
 from swim_ros.typestore import swim_typestore
 from swim_hw_bridge.conversions import default_config_path
@@ -242,7 +242,7 @@ def test_a_corrupt_bag_beside_a_good_one_no_traceback(tmp_path):
     named; no traceback."""
     good = record_constrained_run(tmp_path / "good", {t: t for t in MEASURED})
     bad = corrupt_inputs(tmp_path)[-1]
-    result = run_child([sys.executable, "-m", "swim_bringup.analysis", str(good), str(bad)],
+    result = run_child([sys.executable, "-m", "swim_bringup.analysis_cli", str(good), str(bad)],
                        capture_output=True, text=True, timeout_s=120)
     assert result.returncode == EXIT_UNREADABLE
     assert "Traceback" not in result.stderr and result.stderr.startswith(f"swim-analyze: {bad}")

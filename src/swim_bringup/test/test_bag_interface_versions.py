@@ -9,7 +9,8 @@ import pytest
 from ament_index_python.packages import get_package_share_directory
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from swim_bringup.analysis import EXIT_FULL_REPORT, analyze, analyze_bag, main
+from swim_bringup.analysis import analyze, analyze_bag
+from swim_bringup.analysis_cli import EXIT_FULL_REPORT, main
 from swim_bringup.bag import BagWriter, read_messages
 from swim_ros.typestore import swim_typestore
 

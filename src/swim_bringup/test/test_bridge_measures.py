@@ -1,9 +1,13 @@
-"""The bridge's measures of a run (analysis.bridge_measures) from /diagnostics written to a real bag (no ROS)."""
+"""The bridge's measures of a run (run_record.read_bag, its bridge) from /diagnostics written to a real bag (no ROS)."""
 from conftest import diagnostics_cdr
 
-from swim_bringup.analysis import bridge_measures
 from swim_bringup.bag import BagWriter
 from swim_bringup.reports import BridgeMeasures
+from swim_bringup.run_record import read_bag
+
+
+def bridge_measures(bag_path):
+    return read_bag(bag_path).bridge
 
 
 def write_bag(path, statuses):

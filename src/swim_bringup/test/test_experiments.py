@@ -6,7 +6,8 @@ import pytest
 
 import json
 
-from swim_bringup.experiments import NORMS, RunTask, compare, paper_experiments, results_table, run_label
+from swim_bringup.experiments import NORMS, compare, paper_experiments, results_table, run_label
+from swim_bringup.experiments_cli import RunTask
 from swim_bringup.reports import (BridgeMeasures, ExperimentsSummary, FailedRun, RunMeasures, RunReport,
                                   SlidingModePair, TrackerResult)
 from swim_model import load_rig
@@ -131,10 +132,10 @@ def fake_run(task: RunTask) -> RunReport:
 def test_whatever_stops_a_run_is_named_and_the_others_are_kept(tmp_path, monkeypatch, capsys):
     """A run that raises (a node died, a bug) is named on stderr and in experiments.json's failed_runs; every
     other run is in the experiment's row, with its seed and sliding mode; exit 1."""
-    import swim_bringup.experiments as experiments
-    monkeypatch.setattr(experiments, "run_one", fake_run)
-    assert experiments.main(["--only", "lane_keeping_lambda1.00", "--seeds", "2", "--jobs", "2", "--pipeline", "paper",
-                             "--config", str(tmp_path), "--run-dir", str(tmp_path / "out")]) == 1
+    import swim_bringup.experiments_cli as cli
+    monkeypatch.setattr(cli, "run_one", fake_run)
+    assert cli.main(["--only", "lane_keeping_lambda1.00", "--seeds", "2", "--jobs", "2", "--pipeline", "paper",
+                     "--config", str(tmp_path), "--run-dir", str(tmp_path / "out")]) == 1
     summary = ExperimentsSummary.load(tmp_path / "out" / "experiments.json")
     assert (summary.pipeline, summary.seeds) == ("paper", [1, 2])
     assert summary.failed_runs == [FailedRun("lane_keeping_lambda1.00/seed2/sliding_off",
@@ -157,7 +158,7 @@ def test_whatever_stops_a_run_is_named_and_the_others_are_kept(tmp_path, monkeyp
                                                 (["--jobs", "0"], "--jobs must be at least 1"),
                                                 (["--pipeline", "wet"], "invalid choice: 'wet'")])
 def test_bad_options_are_refused_before_anything_runs(tmp_path, capsys, arguments, message):
-    from swim_bringup.experiments import main
+    from swim_bringup.experiments_cli import main
     with pytest.raises(SystemExit) as stopped:
         main([*arguments, "--run-dir", str(tmp_path / "out")])
     assert stopped.value.code == 2 and message in capsys.readouterr().err

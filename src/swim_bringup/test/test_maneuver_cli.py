@@ -29,7 +29,7 @@ from swim_ros.processes import run_child, start_child
 from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, new_rclpy_context, ros_domain, running_node  # noqa: F401
 
 LANE_KEEPING = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/decelerate/R0.43/E0.05"],
-                [1, 14, 1])   # recorded_run.PAPER_LANE_KEEPING, as an operator types it
+                [1, 14, 1])   # experiments.PAPER_LANE_KEEPING, as an operator types it
 #: a swim-maneuver process: its start (Python imports, DDS discovery: seconds on a loaded 2-core host) and its
 #: command; a run's maneuver lasts up to 23 s in real time. 300 s only stops a hung process
 COMMAND_TIMEOUT_S = 300.0

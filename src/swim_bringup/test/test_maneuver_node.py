@@ -142,7 +142,8 @@ def test_a_goal_that_cannot_be_flown_ends_with_the_reason_and_nothing_moves(oper
 
 
 def test_the_papers_maneuver_typed_as_yaml_flies_from_where_the_vehicle_is(operator):
-    from swim_bringup.recorded_run import PAPER_CONSTRAINED, RUN_TOLERANCES
+    from swim_bringup.experiments import PAPER_CONSTRAINED
+    from swim_bringup.recorded_run import RUN_TOLERANCES
     from swim_interfaces.action import PerformManeuver
     Feedback = PerformManeuver.Feedback
     assert (RUN_TOLERANCES.path_alpha_rad, RUN_TOLERANCES.goal_alpha_rad, RUN_TOLERANCES.goal_r_m) == (1.0, 0.25, 0.025)

@@ -18,7 +18,8 @@ from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import CompressionType, Writer
 from rosbags.rosbag2 import Reader
 
-from swim_bringup.analysis import EXIT_PARTIAL_REPORT, analyze_bag, main
+from swim_bringup.analysis import analyze_bag
+from swim_bringup.analysis_cli import EXIT_PARTIAL_REPORT, main
 from swim_bringup.bag import BagError, bag_info, read_messages, undecodable_topics
 from swim_ros.typestore import swim_typestore
 from swim_ros.processes import run_child
@@ -112,7 +113,7 @@ def test_swim_analyze_on_the_humble_bag_reports_what_it_can_and_names_the_rest(t
 
 
 def test_swim_analyze_on_the_humble_bag_in_its_own_process_no_traceback():
-    result = run_child([sys.executable, "-m", "swim_bringup.analysis", str(HUMBLE_BAG)], capture_output=True,
+    result = run_child([sys.executable, "-m", "swim_bringup.analysis_cli", str(HUMBLE_BAG)], capture_output=True,
                        text=True, timeout_s=120)
     assert result.returncode == EXIT_PARTIAL_REPORT, result.stderr
     assert "Traceback" not in result.stderr and "not decodable:" in result.stdout

@@ -31,7 +31,7 @@ CONSTRAINED_DECELERATES = [s.primitive_id for s in ALL_SPECS if s.constrained
                            and s.primitive_type is PrimitiveType.DECELERATE]
 ANGLE_OF_ATTACK_P95_LIMIT_RAD = math.radians(30.0)   # the 95th percentile of |angle of attack| over the samples
 STROUHAL_BAND = (0.1, 0.8)                           # efficient swimmers and foils: 0.2-0.4; the band asked for
-#: the paper's maneuvers (swim_bringup.recorded_run: PAPER_CONSTRAINED, PAPER_LANE_KEEPING), at lambda = 1
+#: the paper's maneuvers (swim_bringup.experiments: PAPER_CONSTRAINED, PAPER_LANE_KEEPING), at lambda = 1
 PAPER_CONSTRAINED = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05",
                       "constrained/cruise_to_cruise/E0.05-E0.10", "constrained/cruise/E0.10",
                       "constrained/decelerate/E0.10"], [1, 2, 1, 2, 1])
