@@ -37,7 +37,7 @@ from swim_bringup.bag import RUN_TOPICS, BagError, BagInfo, bag_info, read_messa
 from swim_ros.typestore import swim_typestore
 from swim_bringup.reports import BridgeMeasures, RunAnalysis, RunMeasures
 from swim_controller.measures import two_norm
-from swim_hw_bridge.conversions import BridgeConfigError, load_bridge_config
+from swim_model import RigConfigError, load_rig
 from swim_model.limits import HardLimits
 
 
@@ -146,9 +146,9 @@ def hard_stop_periods(run: Run, hard_limits_rad: HardLimits) -> int:
 
 
 def measures(run: Run, hard_limits_rad: Optional[HardLimits] = None) -> RunMeasures:
-    """The run's measures; its hard stops are hard_limits_rad's, by default the shipped bridge file's."""
+    """The run's measures; its hard stops are hard_limits_rad's, by default the shipped rig's (its limits)."""
     if hard_limits_rad is None:
-        hard_limits_rad = load_bridge_config().hard_limits_rad
+        hard_limits_rad = load_rig().hard_limits_rad
     alpha = run.joint_names.index("alpha")
     radius, radius_reference = _radius(run, run.q), _radius(run, run.q_reference)
     alpha_error = run.q[:, alpha] - run.q_reference[:, alpha]
@@ -429,7 +429,6 @@ def write_figures(bag_path: Path, output_dir: Path) -> list[Path]:
     wake = [message for _, _, message in read_messages(bag_path, ("/wake_vortices",))]
     if wake:   # a run in the vortex wake (sim_node's flow: wake): its last vortices over the path
         from swim_bringup.wake_figure import write_wake_figure
-        from swim_model import load_rig
 
         def tank_xy(q: np.ndarray) -> np.ndarray:
             radius = _radius(run, q)
@@ -497,14 +496,14 @@ def main(argv: list[str] | None = None) -> int:
                         help="rosbag2 bags: folders, or single .mcap or .db3 files (several: a side-by-side table)")
     parser.add_argument("--output", type=Path, default=None,
                         help="folder for bag_summary.json, report.json and figures (one bag)")
-    parser.add_argument("--bridge-config", type=Path, default=None,
-                        help="the rig's bridge file, whose hard limits hard_stop_periods counts (default: the shipped "
-                             "one, which sim_node's stops also take)")
+    parser.add_argument("--rig", type=Path, default=None,
+                        help="the rig file, whose hard stops (its limits) hard_stop_periods counts (default: "
+                             "swim_model's shipped rig, every node's when its rig_path is empty)")
     args = parser.parse_args(argv)
     try:
-        hard_limits_rad = load_bridge_config(args.bridge_config).hard_limits_rad
-    except BridgeConfigError as err:
-        print(f"swim-analyze: --bridge-config: {err}", file=sys.stderr)
+        hard_limits_rad = load_rig(args.rig).hard_limits_rad
+    except RigConfigError as err:
+        print(f"swim-analyze: --rig: {err}", file=sys.stderr)
         return EXIT_UNREADABLE
     status = EXIT_FULL_REPORT
     analyses: dict[str, BagAnalysis] = {}

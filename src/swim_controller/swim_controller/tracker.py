@@ -167,7 +167,7 @@ class FoilRangeGuard:
     which only the strokes move, ran away from its plan. On the rig a stop latches the bridge's HARD_LIMIT fault.
     """
 
-    hard_limits_rad: HardLimits   # ((heave lower, upper), (pitch lower, upper)), rad: the bridge file's stops
+    hard_limits_rad: HardLimits   # ((heave lower, upper), (pitch lower, upper)), rad: the rig's hard stops
     braking_acceleration_rad_s2: tuple[float, float] = GUARD_BRAKING_ACCELERATION_RAD_S2
     margin_rad: float = GUARD_MARGIN_RAD
 

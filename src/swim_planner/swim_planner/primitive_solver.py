@@ -188,7 +188,7 @@ class PrimitiveNlp:
     effort: ca.MX     # int (w_h tau_h^2 + w_p tau_p^2) dt over the solved horizon, in terms of Phi
 
 
-def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits = PlanningLimits(),
+def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: Optional[PlanningLimits] = None,
                     start: Optional[tuple[Array, ...]] = None, end: Optional[tuple[Array, ...]] = None,
                     guess: Optional[Primitive] = None, settings: SolverSettings = SolverSettings()) -> Primitive:
     """Solve one primitive.
@@ -209,11 +209,13 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
         end: (q, qdot) it must reach (required for accelerate, cruise-to-cruise, lane change; alpha free);
             (q, qdot, lag) with the circulatory flow (Primitive.start_boundary_state).
         guess: a primitive of the same grid size to warm-start from (else a built-in guess).
+        limits: what the primitive respects (None: PlanningLimits.of(model.rig), the model's rig's ranges).
     Raises:
         PrimitiveSolveError: IPOPT did not converge (in the continuation's last step); the message gives its status.
         ValueError: a continuation with the ideal flow, or one that is not descending from below 90 deg to above
             the bound of ``limits``; a Strouhal floor (PrimitiveSpec.min_strouhal) with the ideal flow.
     """
+    limits = PlanningLimits.of(model.rig) if limits is None else limits
     if spec.coarse_intervals is not None:
         return _solve_refined(model, spec, limits, start, end, guess, settings)
     ipopt_options = {"print_level": settings.print_level, "tol": settings.tolerance,
@@ -315,7 +317,7 @@ def continuation_bounds(model: VehicleModel, spec: PrimitiveSpec, limits: Planni
     return [None, *looser, limits.angle_of_attack_limit_rad]
 
 
-def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits = PlanningLimits(),
+def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: Optional[PlanningLimits] = None,
                   start: Optional[tuple[Array, ...]] = None, end: Optional[tuple[Array, ...]] = None,
                   guess: Optional[Primitive] = None, *, bound_angle_of_attack: bool = True) -> PrimitiveNlp:
     """The NLP of one primitive (arguments as for ``solve_primitive``). ``bound_angle_of_attack`` False leaves the
@@ -326,6 +328,7 @@ def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimi
             ((q, qdot, lag) with the circulatory flow); a Strouhal floor with the ideal flow (its pointwise function
             has no lateral row).
     """
+    limits = PlanningLimits.of(model.rig) if limits is None else limits
     if model.n_lag:
         _check_circulatory_states(model, spec, start, end)
     elif spec.min_strouhal is not None:

@@ -28,8 +28,8 @@ Flow models (``flow``): how the water acts on the foil beyond the disturbances' 
 
 The lag states hold no energy and no momentum (swim_model.vehicle): ``energy`` is T + V for every flow model.
 
-Hard stops (hard_limits_rad: the rig's (lower, upper) heave and pitch limits, as swim_hw_bridge's bridge file and
-its safety layer name them): a joint reaching its stop meets an inelastic stop. Its position is held at the limit
+Hard stops (hard_limits_rad: the rig's (lower, upper) heave and pitch stops, RigParameters.hard_limits_rad from
+its limits record): a joint reaching its stop meets an inelastic stop. Its position is held at the limit
 and its velocity into the stop removed by the same plastic impulse that stops a dry-friction coordinate (the
 Mm-orthogonal projection onto qdot_j = 0, which only removes kinetic energy); then it is locked at the stop while
 the force holding it pushes it back from the limit (a stop pushes, never pulls), and released into its range as

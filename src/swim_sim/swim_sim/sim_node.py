@@ -20,9 +20,9 @@ Services: ``reset`` (std_srvs/Trigger: back to the initial state, noise restarte
 ``set_state`` (swim_interfaces/SetVehicleState: a state within the bounds of StateBounds, else refused with the
 bound it passes and nothing changed).
 
-Hard stops: heave and pitch meet an inelastic stop at the rig's hard limits (swim_sim.plant), read with the
-physically possible joint speeds from the hardware bridge's file (swim_hw_bridge config/bridge.yaml, or
-``bridge_config_path``): a simulated run cannot take a joint where the rig's cannot go.
+Hard stops: heave and pitch meet an inelastic stop at the rig's hard stops (swim_sim.plant), read with the
+physically possible joint speeds from the rig file's limits (``rig_path``): a simulated run cannot take a joint
+where the rig's cannot go.
 
 Modes: ``lockstep`` (default): each state is published, the step waits for the command stamped with that
 state's stamp, then integrates one period and publishes the next: deterministic for a seed and as fast as the
@@ -63,7 +63,6 @@ from std_srvs.srv import Trigger
 from swim_interfaces.msg import WakeStatistics, WakeVortices
 from swim_interfaces.srv import SetVehicleState
 
-from swim_hw_bridge.conversions import BridgeConfig, load_bridge_config_parameter
 from swim_model import StateError, SwimModelError, load_rig
 from swim_planner.maneuver import DEFAULT_BOUNDS
 from swim_ros.codecs import MessageError, float_array, joint_state_arrays, stamp_of, torque_from_command
@@ -94,8 +93,6 @@ SENSOR_PARAMETER_BOUND = 1.0e6
 DEFAULT_VORTICES_PERIOD_S = 0.1
 PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec("rig_path", "", "rig YAML file (empty: swim_model's shipped rig)", read_only=True),
-    ParameterSpec("bridge_config_path", "", "hardware bridge YAML file the hard stops and the physically possible "
-                  "joint speeds are read from (empty: swim_hw_bridge's shipped bridge.yaml)", read_only=True),
     ParameterSpec("constrained", False, "simulate the laterally constrained vehicle (no R)", read_only=True),
     ParameterSpec("flow", "ideal", "the water's model: 'ideal' (added mass), 'circulatory' (the reduced flow model, "
                   "its own foil drag), 'wake' (the vortex wake plus the disturbances' foil separation drag)",
@@ -142,21 +139,20 @@ class StateBounds:
     speeds: dict[str, tuple[float, str]]
 
     @classmethod
-    def of(cls, plant: Plant, config: BridgeConfig) -> "StateBounds":
+    def of(cls, plant: Plant) -> "StateBounds":
         """alpha within swim_planner's start-alpha bound (float64 keeps alpha to 1e-10 rad up to there), R inside
-        the tank, heave and pitch within their hard stops; speeds within the bridge file's physically possible
-        joint speeds."""
-        rig, where = plant.model.rig, f"the bridge file {config.source_path}"
+        the tank, heave and pitch within their hard stops; speeds within the rig's physically possible joint
+        speeds (its limits)."""
+        rig = plant.model.rig
+        where = f"the limits of {rig.source_path}; parameter rig_path"
         alpha = DEFAULT_BOUNDS.max_abs_start_alpha_rad
         positions = {"alpha": (-alpha, alpha, "swim_planner's PlanBounds.max_abs_start_alpha_rad"),
                      "R": (0.0, 0.5 * rig.tank_diameter_m, f"the tank's radius (tank_diameter in {rig.source_path})")}
         for (name, (lower, upper)), joint in zip(plant.hard_limits_rad.items(), ("heave", "pitch")):
-            positions[name] = (lower, upper, f"the hard stops ({joint}_lower_hard_limit, {joint}_upper_hard_limit "
-                                             f"in {where}; parameter bridge_config_path)")
-        speeds = {name: (speed, f"the physically possible speed ({key}_max_speed in {where}; parameter "
-                                f"bridge_config_path)")
+            positions[name] = (lower, upper, f"the hard stops ({joint}_hard_stop in {where})")
+        speeds = {name: (speed, f"the physically possible speed ({key}_max_speed in {where})")
                   for name, key, speed in zip(("alpha", "R", "phi", "theta"), ("hub", "rail", "heave", "pitch"),
-                                              config.max_speeds)}
+                                              rig.limits.max_speeds)}
         return cls(positions, speeds)
 
     def check(self, names: Sequence[str], q: np.ndarray, qdot: np.ndarray) -> None:
@@ -177,7 +173,6 @@ class SimNode(Node):
         value = lambda name: self.get_parameter(name).value  # noqa: E731
         self.mode = value("mode")
         rig = load_rig(value("rig_path") or None)
-        bridge_config = load_bridge_config_parameter(value("bridge_config_path"))
         flow = value("flow")
         model = vehicle_model(flow, rig, value("constrained"), value("lane_radius_m") or None)
         fields = dataclasses.fields
@@ -186,8 +181,8 @@ class SimNode(Node):
         if flow == "wake":
             wake = WakeCoupling(model, parameters_from_values({n: value(f"wake.{n}") for n in parameter_defaults()}))
         self.plant = Plant(model, disturbances, value("sample_period_s"), value("substeps"), value("seed"), wake,
-                           bridge_config.hard_limits_rad, flow=flow)
-        self.state_bounds = StateBounds.of(self.plant, bridge_config)
+                           rig.hard_limits_rad, flow=flow)
+        self.state_bounds = StateBounds.of(self.plant)
         self.sensors = Sensors(model, self._sensor_noise({}), self.plant.sample_period_s)
         self.start_time_s = float(value("start_time_s"))
         initial = value("initial_positions")   # nq entries, or at rest

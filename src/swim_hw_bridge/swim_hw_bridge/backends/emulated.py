@@ -16,7 +16,7 @@ flat-plate separation drag the wake lacks, -1/2 rho Cd A |v| v on the foil's cho
 is emulated: the rig's own friction is what a dry run on hardware adds.
 
 Hard stops (option hard_stops, default on; hard_stops_rad, ((heave lower, upper), (pitch lower, upper)), None for
-none): the rig's heave and pitch stops, at the bridge file's hard limits, as the simulator has them
+none): the rig's heave and pitch hard stops (swim_model's limits record), as the simulator has them
 (swim_sim/plant.py). A joint reaching its stop meets an inelastic stop: its position is held at the stop and its
 velocity into it removed by a plastic impulse, the Mm-orthogonal projection onto qdot_S = 0 for the set S of joints
 at their stops, qdot -= Mm^-1 E (E' Mm^-1 E)^-1 E' qdot (E the columns of I in S), which only removes kinetic
@@ -42,7 +42,7 @@ from typing import Any, cast
 
 import casadi as ca
 import numpy as np
-from swim_model import SwimModelError, VehicleModel, codegen, load_rig
+from swim_model import SwimModelError, VehicleModel, codegen
 from swim_model.codegen import NativeFunction
 from swim_model.wake_coupling import FLOWS, MODEL_FLOWS, WakeCoupling, separation_drag
 
@@ -87,7 +87,6 @@ class EmulatedDevice(Device):
         self.substeps = int(config.get("substeps", 8))
         self.max_integration_s = float(config.get("max_integration_s", 0.05))
         self.initial_counts = tuple(int(c) for c in config.get("initial_counts", (0, 0, 0, 0)))
-        self.rig_path = str(config.get("rig_path", "")) or None
         self.flow = str(config.get("flow", "ideal"))
         if self.flow not in FLOWS:
             raise ValueError(f"emulated device: flow must be one of {', '.join(FLOWS)}, got {self.flow!r}")
@@ -128,7 +127,7 @@ class EmulatedDevice(Device):
     # --- the Device interface --------------------------------------------------------------------------
     def open(self) -> None:
         if self.model is None:
-            self.model = VehicleModel(load_rig(self.rig_path), constrained=False, flow=MODEL_FLOWS[self.flow])
+            self.model = VehicleModel(self.bridge.rig, constrained=False, flow=MODEL_FLOWS[self.flow])
             self.lag = np.zeros(self.model.n_lag)   # the flow at rest
             # compile and load the integrator now, not in the first period of the loop; and the single step and
             # the inertia a read at a stop takes, through their native entry points (microseconds a call)
