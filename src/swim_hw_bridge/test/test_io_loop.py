@@ -236,7 +236,7 @@ def test_an_impossible_encoder_jump_faults(config, conversions, limits):
 
 def test_soft_limit_then_hard_limit_through_the_loop(config, conversions, limits):
     loop, device = make_loop(config, conversions, limits, hard_stops=False)   # the link is placed past the limit
-    upper, margin = config.heave_upper_hard_limit_rad, config.heave_soft_limit_margin_rad
+    upper, margin = config.hard_limits_rad[0][1], config.rig.limits.heave.soft_margin_rad
     home = np.array(config.home_positions)
     heave_currents = []
     for phi in np.arange(0.0, upper + 0.05, 0.02):   # 0.02 rad per 8 ms: well below the jump bound

@@ -55,17 +55,15 @@ def set_state(driver):
 
 @pytest.fixture(scope="module")
 def limits():
-    """(torque limits, hard limits, set_state's bounds) from the rig and bridge files, not from the node."""
-    from swim_hw_bridge.conversions import load_bridge_config
+    """(torque limits, hard limits, set_state's bounds) from the rig file's limits, not from the node."""
     from swim_model import load_rig
     from swim_planner.maneuver import DEFAULT_BOUNDS
-    config = load_bridge_config()
-    hard = {"phi": (config.heave_lower_hard_limit_rad, config.heave_upper_hard_limit_rad),
-            "theta": (config.pitch_lower_hard_limit_rad, config.pitch_upper_hard_limit_rad)}
+    rig = load_rig()
+    hard = {"phi": rig.hard_limits_rad[0], "theta": rig.hard_limits_rad[1]}
     alpha = DEFAULT_BOUNDS.max_abs_start_alpha_rad
-    speeds = {"alpha": config.hub_max_speed_rad_s, "phi": config.heave_max_speed_rad_s,
-              "theta": config.pitch_max_speed_rad_s}
-    return np.array(load_rig().torque_limits_n_m), hard, {"alpha": (-alpha, alpha), **hard}, speeds
+    speeds = {"alpha": rig.limits.hub_max_speed_rad_s, "phi": rig.limits.heave.max_speed_rad_s,
+              "theta": rig.limits.pitch.max_speed_rad_s}
+    return np.array(rig.torque_limits_n_m), hard, {"alpha": (-alpha, alpha), **hard}, speeds
 
 
 def check_published(state, limits):
