@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from swim_bringup.analysis import analyze, write_figures
+from swim_model import load_rig
 from swim_bringup.reports import RunReport, TrackerResult
 from swim_bringup.run_client import STARTUP_TIMEOUT_S, RunClient, RunError
 from swim_bringup.system import System
@@ -59,9 +60,10 @@ def run_maneuver(bag_path: Path, primitive_ids: list[str], repeat_counts: list[i
 
 def run_recorded(specs: list[NodeSpec], run_dir: Path, primitive_ids: list[str], repeat_counts: list[int],
                  time_scale: float, timeout_s: float, tolerances: Tolerances = RUN_TOLERANCES,
-                 progress: Optional[Progress] = None) -> RunReport:
+                 progress: Optional[Progress] = None, rig_path: str = "") -> RunReport:
     """One closed-loop run: bring up the nodes of specs (logs in run_dir/logs), run the maneuver recorded into
-    run_dir/bag, stop the nodes; then analyse the bag and write report.json and the figures into run_dir.
+    run_dir/bag, stop the nodes; then analyse the bag (the hard stops of the rig file at rig_path, empty: the
+    shipped rig, as the nodes' rig_path) and write report.json and the figures into run_dir.
     Returns the report: the analysis measures, the tracker's result and the wall time. RunError if a node died
     or the run could not be done."""
     started = time.monotonic()
@@ -73,14 +75,14 @@ def run_recorded(specs: list[NodeSpec], run_dir: Path, primitive_ids: list[str],
                 raise RunError(f"{', '.join(system.dead())} died (see {run_dir / 'logs'})")
         result = run_maneuver(run_dir / "bag", primitive_ids, repeat_counts, time_scale, timeout_s, on_progress,
                               tolerances)
-    return write_run_report(run_dir, result, started)
+    return write_run_report(run_dir, result, started, rig_path)
 
 
-def write_run_report(run_dir: Path, result: TrackerResult, started_s: float) -> RunReport:
-    """Analyse the run's bag (run_dir/bag) and write report.json and the figures into run_dir; the report, with
-    the tracker's result and the wall time from started_s (time.monotonic) to now. MissingTopic (analysis) if the
-    bag holds no tracked period."""
-    analysis = analyze(run_dir / "bag")
+def write_run_report(run_dir: Path, result: TrackerResult, started_s: float, rig_path: str = "") -> RunReport:
+    """Analyse the run's bag (run_dir/bag; the hard stops of the rig file at rig_path, empty: the shipped rig) and
+    write report.json and the figures into run_dir; the report, with the tracker's result and the wall time from
+    started_s (time.monotonic) to now. MissingTopic (analysis) if the bag holds no tracked period."""
+    analysis = analyze(run_dir / "bag", load_rig(rig_path or None).hard_limits_rad)
     report = RunReport(analysis.measures, analysis.bridge, result, time.monotonic() - started_s)
     report.write(run_dir / "report.json")
     write_figures(run_dir / "bag", run_dir)
