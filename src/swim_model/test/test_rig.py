@@ -80,7 +80,8 @@ def test_digest_tracks_values():
     (lambda d: d["limits"]["pitch_hard_stop"].__setitem__("unit", "m"), "not a angle"),
     (lambda d: d["limits"]["hub_max_speed"].__setitem__("value", 0.0), "must be positive"),
     (lambda d: d["limits"]["heave_soft_margin"].__setitem__("value", 11), "heave soft margin .* must fit in the gap"),
-    (lambda d: d["limits"]["pitch_planning_range"].__setitem__("value", 80), "pitch soft margin .* must fit in the gap"),
+    (lambda d: d["limits"]["pitch_planning_range"].__setitem__("value", 80),
+     "pitch soft margin .* must fit in the gap"),
 ])
 def test_bad_files_are_refused_with_a_clear_message(document, mutate, message):
     bad = copy.deepcopy(document)
