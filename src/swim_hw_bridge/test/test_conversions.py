@@ -61,10 +61,10 @@ def test_every_entry_is_sourced_or_assumed():
 
 
 @pytest.mark.parametrize("edit, message", [
-    (lambda p: p.pop("heave_gear_ratio"), "missing"),
+    (lambda p: p.pop("heave_torque_constant"), "missing"),
     (lambda p: p.update(bogus={"value": 1, "unit": "1", "assumed": "x"}), "unknown"),
     (lambda p: p["heave_torque_constant"].update(unit="A"), "unit"),
-    (lambda p: p["heave_gear_ratio"].pop("source"), "exactly one"),
+    (lambda p: p["quadrature_counts_per_line"].pop("assumed"), "exactly one"),
     (lambda p: p["pitch_current_limit"].update(value=float("nan")), "finite"),
     (lambda p: p["pitch_current_limit"].update(value=-1.0), "positive"),
     (lambda p: p["heave_home_position"].update(value=90, unit="deg"), "home_position"),
