@@ -61,3 +61,12 @@ def test_interface_package_is_a_rosidl_package():
     for folder in ("msg", "srv", "action"):
         for path in (WORKSPACE / "src" / "swim_interfaces" / folder).iterdir():
             assert f'"{folder}/{path.name}"' in cmake, f"{path.name} is not generated"
+
+
+@pytest.mark.parametrize("package", PYTHON_PACKAGES)
+def test_installed_package_is_marked_typed(package):
+    """PEP 561: the py.typed marker installs with the package, so a type checker outside the workspace reads its
+    annotations."""
+    import importlib
+    installed = importlib.import_module(package).__path__[0]
+    assert os.path.isfile(os.path.join(installed, "py.typed")), f"{package} installs no py.typed in {installed}"

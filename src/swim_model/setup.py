@@ -11,7 +11,7 @@ setup(
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/config', ['swim_model/config/rig.yaml']),
     ],
-    package_data={package_name: ['config/*.yaml']},
+    package_data={package_name: ['config/*.yaml', 'py.typed']},
     install_requires=['setuptools', 'numpy', 'scipy', 'casadi', 'numba', 'pyyaml', 'matplotlib'],
     zip_safe=True,
     maintainer='swim maintainers',

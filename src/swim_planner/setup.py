@@ -12,7 +12,7 @@ setup(
     ],
     install_requires=['setuptools', 'numpy', 'scipy', 'casadi', 'tqdm'],
     package_data={package_name: [f'library/{folder}/{files}' for folder in ('default', 'circulatory')
-                                  for files in ('manifest.json', 'primitives/*.npz')]},
+                                  for files in ('manifest.json', 'primitives/*.npz')] + ['py.typed']},
     zip_safe=True,
     maintainer='swim maintainers',
     maintainer_email='swim@example.com',

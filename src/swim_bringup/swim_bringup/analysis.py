@@ -5,7 +5,7 @@ From the tracking_state topic (reference and measured q each control period) and
   R - R_d in m, Cartesian |p - p_d| of the platform's position p = R (cos alpha, sin alpha) in m;
 - the final lateral offset and final alpha error, the duration, peak |torque| per motor, the fraction of
   periods with a saturated motor, the periods with the heave or the pitch at a hard limit (at the rig's stop: by
-  default the shipped bridge file's limits, which sim_node's stops also take; --bridge-config for another rig's),
+  default the shipped rig file's limits, which sim_node's stops also take; --rig for another rig's),
   and the energy used, int (|tau_h phidot| + |tau_p thetadot|) dt in J (motors do not take energy back, so
   negative power is counted as spent too).
 

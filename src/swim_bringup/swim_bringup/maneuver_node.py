@@ -1,19 +1,7 @@
 """maneuver_node: the perform_maneuver action, a maneuver flown from where the vehicle is.
 
-Action ``perform_maneuver`` (swim_interfaces/action/PerformManeuver): the goal is what an operator asks for, a
-primitive sequence or a goal state of the planner's graph, and the tracker's tolerances. The node reads the
-vehicle's alpha, R and lane from the latest ``joint_states``, checks the goal (swim_bringup.maneuver), plans it
-through planner_node's ``request_maneuver`` and tracks the plan through tracker_node's ``execute_plan``, relaying
-the tracker's feedback with the phase (planning, waiting for a model, tracking), the primitive under way, the
-progress and the errors. Its result is the tracker's, with the plan's request id. Cancel cancels the tracker's goal
-(the foil is held where it is); a goal sent while another is tracked preempts it at the tracker (PREEMPTED), as an
-execute_plan goal does. planner_node and tracker_node stay usable on their own.
-
-Every call to them survives a lost answer (swim_ros.calls): the maneuver request carries a request id, the goal is
-sent again with its goal id, the result is asked again. The goal's work runs on a thread of the multi-threaded
-executor, whose other threads serve the answers, the feedback and joint_states meanwhile.
-
-Parameters: the table PARAMETERS (description and range of each; checked when set, read per goal).
+The goal, where it starts, the planner and tracker calls, the result, cancel and the parameters: see
+src/swim_bringup/README.md, section "maneuver_node".
 """
 from __future__ import annotations
 

@@ -1,47 +1,9 @@
 """tracker_node: the cascade tracker (paper Sec. 6) on the rig's state, one plan at a time.
 
-Topics:
-    joint_states (sub, sensor_msgs/JointState)      vehicle state: names alpha, [R,] phi, theta; positions,
-                                                    and velocities (or none: then filtered differences)
-    joint_commands (pub, sensor_msgs/JointState)    torque command: names [phi, theta], effort in N m,
-                                                    one per state received (the state source sets the rate)
-    tracking_state (pub, swim_interfaces/TrackingState)  reference, feedback, error, output per period
-Action ``execute_plan`` (swim_interfaces/action/ExecutePlan): one active goal; a new goal preempts it
-(PREEMPTED); cancel holds the foil where it is (CANCELED); feedback at ``feedback_rate_hz`` (PHASE_TRACKING), and
-once when a goal starts to wait for its vehicle model (PHASE_WAITING_FOR_MODEL).
-Safety: no valid state for ``stale_after_periods`` sample periods -> zero torque, the goal aborts with
-STATE_LOST (a command a period, stamped with the last valid state's stamp, zero before any: command stamps never
-run backwards, and a lock-step simulator never takes one as the answer to a newer state); a state with wrong
-names, lengths or a non-finite value is rejected, counted, never used.
-
-Parameters: the table PARAMETERS (description, range, read-only for rig_path and sample_period_s; `ros2 param
-describe` shows them), checked when set, applied after: time_scale (1.0: run plans as planned; else re-timed by
-Theorem 1 when a goal arrives), the sliding mode's switch and bounds, the range guard's switch (the heave's and the
-pitch's hard stops from the rig's limits, rig_path), the stale-state limit, feedback rate and velocity filter.
-
-Plans of either flow model (PlannedTrajectory's flow_model) run on the vehicle model of that flow, one per vehicle
-and lane. The ideal flow's models of the rig's two vehicles on its default lane are built at start, not by the
-first goal (about half a second of model setup and compilation). Any other model (another lane's, a circulatory
-one) is built by the first goal that needs it on a thread of its own (ModelBuilder), while this node's one thread
-keeps serving states, commands, cancels and the goal under way; the new goal starts, preempting that one, once its
-model is built, and a goal canceled or preempted while it waits ends at once (the build goes on, for the next goal
-that needs it). A model's C code takes about 2 s (ideal) to 7 s (circulatory) to compile the first time on a 2-core
-host (cached on disk after: 0.2-0.5 s to load); meanwhile the node answered each state of a lock-step plant within
-28 ms (the compilation runs in the C compiler's process, the model's symbolic setup holds the interpreter a few
-ms at a time).
-
-Real-time means (swim_ros.realtime; parameters, on by default): once the start-up models are built, main() sets
-the process's threads to SCHED_FIFO realtime_priority, locks its memory, shortens the interpreter's switch interval
-and has the garbage collector run after a command is published, once a second (collect_garbage_between_periods).
-ModelBuilder's thread runs at the real-time policy's lowest priority before each build
-(realtime.make_thread_background): ordinary processes cannot preempt it while it holds the interpreter lock the
-executor waits for, and its C compiler runs as an ordinary process. Where the host refuses a means the node logs
-one warning with the reason and runs on.
-
-Speed (in lock-step every period waits on this node): per period the command and tracking_state messages are
-reused and their float64[] fields filled with array('d') (rosidl's setters check lists element by element), and
-the per-period topics have no QoS event handlers: rclpy gives each publisher and subscription two by default,
-each a waitable that the executor adds to its wait set again on every spin, in Python.
+Topics, the execute_plan action, safety, parameters and the vehicle models built off the control thread: see
+src/swim_controller/README.md, section "tracker_node". The control law: docs/model_and_method.md, section "5.
+Tracking control". The real-time means: docs/realtime.md, section "The means". The per-period messages and
+topics: docs/speed.md, section "The closed loop over DDS".
 """
 from __future__ import annotations
 

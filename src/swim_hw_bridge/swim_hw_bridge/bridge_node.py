@@ -1,53 +1,8 @@
 """bridge_node: the lifecycle node that runs our controller's torques on the rig's motors.
 
-    joint_commands (sub, sensor_msgs/JointState)   names phi, theta (any order), effort N m: what tracker_node
-                                                   publishes; anything else is refused and counted
-    joint_states (pub, sensor_msgs/JointState)     names alpha, R, phi, theta; position (rad, m), velocity
-                                                   (filtered differences), effort (the joint torques N Kt i
-                                                   written; 0 for the unactuated alpha, R); while active, one
-                                                   per period, right after the period that read it
-    /diagnostics (pub, diagnostic_msgs/DiagnosticArray)  loop rate, overruns (by cause, and the worst one: how
-                                                   late and why), watchdog, saturation count, faults; the
-                                                   periods' wake-up lateness and the commands' latency and jitter
-                                                   (median, p99); the real-time means in effect or refused
-    emergency_stop (srv std_srvs/Trigger, and sub std_msgs/Bool: true stops)   latches zero current and stops the
-                                                   amplifier enable line until reset_emergency_stop
-    reset_emergency_stop (srv std_srvs/Trigger)    clears the e-stop and every latched fault; torque resumes
-                                                   only with a command received after the reset
-
-Lifecycle (lifecycle_msgs ChangeState on bridge_node/change_state): configure opens the device with outputs at
-zero; activate enables the amplifiers and starts the I/O loop (io_loop.py); deactivate stops the loop, zeroes,
-disables; cleanup closes the device; shutdown and error zero, then disable, then close. A deactivate that cannot
-make the outputs safe (the device refuses the zero or the disable: unplugged, hung; or the loop does not stop)
-returns ERROR: "inactive" would claim an open device at zero current. rclpy then runs error processing: on_error
-zeroes, disables and closes whatever still answers and the node ends unconfigured, where configure reopens
-(reconnects) the device. The amplifiers of a lost device are off by then anyway: its enable line stopped
-toggling (see below). Parameters: the table PARAMETERS (description and range of each; checked when set; they
-take effect at the next configure): backend (emulated | serial | mf624), config_path (bridge.yaml, the device;
-empty: the shipped one), rig_path (swim_model's rig file, whose encoder lines, gear ratios and joint limits the
-bridge uses, as every node's rig_path; empty: the shipped one), flow (the emulated rig's water: ideal | circulatory
-| wake, as sim_node's), sample_period_s, watchdog_periods, overrun_limit, stale_read_limit, read_failure_limit;
-read-only: diagnostics_rate_hz, autostart (configure and activate at start-up, for runs without a lifecycle
-manager), and the real-time means.
-
-Real-time means (swim_ros.realtime; on by default): while active, the node's threads run at SCHED_FIFO
-realtime_priority (70) and the I/O loop's thread at io_loop_priority (80), memory locked, on the CPUs of
-cpu_affinity (empty: all), the garbage collector frozen and run at a period's end once a second, and the
-interpreter's switch interval at realtime.SWITCH_INTERVAL_S. Configuring
-(opening the device, compiling the emulated rig's model) runs before, at the ordinary policy, and deactivating
-returns to it. Where the host refuses a means the node logs one warning saying what and why, and /diagnostics
-carries it (realtime_refused). The I/O loop is a thread of the node's process, not a process of its own: with
-both at real-time priorities the interpreter lock it shares with the executor delays a period by less than the
-executor's longest callback (docs/realtime.md gives the measurement).
-
-Amplifier-enable wiring (the charge pump). A DAC holds its last value when the process dies, so a current
-command alone cannot make a crashed bridge safe. The bridge therefore drives a digital output that it toggles
-once per period while it is active and no fault is latched (Device.toggle_enable). That line feeds a
-retriggerable monostable (or an AC-coupled charge pump: series capacitor, diode pump into an RC, comparator)
-whose output drives the amplifiers' enable (inhibit) inputs. Each edge retriggers it; its time constant is a
-few periods (the emulated rig: 50 ms, about 6 periods of 8 ms). A steady line, high or low, lets it fall and
-the amplifiers disable: a crashed, hung, overrunning or faulted bridge stops the motors even with the DAC
-stuck. An e-stop or latched fault stops the toggling on purpose.
+Topics, services, the lifecycle, the parameters and the amplifier-enable wiring: see src/swim_hw_bridge/README.md,
+sections "bridge_node" and "Modules and API". The real-time means: docs/realtime.md, section "The means"; why the
+I/O loop is a thread of this process: docs/realtime.md, section "Thread or process for the I/O loop".
 """
 from __future__ import annotations
 

@@ -37,7 +37,15 @@ ComplexMap = Callable[[npt.NDArray[np.complex128]], npt.NDArray[np.complex128]]
 def body_stream_functions(z_body: npt.NDArray[np.complex128]) -> npt.NDArray[np.float64]:
     """Stream functions (psi_1, psi_2, psi_3) of unit surge, sway and yaw on the body points z.
 
-    Returns an array of shape (3, len(z_body)).
+    Parameters
+    ----------
+    z_body : (n,) ndarray of complex
+        Body points x + iy, m.
+
+    Returns
+    -------
+    (3, n) ndarray
+        psi_1 and psi_2 in m, psi_3 in m^2 (per unit velocity and rate).
     """
     x, y = z_body.real, z_body.imag
     return np.stack([y, -x, -(x * x + y * y) / 2.0])
@@ -45,15 +53,22 @@ def body_stream_functions(z_body: npt.NDArray[np.complex128]) -> npt.NDArray[np.
 
 def added_mass_from_circle_map(conformal_map: ComplexMap, circle_radius: float, density_kg_m3: float,
                                samples: int = 1024) -> npt.NDArray[np.float64]:
-    """Added-mass matrix (3 x 3, per unit span) of the body ``F(|zeta| = circle_radius)``.
+    """Added-mass matrix (per unit span) of the body ``F(|zeta| = circle_radius)``.
 
-    Args:
-        conformal_map: F, vectorised over complex arrays, analytic outside the circle.
-        circle_radius: r_c of the circle in the zeta plane, m.
-        density_kg_m3: fluid density rho.
-        samples: points on the circle (even); the result converges geometrically in it.
+    Parameters
+    ----------
+    conformal_map : callable
+        F, vectorised over complex arrays, analytic outside the circle.
+    circle_radius : float
+        r_c of the circle in the zeta plane, m.
+    density_kg_m3 : float
+        Fluid density rho, kg/m^3.
+    samples : int, optional
+        Points on the circle (even); the result converges geometrically in it.
 
-    Returns:
+    Returns
+    -------
+    (3, 3) ndarray
         M_A with rows/columns (U, V, Omega): kg/m, kg/m, kg m/m (= kg), kg m^2/m.
     """
     angle = 2.0 * np.pi * np.arange(samples) / samples

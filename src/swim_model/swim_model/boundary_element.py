@@ -45,11 +45,19 @@ def _panel_integrals(mid: npt.NDArray[np.float64], start: npt.NDArray[np.float64
 
 
 def added_mass_from_polygon(z_nodes: npt.NDArray[np.complex128], density_kg_m3: float) -> npt.NDArray[np.float64]:
-    """Added-mass matrix (3 x 3, per unit span) about z = 0 of the closed polygon ``z_nodes``.
+    """Added-mass matrix (per unit span) about z = 0 of a closed polygon, by boundary elements.
 
-    Args:
-        z_nodes: polygon vertices x + iy, m, counter-clockwise, not repeating the first.
-        density_kg_m3: fluid density rho.
+    Parameters
+    ----------
+    z_nodes : (n,) ndarray of complex
+        Polygon vertices x + iy, m, counter-clockwise, not repeating the first.
+    density_kg_m3 : float
+        Fluid density rho, kg/m^3.
+
+    Returns
+    -------
+    (3, 3) ndarray
+        M_A with rows/columns (U, V, Omega): kg/m, kg/m, kg, kg m^2/m.
     """
     nodes = np.column_stack([z_nodes.real, z_nodes.imag])
     start, end = nodes, np.roll(nodes, -1, axis=0)

@@ -31,7 +31,13 @@ COMPILER_FLAGS = ("-O2", "-shared", "-fPIC")
 
 
 def cache_dir() -> Path:
-    """Where compiled models are kept."""
+    """Where compiled models are kept.
+
+    Returns
+    -------
+    pathlib.Path
+        The cache folder.
+    """
     if os.environ.get("SWIM_CACHE_DIR"):
         return Path(os.environ["SWIM_CACHE_DIR"])
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
@@ -39,7 +45,20 @@ def cache_dir() -> Path:
 
 
 def compile_library(functions: list[ca.Function], tag: str) -> Optional[Path]:
-    """The shared library of the functions' generated C (compiled once, cached); None without a C compiler."""
+    """The shared library of the functions' generated C (compiled once, cached).
+
+    Parameters
+    ----------
+    functions : list of casadi.Function
+        The functions, generated into one C file.
+    tag : str
+        The cache name (codegen adds the source's hash).
+
+    Returns
+    -------
+    pathlib.Path or None
+        The library, or None without a C compiler.
+    """
     compiler = shutil.which(os.environ.get("CC", "gcc"))
     if compiler is None:
         warnings.warn("no C compiler found: swim_model runs its models in CasADi's virtual machine (slower)")
@@ -62,7 +81,20 @@ def compile_library(functions: list[ca.Function], tag: str) -> Optional[Path]:
 
 
 def compiled(functions: list[ca.Function], tag: str) -> dict[str, ca.Function]:
-    """The functions, compiled to C and loaded (or, without a compiler, as given), by name."""
+    """The functions, compiled to C and loaded (or, without a compiler, as given), by name.
+
+    Parameters
+    ----------
+    functions : list of casadi.Function
+        The functions.
+    tag : str
+        The cache name.
+
+    Returns
+    -------
+    dict of str to casadi.Function
+        Each function by its name.
+    """
     library = compile_library(functions, tag)
     if library is None:
         return {f.name(): f for f in functions}
@@ -71,19 +103,49 @@ def compiled(functions: list[ca.Function], tag: str) -> dict[str, ca.Function]:
 
 def native(functions: list[ca.Function], tag: str,
            names: Optional[Sequence[str]] = None) -> dict[str, "NativeFunction"]:
-    """The functions, compiled to C, as NativeFunction (the fast call path), by name: all of them, or those named
-    (the library is the one ``compiled`` makes of the same list, so it is compiled once for both)."""
+    """The functions, compiled to C, as NativeFunction (the fast call path), by name.
+
+    The library is the one ``compiled`` makes of the same list, so it is compiled once for both.
+
+    Parameters
+    ----------
+    functions : list of casadi.Function
+        The functions (dense arguments only for those loaded).
+    tag : str
+        The cache name.
+    names : sequence of str, optional
+        Load only these (default: all).
+
+    Returns
+    -------
+    dict of str to NativeFunction
+        Each loaded function by its name.
+    """
     library = compile_library(functions, tag)
     loaded = None if library is None else ctypes.CDLL(str(library))
     return {f.name(): NativeFunction(f, loaded) for f in functions if names is None or f.name() in names}
 
 
 class NativeFunction:
-    """A function with dense inputs and outputs, called on buffers it owns: write the inputs into ``inputs[i]``
-    (flat, column-major), call, read ``outputs[j]``. The buffers are reused: copy an output to keep it.
+    """A function with dense inputs and outputs, called on buffers it owns.
 
-    With a library the C entry point is called through ctypes; without one (no compiler) the CasADi function
-    itself, into the same buffers. One instance is one set of buffers: not for concurrent use from threads."""
+    Write the inputs into ``inputs[i]`` (flat, column-major), call, read ``outputs[j]``. The buffers are reused:
+    copy an output to keep it. With a library the C entry point is called through ctypes; without one (no compiler)
+    the CasADi function itself, into the same buffers. One instance is one set of buffers: not for concurrent use
+    from threads.
+
+    Parameters
+    ----------
+    function : casadi.Function
+        The function, with dense inputs and outputs.
+    library : ctypes.CDLL, optional
+        The shared library holding its generated C (``compile_library``); None: CasADi's own call.
+
+    Raises
+    ------
+    ValueError
+        For a sparse input or output.
+    """
 
     def __init__(self, function: ca.Function, library: Optional[ctypes.CDLL] = None) -> None:
         for i in range(function.n_in()):
@@ -119,7 +181,13 @@ class NativeFunction:
                                     ctypes.c_void_p(self._w.ctypes.data), self._memory)
 
     def __call__(self) -> None:
-        """Evaluate on the input buffers into the output buffers."""
+        """Evaluate on the input buffers into the output buffers.
+
+        Raises
+        ------
+        ArithmeticError
+            When the compiled function reports an error.
+        """
         if self._entry is not None:
             if self._entry(*self._call_arguments) != 0:
                 raise ArithmeticError(f"{self.function.name()}: the compiled function reported an error")

@@ -25,6 +25,18 @@ from swim_model.gait import ShapeDrivenRun
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    """The command line of ``swim-model-demo``.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        The arguments (None: sys.argv's).
+
+    Returns
+    -------
+    argparse.Namespace
+        The options.
+    """
     parser = argparse.ArgumentParser(prog="swim-model-demo", description=__doc__.splitlines()[0])
     parser.add_argument("--rig", type=Path, default=None, help="rig parameter file (default: the shipped one)")
     parser.add_argument("--output-dir", type=Path, default=Path("runs/model-demo"), help="where the plot goes")
@@ -41,7 +53,20 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 
 
 def summarize(model: VehicleModel, run: ShapeDrivenRun) -> dict[str, float]:
-    """Distance, speed and torque figures of one run."""
+    """Distance, speed and torque figures of one run.
+
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle the run used.
+    run : ShapeDrivenRun
+        The run.
+
+    Returns
+    -------
+    dict of str to float
+        The figures by name, SI units as their names say.
+    """
     alpha = run.q[:, 0]
     radius = run.q[:, 1] if not model.constrained else np.full_like(alpha, model.lane_radius_m)
     duration = run.time_s[-1] - run.time_s[0]
@@ -61,6 +86,15 @@ def summarize(model: VehicleModel, run: ShapeDrivenRun) -> dict[str, float]:
 
 
 def plot(runs: dict[str, tuple[VehicleModel, ShapeDrivenRun]], path: Path) -> None:
+    """Draw the runs' paths, speeds and torques.
+
+    Parameters
+    ----------
+    runs : dict of str to (VehicleModel, ShapeDrivenRun)
+        Each run with its model, by label.
+    path : pathlib.Path
+        The PNG file to write.
+    """
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -89,6 +123,18 @@ def plot(runs: dict[str, tuple[VehicleModel, ShapeDrivenRun]], path: Path) -> No
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run ``swim-model-demo``: the added mass and a shape-driven gait, or the flow comparison.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments (default: sys.argv's).
+
+    Returns
+    -------
+    int
+        The exit status: 0, or 2 for a rig file or gait swim_model refuses.
+    """
     args = parse_args(argv)
     if args.flow_comparison:
         from swim_model import flow_comparison

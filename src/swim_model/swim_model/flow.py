@@ -1,58 +1,17 @@
-"""A reduced-order circulatory flow model of the foil: lift with Wagner's lag, leading-edge suction with a cap,
-profile drag and a smooth transition to the flat plate's normal force past stall.
+"""A reduced-order circulatory flow model of the foil.
 
-What it adds to the ideal model. The ideal (paper's) model applies the added-mass force of Kirchhoff's equations
-(eq. 46, ``hydrodynamics.py``): the non-circulatory part. This module is the rest, the force the vortex wake would
-add (``wake.py``: ``F_v = -dI_v/dt``), written as a generalized force ``Q2(q)' f`` with ``f = (fx, fy, mz)`` in foil
-axes at the foil frame's origin F (the Joukowski map origin, the added mass's reference point) for the whole span.
-Nothing is counted twice: the added mass stays in ``Mm``; ``f`` holds no term in the accelerations.
+Lift with Wagner's lag, leading-edge suction with a cap, profile drag and a smooth transition to the flat plate's
+normal force past stall.
+The ideal (paper's) model applies the added-mass force of Kirchhoff's equations (eq. 46, ``hydrodynamics.py``).
+This module is the rest, the force the vortex wake would add (``wake.py``: ``F_v = -dI_v/dt``), as a generalized
+force ``Q2(q)' f`` with ``f = (fx, fy, mz)`` in foil axes at the foil frame's origin F for the whole span; the
+added mass stays in ``Mm`` and ``f`` holds no term in the accelerations (docs/flow_model.md, Sec. 1).
 
-Notation: foil velocity ``(U, V, Omega)`` of F in foil axes (eq. 40; x along the chord toward the leading edge,
-y normal to it), ``|u| = sqrt(U^2 + V^2)``, semichord ``b = c/2``, span ``s``; the map of ``joukowski.py``:
-``z = zeta + zeta_c + a^2/(zeta + zeta_c)`` on the circle of radius ``r = a + zeta_c``.
-
-1. Normal velocity at the three-quarter chord (thin-aerofoil theory; Theodorsen, NACA Report 496, 1935):
-   ``Q = -(V + Omega x_34)``, ``x_34 = x_LE - 3c/4``. For the symmetric Joukowski section this point is exact, not
-   an approximation: the Kutta condition on the circle plane (``vortex_force.py``) gives the circulation of a
-   translating and turning foil as ``Gamma = -4 pi r (V + Omega (A/r^2 + B/a^2)/2)``, and ``(A/r^2 + B/a^2)/2``
-   equals ``x_LE - 3c/4`` for every thickness (tested to 1e-12).
-2. Wagner's lag as R. T. Jones's two-state approximation (NACA Report 681, 1940; Bisplinghoff, Ashley & Halfman,
-   Aeroelasticity, 1955, Sec. 5-6): ``phi(s) = 1 - A1 e^{-b1 s} - A2 e^{-b2 s}``, A1 = 0.165, b1 = 0.0455,
-   A2 = 0.335, b2 = 0.3, s the distance travelled in semichords. As states, two first-order lags of Q in velocity
-   units (m/s), travelling at the foil's speed::
-
-       dz_i/dt = (|u| / b) b_i (Q - z_i),       Q_eff = (1 - A1 - A2) Q + A1 z1 + A2 z2,
-
-   whose step response is ``phi`` and whose frequency response is ``C(k) = 1 - sum_i A_i i k / (i k + b_i)``,
-   Theodorsen's function within 2.1 % in modulus and 1.3 degrees in phase for k = 0.05-5 (tested).
-3. Attached flow: circulation ``Gamma = 4 pi r Q_eff`` (the Joukowski section's Kutta circulation; ``r = c/4`` for
-   the flat plate gives ``2 pi b``); circulatory normal force ``N = rho s Gamma U`` (Theodorsen's ``2 pi rho U b C Q``).
-   Its moment about F: ``N zeta_c + 4 pi rho s a^2 U (Q_eff - Q)``. In steady flow the first term alone remains, the
-   vortical lift acting at ``x = zeta_c`` as in the wake (``vortex_force.py``); with the Munk moment of the added
-   mass it puts the lift at the aerodynamic centre ``zeta_c + a^2/r``. For the flat plate the second term is
-   ``pi rho b^2 U (C - 1) Q``: exactly what Theodorsen's moment adds to Kirchhoff's (derivation in
-   docs/flow_model.md), so total force and moment are Theodorsen's.
-4. Leading-edge suction (Garrick, NACA Report 567, 1936): ``S = 4 pi rho s r Q_s^2`` along +x, with
-   ``Q_s = Q_eff - Omega c/4`` the leading-edge singularity of unsteady thin-aerofoil theory (the mean normal
-   velocity over the chord, wake included: A0 U; Ramesh et al., J. Fluid Mech. 751, 2014). Steady, ``N`` and ``S``
-   together are the Kutta-Joukowski force ``rho Gamma |u|`` normal to the motion. Capped by a critical
-   leading-edge-suction parameter (Ramesh et al. 2014): ``Q_s`` is limited to ``LESP_crit |u|`` by the smooth
-   saturation ``Q_s / (1 + (Q_s / (LESP_crit |u|))^8)^(1/8)`` (the suction a rounded leading edge sustains before
-   the flow separates there).
-5. Separated flow: the flat plate's normal force ``N_sep = 1/2 rho s c C_N90 |u_34| Q`` with
-   ``|u_34| = sqrt(U^2 + Q^2)`` (``C_N = C_N90 sin alpha``), acting at ``x_mid + (c/4) cos alpha`` (from the quarter
-   chord at small angles to mid-chord broadside), and cancelling the ideal model's Munk moment
-   ``(m11 - m22) U V`` (a steady potential-flow moment that separated flow does not have).
-6. Transition: attached weight ``w = (1 + tanh((cos alpha_e - cos alpha_stall) / (sin alpha_stall dalpha))) / 2``
-   on the lagged effective angle ``cos alpha_e = U / sqrt(U^2 + Q_eff^2)``; ``f = w f_attached + (1 - w) f_sep``.
-   A foil moving trailing edge first (U < 0) counts as separated.
-7. Profile drag ``1/2 rho s c C_D0 |u| (U, V)`` against the motion of F in attached flow; separated, only its
-   chordwise part (skin friction) is added, the flat plate's normal force being its whole pressure drag.
-
-Smoothness and time scaling: every speed is ``sqrt(... + eps^2)`` with ``eps`` = 1e-7 m/s, so the model is
-infinitely differentiable everywhere (also from rest). Away from rest, every force is homogeneous of degree 2 in
-(velocities, lag states) and every lag rate of degree 2, so property P3 (time scaling) holds to ``(eps/|u|)^2``
-(1e-12 at 0.1 m/s): with ``z -> lambda z`` the scaled trajectory is the original one at lambda times the speed.
+The terms, each with its source (Theodorsen's three-quarter chord, R. T. Jones's two-state Wagner lag, Garrick's
+suction capped at Ramesh et al.'s critical LESP, the flat plate past stall, laminar profile drag), and why each is
+what it is: docs/flow_model.md, Sec. 2; the coefficients: Sec. 3 (``FlowParameters``). Every speed is
+``sqrt(... + eps^2)``, so the model is smooth everywhere, and every force and lag rate is homogeneous of degree 2
+in (velocities, lag states), so time scaling (P3) holds to ``(eps/|u|)^2``.
 """
 from __future__ import annotations
 
@@ -84,10 +43,30 @@ KINEMATIC_VISCOSITY_WATER_M2_S = 1.0e-6
 def laminar_profile_drag_coefficient(reynolds_number: float, thickness_ratio: float) -> float:
     """Zero-lift profile drag coefficient of a smooth section with a laminar boundary layer (per chord).
 
-    ``C_D0 = 2 (1.328 / sqrt(Re)) (1 + 2 t/c + 60 (t/c)^4)``: Blasius's laminar skin friction on both sides
-    (Schlichting, Boundary-Layer Theory, Ch. 7) times Hoerner's form factor for aerofoil sections (Hoerner,
-    Fluid-Dynamic Drag, 1965, Ch. 6, eq. 6.23). Chord Reynolds numbers of 1e4-1e5 (the rig, Anderson et al.'s tank)
+    ``C_D0 = 2 (1.328 / sqrt(Re)) (1 + 2 t/c + 60 (t/c)^4)``: Blasius's laminar skin friction on both sides times
+    Hoerner's form factor for aerofoil sections. Chord Reynolds numbers of 1e4-1e5 (the rig, Anderson et al.'s tank)
     are below transition.
+
+    Parameters
+    ----------
+    reynolds_number : float
+        Chord Reynolds number U c / nu, > 0.
+    thickness_ratio : float
+        t/c, in [0, 0.5).
+
+    Returns
+    -------
+    float
+        C_D0, dimensionless (per chord and span).
+
+    Raises
+    ------
+    FlowModelError
+        For Re <= 0 or t/c outside [0, 0.5).
+
+    References
+    ----------
+    Schlichting, Boundary-Layer Theory, Ch. 7; Hoerner, Fluid-Dynamic Drag (1965), Ch. 6, eq. 6.23.
     """
     if not (reynolds_number > 0.0 and 0.0 <= thickness_ratio < 0.5):
         raise FlowModelError(f"laminar_profile_drag_coefficient: needs Re > 0 and 0 <= t/c < 0.5, got "
@@ -97,7 +76,37 @@ def laminar_profile_drag_coefficient(reynolds_number: float, thickness_ratio: fl
 
 @dataclasses.dataclass(frozen=True)
 class FlowParameters:
-    """Coefficients of the circulatory flow model, each with its source or the reason it was assumed."""
+    """Coefficients of the circulatory flow model, each with its source or the reason it was assumed.
+
+    Sources and reasons beside each field and in docs/flow_model.md, Sec. 3.
+
+    Attributes
+    ----------
+    wagner_slow_gain, wagner_slow_rate : float
+        A1 and b1 of Jones's Wagner function (b1 per semichord travelled), dimensionless.
+    wagner_fast_gain, wagner_fast_rate : float
+        A2 and b2 of Jones's Wagner function, dimensionless.
+    critical_leading_edge_suction : float
+        LESP_crit, the leading-edge suction parameter where the suction saturates, dimensionless.
+    suction_cap_exponent : int
+        Order of the smooth saturation, an even integer >= 2.
+    stall_angle_rad : float
+        Lagged effective incidence where attached and separated flow weigh equally, rad.
+    stall_width_rad : float
+        Half-width of the attached-to-separated transition, rad.
+    flat_plate_normal_force_coefficient : float
+        C_N90 of the flat plate broadside past stall, dimensionless.
+    profile_drag_coefficient : float
+        C_D0 of the attached flow (``laminar_profile_drag_coefficient``), dimensionless.
+    speed_regularization_m_s : float
+        eps in sqrt(speed^2 + eps^2), m/s.
+
+    Raises
+    ------
+    FlowModelError
+        For a rate, cap or width that is not positive, a negative gain or drag, gains summing to 1 or more, a stall
+        range reaching 90 deg, or a cap exponent that is not an even integer >= 2.
+    """
 
     wagner_slow_gain: float = 0.165
     wagner_slow_rate: float = 0.0455
@@ -125,6 +134,7 @@ class FlowParameters:
     # assumed: eps in sqrt(speed^2 + eps^2), smooth at rest (swim_model.leading_edge)
 
     def __post_init__(self) -> None:
+        """Check every coefficient's range (the class's Raises)."""
         positive = ("wagner_slow_rate", "wagner_fast_rate", "critical_leading_edge_suction", "stall_angle_rad",
                     "stall_width_rad", "flat_plate_normal_force_coefficient", "speed_regularization_m_s")
         for name in positive:
@@ -143,7 +153,13 @@ class FlowParameters:
             raise FlowModelError("FlowParameters.suction_cap_exponent must be an even integer >= 2")
 
     def digest(self) -> str:
-        """SHA-256 of the values (compiled models are cached under it)."""
+        """SHA-256 of the values (compiled models are cached under it).
+
+        Returns
+        -------
+        str
+            Hex digest.
+        """
         return hashlib.sha256(json.dumps({k: repr(v) for k, v in dataclasses.asdict(self).items()},
                                          sort_keys=True).encode()).hexdigest()
 
@@ -162,10 +178,22 @@ def angle_of_attack(u_m_s: float, v_m_s: Symbolic) -> Symbolic: ...
 
 
 def angle_of_attack(u_m_s: Any, v_m_s: Any) -> Any:
-    """atan2(-V, U), rad: the angle between the chord and the foil frame's motion (eq. 40's U, V in foil axes).
+    """atan2(-V, U): the angle between the chord and the foil frame's motion (eq. 40's U, V in foil axes).
 
     Positive when the foil moves toward -y while moving forward (the flow meets it from below): the sign of the
     lift. Works on numbers, numpy arrays and CasADi expressions.
+
+    Parameters
+    ----------
+    u_m_s : float, ndarray or casadi expression
+        U, the velocity along the chord toward the leading edge, m/s.
+    v_m_s : float, ndarray or casadi expression
+        V, the velocity normal to the chord, m/s (same shape as ``u_m_s``).
+
+    Returns
+    -------
+    float, ndarray or casadi expression
+        The angle of attack, rad, of the inputs' kind and shape.
     """
     if isinstance(u_m_s, (ca.SX, ca.MX, ca.DM)) or isinstance(v_m_s, (ca.SX, ca.MX, ca.DM)):
         return ca.atan2(-v_m_s, u_m_s)
@@ -174,7 +202,25 @@ def angle_of_attack(u_m_s: Any, v_m_s: Any) -> Any:
 
 @dataclasses.dataclass(frozen=True)
 class FlowTerms:
-    """The model's intermediate quantities as CasADi expressions (``CirculatoryFlow.terms``)."""
+    """The model's intermediate quantities as CasADi expressions (``CirculatoryFlow.terms``).
+
+    Attributes
+    ----------
+    force : (3,) casadi.SX
+        (fx N, fy N, mz N m) in foil axes at F, whole span.
+    lag_rate : (2,) casadi.SX
+        dz/dt, m/s^2.
+    normal_velocity : casadi.SX
+        Q at the three-quarter chord, m/s.
+    effective_normal_velocity : casadi.SX
+        Q_eff (lagged), m/s.
+    suction_parameter : casadi.SX
+        Q_s / |u|, the leading-edge suction parameter before the cap, dimensionless.
+    attached_weight : casadi.SX
+        w in [0, 1]: 1 attached, 0 separated.
+    circulation : casadi.SX
+        Gamma, m^2/s.
+    """
 
     force: ca.SX                # (fx, fy, mz): N, N, N m; foil axes at F, whole span
     lag_rate: ca.SX             # dz/dt, m/s^2
@@ -186,12 +232,25 @@ class FlowTerms:
 
 
 class CirculatoryFlow:
-    """The circulatory flow model of one foil (module docstring), as CasADi expressions and functions.
+    """The circulatory flow model of one foil, as CasADi expressions and functions.
 
-    Args:
-        foil: the Joukowski foil (chord, thickness, span).
-        rho_kg_m3: water density.
-        params: coefficients (default: FlowParameters()).
+    Parameters
+    ----------
+    foil : JoukowskiFoil
+        The foil (chord, thickness, span).
+    rho_kg_m3 : float
+        Water density, kg/m^3, > 0.
+    params : FlowParameters, optional
+        Coefficients (default: FlowParameters()).
+
+    Raises
+    ------
+    FlowModelError
+        For a density that is not positive and finite.
+
+    References
+    ----------
+    docs/flow_model.md, Sec. 2.
     """
 
     lag_state_count = 2
@@ -216,8 +275,20 @@ class CirculatoryFlow:
 
     # ----- the model ------------------------------------------------------------------------------------------
     def terms(self, velocity: ca.SX, lag: ca.SX) -> FlowTerms:
-        """The model's expressions for foil velocity (U, V, Omega) (3-vector, m/s, m/s, rad/s) and lag states
-        (2-vector, m/s)."""
+        """The model's expressions at one foil velocity and lag state.
+
+        Parameters
+        ----------
+        velocity : (3,) casadi.SX
+            Foil velocity (U m/s, V m/s, Omega rad/s) in foil axes.
+        lag : (2,) casadi.SX
+            Lag states, m/s.
+
+        Returns
+        -------
+        FlowTerms
+            Force, lag rate and the intermediate quantities.
+        """
         p = self.params
         u, v, omega = velocity[0], velocity[1], velocity[2]
         eps2 = p.speed_regularization_m_s ** 2
@@ -264,8 +335,18 @@ class CirculatoryFlow:
                          suction_parameter=suction_velocity / speed, attached_weight=weight, circulation=circulation)
 
     def profile_drag(self, velocity: ca.SX) -> ca.SX:
-        """The attached flow's profile drag alone, (fx, fy, mz) = -1/2 rho s c C_D0 |u| (U, V, 0) (for the vortex
-        wake, whose flow is always attached)."""
+        """The attached flow's profile drag alone, for the vortex wake (whose flow is always attached).
+
+        Parameters
+        ----------
+        velocity : (3,) casadi.SX
+            Foil velocity (U m/s, V m/s, Omega rad/s) in foil axes.
+
+        Returns
+        -------
+        (3,) casadi.SX
+            (fx, fy, mz) = -1/2 rho s c C_D0 |u| (U, V, 0), N, N and N m.
+        """
         u, v = velocity[0], velocity[1]
         speed = ca.sqrt(u * u + v * v + self.params.speed_regularization_m_s ** 2)
         drag = 0.5 * self.rho_kg_m3 * self.span_m * self.chord_m * self.params.profile_drag_coefficient * speed
@@ -273,9 +354,12 @@ class CirculatoryFlow:
 
     @cached_property
     def functions(self) -> dict[str, ca.Function]:
-        """CasADi functions: ``flow_force(nu, lag) -> f``, ``flow_lag_rate(nu, lag) -> lag_dot``,
+        """The model's CasADi functions.
+
+        ``flow_force(nu, lag) -> f``, ``flow_lag_rate(nu, lag) -> lag_dot``,
         ``flow_terms(nu, lag) -> (f, lag_dot, Q, Q_eff, lesp, w, Gamma)``, ``profile_drag(nu) -> f``, and
-        ``flow_lag_step(lag, nu0, nu_half, nu1, h) -> lag_next`` (one RK4 step with the velocity prescribed)."""
+        ``flow_lag_step(lag, nu0, nu_half, nu1, h) -> lag_next`` (one RK4 step with the velocity prescribed).
+        """
         nu, lag = ca.SX.sym("nu", 3), ca.SX.sym("lag", 2)
         t = self.terms(nu, lag)
         rate = ca.Function("flow_lag_rate", [nu, lag], [t.lag_rate], ["nu", "lag"], ["lag_dot"])
@@ -300,10 +384,26 @@ class CirculatoryFlow:
 
     # ----- numeric conveniences (CasADi's virtual machine, vectorized over samples) -------------------------------
     def evaluate(self, velocity: npt.ArrayLike, lag: npt.ArrayLike) -> dict[str, Array]:
-        """The model's terms at n samples: velocity (n, 3) as (U, V, Omega), lag (n, 2), m/s.
+        """The model's terms at n samples (CasADi's virtual machine, vectorized over samples).
 
-        Returns arrays keyed as ``flow_terms``'s outputs: ``f`` (n, 3), ``lag_dot`` (n, 2), ``Q``, ``Q_eff``, ``lesp``,
-        ``attached_weight``, ``circulation`` (n,); for one sample given as vectors (3,) and (2,), without the n axis.
+        Parameters
+        ----------
+        velocity : (n, 3) or (3,) array_like
+            Foil velocity (U m/s, V m/s, Omega rad/s) in foil axes.
+        lag : (n, 2) or (2,) array_like
+            Lag states, m/s.
+
+        Returns
+        -------
+        dict of str to ndarray
+            Keyed as ``flow_terms``'s outputs: ``f`` (n, 3), ``lag_dot`` (n, 2), ``Q``, ``Q_eff``, ``lesp``,
+            ``attached_weight``, ``circulation`` (n,); for one sample given as vectors (3,) and (2,), without the n
+        axis.
+
+        Raises
+        ------
+        FlowModelError
+            For shapes other than (n, 3) and (n, 2).
         """
         single = np.ndim(velocity) == 1
         nu = np.atleast_2d(np.asarray(velocity, dtype=float))
@@ -321,7 +421,18 @@ class CirculatoryFlow:
         return result
 
     def steady_lag(self, velocity: Iterable[float]) -> Array:
-        """The lag states of steady motion at this velocity (z_i = Q), m/s."""
+        """The lag states of steady motion at this velocity (z_i = Q).
+
+        Parameters
+        ----------
+        velocity : iterable of 3 floats
+            Foil velocity (U m/s, V m/s, Omega rad/s) in foil axes.
+
+        Returns
+        -------
+        (2,) ndarray
+            Lag states, m/s.
+        """
         u, v, omega = (float(x) for x in velocity)
         normal = -(v + omega * self.three_quarter_chord_x_m)
         return np.array([normal, normal])
@@ -329,12 +440,24 @@ class CirculatoryFlow:
     def integrate_lag(self, velocities: npt.ArrayLike, step_s: float, lag0: npt.ArrayLike) -> Array:
         """Lag states under a prescribed motion, RK4 in one call.
 
-        Args:
-            velocities: (2n + 1, 3) foil velocities (U, V, Omega) at t0, t0 + h/2, t0 + h, ..., t0 + n h.
-            step_s: h, s.
-            lag0: lag states at t0, m/s.
-        Returns:
-            (n + 1, 2) lag states at t0, t0 + h, ..., t0 + n h.
+        Parameters
+        ----------
+        velocities : (2n + 1, 3) array_like
+            Foil velocities (U m/s, V m/s, Omega rad/s) at t0, t0 + h/2, t0 + h, ..., t0 + n h.
+        step_s : float
+            h, s.
+        lag0 : (2,) array_like
+            Lag states at t0, m/s.
+
+        Returns
+        -------
+        (n + 1, 2) ndarray
+            Lag states at t0, t0 + h, ..., t0 + n h, m/s.
+
+        Raises
+        ------
+        FlowModelError
+            For velocities that are not (2n + 1, 3) with n >= 1.
         """
         nu = np.asarray(velocities, dtype=float)
         if nu.ndim != 2 or nu.shape[1] != 3 or nu.shape[0] % 2 != 1 or nu.shape[0] < 3:

@@ -28,7 +28,18 @@ DEFAULT_MEASUREMENTS = Path(__file__).resolve().parents[1] / "test" / "data" / "
 
 
 def read_measurements(path: Path) -> dict[str, list[tuple[float, float]]]:
-    """{quantity: [(St, value), ...]} from the CSV (comment lines start with #)."""
+    """The tank's measurements from the CSV (comment lines start with #).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The CSV file.
+
+    Returns
+    -------
+    dict of str to list of (float, float)
+        {quantity: [(St, value), ...]}.
+    """
     rows = csv.DictReader(line for line in path.read_text().splitlines() if not line.startswith("#"))
     series: dict[str, list[tuple[float, float]]] = {}
     for row in rows:
@@ -38,8 +49,21 @@ def read_measurements(path: Path) -> dict[str, list[tuple[float, float]]]:
 
 def compute(strouhal: list[float],
             models: tuple[str, ...] = ("circulatory", "wake")) -> dict[str, dict[str, list[float]]]:
-    """{model: {"strouhal", "thrust_coefficient", "efficiency", "peak_angle_of_attack_deg",
-    "peak_leading_edge_suction_parameter", "min_attached_weight"}} for Anderson's case (OscillatingFoilResult)."""
+    """The towed-foil figures of Anderson's case for each flow model.
+
+    Parameters
+    ----------
+    strouhal : list of float
+        Strouhal numbers 2 h0 f / U to run.
+    models : tuple of str, optional
+        ``oscillating_foil``'s models.
+
+    Returns
+    -------
+    dict of str to dict of str to list of float
+        {model: {"strouhal", "thrust_coefficient", "efficiency", "peak_angle_of_attack_deg",
+        "peak_leading_edge_suction_parameter", "min_attached_weight"}} (OscillatingFoilResult's figures).
+    """
     speed = REYNOLDS * KINEMATIC_VISCOSITY_WATER_M2_S / CHORD_M
     heave = HEAVE_OVER_CHORD * CHORD_M
     foil = JoukowskiFoil(CHORD_M, THICKNESS_RATIO * CHORD_M, SPAN_M)
@@ -68,6 +92,17 @@ def compute(strouhal: list[float],
 
 def plot(results: dict[str, dict[str, list[float]]], measured: dict[str, list[tuple[float, float]]] | None,
          path: Path) -> None:
+    """Draw thrust coefficient and efficiency against Strouhal number, models and tank.
+
+    Parameters
+    ----------
+    results : dict
+        ``compute``'s output.
+    measured : dict or None
+        ``read_measurements``'s output, or None without tank data.
+    path : pathlib.Path
+        The PNG file to write.
+    """
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -100,7 +135,20 @@ def plot(results: dict[str, dict[str, list[float]]], measured: dict[str, list[tu
 
 
 def run(output_dir: Path, measurements: Path | None = None) -> Path:
-    """Compute, write flow_comparison.png and flow_comparison.json into output_dir; return the figure's path."""
+    """Compute, write flow_comparison.png and flow_comparison.json into output_dir.
+
+    Parameters
+    ----------
+    output_dir : pathlib.Path
+        Where the files go.
+    measurements : pathlib.Path, optional
+        The tank data CSV (default: the tests' copy in the source tree).
+
+    Returns
+    -------
+    pathlib.Path
+        The figure's path.
+    """
     source = measurements if measurements is not None else DEFAULT_MEASUREMENTS
     measured = read_measurements(source) if source.exists() else None
     if measured is None:

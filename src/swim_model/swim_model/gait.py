@@ -22,7 +22,21 @@ Array = npt.NDArray[np.float64]
 
 @dataclasses.dataclass(frozen=True)
 class SinusoidalGait:
-    """phi = phi0 + A sin(w t), theta = B sin(w t + lead): pitch leads heave by ``pitch_lead_rad``."""
+    """phi = phi0 + A sin(w t), theta = B sin(w t + lead): pitch leads heave by ``pitch_lead_rad``.
+
+    Attributes
+    ----------
+    heave_amplitude_rad : float
+        A, rad.
+    pitch_amplitude_rad : float
+        B, rad.
+    frequency_hz : float
+        w / (2 pi), Hz.
+    pitch_lead_rad : float
+        Phase by which pitch leads heave, rad.
+    heave_bias_rad : float
+        phi0, the heave's mean, rad.
+    """
 
     heave_amplitude_rad: float = 0.35
     pitch_amplitude_rad: float = 0.6
@@ -31,11 +45,28 @@ class SinusoidalGait:
     heave_bias_rad: float = 0.0
 
     def mirrored(self) -> "SinusoidalGait":
-        """The same loop run the other way round (pitch lags heave by the same angle)."""
+        """The same loop run the other way round (pitch lags heave by the same angle).
+
+        Returns
+        -------
+        SinusoidalGait
+            This gait with ``pitch_lead_rad`` negated.
+        """
         return dataclasses.replace(self, pitch_lead_rad=-self.pitch_lead_rad)
 
     def shape(self, time_s: float) -> tuple[Array, Array, Array]:
-        """(psi, psidot, psiddot) at time_s: rad, rad/s, rad/s^2."""
+        """The foil's shape coordinates psi = (phi, theta) and their rates at one time.
+
+        Parameters
+        ----------
+        time_s : float
+            Time, s.
+
+        Returns
+        -------
+        tuple of three (2,) ndarray
+            (psi rad, psidot rad/s, psiddot rad/s^2).
+        """
         w = 2.0 * math.pi * self.frequency_hz
         phases = np.array([w * time_s, w * time_s + self.pitch_lead_rad])
         amplitude = np.array([self.heave_amplitude_rad, self.pitch_amplitude_rad])
@@ -45,7 +76,21 @@ class SinusoidalGait:
 
 @dataclasses.dataclass(frozen=True)
 class ShapeDrivenRun:
-    """Samples of a shape-driven run: time (s), q and qdot (nq columns), tau (N m)."""
+    """Samples of a shape-driven run.
+
+    Attributes
+    ----------
+    time_s : (n,) ndarray
+        Sample times, s.
+    q : (n, nq) ndarray
+        Configuration, rad and m.
+    qdot : (n, nq) ndarray
+        Velocity, rad/s and m/s.
+    tau : (n, 2) ndarray
+        Joint torques (heave, pitch), N m.
+    joint_names : tuple of str
+        Names of q's columns.
+    """
 
     time_s: Array
     q: Array
@@ -55,7 +100,22 @@ class ShapeDrivenRun:
 
 
 def zero_momentum_velocity(model: VehicleModel, q: Array, psi_dot: Array) -> Array:
-    """ydot with Mm11 ydot + Mm12 psidot = 0: the unactuated momenta vanish."""
+    """Ydot with Mm11 ydot + Mm12 psidot = 0: the unactuated momenta vanish.
+
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle.
+    q : (nq,) ndarray
+        Configuration, rad and m.
+    psi_dot : (2,) ndarray
+        (phidot, thetadot), rad/s.
+
+    Returns
+    -------
+    (ny,) ndarray
+        ydot, rad/s (and m/s for R), ny = nq - 2.
+    """
     ny = model.n_unactuated
     mass = model.mass_matrix(q)
     return cast(Array, -np.linalg.solve(mass[:ny, :ny], mass[:ny, ny:] @ psi_dot))
@@ -65,7 +125,29 @@ def simulate_gait(model: VehicleModel, gait: SinusoidalGait, duration_s: float, 
                   initial_y: npt.ArrayLike | None = None, rtol: float = 1e-10) -> ShapeDrivenRun:
     """Integrate the unactuated coordinates under the prescribed gait, from zero momentum.
 
-    initial_y: starting (alpha) or (alpha, R); default alpha = 0 and R = the rig's lane 1.
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle (free or constrained).
+    gait : SinusoidalGait
+        The prescribed foil motion.
+    duration_s : float
+        Length of the run, s.
+    sample_period_s : float, optional
+        Spacing of the returned samples, s.
+    initial_y : array_like, optional
+        Starting (alpha) or (alpha, R), rad and m; default alpha = 0 and R = the rig's lane 1.
+    rtol : float, optional
+        Relative tolerance of the DOP853 integrator (absolute tolerance rtol / 100).
+
+    Returns
+    -------
+    ShapeDrivenRun
+        The samples, with the torques that produce the motion.
+
+    References
+    ----------
+    Saimek & Li (2004), eqs. 14-15 and Prop. 1.
     """
     ny = model.n_unactuated
     y0 = np.asarray(initial_y if initial_y is not None else

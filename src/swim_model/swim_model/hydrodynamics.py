@@ -21,7 +21,22 @@ from swim_model.vehicle import VehicleModel, coriolis_from_mass
 
 
 def kirchhoff_force(added: AddedMass, velocity: ca.SX, acceleration: ca.SX) -> ca.SX:
-    """(Fx, Fy, tau_z) on the foil from its frame velocity (U, V, Omega) and its rate (eq. 46)."""
+    """(Fx, Fy, tau_z) on the foil from its frame velocity (U, V, Omega) and its rate (eq. 46).
+
+    Parameters
+    ----------
+    added : AddedMass
+        The foil's added mass.
+    velocity : (3,) casadi.SX
+        (U m/s, V m/s, Omega rad/s) in foil axes.
+    acceleration : (3,) casadi.SX
+        Its rate, m/s^2 and rad/s^2.
+
+    Returns
+    -------
+    (3,) casadi.SX
+        (Fx N, Fy N, tau_z N m) in foil axes.
+    """
     u, v, w = velocity[0], velocity[1], velocity[2]
     inertial = -ca.SX(added.matrix()) @ acceleration
     coupling = ca.vertcat(added.m22 * w * v + added.m26 * w * w,
@@ -31,7 +46,18 @@ def kirchhoff_force(added: AddedMass, velocity: ca.SX, acceleration: ca.SX) -> c
 
 
 def force_route_forward_dynamics(model: VehicleModel) -> ca.Function:
-    """qddot(q, qdot, tau) from eqs. 44-47, solved for qddot (linear in it)."""
+    """qddot(q, qdot, tau) from eqs. 44-47, solved for qddot (linear in it).
+
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle (its mechanism, Q2 and added mass).
+
+    Returns
+    -------
+    casadi.Function
+        (q (nq,), qdot (nq,), tau (2,) N m) -> qddot (nq,), rad/s^2 and m/s^2.
+    """
     s = model.symbolic
     q2 = s.foil_velocity_map
     q2dot_qdot = ca.jtimes(q2 @ s.qdot, s.q, s.qdot)

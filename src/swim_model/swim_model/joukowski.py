@@ -31,8 +31,18 @@ from swim_model.errors import FoilGeometryError
 class AddedMass:
     """Added-mass coefficients in the foil frame (Kirchhoff form, eq. 46).
 
-    ``m11`` (surge, kg), ``m22`` (sway, kg), ``m26 = m62`` (sway-yaw, kg m), ``m66`` (yaw, kg m^2);
-    for the whole span unless stated otherwise.
+    For the whole span unless stated otherwise.
+
+    Attributes
+    ----------
+    m11 : float
+        Surge, kg.
+    m22 : float
+        Sway, kg.
+    m26 : float
+        Sway-yaw coupling m26 = m62, kg m.
+    m66 : float
+        Yaw, kg m^2.
     """
 
     m11: float
@@ -41,39 +51,108 @@ class AddedMass:
     m66: float
 
     def matrix(self) -> npt.NDArray[np.float64]:
-        """M_A = [[m11, 0, 0], [0, m22, m26], [0, m62, m66]] (eq. 41)."""
+        """M_A = [[m11, 0, 0], [0, m22, m26], [0, m62, m66]] (eq. 41).
+
+        Returns
+        -------
+        (3, 3) ndarray
+            M_A, kg, kg m and kg m^2 by entry.
+        """
         return np.array([[self.m11, 0.0, 0.0], [0.0, self.m22, self.m26], [0.0, self.m26, self.m66]])
 
     @classmethod
     def from_matrix(cls, matrix: npt.ArrayLike) -> "AddedMass":
+        """The coefficients of a 3 x 3 added-mass matrix (its sway-yaw entries averaged).
+
+        Parameters
+        ----------
+        matrix : (3, 3) array_like
+            M_A, kg, kg m and kg m^2 by entry.
+
+        Returns
+        -------
+        AddedMass
+            The coefficients.
+        """
         m = np.asarray(matrix, dtype=float)
         return cls(m11=float(m[0, 0]), m22=float(m[1, 1]), m26=float(0.5 * (m[1, 2] + m[2, 1])),
                    m66=float(m[2, 2]))
 
     def scaled(self, factor: float) -> "AddedMass":
+        """Every coefficient times a factor (per-span values times the span, for instance).
+
+        Parameters
+        ----------
+        factor : float
+            The factor (m for a span).
+
+        Returns
+        -------
+        AddedMass
+            The scaled coefficients.
+        """
         return AddedMass(self.m11 * factor, self.m22 * factor, self.m26 * factor, self.m66 * factor)
 
 
 @dataclasses.dataclass(frozen=True)
 class JoukowskiMap:
-    """The map ``z = zeta + zeta_c + a^2/(zeta + zeta_c)`` of the circle ``|zeta| = r_c`` (eq. 1)."""
+    """The map ``z = zeta + zeta_c + a^2/(zeta + zeta_c)`` of the circle ``|zeta| = r_c`` (eq. 1).
+
+    Attributes
+    ----------
+    a_m : float
+        a, m.
+    zeta_c_m : float
+        zeta_c, the circle's offset (real for a symmetric foil), m.
+    r_c_m : float
+        r_c, the circle's radius, m.
+    """
 
     a_m: float
     zeta_c_m: float
     r_c_m: float
 
     def __call__(self, zeta: npt.NDArray[np.complex128]) -> npt.NDArray[np.complex128]:
+        """Map circle-plane points to the foil plane.
+
+        Parameters
+        ----------
+        zeta : ndarray of complex
+            Points of the circle plane, m.
+
+        Returns
+        -------
+        ndarray of complex
+            z = F(zeta), m, of zeta's shape.
+        """
         shifted = zeta + self.zeta_c_m
         return shifted + self.a_m ** 2 / shifted
 
     def profile(self, points: int = 400) -> npt.NDArray[np.complex128]:
-        """Body points z, counter-clockwise, starting at the angle of the trailing edge."""
+        """Body points z, counter-clockwise, starting at the angle of the trailing edge.
+
+        Parameters
+        ----------
+        points : int, optional
+            Number of points.
+
+        Returns
+        -------
+        (points,) ndarray of complex
+            z = x + iy, m.
+        """
         start = math.pi if self.zeta_c_m > 0.0 else 0.0
         angle = start + 2.0 * np.pi * np.arange(points) / points
         return self(self.r_c_m * np.exp(1j * angle))
 
     def max_thickness(self) -> float:
-        """Largest extent of the profile normal to the chord (2 max y: the profile is symmetric)."""
+        """Largest extent of the profile normal to the chord (2 max y: the profile is symmetric).
+
+        Returns
+        -------
+        float
+            Thickness, m.
+        """
         def negative_half_thickness(angle: float) -> float:
             return -float(self(np.array([self.r_c_m * np.exp(1j * angle)]))[0].imag)
         grid = np.linspace(0.0, np.pi, 721)
@@ -84,12 +163,29 @@ class JoukowskiMap:
         return -2.0 * float(result.fun)
 
     def chord(self) -> float:
-        """Extent along x, from the point of smallest x to the point of largest x."""
+        """Extent along x, from the point of smallest x to the point of largest x.
+
+        Returns
+        -------
+        float
+            Chord, m.
+        """
         x = self.profile(4096).real
         return float(x.max() - x.min())
 
     def added_mass_per_span(self, density_kg_m3: float) -> AddedMass:
-        """Added mass per metre of span about the map origin (Appendix A.1)."""
+        """Added mass per metre of span about the map origin (Appendix A.1).
+
+        Parameters
+        ----------
+        density_kg_m3 : float
+            Fluid density, kg/m^3.
+
+        Returns
+        -------
+        AddedMass
+            Per span: kg/m, kg, kg m.
+        """
         return AddedMass.from_matrix(added_mass_from_circle_map(self, self.r_c_m, density_kg_m3))
 
 
@@ -108,8 +204,22 @@ def _symmetric_chord(a_m: float, offset_ratio: float) -> float:
 class JoukowskiFoil:
     """A symmetric Joukowski foil of given chord, maximum thickness and span (paper Sec. 2).
 
-    The map parameters follow from the two lengths: the thickness ratio fixes ``zeta_c / a``
-    (solved numerically), the chord then fixes ``a``.
+    The map parameters follow from the two lengths: the thickness ratio fixes ``zeta_c / a`` (solved
+    numerically), the chord then fixes ``a``.
+
+    Parameters
+    ----------
+    chord_m : float
+        Chord, m, > 0.
+    thickness_m : float
+        Largest thickness, m, below half the chord.
+    span_m : float, optional
+        Span, m.
+
+    Raises
+    ------
+    FoilGeometryError
+        For a length that is not positive and finite, or a thickness of half the chord or more.
     """
 
     def __init__(self, chord_m: float, thickness_m: float, span_m: float = 1.0) -> None:
@@ -134,32 +244,86 @@ class JoukowskiFoil:
 
     @property
     def leading_edge_x_m(self) -> float:
+        """The leading edge's x in the foil frame, m."""
         return float(self.map(np.array([self.map.r_c_m + 0j]))[0].real)
 
     @property
     def trailing_edge_x_m(self) -> float:
+        """The trailing edge's (cusp's) x in the foil frame, -2a, m."""
         return -2.0 * self.map.a_m
 
     def profile(self, points: int = 400) -> npt.NDArray[np.complex128]:
-        """Profile points z = x + iy in the foil frame, m, counter-clockwise from the trailing edge."""
+        """Profile points in the foil frame, counter-clockwise from the trailing edge.
+
+        Parameters
+        ----------
+        points : int, optional
+            Number of points.
+
+        Returns
+        -------
+        (points,) ndarray of complex
+            z = x + iy, m.
+        """
         return self.map.profile(points)
 
     def added_mass_per_span(self, rho_kg_m3: float) -> AddedMass:
-        """m11, m22, m26, m66 per metre of span, about the map origin."""
+        """m11, m22, m26, m66 per metre of span, about the map origin.
+
+        Parameters
+        ----------
+        rho_kg_m3 : float
+            Water density, kg/m^3.
+
+        Returns
+        -------
+        AddedMass
+            Per span: kg/m, kg, kg m.
+        """
         return self.map.added_mass_per_span(rho_kg_m3)
 
     def added_mass(self, rho_kg_m3: float) -> AddedMass:
-        """m11, m22, m26, m66 of the whole span (the M_A of eq. 41 and eq. 46)."""
+        """m11, m22, m26, m66 of the whole span (the M_A of eq. 41 and eq. 46).
+
+        Parameters
+        ----------
+        rho_kg_m3 : float
+            Water density, kg/m^3.
+
+        Returns
+        -------
+        AddedMass
+            kg, kg m and kg m^2.
+        """
         return self.added_mass_per_span(rho_kg_m3).scaled(self.span_m)
 
     def __repr__(self) -> str:
+        """The foil's lengths and its map's parameters."""
         m = self.map
         return (f"JoukowskiFoil(chord_m={self.chord_m}, thickness_m={self.thickness_m}, span_m={self.span_m}; "
                 f"a={m.a_m:.6g} m, zeta_c={m.zeta_c_m:.6g} m, r_c={m.r_c_m:.6g} m)")
 
 
 def ellipse_map(semi_axis_x_m: float, semi_axis_y_m: float) -> JoukowskiMap:
-    """The centred Joukowski map (zeta_c = 0) whose image is the ellipse with these semi-axes."""
+    """The centred Joukowski map (zeta_c = 0) whose image is the ellipse with these semi-axes.
+
+    Parameters
+    ----------
+    semi_axis_x_m : float
+        Semi-axis along x, m.
+    semi_axis_y_m : float
+        Semi-axis along y, m, with 0 < semi_axis_y_m < semi_axis_x_m.
+
+    Returns
+    -------
+    JoukowskiMap
+        The map.
+
+    Raises
+    ------
+    FoilGeometryError
+        Unless semi_axis_x_m > semi_axis_y_m > 0.
+    """
     if not semi_axis_x_m > semi_axis_y_m > 0.0:
         raise FoilGeometryError("an ellipse map needs semi_axis_x_m > semi_axis_y_m > 0")
     r_c = 0.5 * (semi_axis_x_m + semi_axis_y_m)

@@ -27,18 +27,52 @@ Vec = ca.SX
 
 
 def unit_along(angle: ca.SX) -> ca.SX:
-    """(cos angle, sin angle)."""
+    """The unit vector at an angle from +x, e_r(angle).
+
+    Parameters
+    ----------
+    angle : casadi.SX
+        Angle from the tank frame's +x, counter-clockwise, rad.
+
+    Returns
+    -------
+    (2,) casadi.SX
+        (cos angle, sin angle).
+    """
     return ca.vertcat(ca.cos(angle), ca.sin(angle))
 
 
 def unit_across(angle: ca.SX) -> ca.SX:
-    """dir(angle) = (-sin angle, cos angle): e_r(angle) rotated by +90 deg."""
+    """dir(angle) = (-sin angle, cos angle): e_r(angle) rotated by +90 deg.
+
+    Parameters
+    ----------
+    angle : casadi.SX
+        Angle from the tank frame's +x, counter-clockwise, rad.
+
+    Returns
+    -------
+    (2,) casadi.SX
+        The unit vector.
+    """
     return ca.vertcat(-ca.sin(angle), ca.cos(angle))
 
 
 @dataclasses.dataclass(frozen=True)
 class Coordinates:
-    """The full coordinates (alpha, R, phi, theta) as symbols or expressions of the chosen q."""
+    """The full coordinates (alpha, R, phi, theta) as symbols or expressions of the chosen q.
+
+    Attributes
+    ----------
+    alpha : casadi.SX
+        Hub angle, rad.
+    radius : casadi.SX
+        R, the platform's distance from the hub axis along the rails, m.
+    phi : casadi.SX
+        Heave angle of the link relative to the rails' normal, rad.
+    theta : casadi.SX
+        Pitch angle of the foil, rad.
+    """
 
     alpha: ca.SX
     radius: ca.SX
@@ -48,7 +82,21 @@ class Coordinates:
 
 @dataclasses.dataclass(frozen=True)
 class RigidBody:
-    """One rigid body: centre-of-mass position, absolute angle, mass and central inertia."""
+    """One rigid body: centre-of-mass position, absolute angle, mass and central inertia.
+
+    Attributes
+    ----------
+    name : str
+        The body's name (``platform``, ``heave_link``, ...).
+    position : (2,) casadi.SX
+        Centre of mass in the tank frame, m.
+    angle : casadi.SX
+        Absolute angle, rad.
+    mass_kg : float
+        Mass, kg.
+    inertia_kg_m2 : float
+        Inertia about the centre of mass, kg m^2.
+    """
 
     name: str
     position: ca.SX
@@ -58,14 +106,42 @@ class RigidBody:
 
 
 def foil_reference_point(c: Coordinates, rig: RigParameters) -> ca.SX:
-    """F = (R - Ld) e_r + Lh dir(alpha + phi) + Lf dir(alpha + theta)."""
+    """F = (R - Ld) e_r + Lh dir(alpha + phi) + Lf dir(alpha + theta), the foil frame's origin (eq. 40).
+
+    Parameters
+    ----------
+    c : Coordinates
+        The coordinates.
+    rig : RigParameters
+        Ld, Lh and Lf.
+
+    Returns
+    -------
+    (2,) casadi.SX
+        F in the tank frame, m.
+    """
     return ((c.radius - rig.heave_pivot_inset_m) * unit_along(c.alpha)
             + rig.heave_link_length_m * unit_across(c.alpha + c.phi)
             + rig.pitch_axis_to_foil_reference_m * unit_across(c.alpha + c.theta))
 
 
 def foil_velocity_map(c: Coordinates, q: ca.SX, rig: RigParameters) -> ca.SX:
-    """Q2(q) (3 x nq): (U, V, Omega) = Q2(q) qdot (eq. 40), foil frame at the foil reference point."""
+    """Q2(q): (U, V, Omega) = Q2(q) qdot (eq. 40), foil frame at the foil reference point.
+
+    Parameters
+    ----------
+    c : Coordinates
+        The coordinates as expressions of q.
+    q : (nq,) casadi.SX
+        The model's configuration symbols, rad and m.
+    rig : RigParameters
+        Ld, Lh and Lf.
+
+    Returns
+    -------
+    (3, nq) casadi.SX
+        Q2: qdot to (U m/s, V m/s, Omega rad/s).
+    """
     jacobian_f = ca.jacobian(foil_reference_point(c, rig), q)
     chord = unit_across(c.alpha + c.theta)
     normal = ca.vertcat(-chord[1], chord[0])
@@ -75,8 +151,20 @@ def foil_velocity_map(c: Coordinates, q: ca.SX, rig: RigParameters) -> ca.SX:
 def rigid_bodies(c: Coordinates, rig: RigParameters) -> list[RigidBody]:
     """The mechanism's bodies (the paper's M(q) of eq. 4; all inertias assumed, see rig.yaml).
 
-    Motor rotors turn at alphadot + N phidot and alphadot + N thetadot (gear ratio N), both motors
-    being on the platform; their masses are part of the platform's.
+    Motor rotors turn at alphadot + N phidot and alphadot + N thetadot (gear ratio N), both motors being on the
+    platform; their masses are part of the platform's.
+
+    Parameters
+    ----------
+    c : Coordinates
+        The coordinates.
+    rig : RigParameters
+        Lengths, masses, inertias and gear ratios.
+
+    Returns
+    -------
+    list of RigidBody
+        Hub arm, platform, heave and pitch rotors, heave link, foil assembly.
     """
     origin = ca.SX.zeros(2)
     pivot = (c.radius - rig.heave_pivot_inset_m) * unit_along(c.alpha)
@@ -99,7 +187,22 @@ def rigid_bodies(c: Coordinates, rig: RigParameters) -> list[RigidBody]:
 
 
 def rigid_mass_matrix(c: Coordinates, q: ca.SX, rig: RigParameters) -> ca.SX:
-    """M(q) = sum over bodies of m J_v' J_v + I J_w' J_w (J_v, J_w: Jacobians of position and angle)."""
+    """M(q) = sum over bodies of m J_v' J_v + I J_w' J_w (J_v, J_w: Jacobians of position and angle; eq. 4).
+
+    Parameters
+    ----------
+    c : Coordinates
+        The coordinates as expressions of q.
+    q : (nq,) casadi.SX
+        The model's configuration symbols, rad and m.
+    rig : RigParameters
+        Lengths, masses, inertias and gear ratios.
+
+    Returns
+    -------
+    (nq, nq) casadi.SX
+        M(q), kg, kg m and kg m^2 by entry.
+    """
     nq = q.shape[0]
     mass = ca.SX.zeros(nq, nq)
     for body in rigid_bodies(c, rig):

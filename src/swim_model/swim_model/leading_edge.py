@@ -1,10 +1,10 @@
-"""The leading edge's suction cap, shared by the reduced flow model (swim_model.flow) and the vortex wake
-(swim_model.wake): one edge, one criterion, one formula.
+"""The leading edge's suction cap, shared by the reduced flow model and the vortex wake.
 
-A rounded leading edge holds suction only up to a critical leading-edge suction parameter (LESP); beyond it the flow
-separates there (Ramesh, Gopalarathnam, Granlund, Ol & Edwards, J. Fluid Mech. 751, 2014). Both models cap the
-suction smoothly, x / (1 + (x / limit)^n)^(1/n), so that the optimizer has derivatives everywhere: flow caps the
-suction velocity at CRITICAL_LEADING_EDGE_SUCTION |u|, the wake its LESP at CRITICAL_LEADING_EDGE_SUCTION.
+swim_model.flow and swim_model.wake: one edge, one criterion, one formula. A rounded leading edge holds suction
+only up to a critical leading-edge suction parameter (LESP); beyond it the flow separates there (Ramesh,
+Gopalarathnam, Granlund, Ol & Edwards, J. Fluid Mech. 751, 2014). Both models cap the suction smoothly,
+x / (1 + (x / limit)^n)^(1/n), so that the optimizer has derivatives everywhere: flow caps the suction velocity at
+CRITICAL_LEADING_EDGE_SUCTION |u|, the wake its LESP at CRITICAL_LEADING_EDGE_SUCTION.
 
 Pure arithmetic: smooth_cap works on floats and on CasADi expressions alike, and this module sits below both models
 (flow imports the towed foil, which imports the wake).
@@ -26,13 +26,40 @@ SPEED_REGULARIZATION_M_S = 1.0e-7
 
 
 def is_cap_exponent(exponent: object) -> bool:
-    """Whether exponent can be smooth_cap's: an even integer >= 2 (an odd one leaves 1 + (value / limit)^n negative
-    for value below -limit)."""
+    """Whether exponent can be smooth_cap's: an even integer >= 2.
+
+    An odd one leaves 1 + (value / limit)^n negative for value below -limit.
+
+    Parameters
+    ----------
+    exponent : object
+        The candidate.
+
+    Returns
+    -------
+    bool
+        True for an even int >= 2 (not a bool).
+    """
     return isinstance(exponent, int) and not isinstance(exponent, bool) and exponent >= 2 and exponent % 2 == 0
 
 
 def smooth_cap(value: Any, limit: Any, exponent: int) -> Any:
-    """value / (1 + (value / limit)^exponent)^(1/exponent): value where |value| << limit, limit in size where
-    |value| >> limit, smooth through zero for an even exponent. value and limit in one unit (a float or a CasADi
-    expression each); the result in that unit."""
+    """Value / (1 + (value / limit)^exponent)^(1/exponent).
+
+    value where |value| << limit, limit in size where |value| >> limit, smooth through zero for an even exponent.
+
+    Parameters
+    ----------
+    value : float or casadi expression
+        The quantity to cap, in the unit of ``limit``.
+    limit : float or casadi expression
+        The cap, > 0.
+    exponent : int
+        The saturation's order, even (``is_cap_exponent``).
+
+    Returns
+    -------
+    float or casadi expression
+        The capped value, in value's unit.
+    """
     return value / (1.0 + (value / limit) ** exponent) ** (1.0 / exponent)

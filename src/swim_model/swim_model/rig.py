@@ -85,8 +85,51 @@ def _field_name(key: str) -> str:
 class RigParameters:
     """The rig's parameters in SI units (field names carry the unit).
 
-    Symbols of the paper: ``heave_link_length_m`` is Lh, ``heave_pivot_inset_m`` is Ld and
-    ``pitch_axis_to_foil_reference_m`` is Lf of eq. 40.
+    Each value's source in the paper, or why it was assumed, is beside its key in ``config/rig.yaml``. Symbols of
+    the paper: ``heave_link_length_m`` is Lh, ``heave_pivot_inset_m`` is Ld and ``pitch_axis_to_foil_reference_m``
+    is Lf of eq. 40.
+
+    Attributes
+    ----------
+    foil_chord_m, foil_max_thickness_m, foil_span_m : float
+        The foil's chord, largest thickness and submerged span, m (Sec. 2).
+    water_density_kg_m3 : float
+        Water density, kg/m^3.
+    heave_link_length_m : float
+        Lh, heave axis to pitch axis, m.
+    heave_pivot_inset_m : float
+        Ld, signed, from the platform's centre of mass in to the heave axis, m.
+    pitch_axis_to_foil_reference_m : float
+        Lf, signed, from the pitch axis along the chord to the foil frame's origin, m.
+    tank_diameter_m : float
+        The tank's diameter, m.
+    constrained_lane_radius_m, lane_1_radius_m, lane_2_radius_m : float
+        R of the laterally constrained vehicle and of the paper's two lanes, m.
+    hub_arm_inertia_kg_m2 : float
+        Hub, rails and hub encoder about the hub axis, kg m^2.
+    platform_mass_kg, platform_inertia_kg_m2 : float
+        The platform with both motors: mass, kg, and inertia about its centre of mass, kg m^2.
+    heave_link_mass_kg, heave_link_cg_distance_m, heave_link_inertia_kg_m2 : float
+        The heave link: mass, kg; centre of mass from the heave axis, m; inertia about it, kg m^2.
+    foil_assembly_mass_kg, foil_assembly_cg_offset_m, foil_assembly_inertia_kg_m2 : float
+        Foil, pitch shaft and pulley: mass, kg; centre of mass along the chord from the pitch axis, m; inertia
+        about it, kg m^2.
+    heave_rotor_inertia_kg_m2, pitch_rotor_inertia_kg_m2 : float
+        Motor rotor inertias, kg m^2.
+    heave_gear_ratio, pitch_gear_ratio : float
+        Gear ratios N, motor turns per joint turn.
+    limits : RigLimits
+        The joints' limits, the file's ``limits`` section (swim_model.limits): planning ranges, soft margins, hard
+        stops, largest speeds and torque limits; ``heave_torque_limit_n_m``, ``pitch_torque_limit_n_m``,
+        ``torque_limits_n_m`` and ``hard_limits_rad`` read it.
+    heave_encoder_lines_per_rev, pitch_encoder_lines_per_rev, hub_encoder_lines_per_rev : float
+        Encoder lines per motor (or hub) revolution.
+    rail_encoder_lines_per_m : float
+        Rail encoder lines per metre.
+    sample_period_s : float
+        The rig's control sample period, s.
+    source_path : str
+        The file the values came from ("" when built in code); not compared.
     """
 
     foil_chord_m: float
@@ -142,36 +185,84 @@ class RigParameters:
         return self.limits.hard_limits_rad
 
     def replace(self, **changes: Any) -> "RigParameters":
-        """A copy with some values (or the limits record) changed, validated like a loaded file."""
+        """A copy with some values (or the limits record) changed, validated like a loaded file.
+
+        Parameters
+        ----------
+        **changes : float or RigLimits
+            New values by field name, SI (``limits``: a RigLimits).
+
+        Returns
+        -------
+        RigParameters
+            The changed copy.
+
+        Raises
+        ------
+        RigConfigError
+            When the changed values are inconsistent (a thickness not below the chord, a lane outside the tank, a
+            non-finite value).
+        TypeError
+            For a name that is no field.
+        """
         changed = dataclasses.replace(self, **changes)   # dataclasses.replace checks the names when it runs
         _check_consistency(changed)
         return changed
 
     def as_dict(self) -> dict[str, float]:
-        """The SI values by field name, the torque limits the primitives are solved against among them (no source
-        path, no other limits)."""
+        """The SI values by field name, the torque limits the primitives are solved against among them.
+
+        Returns
+        -------
+        dict of str to float
+            Field name to value (no source path, no limits but the two torque limits).
+        """
         values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
                   if f.name not in ("source_path", "limits")}
         return {**values, "heave_torque_limit_n_m": self.heave_torque_limit_n_m,
                 "pitch_torque_limit_n_m": self.pitch_torque_limit_n_m}
 
     def digest(self) -> str:
-        """SHA-256 of the SI values: primitive libraries record it to detect a different rig."""
+        """SHA-256 of the SI values: primitive libraries record it to detect a different rig.
+
+        Returns
+        -------
+        str
+            Hex digest.
+        """
         canonical = json.dumps({k: repr(v) for k, v in sorted(self.as_dict().items())}, sort_keys=True)
         return hashlib.sha256(canonical.encode()).hexdigest()
 
 
 def default_rig_path() -> Path:
-    """The rig file shipped with swim_model."""
+    """The rig file shipped with swim_model.
+
+    Returns
+    -------
+    pathlib.Path
+        ``swim_model/config/rig.yaml`` in the installed package.
+    """
     return Path(str(resources.files("swim_model") / "config" / "rig.yaml"))
 
 
 def load_rig(path: str | Path | None = None) -> RigParameters:
-    """Load and validate a rig file (default: the shipped ``config/rig.yaml``).
+    """Load and validate a rig file.
 
-    Raises:
-        RigConfigError: the file is missing or unreadable, or an entry is missing, unknown,
-            in a unit of the wrong dimension, without ``source``/``assumed``, or impossible.
+    Parameters
+    ----------
+    path : str or pathlib.Path, optional
+        The rig file (default: the shipped ``config/rig.yaml``).
+
+    Returns
+    -------
+    RigParameters
+        The values in SI.
+
+    Raises
+    ------
+    RigConfigError
+        The file is missing or unreadable, or an entry is missing, unknown, in a unit of the wrong dimension,
+        without ``source``/``assumed``, or impossible.
     """
     rig_path = Path(path) if path is not None else default_rig_path()
     try:
@@ -184,7 +275,25 @@ def load_rig(path: str | Path | None = None) -> RigParameters:
 
 
 def rig_from_mapping(document: Any, origin: str = "<mapping>") -> RigParameters:
-    """Validate a parsed rig document (the YAML's structure) and convert it to SI."""
+    """Validate a parsed rig document (the YAML's structure) and convert it to SI.
+
+    Parameters
+    ----------
+    document : mapping
+        ``{"format_version": 1, "parameters": {key: entry}}``, each entry as ``units.entry_to_si`` reads it.
+    origin : str, optional
+        Where the document came from, for messages and ``source_path``.
+
+    Returns
+    -------
+    RigParameters
+        The values in SI.
+
+    Raises
+    ------
+    RigConfigError
+        For a wrong format version, or a missing, unknown, badly unitted, unsourced or impossible entry.
+    """
     if not isinstance(document, Mapping):
         raise RigConfigError(f"{origin}: expected a mapping with 'format_version' and 'parameters'")
     if document.get("format_version") != RIG_FORMAT_VERSION:

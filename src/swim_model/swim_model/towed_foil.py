@@ -54,7 +54,23 @@ WAKE_STARTUP_CHORDS = 8.0                  # the starting vortex is 8 chords beh
 
 @dataclasses.dataclass(frozen=True)
 class TowedFoilKinematics:
-    """Prescribed heave and pitch of a towed foil (module docstring); all methods take time arrays in s."""
+    """Prescribed heave and pitch of a towed foil (kinematics: the module docstring).
+
+    Attributes
+    ----------
+    speed_m_s : float
+        Towing speed U along +X, m/s.
+    heave_amplitude_m : float
+        h0 of h = h0 sin(w t), m.
+    pitch_amplitude_rad : float
+        theta0 of theta = theta0 sin(w t + psi), rad.
+    frequency_hz : float
+        f = w / (2 pi), Hz.
+    phase_rad : float
+        psi, pitch ahead of heave, rad.
+    pivot_x_m : float
+        The pivot's x in the foil frame (x toward the leading edge from the map origin), m.
+    """
 
     speed_m_s: float
     heave_amplitude_m: float
@@ -65,29 +81,74 @@ class TowedFoilKinematics:
 
     @property
     def omega_rad_s(self) -> float:
+        """Angular frequency w = 2 pi f, rad/s."""
         return 2.0 * math.pi * self.frequency_hz
 
     def heave(self, t: Array) -> tuple[Array, Array, Array]:
-        """(h, h', h''): m, m/s, m/s^2."""
+        """The heave and its first two derivatives.
+
+        Parameters
+        ----------
+        t : (n,) ndarray
+            Times, s.
+
+        Returns
+        -------
+        tuple of three (n,) ndarray
+            (h m, h' m/s, h'' m/s^2).
+        """
         w = self.omega_rad_s
         return (self.heave_amplitude_m * np.sin(w * t), self.heave_amplitude_m * w * np.cos(w * t),
                 -self.heave_amplitude_m * w * w * np.sin(w * t))
 
     def pitch(self, t: Array) -> tuple[Array, Array, Array]:
-        """(theta, theta', theta''): rad, rad/s, rad/s^2."""
+        """The pitch angle and its first two derivatives.
+
+        Parameters
+        ----------
+        t : (n,) ndarray
+            Times, s.
+
+        Returns
+        -------
+        tuple of three (n,) ndarray
+            (theta rad, theta' rad/s, theta'' rad/s^2).
+        """
         w = self.omega_rad_s
         arg = w * t + self.phase_rad
         return (self.pitch_amplitude_rad * np.sin(arg), self.pitch_amplitude_rad * w * np.cos(arg),
                 -self.pitch_amplitude_rad * w * w * np.sin(arg))
 
     def pose(self, t: Array) -> tuple[Array, Array, Array]:
-        """(X, Y, theta) of the foil frame's origin F in the tank frame: m, m, rad."""
+        """The foil frame's origin F and the chord's angle in the tank frame.
+
+        Parameters
+        ----------
+        t : (n,) ndarray
+            Times, s.
+
+        Returns
+        -------
+        tuple of three (n,) ndarray
+            (X m, Y m, theta rad).
+        """
         h, _, _ = self.heave(t)
         theta, _, _ = self.pitch(t)
         return (self.speed_m_s * t - self.pivot_x_m * np.cos(theta), h - self.pivot_x_m * np.sin(theta), theta)
 
     def velocity(self, t: Array) -> Array:
-        """(U, V, Omega) of F in foil axes (eq. 40's frame), shape (n, 3)."""
+        """The velocity of F in foil axes (eq. 40's frame).
+
+        Parameters
+        ----------
+        t : (n,) ndarray
+            Times, s.
+
+        Returns
+        -------
+        (n, 3) ndarray
+            (U m/s, V m/s, Omega rad/s).
+        """
         _, hd, _ = self.heave(t)
         theta, thetad, _ = self.pitch(t)
         c, s = np.cos(theta), np.sin(theta)
@@ -96,7 +157,18 @@ class TowedFoilKinematics:
         return np.column_stack([u, v, thetad])
 
     def acceleration(self, t: Array) -> Array:
-        """d/dt of (U, V, Omega) (components in the turning foil axes), shape (n, 3)."""
+        """The rate of (U, V, Omega), components in the turning foil axes.
+
+        Parameters
+        ----------
+        t : (n,) ndarray
+            Times, s.
+
+        Returns
+        -------
+        (n, 3) ndarray
+            (U' m/s^2, V' m/s^2, Omega' rad/s^2).
+        """
         _, hd, hdd = self.heave(t)
         theta, thetad, thetadd = self.pitch(t)
         c, s = np.cos(theta), np.sin(theta)
@@ -106,7 +178,18 @@ class TowedFoilKinematics:
                                 thetadd])
 
     def pivot_velocity(self, t: Array) -> Array:
-        """(U_P, V_P) of the pivot in foil axes, shape (n, 2)."""
+        """The pivot's velocity in foil axes.
+
+        Parameters
+        ----------
+        t : (n,) ndarray
+            Times, s.
+
+        Returns
+        -------
+        (n, 2) ndarray
+            (U_P, V_P), m/s.
+        """
         _, hd, _ = self.heave(t)
         theta, _, _ = self.pitch(t)
         c, s = np.cos(theta), np.sin(theta)
@@ -114,7 +197,26 @@ class TowedFoilKinematics:
 
 
 def kirchhoff_force(added: AddedMass, velocity: Array, acceleration: Array) -> Array:
-    """The ideal model's added-mass force and moment (eq. 46) in foil axes at F, (n, 3), from (n, 3) arrays."""
+    """The ideal model's added-mass force and moment (eq. 46) in foil axes at F.
+
+    Parameters
+    ----------
+    added : AddedMass
+        The foil's added mass.
+    velocity : (n, 3) ndarray
+        (U m/s, V m/s, Omega rad/s) of F in foil axes.
+    acceleration : (n, 3) ndarray
+        Its rate, m/s^2 and rad/s^2.
+
+    Returns
+    -------
+    (n, 3) ndarray
+        (Fx N, Fy N, tau_z N m).
+
+    References
+    ----------
+    Saimek & Li (2004), eq. 46.
+    """
     u, v, w = velocity.T
     ud, vd, wd = acceleration.T
     return np.column_stack([-added.m11 * ud + added.m22 * w * v + added.m26 * w * w,
@@ -124,17 +226,44 @@ def kirchhoff_force(added: AddedMass, velocity: Array, acceleration: Array) -> A
 
 @dataclasses.dataclass(frozen=True)
 class OscillatingFoilResult:
-    """Cycle means and time series of a towed oscillating foil (module docstring for signs and definitions).
+    """Cycle means and time series of a towed oscillating foil (signs and definitions: the module docstring).
 
-    Scalars: ``mean_thrust_n`` (N, +X), ``mean_power_w`` (W, put in by the heave and pitch drives),
-    ``thrust_coefficient`` T / (1/2 rho U^2 c s), ``power_coefficient`` P / (1/2 rho U^3 c s), ``efficiency`` T U / P,
-    ``strouhal`` 2 h0 f / U, ``reduced_frequency`` w c / (2 U), ``peak_angle_of_attack_rad`` (largest |atan2(-V, U)| at
-    the foil frame's origin), ``peak_angle_of_attack_at_pivot_rad``, ``lift_amplitude_n`` (first harmonic of the
-    force along +Y), ``mean_lift_n``, and two indicators of separation over the averaged cycles:
-    ``peak_leading_edge_suction_parameter`` (largest |A0|, the leading-edge suction parameter before its cap,
-    swim_model.leading_edge) and ``min_attached_weight`` (the reduced model's smallest attached-flow weight w: 1
-    attached, 0 stalled; 1 for the wake, whose flow never stalls). Series over the averaged cycles, shape (n,):
-    ``time_s``, ``thrust_n``, ``lift_n``, ``power_w``, ``angle_of_attack_rad``.
+    Attributes
+    ----------
+    model : str
+        "circulatory" or "wake".
+    mean_thrust_n : float
+        Mean fluid force along +X, N.
+    mean_power_w : float
+        Mean power the heave and pitch drives put in, W.
+    thrust_coefficient : float
+        T / (1/2 rho U^2 c s).
+    power_coefficient : float
+        P / (1/2 rho U^3 c s).
+    efficiency : float
+        T U / P.
+    strouhal : float
+        2 h0 f / U.
+    reduced_frequency : float
+        w c / (2 U).
+    peak_angle_of_attack_rad : float
+        Largest |atan2(-V, U)| at the foil frame's origin, rad.
+    peak_angle_of_attack_at_pivot_rad : float
+        The same at the pivot, rad.
+    lift_amplitude_n : float
+        First harmonic of the force along +Y, N.
+    mean_lift_n : float
+        Mean force along +Y, N.
+    peak_leading_edge_suction_parameter : float
+        Largest |A0| over the averaged cycles, the leading-edge suction parameter before its cap
+        (swim_model.leading_edge).
+    min_attached_weight : float
+        The reduced model's smallest attached-flow weight w (1 attached, 0 stalled; 1 for the wake, whose flow
+        never stalls).
+    cycles, averaged_cycles, steps_per_cycle : int
+        Cycles simulated, cycles averaged (the last ones), time steps per cycle.
+    time_s, thrust_n, lift_n, power_w, angle_of_attack_rad : (n,) ndarray
+        Series over the averaged cycles: s, N, N, W, rad.
     """
 
     model: str
@@ -176,24 +305,52 @@ def oscillating_foil(foil: JoukowskiFoil, speed_m_s: float, heave_amplitude_m: f
                      wake_parameters: WakeParameters | None = None) -> OscillatingFoilResult:
     """Tow the foil at constant speed while it heaves and pitches; return thrust, power and efficiency.
 
-    Args:
-        foil: the Joukowski foil (its chord and span set the coefficients' reference area c s).
-        speed_m_s: towing speed U > 0.
-        heave_amplitude_m: h0 >= 0 of h = h0 sin(w t).
-        pitch_amplitude_rad: theta0 of theta = theta0 sin(w t + phase).
-        frequency_hz: f > 0.
-        phase_rad: psi, pitch ahead of heave (pi/2 makes thrust).
-        pivot_from_leading_edge_m: pitch axis position behind the leading edge along the chord.
-        model: "circulatory" (flow.py's reduced model) or "wake" (wake.py's vortices plus flow.py's profile drag).
-        cycles: total cycles simulated (default: enough start-up cycles to travel 30 chords for the reduced model,
-            8 for the wake, at least 2, plus ``averaged_cycles``).
-        averaged_cycles: the last cycles, averaged.
-        steps_per_cycle: time steps per cycle (default: see the module constants).
-        water_density_kg_m3: rho.
-        flow_parameters: the reduced model's coefficients (the wake uses its profile drag coefficient and its
-            leading edge's critical suction).
-        wake_parameters: the wake's numerical parameters (default: WakeParameters with room for one cycle of
-            unmerged vortices).
+    Parameters
+    ----------
+    foil : JoukowskiFoil
+        The foil (its chord and span set the coefficients' reference area c s).
+    speed_m_s : float
+        Towing speed U > 0, m/s.
+    heave_amplitude_m : float
+        h0 >= 0 of h = h0 sin(w t), m.
+    pitch_amplitude_rad : float
+        theta0 of theta = theta0 sin(w t + phase), rad.
+    frequency_hz : float
+        f > 0, Hz.
+    phase_rad : float
+        psi, pitch ahead of heave, rad (pi/2 makes thrust).
+    pivot_from_leading_edge_m : float
+        Pitch axis position behind the leading edge along the chord, m.
+    model : {"circulatory", "wake"}, optional
+        flow.py's reduced model, or wake.py's vortices plus flow.py's profile drag.
+    cycles : int, optional
+        Total cycles simulated (default: enough start-up cycles to travel 30 chords for the reduced model, 8 for
+        the wake, at least 2, plus ``averaged_cycles``).
+    averaged_cycles : int, optional
+        The last cycles, averaged.
+    steps_per_cycle : int, optional
+        Time steps per cycle (default: the module's REDUCED_/WAKE_ constants).
+    water_density_kg_m3 : float, optional
+        rho, kg/m^3.
+    flow_parameters : FlowParameters, optional
+        The reduced model's coefficients (the wake uses its profile drag coefficient and its leading edge's
+        critical suction).
+    wake_parameters : WakeParameters, optional
+        The wake's numerical parameters (default: WakeParameters with room for one cycle of unmerged vortices).
+
+    Returns
+    -------
+    OscillatingFoilResult
+        Cycle means and the averaged cycles' series.
+
+    Raises
+    ------
+    FlowModelError
+        For an unknown model, a non-positive speed or frequency, or cycle and step counts that cannot be run.
+
+    References
+    ----------
+    Anderson, Streitlien, Barrett & Triantafyllou, J. Fluid Mech. 360 (1998): the experiment and its definitions.
     """
     from swim_model.flow import CirculatoryFlow, FlowParameters
 

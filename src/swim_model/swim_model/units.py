@@ -40,10 +40,30 @@ def entry_to_si(entry: Any, dimension: str, sign_rule: str, where: str,
                 units: Mapping[str, Mapping[str, float]] = UNITS) -> float:
     """One entry of a parameter file (rig.yaml, bridge.yaml) in the SI unit of its dimension.
 
-    An entry is a mapping with ``value``, ``unit`` and exactly one of ``source`` (where the number comes from) or
-    ``assumed`` (why it was chosen). ``where`` names the entry in messages (file and key); ``units`` maps each
-    dimension to its accepted units and their factors to SI (the first listed is the SI unit). Raises EntryError
-    for a missing field, a unit of another dimension, a non-finite value or a sign the rule forbids."""
+    Parameters
+    ----------
+    entry : mapping
+        ``value``, ``unit`` and exactly one of ``source`` (where the number comes from) or ``assumed`` (why it was
+        chosen).
+    dimension : str
+        A key of ``units`` (``"length"``, ``"torque"``, ...).
+    sign_rule : str
+        POSITIVE, NON_NEGATIVE or SIGNED.
+    where : str
+        Names the entry in messages (file and key).
+    units : mapping, optional
+        Each dimension's accepted units and their factors to SI (the first listed is the SI unit).
+
+    Returns
+    -------
+    float
+        The value in SI.
+
+    Raises
+    ------
+    EntryError
+        For a missing field, a unit of another dimension, a non-finite value or a sign the rule forbids.
+    """
     if not isinstance(entry, Mapping) or "value" not in entry or "unit" not in entry:
         raise EntryError(f"{where} must be a mapping with 'value' and 'unit'")
     if ("source" in entry) == ("assumed" in entry):

@@ -1,33 +1,13 @@
 """The swimming machine's equations of motion (paper Sec. 3, eqs. 4-7, 14-15, 22-23; Appendix A).
 
-q = (alpha, R, phi, theta) for the free vehicle (eq. 6), q = (alpha, phi, theta) with the rails
-locked at R = lane radius for the laterally constrained one (eq. 7). Energy route (A.1):
+q = (alpha, R, phi, theta) for the free vehicle (eq. 6), q = (alpha, phi, theta) with the rails locked at
+R = lane radius for the laterally constrained one (eq. 7). The energy route and the partition into unactuated
+and shape coordinates are derived in docs/model_and_method.md, Sec. 2.3; ``flow="circulatory"``'s generalized
+force and lag states in docs/flow_model.md, Sec. 1. The hydrodynamic-force route (A.2) is
+:mod:`swim_model.hydrodynamics`.
 
-    T = 1/2 qdot' Mm(q) qdot,   Mm(q) = M(q) + Q2(q)' M_A Q2(q)           (eqs. 5, 41)
-    Mm(q) qddot + Cm(q, qdot) qdot = B tau,   B = [0; I_2],  tau = (tau_h, tau_p)   (eqs. 6, 7)
-
-with Cm from the Christoffel symbols of Mm, written as
-``Cm = 1/2 (Mmdot + d(Mm qdot)/dq - d(Mm qdot)/dq')`` so that ``Mmdot - 2 Cm`` is skew-symmetric.
-The hydrodynamic-force route (A.2, eqs. 44-48) is in :mod:`swim_model.hydrodynamics`.
-
-Partition (eqs. 14-15, 22-23), y = the unactuated coordinates, psi = (phi, theta):
-
-    Mm11 yddot + Mm12 psiddot + Cm1 qdot = 0
-    Mm21 yddot + Mm22 psiddot + Cm2 qdot = tau
-    Mio = Mm22 - Mm21 Mm11^-1 Mm12,   Cio qdot = Cm2 qdot - Mm21 Mm11^-1 Cm1 qdot,
-    tau = Mio psiddot + Cio qdot.
-
-Flow models. ``flow="ideal"`` (the default) is the paper's: the fluid enters through the added mass in Mm only.
-``flow="circulatory"`` adds the circulatory force of :mod:`swim_model.flow` as a generalized force
-``Q_flow = Q2(q)' f(Q2 qdot, z)`` on the right-hand side, and the flow's two lag states z (m/s) to the state:
-
-    Mm qddot + Cm qdot = B tau + Q_flow(q, qdot, z),     zdot = g(Q2 qdot, z).
-
-T and p = Mm qdot keep their meaning (z holds no energy or momentum), so dT/dt = phidot tau_h + thetadot tau_p +
-qdot' Q_flow and dp_alpha/dt = Q_flow[0]. Every dynamics function takes z as its last input.
-
-All expressions are CasADi SX (for optimization and exact Jacobians, ``VehicleModel.symbolic``);
-the numeric methods evaluate the same expressions compiled to C (:mod:`swim_model.codegen`).
+All expressions are CasADi SX (for optimization and exact Jacobians, ``VehicleModel.symbolic``); the numeric
+methods evaluate the same expressions compiled to C (:mod:`swim_model.codegen`).
 """
 from __future__ import annotations
 
@@ -62,7 +42,28 @@ RK4_CHUNK_STEPS = tuple(2 ** k for k in range(10))
 
 
 def coriolis_from_mass(mass: ca.SX, q: ca.SX, qdot: ca.SX) -> ca.SX:
-    """Cm(q, qdot) from the Christoffel symbols of a configuration-dependent mass matrix."""
+    """Cm(q, qdot) from the Christoffel symbols of a configuration-dependent mass matrix.
+
+    Written as ``Cm = 1/2 (Mmdot + d(Mm qdot)/dq - d(Mm qdot)/dq')``, so that ``Mmdot - 2 Cm`` is skew-symmetric.
+
+    Parameters
+    ----------
+    mass : (n, n) casadi.SX
+        Mass matrix as an expression of q, kg, kg m and kg m^2 by entry.
+    q : (n,) casadi.SX
+        Configuration symbols the mass matrix depends on, rad and m.
+    qdot : (n,) casadi.SX
+        Velocity symbols, rad/s and m/s.
+
+    Returns
+    -------
+    (n, n) casadi.SX
+        Cm, linear in qdot.
+
+    References
+    ----------
+    Saimek & Li (2004), eqs. 6-7 and Appendix A.1.
+    """
     mass_dot = ca.jtimes(mass, q, qdot)
     d_momentum = ca.jacobian(mass @ qdot, q)
     return 0.5 * (mass_dot + d_momentum - d_momentum.T)
@@ -70,7 +71,33 @@ def coriolis_from_mass(mass: ca.SX, q: ca.SX, qdot: ca.SX) -> ca.SX:
 
 @dataclasses.dataclass(frozen=True)
 class SymbolicModel:
-    """CasADi symbols, expressions and functions of one vehicle model."""
+    """CasADi symbols, expressions and functions of one vehicle model (``VehicleModel.symbolic``).
+
+    Attributes
+    ----------
+    q, qdot, qddot : (nq,) casadi.SX
+        Configuration (rad and m), velocity and acceleration symbols.
+    tau : (2,) casadi.SX
+        Joint torques (heave, pitch), N m.
+    u : (2,) casadi.SX
+        Prescribed foil accelerations psiddot = (phiddot, thetaddot), rad/s^2 (eqs. 14-15).
+    foil_velocity_map : (3, nq) casadi.SX
+        Q2(q): (U, V, Omega) = Q2 qdot (eq. 40).
+    rigid_mass : (nq, nq) casadi.SX
+        M(q), the mechanism's mass matrix without the fluid.
+    mass : (nq, nq) casadi.SX
+        Mm(q) = M + Q2' M_A Q2 (eq. 41).
+    coriolis : (nq, nq) casadi.SX
+        Cm(q, qdot) (eq. 6).
+    functions : dict of str to casadi.Function
+        The model's functions by name (``mass_matrix``, ``forward_dynamics``, ...).
+    lag : (2,) casadi.SX or None
+        The flow's lag states z, m/s (circulatory flow only).
+    flow_force : (3,) casadi.SX or None
+        (fx, fy, mz) in foil axes at the foil frame's origin, N, N and N m (circulatory flow only).
+    generalized_flow_force : (nq,) casadi.SX or None
+        Q_flow = Q2' f, one entry per coordinate (circulatory flow only).
+    """
 
     q: ca.SX
     qdot: ca.SX
@@ -90,18 +117,34 @@ class SymbolicModel:
 class VehicleModel:
     """Equations of motion of the free (4-DOF) or laterally constrained (3-DOF) vehicle.
 
-    Args:
-        rig: rig parameters (default: the shipped rig file).
-        constrained: lock the rails (q = (alpha, phi, theta)).
-        lane_radius_m: R of the locked rails (default: the rig's constrained_lane_radius).
-        flow: "ideal" (the paper's added mass only) or "circulatory" (plus swim_model.flow's lift, suction, drag
-            and stall, with n_lag = 2 lag states).
-        flow_parameters: the circulatory model's coefficients (default: FlowParameters()).
+    All numeric methods take and return numpy arrays: q and qdot of length nq (4 free: alpha rad, R m, phi rad,
+    theta rad; 3 constrained: alpha, phi, theta), tau the (2,) joint torques (heave, pitch) in N m. With the
+    circulatory flow the dynamics methods also take ``lag``, the (2,) lag states in m/s (``lag=`` is refused by the
+    ideal model, required by the circulatory one); the state for integrators is x = (q, qdot, lag),
+    nx = 2 nq + n_lag. The equations are in docs/model_and_method.md, Sec. 2.3.
 
-    All numeric methods take and return numpy arrays: q and qdot of length nq (3 or 4), tau the
-    2-vector (heave, pitch) of joint torques in N m. With the circulatory flow the dynamics methods also take
-    ``lag``, the 2 lag states in m/s (``lag=`` is refused by the ideal model, required by the circulatory one);
-    the state for integrators is x = (q, qdot, lag), nx = 2 nq + n_lag.
+    Parameters
+    ----------
+    rig : RigParameters, optional
+        Rig parameters (default: the shipped rig file).
+    constrained : bool, optional
+        Lock the rails: q = (alpha, phi, theta).
+    lane_radius_m : float, optional
+        R of the locked rails, m (default: the rig's ``constrained_lane_radius_m``).
+    flow : {"ideal", "circulatory"}, optional
+        "ideal" (the paper's added mass only) or "circulatory" (plus swim_model.flow's lift, suction, drag and
+        stall, with n_lag = 2 lag states).
+    flow_parameters : FlowParameters, optional
+        The circulatory model's coefficients (default: FlowParameters()); refused with ``flow="ideal"``.
+
+    Raises
+    ------
+    FlowModelError
+        For an unknown flow, or flow_parameters with the ideal flow.
+
+    References
+    ----------
+    Saimek & Li (2004), Sec. 3, eqs. 4-7, 14-15, 22-23, Appendix A.
     """
 
     def __init__(self, rig: RigParameters | None = None, constrained: bool = False,
@@ -130,13 +173,25 @@ class VehicleModel:
 
     # ----- symbolic model ----------------------------------------------------------------------
     def coordinates(self, q: ca.SX) -> Coordinates:
-        """Map the model's q to (alpha, R, phi, theta)."""
+        """Map the model's q to (alpha, R, phi, theta).
+
+        Parameters
+        ----------
+        q : (nq,) casadi.SX
+            Configuration, rad and m.
+
+        Returns
+        -------
+        Coordinates
+            The four coordinates; R is the lane radius for the constrained vehicle.
+        """
         if self.constrained:
             return Coordinates(alpha=q[0], radius=ca.SX(self.lane_radius_m), phi=q[1], theta=q[2])
         return Coordinates(alpha=q[0], radius=q[1], phi=q[2], theta=q[3])
 
     @cached_property
     def symbolic(self) -> SymbolicModel:
+        """The model's CasADi symbols, expressions and functions, built once (eqs. 5-7, 14-15, 22-23, 41)."""
         nq, ny = self.nq, self.n_unactuated
         q, qdot, qddot = ca.SX.sym("q", nq), ca.SX.sym("qdot", nq), ca.SX.sym("qddot", nq)
         tau, u = ca.SX.sym("tau", 2), ca.SX.sym("u", 2)
@@ -199,7 +254,13 @@ class VehicleModel:
                              flow_force=flow_force, generalized_flow_force=generalized_flow)
 
     def state_derivative_function(self) -> ca.Function:
-        """f(x, tau) = (qdot, qddot[, lag_dot]) with x = (q, qdot[, lag]): the state equation for integrators."""
+        """The state equation for integrators.
+
+        Returns
+        -------
+        casadi.Function
+            f(x, tau) = (qdot, qddot[, lag_dot]) with x = (q, qdot[, lag]), (nx,), and tau (2,), N m.
+        """
         s = self.symbolic
         if s.lag is None:
             x = ca.vertcat(s.q, s.qdot)
@@ -212,7 +273,13 @@ class VehicleModel:
                            ["xdot"])
 
     def rk4_step_function(self) -> ca.Function:
-        """x(t + h) by one classical Runge-Kutta step with tau held: (x, tau, h) -> x_next."""
+        """One classical Runge-Kutta step with tau held, as a CasADi function.
+
+        Returns
+        -------
+        casadi.Function
+            (x (nx,), tau (2,) N m, h s) -> x(t + h), (nx,).
+        """
         f = self.state_derivative_function()
         x, tau, h = ca.SX.sym("x", self.nx), ca.SX.sym("tau", 2), ca.SX.sym("h")
         k1 = f(x, tau)
@@ -223,9 +290,12 @@ class VehicleModel:
         return ca.Function("rk4_step", [x, tau, h], [x_next], ["x", "tau", "h"], ["x_next"])
 
     def _rk4_chunk_functions(self, step: ca.Function) -> list[ca.Function]:
-        """``rk4_steps_<n>`` for n in RK4_CHUNK_STEPS past 1: (x, tau (2, n), h) -> the states after each of n
-        steps of ``step`` (the RK4 step, tau[:, k] held over step k), (nx, n); generated as calls of the same step
-        function, so they compute bit for bit what n calls of it do."""
+        """``rk4_steps_<n>`` for n in RK4_CHUNK_STEPS past 1: n RK4 steps in one function.
+
+        (x, tau (2, n), h) -> the states after each of n steps of ``step`` (the RK4 step, tau[:, k] held over step
+        k), (nx, n); generated as calls of the same step function, so they compute bit for bit what n calls of it
+        do.
+        """
         functions = []
         for steps in RK4_CHUNK_STEPS[1:]:
             x, tau, h = ca.MX.sym("x", self.nx), ca.MX.sym("tau", 2, steps), ca.MX.sym("h")
@@ -235,9 +305,16 @@ class VehicleModel:
         return functions
 
     def foil_pose_function(self) -> ca.Function:
-        """q -> (x_F m, y_F m, chord angle alpha + theta + pi/2 rad): the foil frame's origin F and its chord's angle
-        in the tank frame (the pose swim_model.wake.Wake.step takes). A CasADi SX function (map it over many q, or
-        differentiate it); made once per model, not part of the compiled ``numeric`` set."""
+        """The foil frame's origin F and its chord's angle in the tank frame, as a CasADi function.
+
+        The pose swim_model.wake.Wake.step takes. A CasADi SX function (map it over many q, or differentiate it); made
+        once per model, not part of the compiled ``numeric`` set.
+
+        Returns
+        -------
+        casadi.Function
+            q (nq,) -> (x_F m, y_F m, chord angle alpha + theta + pi/2 rad).
+        """
         cache: dict[str, ca.Function] = self.__dict__.setdefault("_foil_pose", {})
         if "pose" not in cache:
             q = self.symbolic.q
@@ -248,7 +325,18 @@ class VehicleModel:
         return cache["pose"]
 
     def foil_pose(self, q: npt.ArrayLike) -> Array:
-        """(x_F m, y_F m, chord angle rad) of the foil frame in the tank frame at q (``foil_pose_function``)."""
+        """The foil frame's pose in the tank frame (``foil_pose_function``).
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+
+        Returns
+        -------
+        (3,) ndarray
+            (x_F m, y_F m, chord angle rad).
+        """
         return np.asarray(self.foil_pose_function()(self._vector(q, self.nq, "q")), dtype=float).reshape(-1)
 
     # ----- numeric path ----------------------------------------------------------------------------
@@ -258,9 +346,21 @@ class VehicleModel:
         return codegen.compiled(self._numeric_functions(), tag=self._codegen_tag())
 
     def native_function(self, name: str) -> codegen.NativeFunction:
-        """One of ``numeric``'s functions (dense arguments only) called through its C entry point on buffers it
-        owns (codegen.NativeFunction): the same numbers, ~1 us a call instead of CasADi's ~45 us, for loops
-        that call it every period. One instance per name and model: copy what you keep of its outputs."""
+        """One of ``numeric``'s functions called through its C entry point on buffers it owns.
+
+        The same numbers as ``numeric[name]``, ~1 us a call instead of CasADi's ~45 us, for loops that call it every
+        period. One instance per name and model: copy what you keep of its outputs.
+
+        Parameters
+        ----------
+        name : str
+            The function's name in ``numeric`` (dense arguments only).
+
+        Returns
+        -------
+        codegen.NativeFunction
+            Fill its ``inputs`` buffers, call it, read its ``outputs``.
+        """
         # made on first use, like ``numeric``
         loaded: dict[str, codegen.NativeFunction] = self.__dict__.setdefault("_native", {})
         if name not in loaded:
@@ -313,74 +413,266 @@ class VehicleModel:
         return [np.asarray(o, dtype=float) for o in outputs]
 
     def mass_matrix(self, q: npt.ArrayLike) -> Array:
-        """Mm(q), nq x nq (eq. 41)."""
+        """Mm(q), the mass matrix with the fluid's added mass (eq. 41).
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+
+        Returns
+        -------
+        (nq, nq) ndarray
+            Mm, kg, kg m and kg m^2 by entry.
+
+        Raises
+        ------
+        StateError
+            For a q of the wrong length or with a non-finite entry (as every numeric method).
+        """
         return self._call("mass_matrix", self._vector(q, self.nq, "q"))[0]
 
     def coriolis_matrix(self, q: npt.ArrayLike, qdot: npt.ArrayLike) -> Array:
-        """Cm(q, qdot), nq x nq, linear in qdot (eq. 6)."""
+        """Cm(q, qdot), linear in qdot (eq. 6).
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+        qdot : (nq,) array_like
+            Velocity, rad/s and m/s.
+
+        Returns
+        -------
+        (nq, nq) ndarray
+            Cm, so that Cm qdot is in N and N m by row.
+        """
         return self._call("coriolis_matrix", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"))[0]
 
     def forward_dynamics(self, q: npt.ArrayLike, qdot: npt.ArrayLike, tau: npt.ArrayLike,
                          lag: npt.ArrayLike | None = None) -> Array:
-        """qddot = Mm^-1 (B tau - Cm qdot [+ Q_flow]) (eqs. 6-7)."""
+        """Qddot = Mm^-1 (B tau - Cm qdot [+ Q_flow]) (eqs. 6-7).
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+        qdot : (nq,) array_like
+            Velocity, rad/s and m/s.
+        tau : (2,) array_like
+            Joint torques (heave, pitch), N m.
+        lag : (n_lag,) array_like, optional
+            The flow's lag states, m/s (circulatory flow only, and required there).
+
+        Returns
+        -------
+        (nq,) ndarray
+            qddot, rad/s^2 and m/s^2.
+        """
         out = self._call("forward_dynamics", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
                          self._vector(tau, 2, "tau"), *self._lag(lag))[0]
         return out.reshape(-1)
 
     def generalized_force(self, q: npt.ArrayLike, qdot: npt.ArrayLike, qddot: npt.ArrayLike,
                           lag: npt.ArrayLike | None = None) -> Array:
-        """Mm qddot + Cm qdot [- Q_flow]: the force the joints must supply on every coordinate (zero on the
-        unactuated ones if feasible)."""
+        """Mm qddot + Cm qdot [- Q_flow]: the force the joints must supply on every coordinate.
+
+        Zero on the unactuated coordinates when the motion is feasible.
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+        qdot : (nq,) array_like
+            Velocity, rad/s and m/s.
+        qddot : (nq,) array_like
+            Acceleration, rad/s^2 and m/s^2.
+        lag : (n_lag,) array_like, optional
+            The flow's lag states, m/s (circulatory flow only).
+
+        Returns
+        -------
+        (nq,) ndarray
+            Generalized force, N m and N by coordinate.
+        """
         return self._call("generalized_force", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
                           self._vector(qddot, self.nq, "qddot"), *self._lag(lag))[0].reshape(-1)
 
     def inverse_dynamics(self, q: npt.ArrayLike, qdot: npt.ArrayLike, qddot: npt.ArrayLike,
                          lag: npt.ArrayLike | None = None) -> Array:
-        """tau = (Mm qddot + Cm qdot [- Q_flow]) on the actuated rows (heave, pitch), N m."""
+        """Tau = (Mm qddot + Cm qdot [- Q_flow]) on the actuated rows (heave, pitch).
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+        qdot : (nq,) array_like
+            Velocity, rad/s and m/s.
+        qddot : (nq,) array_like
+            Acceleration, rad/s^2 and m/s^2.
+        lag : (n_lag,) array_like, optional
+            The flow's lag states, m/s (circulatory flow only).
+
+        Returns
+        -------
+        (2,) ndarray
+            Joint torques (heave, pitch), N m.
+        """
         return self.generalized_force(q, qdot, qddot, lag)[self.n_unactuated:]
 
     def kinetic_energy(self, q: npt.ArrayLike, qdot: npt.ArrayLike, lag: npt.ArrayLike | None = None) -> float:
-        """T = 1/2 qdot' Mm qdot, J (eq. 5). The lag states hold no energy; ``lag`` is only checked."""
+        """T = 1/2 qdot' Mm qdot (eq. 5).
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+        qdot : (nq,) array_like
+            Velocity, rad/s and m/s.
+        lag : (n_lag,) array_like, optional
+            The flow's lag states, m/s: they hold no energy, so ``lag`` is only checked.
+
+        Returns
+        -------
+        float
+            T, J.
+        """
         if lag is not None:
             self._lag(lag)
         energy = self._call("kinetic_energy", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"))[0]
         return energy.item()
 
     def momentum(self, q: npt.ArrayLike, qdot: npt.ArrayLike, lag: npt.ArrayLike | None = None) -> Array:
-        """Generalized momentum p = dT/dqdot = Mm qdot; p[0] = p_alpha is conserved (Prop. 1) by the ideal model
-        and changes at Q_flow[0] with the circulatory flow. The lag states hold no momentum; ``lag`` is only
-        checked."""
+        """Generalized momentum p = dT/dqdot = Mm qdot.
+
+        p[0] = p_alpha is conserved (Prop. 1) by the ideal model and changes at Q_flow[0] with the circulatory flow.
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+        qdot : (nq,) array_like
+            Velocity, rad/s and m/s.
+        lag : (n_lag,) array_like, optional
+            The flow's lag states, m/s: they hold no momentum, so ``lag`` is only checked.
+
+        Returns
+        -------
+        (nq,) ndarray
+            p, kg m^2/s and kg m/s by coordinate.
+        """
         if lag is not None:
             self._lag(lag)
         return self._call("momentum", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"))[0].reshape(-1)
 
     def io_linearization(self, q: npt.ArrayLike, qdot: npt.ArrayLike,
                          lag: npt.ArrayLike | None = None) -> tuple[Array, Array]:
-        """(Mio, Cio qdot) of eqs. 22-23: tau = Mio psiddot + Cio qdot (Cio qdot includes the flow's force)."""
+        """(Mio, Cio qdot) of eqs. 22-23: tau = Mio psiddot + Cio qdot.
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+        qdot : (nq,) array_like
+            Velocity, rad/s and m/s.
+        lag : (n_lag,) array_like, optional
+            The flow's lag states, m/s (circulatory flow only).
+
+        Returns
+        -------
+        mio : (2, 2) ndarray
+            Mio = Mm22 - Mm21 Mm11^-1 Mm12, kg m^2.
+        cio_qdot : (2,) ndarray
+            Cio qdot, N m (includes the flow's force).
+        """
         mio, cio = self._call("io_linearization", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
                               *self._lag(lag))
         return mio, cio.reshape(-1)
 
     def shape_dynamics(self, q: npt.ArrayLike, qdot: npt.ArrayLike, psi_ddot: npt.ArrayLike,
                        lag: npt.ArrayLike | None = None) -> tuple[Array, Array]:
-        """With the foil accelerations u = psiddot prescribed: (qddot, tau) from eqs. 14-15."""
+        """(qddot, tau) with the foil accelerations u = psiddot prescribed (eqs. 14-15).
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+        qdot : (nq,) array_like
+            Velocity, rad/s and m/s.
+        psi_ddot : (2,) array_like
+            (phiddot, thetaddot), rad/s^2.
+        lag : (n_lag,) array_like, optional
+            The flow's lag states, m/s (circulatory flow only).
+
+        Returns
+        -------
+        qddot : (nq,) ndarray
+            Acceleration, rad/s^2 and m/s^2.
+        tau : (2,) ndarray
+            Joint torques (heave, pitch), N m.
+        """
         qddot, tau = self._call("shape_dynamics", self._vector(q, self.nq, "q"),
                                 self._vector(qdot, self.nq, "qdot"), self._vector(psi_ddot, 2, "psi_ddot"),
                                 *self._lag(lag))
         return qddot.reshape(-1), tau.reshape(-1)
 
     def foil_velocity_map(self, q: npt.ArrayLike) -> Array:
-        """Q2(q), 3 x nq: (U, V, Omega) = Q2 qdot (eq. 40)."""
+        """Q2(q): (U, V, Omega) = Q2 qdot (eq. 40).
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+
+        Returns
+        -------
+        (3, nq) ndarray
+            Q2: maps qdot to the foil frame's (U m/s, V m/s, Omega rad/s) in foil axes.
+        """
         return self._call("foil_velocity_map", self._vector(q, self.nq, "q"))[0]
 
     def angle_of_attack(self, q: npt.ArrayLike, qdot: npt.ArrayLike) -> float:
-        """atan2(-V, U) of the foil frame's velocity in foil axes (eq. 40), rad (swim_model.flow.angle_of_attack)."""
+        """atan2(-V, U) of the foil frame's velocity in foil axes (eq. 40; swim_model.flow.angle_of_attack).
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+        qdot : (nq,) array_like
+            Velocity, rad/s and m/s.
+
+        Returns
+        -------
+        float
+            Angle of attack, rad.
+        """
         u, v, _ = self.foil_velocity_map(q) @ self._vector(qdot, self.nq, "qdot")
         return math.atan2(-v, u)
 
     def flow_force(self, q: npt.ArrayLike, qdot: npt.ArrayLike, lag: npt.ArrayLike) -> tuple[Array, Array]:
-        """The circulatory flow's (fx, fy, mz) in foil axes at the foil frame's origin (N, N, N m) and its
-        generalized force Q_flow = Q2' f (one entry per coordinate)."""
+        """The circulatory flow's force on the foil and its generalized force.
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+        qdot : (nq,) array_like
+            Velocity, rad/s and m/s.
+        lag : (n_lag,) array_like
+            The flow's lag states, m/s.
+
+        Returns
+        -------
+        force : (3,) ndarray
+            (fx N, fy N, mz N m) in foil axes at the foil frame's origin.
+        generalized : (nq,) ndarray
+            Q_flow = Q2' f, N m and N by coordinate.
+
+        Raises
+        ------
+        StateError
+            On the ideal-flow model, which has no circulatory force.
+        """
         if self.n_lag == 0:
             raise StateError("flow_force: the ideal-flow model has no circulatory force")
         f, generalized = self._call("flow_force", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
@@ -388,7 +680,27 @@ class VehicleModel:
         return f.reshape(-1), generalized.reshape(-1)
 
     def lag_rate(self, q: npt.ArrayLike, qdot: npt.ArrayLike, lag: npt.ArrayLike) -> Array:
-        """d(lag)/dt, m/s^2 (swim_model.flow, Jones's two-state Wagner lag)."""
+        """d(lag)/dt of Jones's two-state Wagner lag (swim_model.flow).
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+        qdot : (nq,) array_like
+            Velocity, rad/s and m/s.
+        lag : (n_lag,) array_like
+            The flow's lag states, m/s.
+
+        Returns
+        -------
+        (n_lag,) ndarray
+            Lag rate, m/s^2.
+
+        Raises
+        ------
+        StateError
+            On the ideal-flow model, which has no lag states.
+        """
         if self.n_lag == 0:
             raise StateError("lag_rate: the ideal-flow model has no lag states")
         return self._call("lag_rate", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
@@ -396,8 +708,26 @@ class VehicleModel:
 
     def rk4_step(self, q: npt.ArrayLike, qdot: npt.ArrayLike, tau: npt.ArrayLike, step_s: float,
                  lag: npt.ArrayLike | None = None) -> tuple[Array, ...]:
-        """One RK4 step of step_s seconds with tau held; returns (q, qdot), or (q, qdot, lag) with the
-        circulatory flow."""
+        """One RK4 step with tau held.
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+        qdot : (nq,) array_like
+            Velocity, rad/s and m/s.
+        tau : (2,) array_like
+            Joint torques (heave, pitch), N m.
+        step_s : float
+            Step length, s.
+        lag : (n_lag,) array_like, optional
+            The flow's lag states, m/s (circulatory flow only).
+
+        Returns
+        -------
+        tuple of ndarray
+            (q, qdot) after the step, each (nq,); with the circulatory flow (q, qdot, lag), lag (n_lag,).
+        """
         x = np.concatenate([self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"), *self._lag(lag)])
         x_next = self._call("rk4_step", x, self._vector(tau, 2, "tau"), np.array(float(step_s)))[0].reshape(-1)
         return self._split(x_next)
@@ -415,12 +745,29 @@ class VehicleModel:
         The steps are the compiled ``rk4_step``'s, bit for bit (chunks of RK4_CHUNK_STEPS steps called on buffers).
         Safe to call from several threads (the chunks' buffers are used by one call at a time).
 
-        Args:
-            torques: (n, 2) heave and pitch torques, N m.
-            lag: the flow's lag states at the start (circulatory flow only), m/s.
-        Returns:
-            (q, qdot) at the n + 1 step boundaries, shapes (n + 1, nq); with the circulatory flow
-            (q, qdot, lag), lag of shape (n + 1, n_lag).
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Initial configuration, rad and m.
+        qdot : (nq,) array_like
+            Initial velocity, rad/s and m/s.
+        torques : (n, 2) array_like
+            Heave and pitch torques, N m.
+        step_s : float
+            Step length, s.
+        lag : (n_lag,) array_like, optional
+            The flow's lag states at the start, m/s (circulatory flow only).
+
+        Returns
+        -------
+        tuple of ndarray
+            (q, qdot) at the n + 1 step boundaries, shapes (n + 1, nq); with the circulatory flow (q, qdot, lag), lag
+            of shape (n + 1, n_lag).
+
+        Raises
+        ------
+        StateError
+            For torques that are not a finite (n, 2) array, or a bad initial state.
         """
         torque_array = np.asarray(torques, dtype=float)
         if torque_array.ndim != 2 or torque_array.shape[1] != 2 or not np.all(np.isfinite(torque_array)):
@@ -446,8 +793,10 @@ class VehicleModel:
         return self._split(trajectory)
 
     def _rk4_chunks(self) -> dict[int, codegen.NativeFunction]:
-        """integrate_rk4's compiled chunks by step count, with buffers of their own (not native_function's, which
-        callers fill between their own calls)."""
+        """integrate_rk4's compiled chunks by step count, with buffers of their own.
+
+        Not native_function's, which callers fill between their own calls.
+        """
         chunks: dict[int, codegen.NativeFunction] | None = self.__dict__.get("_rk4_chunk_cache")
         if chunks is None:
             names = {steps: _rk4_chunk_name(steps) for steps in RK4_CHUNK_STEPS}

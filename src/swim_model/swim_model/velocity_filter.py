@@ -17,6 +17,19 @@ DEFAULT_CUTOFF_HZ = 30.0   # assumed: above the 1-2 Hz strokes, below the 62.5 H
 
 
 class VelocityEstimator:
+    """Filtered backward differences of positions: the velocity when the state source gives none.
+
+    Parameters
+    ----------
+    cutoff_hz : float, optional
+        f_c of the first-order low-pass, Hz.
+
+    Raises
+    ------
+    ValueError
+        For a cutoff that is not positive and finite.
+    """
+
     def __init__(self, cutoff_hz: float = DEFAULT_CUTOFF_HZ) -> None:
         if not (math.isfinite(cutoff_hz) and cutoff_hz > 0.0):
             raise ValueError(f"cutoff must be positive and finite, got {cutoff_hz!r}")
@@ -25,10 +38,26 @@ class VelocityEstimator:
         self._rate: Optional[Array] = None
 
     def reset(self) -> None:
+        """Forget the samples: the next update starts again from zero velocity."""
         self._last, self._rate = None, None
 
     def update(self, time_s: float, q: Array) -> Array:
-        """The velocity estimate after the sample q at time_s (zero until two samples are in)."""
+        """The velocity estimate after a sample (zero until two samples are in).
+
+        A sample not later than the last restarts the estimate.
+
+        Parameters
+        ----------
+        time_s : float
+            The sample's time, s.
+        q : (n,) ndarray
+            Positions, rad or m.
+
+        Returns
+        -------
+        (n,) ndarray
+            Velocity, rad/s or m/s.
+        """
         if self._last is None or time_s <= self._last[0]:
             self._last, self._rate = (time_s, q.copy()), np.zeros_like(q)
             return self._rate.copy()

@@ -1,72 +1,12 @@
 """Point vortices around the Joukowski foil in the circle plane: flow, Kutta condition, impulse and force.
 
-Streitlien & Triantafyllou, "Force and moment on a Joukowski profile in the presence of point vortices",
-AIAA J. 33(4), 1995; Streitlien, PhD thesis, MIT 1994, Ch. 2-3; Milne-Thomson, Theoretical Hydrodynamics,
-Sec. 6.21 (circle theorem) and 13.3 (Routh's rule); Saffman, Vortex Dynamics (1992), Sec. 3.2 (impulse).
-
-Notation (foil frame of ``joukowski.py``: origin at the map origin, x along the chord toward the leading edge):
-
-* Map (paper eq. 1): ``z = F(zeta) = s + a^2/s``, ``s = zeta + zeta_c``, exterior of ``|zeta| = r`` (``r = r_c``)
-  onto the exterior of the foil. ``F'(zeta) = 1 - a^2/s^2``, ``F''(zeta) = 2 a^2/s^3``. The trailing edge (cusp,
-  ``F' = 0``) is ``zeta_TE = -r``, ``z_TE = -2a``. Inverse: ``s = (z +- sqrt(z^2 - 4a^2))/2``, the root with
-  ``|s| >= a`` (the other root lies inside the circle).
-* Complex potential ``w = phi + i psi`` of the absolute fluid velocity, written in foil-frame coordinates:
-  ``dw/dz = u - i v`` (u, v along the foil axes). Circulation Gamma counter-clockwise positive.
-* Foil motion ``nu = (U, V, Omega)``: velocity of the frame origin along the foil axes, ``u_b = U + iV``, and the
-  angular rate (the U, V, Omega of paper eq. 40).
-
-Potential (Kelvin: the circulation of the whole flow is zero, so the bound circulation ``-sum Gamma_k`` is
-carried by the images alone and no vortex sits at the circle's centre)::
-
-    w(zeta) = w_body(zeta) + sum_k Gamma_k/(2 pi i) [log(zeta - zeta_k) - log(zeta - zeta_k*)],
-    zeta_k* = r^2 / conj(zeta_k)                                  (image by the circle theorem)
-    w_body  = -u_b r^2/zeta + conj(u_b) a^2/s - i Omega (A/zeta + B/s),
-    A = r^2 F(0),   B = a^2 F(-r^2/zeta_c).
-
-``w_body`` satisfies the body's kinematic condition ``psi = Im(conj(u_b) z) - Omega |z|^2/2`` on
-``|zeta| = r``: the translation part directly (``Im(conj(u_b) zeta) = Im(-u_b r^2/zeta)`` on the circle); the
-rotation part because ``|z|^2 = G(zeta) = F(zeta) F(r^2/zeta)`` there, and ``G``'s principal parts at its poles
-inside the circle (``zeta = 0`` with residue A, ``zeta = -zeta_c`` with residue B) give ``G = 2 Re(A/zeta +
-B/s) + const`` on the circle. (A symmetric Joukowski foil has ``zeta_c > 0``; the two poles merge for the
-ellipse ``zeta_c = 0``, which this module does not handle.)
-
-Velocity of free vortex j (Routh's rule, the self-induced term a point vortex has in a mapped plane)::
-
-    conj(u_j) = W_j'(zeta_j) / F'(zeta_j) - Gamma_j F''(zeta_j) / (4 pi i F'(zeta_j)^2),
-
-``W_j'`` being ``dw/dzeta`` without vortex j's own singular term (its image kept). Vortex-vortex terms use a
-Krasny (1986) blob, ``1/Delta -> conj(Delta)/(|Delta|^2 + delta_k^2)``, with the source vortex's physical core
-radius (one for all, or each vortex its own: a viscous wake's grow with their age, wake.py) scaled to the circle
-plane by ``delta_k = delta/|F'(zeta_k)|``; the image and body terms stay exact so that the foil stays
-impermeable.
-
-Kutta condition at the cusp: ``dw/dzeta(zeta_TE) = 0``. Its real part (normal velocity in the circle plane,
-``|F'|`` times the foil's normal velocity) vanishes identically at the cusp; the imaginary part (tangential) fixes
-the strength of the vortex shed in the step, linearly.
-
-Force and moment (impulse, Saffman Sec. 3.2; Streitlien & Triantafyllou 1995). The flow's total impulse, with
-the foil's interior counted as fluid moving rigidly, is ``I_tot = -2 pi rho A_1`` where A_1 is the ``1/z``
-coefficient of w at infinity; it splits into the ideal-flow part of the foil's motion and a vortical part::
-
-    I_tot = [M_A nu]_translation + rho S u_centroid + I_v,     I_v = -i rho sum_k Gamma_k (zeta_k - zeta_k*).
-
-The first term is the Kirchhoff impulse of added_mass.py (``-2 pi rho A_1`` of ``w_body``: ``m11 + rho S =
-2 pi rho (r^2 - a^2)``, ``m22 + rho S = 2 pi rho (r^2 + a^2)``; tested), the second the interior fluid's
-momentum, which cancels in ``F = -dI_tot/dt + rho S du_centroid/dt``. So the force on the foil is exactly
-
-    F = F_Kirchhoff(M_A, nu, nu_dot)  [the ideal-flow model, already in swim_model]  +  F_v,   F_v = -dI_v/dt,
-
-the time derivative taken in the inertial frame (``I_v`` rotates with the foil). Likewise the angular impulse
-about the frame origin, ``L = -(rho/2) int |z|^2 omega dA`` over the free vortices and the vortex sheet that
-the vortices induce on the foil (sheet strength ``dphi_v`` along the contour), is, by residues inside the circle::
-
-    L_v = -(rho/2) sum_k Gamma_k [ |z_k|^2 + Re( -F(zeta_k*) conj(z_k) + A (1/zeta_k* - 1/zeta_k)
-                                                 + B (1/(zeta_k* + zeta_c) - 1/(zeta_k + zeta_c)) ) ],
-
-and the vortical moment about the frame origin ``X_0`` is ``M_v = -dL_v/dt - Xdot_0 x I_v`` (the second term
-because the reference point moves; Kirchhoff's ``-u x P`` for the vortical impulse). Everything else --
-the added-mass force and moment, including Munk's moment -- is the ideal-flow model's and is not counted here.
-For a steady Kutta flow this split puts the circulatory lift ``rho U Gamma`` at ``x = zeta_c`` (tested).
+The closed forms the wake (swim_model.wake) evaluates: the map and its inverse, the body's and the vortices'
+complex potentials (circle theorem), each free vortex's velocity (Routh's rule, Krasny blob), the Kutta condition
+at the cusp, the leading-edge suction parameter, and the vortical impulse and angular impulse whose rates are the
+vortical force and moment. Notation and derivations: docs/wake_study.md, Sec. 1.1 (after Streitlien &
+Triantafyllou, AIAA J. 33(4), 1995; Milne-Thomson, Theoretical Hydrodynamics, Sec. 6.21 and 13.3; Saffman,
+Vortex Dynamics, 1992, Sec. 3.2). Complex positions are in metres on the circle plane (zeta) or in the foil frame
+(z); circulations are counter-clockwise, m^2/s; a foil velocity is (U m/s, V m/s, Omega rad/s) in foil axes.
 """
 from __future__ import annotations
 
@@ -90,8 +30,10 @@ _Points = TypeVar("_Points", Complex, complex)   # an array of points in the cir
 
 
 class _Kernel:
-    """A function of this package's that numba compiles, numba imported only when a kernel is first called (so a
-    process that never steps a wake does not pay numba's import, about 0.6 s)."""
+    """A function of this package's that numba compiles, numba imported only when a kernel is first called.
+
+    A process that never steps a wake does not pay numba's import, about 0.6 s.
+    """
 
     registered: list["_Kernel"] = []
 
@@ -107,9 +49,12 @@ class _Kernel:
 
     @staticmethod
     def load_all() -> None:
-        """Wrap every registered kernel in numba's dispatcher and put it in its module's namespace in place of this
-        object, so that a kernel calling another compiles against the other's dispatcher and module code calls the
-        dispatcher directly. numba compiles a kernel at its first call for the argument types."""
+        """Wrap every registered kernel in numba's dispatcher.
+
+        Each dispatcher goes into its module's namespace in place of this object, so that a kernel calling another
+        compiles against the other's dispatcher and module code calls the dispatcher directly. numba compiles a kernel
+        at its first call for the argument types.
+        """
         import numba   # here, not at the module top: the point of the lazy load
         for kernel in _Kernel.registered:
             if kernel.dispatcher is None:
@@ -120,9 +65,21 @@ class _Kernel:
 
 
 def compiled(function: _Function) -> _Function:
-    """The function compiled to machine code by numba (nopython mode) at its first call, cached on disk beside the
-    module: the first call in a fresh environment compiles it (about a second), later processes load it. numba
-    itself is imported at the first call of any such function (``_Kernel``)."""
+    """The function compiled to machine code by numba (nopython mode) at its first call.
+
+    Cached on disk beside the module: the first call in a fresh environment compiles it (about a second), later
+    processes load it. numba itself is imported at the first call of any such function (``_Kernel``).
+
+    Parameters
+    ----------
+    function : callable
+        A function numba can compile in nopython mode.
+
+    Returns
+    -------
+    callable
+        A stand-in with the function's signature that compiles and calls it.
+    """
     return cast(_Function, _Kernel(function))
 
 
@@ -130,9 +87,12 @@ def compiled(function: _Function) -> _Function:
 def _blob_sums(x: npt.NDArray[np.float64], y: npt.NDArray[np.float64], source_x: npt.NDArray[np.float64],
                source_y: npt.NDArray[np.float64], gamma: npt.NDArray[np.float64], core2: npt.NDArray[np.float64],
                sum_x: npt.NDArray[np.float64], sum_y: npt.NDArray[np.float64]) -> None:
-    """(sum_x, sum_y)[j] = sum_k (w_jk dx_jk, w_jk dy_jk), dx_jk + i dy_jk = (x_j + i y_j) - (source_x_k + i
-    source_y_k), w_jk = gamma_k / (dx_jk^2 + dy_jk^2 + core2_k): O(N M), the cost of a wake step. Summed in index
-    order k; the loop over the points j is the inner one, so that it runs in SIMD lanes."""
+    """(sum_x, sum_y)[j] = sum_k (w_jk dx_jk, w_jk dy_jk): the blob sums of a wake step.
+
+    dx_jk + i dy_jk = (x_j + i y_j) - (source_x_k + i source_y_k), w_jk = gamma_k / (dx_jk^2 + dy_jk^2 + core2_k): O(N
+    M), the cost of a wake step. Summed in index order k; the loop over the points j is the inner one, so that it runs
+    in SIMD lanes.
+    """
     sum_x[:] = 0.0
     sum_y[:] = 0.0
     for k in range(source_x.size):
@@ -147,8 +107,11 @@ def _blob_sums(x: npt.NDArray[np.float64], y: npt.NDArray[np.float64], source_x:
 @compiled
 def _vortex_potential_sums(points: Complex, zeta: Complex, gamma: npt.NDArray[np.float64], r_m: float,
                            sums: Complex) -> None:
-    """sum_k Gamma_k [1/(p - zeta_k) - 1/(p - zeta_k*)] at the points p into sums; exact kernel, summed in index
-    order (1/D = conj(D)/|D|^2, the loop over the points inner, so that it runs in SIMD lanes)."""
+    """sum_k Gamma_k [1/(p - zeta_k) - 1/(p - zeta_k*)] at the points p into sums.
+
+    Exact kernel, summed in index order (1/D = conj(D)/|D|^2, the loop over the points inner, so that it runs in SIMD
+    lanes).
+    """
     r2 = r_m * r_m
     x, y = points.real.copy(), points.imag.copy()
     real, imag = np.zeros(points.size), np.zeros(points.size)
@@ -168,7 +131,7 @@ def _vortex_potential_sums(points: Complex, zeta: Complex, gamma: npt.NDArray[np
 
 @compiled
 def _to_circle(z: Complex, a_m: float, zeta_c_m: float, zeta: Complex) -> None:
-    """zeta = F^{-1}(z) into zeta, the branch outside the circle (``CirclePlane.to_circle``)."""
+    """Zeta = F^{-1}(z) into zeta, the branch outside the circle (``CirclePlane.to_circle``)."""
     four_a2 = 4.0 * a_m * a_m
     for k in range(z.size):
         root = cmath.sqrt(z[k] * z[k] - four_a2)
@@ -180,8 +143,11 @@ def _to_circle(z: Complex, a_m: float, zeta_c_m: float, zeta: Complex) -> None:
 def _vortex_velocities(zeta: Complex, gamma: npt.NDArray[np.float64], u_b: complex, omega: float,
                        core_radii_m: npt.NDArray[np.float64], a_m: float, zeta_c_m: float, r_m: float,
                        pole_origin_m3: float, pole_offset_m3: float, velocities: Complex) -> None:
-    """``CirclePlane.vortex_velocities`` into velocities (N): the map's derivatives, each blob's core (N) in the
-    circle plane and the images per vortex, the O(N^2) sums (``_blob_sums``), then the body and Routh terms."""
+    """``CirclePlane.vortex_velocities`` into velocities (N).
+
+    The map's derivatives, each blob's core (N) in the circle plane and the images per vortex, the O(N^2) sums
+    (``_blob_sums``), then the body and Routh terms.
+    """
     n = zeta.size
     a2, r2 = a_m * a_m, r_m * r_m
     x, y = np.empty(n), np.empty(n)
@@ -226,7 +192,18 @@ def _impulse_terms_kernel(zeta: Complex, gamma: npt.NDArray[np.float64], a_m: fl
         angular_terms[k] = gamma[k] * (z_k.real * z_k.real + z_k.imag * z_k.imag + sheet.real)
 
 class CirclePlane:
-    """The Joukowski map of one foil and the closed forms of this module's docstring evaluated on it."""
+    """The Joukowski map of one foil and the closed forms of docs/wake_study.md, Sec. 1.1, evaluated on it.
+
+    Parameters
+    ----------
+    conformal_map : JoukowskiMap
+        The foil's map, with zeta_c > 0.
+
+    Raises
+    ------
+    FoilGeometryError
+        For an ellipse map (zeta_c / a below MIN_OFFSET_RATIO), whose rotation poles merge.
+    """
 
     def __init__(self, conformal_map: JoukowskiMap) -> None:
         if conformal_map.zeta_c_m < MIN_OFFSET_RATIO * conformal_map.a_m:
@@ -248,31 +225,88 @@ class CirclePlane:
 
     # --- the map ------------------------------------------------------------------------------------------
     def to_foil(self, zeta: Complex) -> Complex:
-        """z = F(zeta)."""
+        """Z = F(zeta).
+
+        Parameters
+        ----------
+        zeta : ndarray of complex
+            Circle-plane points, m.
+
+        Returns
+        -------
+        ndarray of complex
+            Foil-frame points, m, of zeta's shape.
+        """
         s = zeta + self.zeta_c_m
         return s + self.a_m ** 2 / s
 
     def map_derivatives(self, zeta: Complex) -> tuple[Complex, Complex]:
-        """(F'(zeta), F''(zeta))."""
+        """(F'(zeta), F''(zeta)).
+
+        Parameters
+        ----------
+        zeta : ndarray of complex
+            Circle-plane points, m.
+
+        Returns
+        -------
+        tuple of two ndarray of complex
+            F' (dimensionless) and F'' (1/m), of zeta's shape.
+        """
         s = zeta + self.zeta_c_m
         a2_over_s2 = self.a_m ** 2 / (s * s)
         return 1.0 - a2_over_s2, 2.0 * a2_over_s2 / s
 
     def to_circle(self, z: Complex) -> Complex:
-        """zeta = F^{-1}(z), the branch outside the circle (``|s| >= a``)."""
+        """Zeta = F^{-1}(z), the branch outside the circle (``|s| >= a``).
+
+        Parameters
+        ----------
+        z : ndarray of complex
+            Foil-frame points, m.
+
+        Returns
+        -------
+        ndarray of complex
+            Circle-plane points, m, of z's shape.
+        """
         points = np.ascontiguousarray(z, dtype=complex).reshape(-1)
         zeta: Complex = np.empty_like(points)
         _to_circle(points, self.a_m, self.zeta_c_m, zeta)
         return zeta.reshape(np.shape(z))
 
     def image(self, zeta: Complex) -> Complex:
-        """zeta* = r^2 / conj(zeta) (circle theorem)."""
+        """zeta* = r^2 / conj(zeta) (circle theorem).
+
+        Parameters
+        ----------
+        zeta : ndarray of complex
+            Circle-plane points, m.
+
+        Returns
+        -------
+        ndarray of complex
+            Their images, m.
+        """
         conjugate: Complex = np.conj(zeta)
         return self.r_m ** 2 / conjugate
 
     # --- flow -----------------------------------------------------------------------------------------------
     def body_potential_derivative(self, zeta: _Points, velocity: tuple[float, float, float]) -> _Points:
-        """d w_body / d zeta = u_b r^2/zeta^2 - conj(u_b) a^2/s^2 + i Omega (A/zeta^2 + B/s^2)."""
+        """D w_body / d zeta = u_b r^2/zeta^2 - conj(u_b) a^2/s^2 + i Omega (A/zeta^2 + B/s^2).
+
+        Parameters
+        ----------
+        zeta : complex or ndarray of complex
+            Circle-plane points, m.
+        velocity : tuple of 3 floats
+            Foil velocity (U m/s, V m/s, Omega rad/s).
+
+        Returns
+        -------
+        complex or ndarray of complex
+            dw_body/dzeta, m/s, of zeta's shape.
+        """
         u_b = complex(velocity[0], velocity[1])
         omega = velocity[2]
         s = zeta + self.zeta_c_m
@@ -281,13 +315,39 @@ class CirclePlane:
                 + 1j * omega * (self.rotation_pole_origin_m3 * inv_zeta2 + self.rotation_pole_offset_m3 * inv_s2))
 
     def body_dipole(self, velocity: tuple[float, float, float]) -> complex:
-        """A_1 of w_body at infinity: -u_b r^2 + conj(u_b) a^2 - i Omega (A + B), m^3/s."""
+        """A_1 of w_body at infinity: -u_b r^2 + conj(u_b) a^2 - i Omega (A + B).
+
+        Parameters
+        ----------
+        velocity : tuple of 3 floats
+            Foil velocity (U m/s, V m/s, Omega rad/s).
+
+        Returns
+        -------
+        complex
+            A_1, m^3/s.
+        """
         u_b = complex(velocity[0], velocity[1])
         return (-u_b * self.r_m ** 2 + u_b.conjugate() * self.a_m ** 2
                 - 1j * velocity[2] * (self.rotation_pole_origin_m3 + self.rotation_pole_offset_m3))
 
     def vortex_potential_derivative(self, zeta: Complex, zeta_k: Complex, gamma_k: npt.NDArray[np.float64]) -> Complex:
-        """sum_k Gamma_k/(2 pi i) [1/(zeta - zeta_k) - 1/(zeta - zeta_k*)], exact kernel, at points zeta."""
+        """sum_k Gamma_k/(2 pi i) [1/(zeta - zeta_k) - 1/(zeta - zeta_k*)], exact kernel, at points zeta.
+
+        Parameters
+        ----------
+        zeta : ndarray of complex
+            Circle-plane points where it is evaluated, m.
+        zeta_k : (N,) ndarray of complex
+            The free vortices' circle-plane positions, m.
+        gamma_k : (N,) ndarray
+            Their circulations, m^2/s.
+
+        Returns
+        -------
+        ndarray of complex
+            dw/dzeta of the vortices and their images, m/s, one per point (1-D).
+        """
         points = np.ascontiguousarray(np.atleast_1d(zeta), dtype=complex)
         sums: Complex = np.zeros(points.size, dtype=complex)
         _vortex_potential_sums(points, np.ascontiguousarray(zeta_k, dtype=complex),
@@ -300,8 +360,23 @@ class CirclePlane:
                           core_radius_m: float | npt.NDArray[np.float64]) -> Complex:
         """Fluid velocity u + iv (foil axes) at each free vortex: blob mutual terms, exact images, Routh term.
 
-        core_radius_m: the blobs' core radius in the physical plane, m: one for all, or one per vortex (N,), the
-        source vortex's core desingularizing each pair's term."""
+        Parameters
+        ----------
+        zeta_k : (N,) ndarray of complex
+            The free vortices' circle-plane positions, m.
+        gamma_k : (N,) ndarray
+            Their circulations, m^2/s.
+        velocity : tuple of 3 floats
+            Foil velocity (U m/s, V m/s, Omega rad/s).
+        core_radius_m : float or (N,) ndarray
+            The blobs' core radius in the physical plane, m: one for all, or one per vortex, the source vortex's core
+            desingularizing each pair's term.
+
+        Returns
+        -------
+        (N,) ndarray of complex
+            u + iv at each vortex, m/s.
+        """
         velocities: Complex = np.empty(zeta_k.size, dtype=complex)
         cores = np.ascontiguousarray(np.broadcast_to(np.asarray(core_radius_m, dtype=float), np.shape(zeta_k)))
         _vortex_velocities(np.ascontiguousarray(zeta_k, dtype=complex), np.ascontiguousarray(gamma_k, dtype=float),
@@ -312,20 +387,65 @@ class CirclePlane:
 
     def kutta_strength(self, zeta_new: complex, zeta_k: Complex, gamma_k: npt.NDArray[np.float64],
                        velocity: tuple[float, float, float]) -> float:
-        """Strength of a vortex at zeta_new that makes Im(dw/dzeta) vanish at the trailing edge."""
+        """Strength of a vortex at zeta_new that makes Im(dw/dzeta) vanish at the trailing edge.
+
+        Parameters
+        ----------
+        zeta_new : complex
+            The new vortex's circle-plane position, m.
+        zeta_k : (N,) ndarray of complex
+            The free vortices' circle-plane positions, m.
+        gamma_k : (N,) ndarray
+            Their circulations, m^2/s.
+        velocity : tuple of 3 floats
+            Foil velocity (U m/s, V m/s, Omega rad/s).
+
+        Returns
+        -------
+        float
+            The new vortex's circulation, m^2/s.
+        """
         te = self.zeta_te
         known = self.body_potential_derivative(te, velocity) + self.vortex_potential_derivative(
             np.array([te]), zeta_k, gamma_k)[0]
         return float(-known.imag / self.unit_vortex_potential_derivative(te, zeta_new).imag)
 
     def unit_vortex_potential_derivative(self, point: complex, zeta_new: complex) -> complex:
-        """dw/dzeta at point of a vortex of unit strength at zeta_new with its image (1/(2 pi i) per m^2/s)."""
+        """dw/dzeta at a point of a vortex of unit strength at zeta_new with its image.
+
+        Parameters
+        ----------
+        point : complex
+            Where it is evaluated, circle plane, m.
+        zeta_new : complex
+            The vortex's circle-plane position, m.
+
+        Returns
+        -------
+        complex
+            dw/dzeta per unit circulation, 1/m.
+        """
         image_new = self.r_m ** 2 / zeta_new.conjugate()
         return (1.0 / (point - zeta_new) - 1.0 / (point - image_new)) / (2j * math.pi)
 
     def edge_potential_derivatives(self, zeta_k: Complex, gamma_k: npt.NDArray[np.float64],
                                    velocity: tuple[float, float, float]) -> tuple[complex, complex]:
-        """dw/dzeta (body and free vortices with their images) at the trailing edge and at the leading edge."""
+        """dw/dzeta (body and free vortices with their images) at the trailing edge and at the leading edge.
+
+        Parameters
+        ----------
+        zeta_k : (N,) ndarray of complex
+            The free vortices' circle-plane positions, m.
+        gamma_k : (N,) ndarray
+            Their circulations, m^2/s.
+        velocity : tuple of 3 floats
+            Foil velocity (U m/s, V m/s, Omega rad/s).
+
+        Returns
+        -------
+        tuple of two complex
+            (at the trailing edge, at the leading edge), m/s.
+        """
         edges = np.array([self.zeta_te, self.zeta_le])
         total = self.body_potential_derivative(edges, velocity) + self.vortex_potential_derivative(edges, zeta_k,
                                                                                                    gamma_k)
@@ -333,11 +453,27 @@ class CirclePlane:
 
     def leading_edge_suction_parameter(self, leading_edge_derivative: complex,
                                        velocity: tuple[float, float, float], speed_m_s: float) -> float:
-        """LESP = q_LE / (4 |u|): the flow's tangential velocity relative to the foil at the circle's leading-edge
-        point (circle plane, counter-clockwise positive) over four times the foil's speed |u|, m/s. The relative
-        derivative is dw/dzeta - conj(u_LE) F'(zeta_LE), u_LE the leading edge's own velocity. In the steady Kutta
-        flow at angle of attack alpha it is sin(alpha) for every thickness, the thin aerofoil's A0 (swim_model.flow:
-        the suction 4 pi rho r (LESP |u|)^2)."""
+        """LESP = q_LE / (4 |u|) of the flow at the leading edge.
+
+        q_LE is the flow's tangential velocity relative to the foil at the circle's leading-edge point (circle plane,
+        counter-clockwise positive): dw/dzeta - conj(u_LE) F'(zeta_LE), u_LE the leading edge's own velocity. In the
+        steady Kutta flow at angle of attack alpha it is sin(alpha) for every thickness, the thin aerofoil's A0
+        (swim_model.flow: the suction 4 pi rho r (LESP |u|)^2).
+
+        Parameters
+        ----------
+        leading_edge_derivative : complex
+            dw/dzeta at the leading edge (``edge_potential_derivatives``), m/s.
+        velocity : tuple of 3 floats
+            Foil velocity (U m/s, V m/s, Omega rad/s).
+        speed_m_s : float
+            The foil's speed |u|, m/s, > 0.
+
+        Returns
+        -------
+        float
+            LESP, dimensionless.
+        """
         u, v, omega = velocity
         leading_edge_velocity = complex(u, v) + 1j * omega * self.z_le
         relative = leading_edge_derivative - leading_edge_velocity.conjugate() * self.map_derivative_le
@@ -347,8 +483,24 @@ class CirclePlane:
                               velocity: tuple[float, float, float], samples: int = 256) -> float:
         """Re of the contour integral of dw/dzeta on a circle enclosing every vortex: the flow's total circulation.
 
-        The integrand is analytic outside all vortices, so the trapezoidal rule converges geometrically on a
-        circle twice as large as the farthest vortex.
+        The integrand is analytic outside all vortices, so the trapezoidal rule converges geometrically on a circle
+        twice as large as the farthest vortex.
+
+        Parameters
+        ----------
+        zeta_k : (N,) ndarray of complex
+            The free vortices' circle-plane positions, m.
+        gamma_k : (N,) ndarray
+            Their circulations, m^2/s.
+        velocity : tuple of 3 floats
+            Foil velocity (U m/s, V m/s, Omega rad/s).
+        samples : int, optional
+            Points of the trapezoidal rule.
+
+        Returns
+        -------
+        float
+            Total circulation, m^2/s (Kelvin: zero).
         """
         radius = 2.0 * max(self.r_m, float(np.max(np.abs(zeta_k))) if zeta_k.size else 0.0)
         zeta = radius * np.exp(2j * math.pi * np.arange(samples) / samples)
@@ -357,18 +509,62 @@ class CirclePlane:
 
     # --- impulse ----------------------------------------------------------------------------------------------
     def vortex_impulse(self, zeta_k: Complex, gamma_k: npt.NDArray[np.float64], rho_kg_m3: float) -> complex:
-        """I_v = -i rho sum_k Gamma_k (zeta_k - zeta_k*), foil axes, kg/s per metre of span."""
+        """I_v = -i rho sum_k Gamma_k (zeta_k - zeta_k*), foil axes, per metre of span.
+
+        Parameters
+        ----------
+        zeta_k : (N,) ndarray of complex
+            The free vortices' circle-plane positions, m.
+        gamma_k : (N,) ndarray
+            Their circulations, m^2/s.
+        rho_kg_m3 : float
+            Water density, kg/m^3.
+
+        Returns
+        -------
+        complex
+            I_v, kg/s per metre of span (x + iy in foil axes).
+        """
         return impulse_from_terms(self.impulse_terms(zeta_k, gamma_k)[0], rho_kg_m3)
 
     def vortex_angular_impulse(self, zeta_k: Complex, gamma_k: npt.NDArray[np.float64], rho_kg_m3: float) -> float:
-        """L_v about the frame origin (module docstring), kg m/s per metre of span."""
+        """L_v about the frame origin (docs/wake_study.md, Sec. 1.1), per metre of span.
+
+        Parameters
+        ----------
+        zeta_k : (N,) ndarray of complex
+            The free vortices' circle-plane positions, m.
+        gamma_k : (N,) ndarray
+            Their circulations, m^2/s.
+        rho_kg_m3 : float
+            Water density, kg/m^3.
+
+        Returns
+        -------
+        float
+            L_v, kg m/s per metre of span.
+        """
         return angular_impulse_from_terms(self.impulse_terms(zeta_k, gamma_k)[1], rho_kg_m3)
 
     def impulse_terms(self, zeta_k: Complex,
                       gamma_k: npt.NDArray[np.float64]) -> tuple[Complex, npt.NDArray[np.float64]]:
-        """Each vortex's terms of the impulse sums: (Gamma_k (zeta_k - zeta_k*), m^3/s: I_v = -i rho times their
-        sum; Gamma_k [|z_k|^2 + Re(...)], m^4/s, the bracket of L_v in the module docstring: L_v = -rho/2 times
-        their sum)."""
+        """Each vortex's terms of the impulse sums.
+
+        Parameters
+        ----------
+        zeta_k : (N,) ndarray of complex
+            The free vortices' circle-plane positions, m.
+        gamma_k : (N,) ndarray
+            Their circulations, m^2/s.
+
+        Returns
+        -------
+        impulse : (N,) ndarray of complex
+            Gamma_k (zeta_k - zeta_k*), m^3/s: I_v = -i rho times their sum.
+        angular : (N,) ndarray
+            Gamma_k [|z_k|^2 + Re(...)], m^4/s, the bracket of L_v (docs/wake_study.md, Sec. 1.1): L_v = -rho/2 times
+            their sum.
+        """
         zeta = np.ascontiguousarray(np.atleast_1d(zeta_k), dtype=complex)
         impulse: Complex = np.empty_like(zeta)
         angular: npt.NDArray[np.float64] = np.empty(zeta.size)
@@ -379,14 +575,38 @@ class CirclePlane:
 
 
 def impulse_from_terms(impulse_terms: Complex, rho_kg_m3: float) -> complex:
-    """I_v = -i rho times the sum of the vortices' impulse terms (``CirclePlane.impulse_terms``), in the axes of the
-    terms (foil axes), kg/s per metre of span."""
+    """I_v = -i rho times the sum of the vortices' impulse terms (``CirclePlane.impulse_terms``).
+
+    Parameters
+    ----------
+    impulse_terms : (N,) ndarray of complex
+        The terms, m^3/s, in foil axes.
+    rho_kg_m3 : float
+        Water density, kg/m^3.
+
+    Returns
+    -------
+    complex
+        I_v in the axes of the terms, kg/s per metre of span.
+    """
     return -1j * rho_kg_m3 * complex(np.sum(impulse_terms))
 
 
 def angular_impulse_from_terms(angular_terms: npt.NDArray[np.float64], rho_kg_m3: float) -> float:
-    """L_v about the foil frame's origin = -rho/2 times the sum of the vortices' angular terms
-    (``CirclePlane.impulse_terms``), kg m/s per metre of span."""
+    """L_v about the foil frame's origin: -rho/2 times the sum of the vortices' angular terms.
+
+    Parameters
+    ----------
+    angular_terms : (N,) ndarray
+        The terms (``CirclePlane.impulse_terms``), m^4/s.
+    rho_kg_m3 : float
+        Water density, kg/m^3.
+
+    Returns
+    -------
+    float
+        L_v, kg m/s per metre of span.
+    """
     return -0.5 * rho_kg_m3 * float(np.sum(angular_terms))
 
 
@@ -396,5 +616,19 @@ def steady_kutta_circulation(plane: CirclePlane, speed_m_s: float, angle_of_atta
     Relative stream ``W = -u_b`` past the circle: ``dw/dzeta = conj(W) - W r^2/zeta^2 + Gamma/(2 pi i zeta)``
     vanishes at ``zeta = -r`` when ``Gamma = 4 pi r Im(W)``; with ``u_b = U e^{-i alpha}``, ``Im W = U sin alpha``.
     The lift is ``rho U Gamma`` (Kutta-Joukowski); r = c/4 (flat plate) gives ``pi rho c U^2 sin alpha``.
+
+    Parameters
+    ----------
+    plane : CirclePlane
+        The foil's circle plane (its radius r).
+    speed_m_s : float
+        U, m/s.
+    angle_of_attack_rad : float
+        alpha, rad.
+
+    Returns
+    -------
+    float
+        Gamma, m^2/s.
     """
     return 4.0 * math.pi * plane.r_m * speed_m_s * math.sin(angle_of_attack_rad)

@@ -2,81 +2,14 @@
 
 2-D inviscid flow around the foil of ``joukowski.py`` with point vortices, after Streitlien & Triantafyllou
 (AIAA J. 1995) and the discrete-vortex methods of Katz & Plotkin, "Low-Speed Aerodynamics" (2nd ed. 2001),
-Ch. 13. The formulas (map, circle theorem, Routh's rule, Kutta condition, impulse) are stated and derived in
-``vortex_force.py``; this module holds the wake's state and its time step.
+Ch. 13. The closed forms are ``vortex_force.py``'s; this module holds the wake's state and its time step.
 
-Each call ``Wake.step(dt, pose, velocity)`` advances from t to t + dt:
-
-1. Convect the free vortices with the local fluid velocity at t (second-order Adams-Bashforth,
-   ``Z += dt (u_n + dt/(2 dt_prev) (u_n - u_{n-1}))``; forward Euler for a vortex's first step).
-2. Move the foil to the new pose (position ``X_0`` of the frame origin and chord angle theta in the tank frame)
-   with its new velocity ``(U, V, Omega)`` in foil axes. A vortex the step carried into the foil is reflected
-   to its mirror point in the circle plane (counted in ``reflected_count``). A vortex then closer to the
-   surface than ``surface_absorption_gap_m`` is absorbed into the foil's bound circulation (next section).
-3. Shed one vortex on the chord line behind the trailing-edge cusp, at a distance
-   ``max(shed_distance_fraction |v_TE| dt, min_shed_distance_m)`` (``v_TE`` the foil's velocity at its trailing
-   edge); its strength makes the Kutta condition hold. The images carry the bound circulation
-   ``-sum Gamma_k``, so Kelvin's theorem (zero total circulation) holds by construction; the test measures it
-   independently from the velocity field's circulation at infinity.
-4. Force and moment from the change of the vortical impulse over the step (backward difference; the values
-   belong to the middle of the step):
-   ``F_v = -(I_v(t+dt) - I_v(t))/dt`` in the tank frame, returned in foil axes at the mid-step angle;
-   ``M_v = -(L_O(t+dt) - L_O(t))/dt - X_0,mid x F_v`` with ``L_O = L_v + X_0 x I_v`` about the tank origin.
-5. If more than ``max_vortex_count`` vortices exist, amalgamate the pair of age-adjacent vortices (same sign
-   preferred) that is closest together relative to its distance from the foil, at the circulation-weighted
-   centroid (circulation conserved exactly; the impulse used for the next force is recomputed after merging,
-   so merging causes no force spike). The newest ``protected_vortex_count`` vortices are never merged.
-
-Vortices at the surface (absorption). A point vortex next to a wall is a model artifact: with its image it
-is a dipole whose own velocity, ``Gamma / (4 pi d)`` along the wall at a gap d in the circle plane (and the Routh
-term, unbounded near the cusp), grows without bound as d -> 0, so an explicit step throws it about and the
-impulse it carries jumps. In a real flow vorticity that reaches the wall joins the boundary layer: it diffuses
-into the wall's vortex sheet instead of sliding along the surface as a concentrated vortex. Discrete-vortex
-methods therefore remove the vortices that come within a set distance of the body and keep their circulation
-in the body's bound circulation (Sarpkaya, J. Fluid Mech. 68, 1975, and Sarpkaya & Shoaff, AIAA J. 17, 1979,
-for the inclined plate and the cylinder; Clements, J. Fluid Mech. 57, 1973; Cottet & Koumoutsakos, "Vortex
-Methods: Theory and Practice", 2000, on vorticity at walls: what reaches the wall is given to the wall's
-vorticity). Here the distance is taken in the circle plane, where the wall is the circle and the image is exact:
-a vortex with ``|zeta_k| - r < surface_absorption_gap_m`` is removed. Its circulation is not lost: the images
-carry the bound circulation ``-sum Gamma_k`` over the free vortices, so removing vortex k adds ``Gamma_k`` to
-the foil's circulation and the flow's total circulation stays zero (Kelvin) exactly; ``absorbed_count`` and
-``absorbed_circulation_m2_s`` (the sum of the absorbed circulations, so that shed = free + absorbed) keep the
-books. The absorption is done before the step's impulse is evaluated, so the impulse the vortex carried,
-``-i rho Gamma_k (zeta_k - zeta_k*)``, of size ``2 rho |Gamma_k| d`` (vortex and image almost cancel), is handed
-to the foil in that step: momentum is conserved, and the force it adds is at most ``2 rho |Gamma_k| gap / dt``
-per metre of span.
-
-Leading-edge suction (``critical_leading_edge_suction``). The wake's flow stays attached at the leading edge, so its
-force holds the whole suction of the attached flow there: the thin aerofoil's ``4 pi rho r (A0 |u|)^2`` per metre of
-span (swim_model.flow). A rounded edge holds suction only up to a critical leading-edge suction parameter; beyond it
-the flow separates there (Ramesh et al., JFM 751, 2014). The step computes the parameter of its flow, ``A0 = q_LE /
-(4 |u|)`` (``CirclePlane.leading_edge_suction_parameter``: the tangential velocity relative to the foil at the
-circle's leading-edge point; sin(alpha) in the steady Kutta flow, for every thickness), caps it as swim_model.flow
-caps its suction (``A0 / (1 + (A0 / A0_crit)^n)^(1/n)``, swim_model.leading_edge, the same parameters), and takes the
-suction the edge cannot hold, ``4 pi rho r |u|^2 (A0^2 - capped^2)``, off the chordwise force. The vortices, the
-normal force and the moment are unchanged: it is a force on the foil, not a separated flow (no vortex is shed at the
-leading edge).
-
-Force split (the integration rule): the total fluid force on the foil is ``F_Kirchhoff + F_v``, where
-``F_Kirchhoff`` is the added-mass (ideal-flow) force of eq. 46 that swim_model's ideal model already applies
-with ``M_A`` of ``added_mass.py``; ``WakeForce`` is ``F_v`` only -- the circulatory (vortical) part, with no
-added-mass term. In particular the foil's own motion enters F_v only through the vortices it sheds.
-
-Viscous core growth (``kinematic_viscosity_m2_s`` > 0). In an inviscid wake a vortex keeps its core
-``core_radius_m`` for as long as it lives, so a foil circling the hub meets the vortices it shed a turn earlier as
-concentrated as they were shed (docs/disturbances.md measures what that does to the closed loop). In water a
-vortex's vorticity diffuses: the Lamb-Oseen vortex ``v(r) = Gamma/(2 pi r) (1 - exp(-r^2/(4 nu t)))`` has its
-largest speed ``Gamma (1 - e^-x)/(2 pi r_max)`` at ``r_max^2 = 4 x nu t``, x = 1.2564 (Saffman, "Vortex Dynamics",
-1992). The blob's largest speed is ``Gamma/(4 pi delta)``, at ``r = delta``. With viscosity each
-vortex's core grows so that the two agree for the time the vortex has diffused:
-``delta^2 = core_radius_m^2 + x/(1 - e^-x)^2 nu t`` (2.4554 nu t; ``viscous_core_radius``, once per step). The
-far field and the circulation are unchanged. Amalgamating two vortices keeps the mean of their squared cores
-weighted by their |Gamma| (the weights of the centroid). The image and body terms stay exact (``vortex_force.py``).
-
-Assumptions: unbounded fluid (the tank wall and free surface are ignored), 2-D strips (forces are per metre of
-span times the span, no tip vortices), no viscous drag, shedding only from the trailing edge (no leading-edge
-vortex: beyond the critical suction parameter only the suction is taken off, above). Vortices live in the tank
-frame, so a foil circling the hub meets its own wake.
+``Wake.step(dt, pose, velocity)`` convects the free vortices (Adams-Bashforth), moves the foil, reflects the
+vortices it carried inside and absorbs those at the surface into the bound circulation, sheds one vortex by the
+Kutta condition, returns the vortical force and moment ``F_v = -dI_v/dt`` (the added-mass force stays the ideal
+model's: nothing is counted twice), with the leading-edge suction beyond the critical LESP taken off, and
+amalgamates vortices above ``max_vortex_count``. Each rule, with its sources, the viscous core growth and the
+assumptions: docs/wake_study.md, Sec. 1.2; the absorption: docs/wake_near_surface.md.
 """
 from __future__ import annotations
 
@@ -99,14 +32,30 @@ Velocity = tuple[float, float, float]    # U_m_s, V_m_s (origin velocity along t
 #: x = r_max^2 / (4 nu t) at the Lamb-Oseen vortex's largest speed: the root of (1 + 2 x) e^-x = 1
 LAMB_OSEEN_PEAK_RADIUS2 = 1.2564312086261696
 #: d(delta^2)/d(nu t) of a blob whose largest speed Gamma/(4 pi delta) is the Lamb-Oseen vortex's,
-#: Gamma (1 - e^-x) / (2 pi r_max): delta^2 = x nu t / (1 - e^-x)^2 (module docstring)
+#: Gamma (1 - e^-x) / (2 pi r_max): delta^2 = x nu t / (1 - e^-x)^2 (docs/wake_study.md, Sec. 1.2)
 LAMB_OSEEN_CORE_GROWTH = LAMB_OSEEN_PEAK_RADIUS2 / (1.0 - math.exp(-LAMB_OSEEN_PEAK_RADIUS2)) ** 2
 
 
 def viscous_core_radius(core_radius_m: npt.NDArray[np.float64], kinematic_viscosity_m2_s: float,
                         dt_s: float) -> npt.NDArray[np.float64]:
-    """The blob cores (m, any shape) after dt_s (s) of viscous diffusion at kinematic_viscosity_m2_s (m^2/s):
-    ``delta^2 + LAMB_OSEEN_CORE_GROWTH nu dt``, so that a vortex's largest speed stays a Lamb-Oseen vortex's."""
+    """The blob cores after dt_s of viscous diffusion, so that a vortex's largest speed stays a Lamb-Oseen vortex's.
+
+    ``delta^2 + LAMB_OSEEN_CORE_GROWTH nu dt`` (docs/wake_study.md, Sec. 1.2, "Viscous core growth").
+
+    Parameters
+    ----------
+    core_radius_m : ndarray
+        The cores, m (any shape).
+    kinematic_viscosity_m2_s : float
+        nu, m^2/s.
+    dt_s : float
+        The diffusion time, s.
+
+    Returns
+    -------
+    ndarray
+        The grown cores, m, of core_radius_m's shape.
+    """
     grown: npt.NDArray[np.float64] = np.sqrt(core_radius_m ** 2
                                              + LAMB_OSEEN_CORE_GROWTH * kinematic_viscosity_m2_s * dt_s)
     return grown
@@ -115,8 +64,11 @@ def viscous_core_radius(core_radius_m: npt.NDArray[np.float64], kinematic_viscos
 @compiled
 def _merge_pair(positions_m: npt.NDArray[np.complex128], circulations_m2_s: npt.NDArray[np.float64],
                 origin_m: complex, candidates: int, chord_m: float, opposite_sign_penalty: float) -> int:
-    """i of the pair (i, i + 1), i + 1 < candidates, of least cost: separation / (distance from the foil frame's
-    origin of the nearer one + chord), times opposite_sign_penalty for opposite signs (the first of equal costs)."""
+    """I of the pair (i, i + 1), i + 1 < candidates, of least cost.
+
+    The cost is separation / (distance from the foil frame's origin of the nearer one + chord), times
+    opposite_sign_penalty for opposite signs (the first of equal costs).
+    """
     best, best_cost = 0, math.inf
     for i in range(candidates - 1):
         separation = abs(positions_m[i + 1] - positions_m[i])
@@ -130,10 +82,12 @@ def _merge_pair(positions_m: npt.NDArray[np.complex128], circulations_m2_s: npt.
 
 
 def compile_kernels() -> None:
-    """Compile the wake's numba kernels into their on-disk cache, or load them from it, by stepping a small wake
-    through shedding, merging and the Kelvin statistics, so that a process stepping a wake afterwards starts at full
-    speed. Compiling takes seconds (7 to 19 s on this 2-core host, by its load); loading the cache well under one.
-    For an install step."""
+    """Compile the wake's numba kernels into their on-disk cache, or load them from it.
+
+    Steps a small wake through shedding, merging and the Kelvin statistics, so that a process stepping a wake
+    afterwards starts at full speed. Compiling takes seconds (7 to 19 s on this 2-core host, by its load); loading
+    the cache well under one. For an install step.
+    """
     # any foil, motion and bound do: the kernels are compiled for the argument types only
     foil = JoukowskiFoil(chord_m=0.06, thickness_m=0.008, span_m=0.2)
     wake = Wake(foil, WakeParameters(max_vortex_count=4, protected_vortex_count=2))
@@ -144,7 +98,40 @@ def compile_kernels() -> None:
 
 @dataclasses.dataclass(frozen=True)
 class WakeParameters:
-    """Numerical parameters of the wake; all assumed (the paper models no wake), each with its reason."""
+    """Numerical parameters of the wake; all assumed (the paper models no wake), each with its reason beside it.
+
+    Attributes
+    ----------
+    rho_kg_m3 : float
+        Water density, kg/m^3.
+    core_radius_m : float
+        Krasny blob radius of a new vortex in the physical plane, m.
+    shed_distance_fraction : float
+        A new vortex's distance behind the cusp as a fraction of the trailing edge's travel in the step.
+    min_shed_distance_m : float
+        Smallest distance of a new vortex behind the cusp, m.
+    max_vortex_count : int or None
+        Bound on the vortex count above which vortices are amalgamated; None: never merge.
+    protected_vortex_count : int
+        The newest vortices, never merged.
+    opposite_sign_merge_penalty : float
+        Cost factor of merging a pair of opposite signs.
+    surface_absorption_gap_m : float
+        A vortex closer than this to the circle (``|zeta| - r``, m) is absorbed into the bound circulation; 0: never.
+    critical_leading_edge_suction : float or None
+        LESP beyond which the leading edge's suction is lost; None: the attached flow's whole suction.
+    suction_cap_exponent : int
+        Order of the smooth cap, an even integer >= 2.
+    speed_regularization_m_s : float
+        eps in |u| = sqrt(U^2 + V^2 + eps^2), m/s.
+    kinematic_viscosity_m2_s : float
+        nu, by which each vortex's core grows with its age, m^2/s; 0: the inviscid wake.
+
+    Raises
+    ------
+    StateError
+        For a value outside its range (each check names the field).
+    """
 
     rho_kg_m3: float = 998.2
     # assumed: fresh water at 20 C, as rig.yaml
@@ -167,23 +154,25 @@ class WakeParameters:
     # assumed: merging vortices of opposite sign destroys their dipole; such pairs are merged last
     surface_absorption_gap_m: float = 1.5e-3
     # assumed: a vortex within one core radius (core_radius_m) of the circle, |zeta| - r, has its core on the
-    # wall: its vorticity is in the boundary layer and it is absorbed into the bound circulation (module
-    # docstring). Smaller than the gap of a vortex just shed at min_shed_distance_m behind the cusp (1.8 mm on the
-    # rig's foil). 0: never absorb
+    # wall: its vorticity is in the boundary layer and it is absorbed into the bound circulation
+    # (docs/wake_near_surface.md). Smaller than the gap of a vortex just shed at min_shed_distance_m behind the
+    # cusp (1.8 mm on the rig's foil). 0: never absorb
     critical_leading_edge_suction: float | None = CRITICAL_LEADING_EDGE_SUCTION
     # the leading edge holds suction up to this leading-edge suction parameter, beyond it the suction is lost
-    # (module docstring, "Leading-edge suction"); the reduced model's edge (swim_model.leading_edge). None: the
-    # attached flow's whole suction
+    # (docs/wake_study.md, Sec. 1.2, "Leading-edge suction"); the reduced model's edge (swim_model.leading_edge).
+    # None: the attached flow's whole suction
     suction_cap_exponent: int = SUCTION_CAP_EXPONENT
     # assumed: the order of the smooth cap LESP / (1 + (LESP/LESP_crit)^n)^(1/n) (swim_model.leading_edge)
     speed_regularization_m_s: float = SPEED_REGULARIZATION_M_S
     # assumed: eps in the speed |u| = sqrt(U^2 + V^2 + eps^2) (swim_model.leading_edge)
     kinematic_viscosity_m2_s: float = 0.0
-    # the fluid's kinematic viscosity, by which each vortex's core grows with its age (viscous core growth, module
-    # docstring); water at 20 C: 1.0e-6. Assumed 0 by default: the inviscid wake, every core core_radius_m for
-    # as long as the vortex lives, as the wake's checks against theory and the tank were made
+    # the fluid's kinematic viscosity, by which each vortex's core grows with its age (docs/wake_study.md,
+    # Sec. 1.2, "Viscous core growth"); water at 20 C: 1.0e-6. Assumed 0 by default: the inviscid wake, every
+    # core core_radius_m for as long as the vortex lives, as the wake's checks against theory and the tank were
+    # made
 
     def __post_init__(self) -> None:
+        """Check every coefficient's range (the class's Raises)."""
         for name in ("rho_kg_m3", "core_radius_m", "shed_distance_fraction", "min_shed_distance_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
@@ -209,9 +198,18 @@ class WakeParameters:
 class WakeForce:
     """The vortical force and moment on the foil over one step, foil axes, for the whole span.
 
-    ``fx_n`` along the chord (toward the leading edge: thrust when the foil swims forward), ``fy_n`` normal to
-    it, ``moment_n_m`` about the foil frame's origin (the map origin, the added mass's reference point),
-    counter-clockwise. Per metre of span: divide by the foil's span. Valid at the middle of the step.
+    Per metre of span: divide by the foil's span. Valid at the middle of the step.
+
+    Attributes
+    ----------
+    fx_n : float
+        Along the chord toward the leading edge (thrust when the foil swims forward), N.
+    fy_n : float
+        Normal to the chord, N.
+    moment_n_m : float
+        About the foil frame's origin (the map origin, the added mass's reference point), counter-clockwise, N m.
+    time_s : float
+        The middle of the step, s.
     """
 
     fx_n: float
@@ -221,7 +219,15 @@ class WakeForce:
 
 
 class Wake:
-    """Point-vortex wake of one foil; call ``step`` once per control period."""
+    """Point-vortex wake of one foil; call ``step`` once per control period.
+
+    Parameters
+    ----------
+    foil : JoukowskiFoil
+        The foil (a Joukowski section with zeta_c > 0).
+    params : WakeParameters, optional
+        Numerical parameters (default: WakeParameters()).
+    """
 
     def __init__(self, foil: JoukowskiFoil, params: WakeParameters | None = None) -> None:
         self.foil = foil
@@ -251,27 +257,62 @@ class Wake:
 
     # --- queries ------------------------------------------------------------------------------------------
     def vortex_count(self) -> int:
+        """The number of free vortices.
+
+        Returns
+        -------
+        int
+            The count.
+        """
         return int(self.circulations_m2_s.size)
 
     def shed_circulation(self) -> float:
-        """Sum of the free vortices' circulations, m^2/s (minus the foil's bound circulation)."""
+        """Sum of the free vortices' circulations (minus the foil's bound circulation).
+
+        Returns
+        -------
+        float
+            m^2/s.
+        """
         return float(np.sum(self.circulations_m2_s))
 
     def bound_circulation(self) -> float:
-        """Circulation around the foil, m^2/s: the total circulation of the flow minus that of the free vortices."""
+        """Circulation around the foil: the total circulation of the flow minus that of the free vortices.
+
+        Returns
+        -------
+        float
+            m^2/s.
+        """
         return self.total_circulation() - self.shed_circulation()
 
     def total_circulation(self, samples: int = 256) -> float:
-        """Circulation of the whole flow, measured on a contour enclosing foil and wake (Kelvin: zero), m^2/s.
+        """Circulation of the whole flow, measured on a contour enclosing foil and wake (Kelvin: zero).
 
-        ``samples`` points of the trapezoidal rule on a circle twice the farthest vortex's radius: the error falls
-        as 2^-samples (CirclePlane.far_field_circulation), so 64 already reach round-off.
+        The trapezoidal rule on a circle twice the farthest vortex's radius: the error falls as 2^-samples
+        (CirclePlane.far_field_circulation), so 64 already reach round-off.
+
+        Parameters
+        ----------
+        samples : int, optional
+            Points of the rule.
+
+        Returns
+        -------
+        float
+            m^2/s.
         """
         zeta = self._current_circle_plane_positions()
         return self.plane.far_field_circulation(zeta, self.circulations_m2_s, self._velocity, samples)
 
     def vortices_in_foil_frame(self) -> npt.NDArray[np.complex128]:
-        """Free-vortex positions z = x + iy in the foil frame, m (for plots)."""
+        """Free-vortex positions in the foil frame (for plots).
+
+        Returns
+        -------
+        (N,) ndarray of complex
+            z = x + iy, m; empty before the first step.
+        """
         if self._pose is None:
             return np.zeros(0, dtype=complex)
         x, y, theta = self._pose
@@ -279,11 +320,23 @@ class Wake:
         return (self.positions_m - complex(x, y)) * unrotate
 
     def add_vortex(self, position_m: complex, circulation_m2_s: float) -> None:
-        """Put a free vortex at a tank-frame position x + iy (m), circulation counter-clockwise (m^2/s).
+        """Put a free vortex at a tank-frame position.
 
         An initial condition, not a shedding: the images take ``-circulation_m2_s`` into the bound circulation
         (Kelvin holds), and the impulse the next force is measured from is re-evaluated, so placing it exerts no
-        force. Needs the foil's pose (one ``step`` first); a position inside the foil is refused.
+        force. Needs the foil's pose (one ``step`` first).
+
+        Parameters
+        ----------
+        position_m : complex
+            x + iy in the tank frame, m.
+        circulation_m2_s : float
+            Circulation, counter-clockwise, m^2/s.
+
+        Raises
+        ------
+        StateError
+            Before the first step, for a non-finite value, or for a position inside the foil.
         """
         if self._pose is None:
             raise StateError("Wake.add_vortex: step the wake once first, so the foil has a pose")
@@ -308,10 +361,26 @@ class Wake:
     def step(self, dt_s: float, pose: Pose, velocity: Velocity) -> WakeForce:
         """Advance by dt_s to the foil's new pose and velocity; return the vortical force over the step.
 
-        Args:
-            dt_s: step, s (> 0).
-            pose: (x_m, y_m, theta_rad) of the foil frame in the tank frame at the end of the step.
-            velocity: (U_m_s, V_m_s, Omega_rad_s) in foil axes at the end of the step.
+        The step's rules: docs/wake_study.md, Sec. 1.2.
+
+        Parameters
+        ----------
+        dt_s : float
+            Step, s (> 0).
+        pose : tuple of 3 floats
+            (x m, y m, theta rad) of the foil frame in the tank frame at the end of the step.
+        velocity : tuple of 3 floats
+            (U m/s, V m/s, Omega rad/s) in foil axes at the end of the step.
+
+        Returns
+        -------
+        WakeForce
+            The vortical force and moment, valid at the middle of the step.
+
+        Raises
+        ------
+        StateError
+            For a step that is not positive, or a non-finite pose or velocity.
         """
         if not (math.isfinite(dt_s) and dt_s > 0.0):
             raise StateError(f"Wake.step: dt_s must be positive and finite, got {dt_s!r}")
@@ -400,8 +469,10 @@ class Wake:
         return zeta
 
     def _absorb_at_surface(self, zeta: npt.NDArray[np.complex128]) -> npt.NDArray[np.complex128]:
-        """Remove the vortices (circle-plane positions zeta) closer to the circle than surface_absorption_gap_m;
-        the circle-plane positions of those kept."""
+        """Remove the vortices closer to the circle than surface_absorption_gap_m.
+
+        zeta holds the vortices' circle-plane positions; returns those of the vortices kept.
+        """
         gap_m = self.params.surface_absorption_gap_m
         if gap_m == 0.0 or zeta.size == 0:
             return zeta
@@ -418,8 +489,11 @@ class Wake:
         return zeta[keep]
 
     def _shed(self, dt_s: float, zeta: npt.NDArray[np.complex128]) -> None:
-        """Shed the step's vortex (Kutta condition against the vortices at zeta, their circle-plane positions at the
-        current pose); keeps the circle-plane positions and impulse terms of all (``_map_vortices``)."""
+        """Shed the step's vortex.
+
+        Its strength is the Kutta condition's against the vortices at zeta, their circle-plane positions at the
+        current pose; keeps the circle-plane positions and impulse terms of all (``_map_vortices``).
+        """
         u, v, omega = self._velocity
         te_speed = abs(complex(u, v) + 1j * omega * self.plane.z_te)
         distance = max(self.params.shed_distance_fraction * te_speed * dt_s, self.params.min_shed_distance_m)
@@ -438,9 +512,16 @@ class Wake:
         self._map_vortices(np.append(zeta, new))
 
     def leading_edge_suction_parameter(self) -> float:
-        """The flow's leading-edge suction parameter now, before the cap: A0 = q_LE / (4 |u|)
-        (``CirclePlane.leading_edge_suction_parameter``; sin(alpha) in the steady Kutta flow), dimensionless, signed
-        as the suction velocity of swim_model.flow. NaN before the first step."""
+        """The flow's leading-edge suction parameter now, before the cap.
+
+        A0 = q_LE / (4 |u|) (``CirclePlane.leading_edge_suction_parameter``; sin(alpha) in the steady Kutta flow),
+        signed as the suction velocity of swim_model.flow.
+
+        Returns
+        -------
+        float
+            A0, dimensionless; NaN before the first step.
+        """
         if self._pose is None:
             return math.nan
         _, known_le = self.plane.edge_potential_derivatives(self._current_circle_plane_positions(),
@@ -453,9 +534,11 @@ class Wake:
         return math.sqrt(u * u + v * v + self.params.speed_regularization_m_s ** 2)
 
     def _lost_suction(self) -> float:
-        """The leading-edge suction the edge cannot hold, per metre of span along the chord, N/m: the attached
-        flow's 4 pi rho r (LESP |u|)^2 less the same with LESP capped at critical_leading_edge_suction as
-        swim_model.flow caps it (0 when the parameter is None)."""
+        """The leading-edge suction the edge cannot hold, per metre of span along the chord, N/m.
+
+        The attached flow's 4 pi rho r (LESP |u|)^2 less the same with LESP capped at critical_leading_edge_suction as
+        swim_model.flow caps it (0 when the parameter is None).
+        """
         critical = self.params.critical_leading_edge_suction
         if critical is None:
             return 0.0

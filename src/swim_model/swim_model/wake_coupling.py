@@ -1,47 +1,16 @@
-"""The free-vortex wake (swim_model.wake) as a generalized force on a simulated vehicle, and the flat-plate
-separation drag the wake lacks. No ROS. Used by swim_sim's plant and swim_hw_bridge's emulated rig (flow "wake").
+"""The free-vortex wake as a generalized force on a simulated vehicle, and the separation drag it lacks.
 
-What it adds. The plant's equations of motion already hold the ideal-flow (added-mass, Kirchhoff) force of the
-foil through Mm = M + Q2' M_A Q2. ``Wake.step`` returns only what that leaves out, the vortical force
-``F_v = -dI_v/dt`` of the shed vortices (swim_model.vortex_force), so adding it counts nothing twice:
+swim_model.wake's vortical force, and the flat-plate separation drag the wake lacks. No ROS.
+
+The plant's equations of motion already hold the added-mass force through Mm = M + Q2' M_A Q2; ``Wake.step``
+returns only the vortical force ``F_v = -dI_v/dt``, so adding it counts nothing twice:
 
     Mm qddot + Cm qdot = B tau + (disturbances) + Q_wake,     Q_wake = Q2(q)' (fx, fy, M_z).
 
-Frames (checked by the tests against rigid-body statics). ``kinematics.py``'s foil frame and the wake's foil
-axes are the same frame: origin at the Joukowski map origin F (the added mass's reference point, Lf from the
-pitch axis), x along the chord toward the leading edge, y the chord rotated by +90 deg. The chord of
-kinematics.py points along ``dir(alpha + theta) = (-sin, cos)(alpha + theta)``, so the chord angle the wake
-takes in the tank frame is ``alpha + theta + pi/2``; its position is F(q) in the tank frame (origin on the hub
-axis); its velocity ``(U, V, Omega) = Q2(q) qdot`` (eq. 40) at F along the same axes; the wake's moment is
-about F, which is the point Q2's first two rows are taken at. By virtual work the generalized force is then
-``Q2' (fx, fy, M_z)`` and its power ``Q_wake . qdot`` equals ``(fx, fy, M_z) . (U, V, Omega)``.
-
-Timing (zero-order hold, once per control period). At the start of period k (time t_k, state q_k, qdot_k)
-the wake is stepped from t_{k-1} to t_k with the foil's pose and velocity at t_k; the force it returns belongs
-to the middle of [t_{k-1}, t_k] and is held over [t_k, t_{k+1}], like the torque: a lag of one period (8 ms,
-2 to 4 degrees of phase at the paper's 0.7-1.2 Hz gaits). Why not once per RK4 substep: the wake is validated
-(Wagner, Garrick: swim_model/test/test_wake.py) at steps of about a period; eight times as many steps would shed
-eight times as many vortices (the merging bound reached in 0.3 s instead of 2.4 s) and cost eight times as
-much, well under real time; and a force that changes inside the period would break the plant's one compiled
-call per period. Shedding one vortex per period is the discretization the wake's validation used.
-
-Force spikes. A vortex passing close to the foil, or one the step carried into the foil and the wake reflected
-out, changes the vortical impulse fast. Vortex-vortex velocities are desingularized (Krasny blob,
-``WakeParameters.core_radius_m``); what is left is clipped: the force vector's magnitude to ``force_limit_n`` and
-the moment to ``moment_limit_n_m`` (both assumed, sized to the largest circulatory force the foil could carry,
-see below), and each clipped period counted (``clipped_count``).
-
-No random numbers: a run with the wake repeats bit for bit.
-
-Separation drag. The wake sheds from the trailing edge only: the flow stays attached at the leading edge (which
-loses only the suction it cannot hold, swim_model.wake), so the wake alone carries no separated (post-stall)
-force. A simulated vehicle in the wake's water adds it as the quadratic drag ``F = -1/2 rho Cd A |v| v`` on the
-foil's chordwise (U) and normal (V) velocities (``separation_drag``; a flat plate broadside has Cd 1.2, Hoerner),
-mapped to q by Q2(q)'.
-
-Flows (``FLOWS``): the water a simulated vehicle swims in, the same choice for swim_sim's plant and the emulated
-rig: "ideal" (the paper's added mass only), "circulatory" (``VehicleModel(flow="circulatory")``, swim_model.flow)
-and "wake" (the ideal model plus this module's wake force and separation drag).
+The wake is stepped once per control period and its force held over the next (docs/wake_study.md, Sec. 2,
+"Timing"), clipped to force_limit_n and moment_limit_n_m ("Limits"). The frames, the separation drag and the
+flows (``FLOWS``) a simulated vehicle swims in: docs/wake_study.md, Sec. 2.1. No random numbers: a run with the
+wake repeats bit for bit.
 """
 from __future__ import annotations
 
@@ -60,7 +29,7 @@ from swim_model.wake import Wake, WakeParameters
 
 Array = npt.NDArray[np.float64]
 
-#: the water a simulated vehicle swims in (module docstring), and the VehicleModel flow each integrates
+#: the water a simulated vehicle swims in (docs/wake_study.md, Sec. 2.1), and the VehicleModel flow each integrates
 FLOWS = ("ideal", "circulatory", "wake")
 MODEL_FLOWS = {"ideal": "ideal", "circulatory": "circulatory", "wake": "ideal"}
 
@@ -80,13 +49,29 @@ FOIL_KINEMATICS_NAME = "wake_foil_kinematics"
 
 @dataclasses.dataclass(frozen=True)
 class WakeCouplingParameters:
-    """The wake's numerical parameters (swim_model.wake.WakeParameters) and the clip limits."""
+    """The wake's numerical parameters and the clip limits.
+
+    Attributes
+    ----------
+    wake : WakeParameters
+        The wake's numerical parameters (its density is replaced by the rig's).
+    force_limit_n : float
+        Largest magnitude of the held force (fx, fy), N.
+    moment_limit_n_m : float
+        Largest magnitude of the held moment, N m.
+
+    Raises
+    ------
+    StateError
+        For a limit that is not positive and finite.
+    """
 
     wake: WakeParameters = WakeParameters()
     force_limit_n: float = FORCE_LIMIT_N
     moment_limit_n_m: float = MOMENT_LIMIT_N_M
 
     def __post_init__(self) -> None:
+        """Check that both clip limits are positive and finite."""
         for name in ("force_limit_n", "moment_limit_n_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
@@ -97,9 +82,24 @@ class WakeCouplingParameters:
 class WakeStatistics:
     """The wake after a period, for analysis (published by sim_node on ``wake_statistics``).
 
-    ``foil_force`` (fx N, fy N, M_z N m) is the force held over the period (after the clip), foil axes at F;
-    ``thrust_n`` its tank-frame component along the foil's direction of travel about the hub (``thrust_n``);
-    ``generalized_force`` = Q2' foil_force, per coordinate of q (N m, or N on R).
+    Attributes
+    ----------
+    time_s : float
+        The wake's time, s.
+    vortex_count : int
+        Free vortices.
+    shed_circulation_m2_s : float
+        Sum of the free vortices' circulations, m^2/s.
+    total_circulation_m2_s : float
+        Kelvin's total circulation measured from the velocity field, m^2/s.
+    foil_force : tuple of 3 floats
+        (fx N, fy N, M_z N m), the force held over the period (after the clip), foil axes at F.
+    thrust_n : float
+        Its tank-frame component along the foil's direction of travel about the hub, N.
+    generalized_force : tuple of float
+        Q2' foil_force, per coordinate of q (N m, or N on R).
+    clipped_count, merged_count, reflected_count : int
+        Periods clipped, vortex pairs merged, vortices reflected out of the foil.
     """
 
     time_s: float
@@ -116,8 +116,19 @@ class WakeStatistics:
 
 @dataclasses.dataclass(frozen=True)
 class WakeVortices:
-    """The free vortices after a period (published by sim_node on ``wake_vortices``): positions x + iy in the tank
-    frame (m, oldest first), circulations (m^2/s, counter-clockwise positive), the trailing edge x + iy (m)."""
+    """The free vortices after a period (published by sim_node on ``wake_vortices``).
+
+    Attributes
+    ----------
+    time_s : float
+        The wake's time, s.
+    positions_m : (N,) ndarray of complex
+        x + iy in the tank frame, m, oldest first.
+    circulations_m2_s : (N,) ndarray
+        Circulations, counter-clockwise positive, m^2/s.
+    trailing_edge_m : complex
+        The trailing edge x + iy in the tank frame, m.
+    """
 
     time_s: float
     positions_m: npt.NDArray[np.complex128]
@@ -126,7 +137,15 @@ class WakeVortices:
 
 
 class WakeCoupling:
-    """The wake behind the vehicle's foil, stepped once per control period; returns the held generalized force."""
+    """The wake behind the vehicle's foil, stepped once per control period; returns the held generalized force.
+
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle (its foil, rig density and kinematics).
+    params : WakeCouplingParameters, optional
+        The wake's parameters and the clip limits.
+    """
 
     def __init__(self, model: VehicleModel, params: WakeCouplingParameters = WakeCouplingParameters()) -> None:
         self.model, self.params = model, params
@@ -148,7 +167,18 @@ class WakeCoupling:
         self._pose_now = (0.0, 0.0, 0.0)
 
     def foil_pose(self, q: Array) -> tuple[float, float, float]:
-        """(x_m, y_m, chord angle rad) of the foil frame in the tank frame (the wake's pose)."""
+        """The foil frame's pose in the tank frame (the wake's pose).
+
+        Parameters
+        ----------
+        q : (nq,) ndarray
+            Configuration, rad and m.
+
+        Returns
+        -------
+        tuple of 3 floats
+            (x m, y m, chord angle rad).
+        """
         return self._foil_kinematics(q)[0]
 
     def _foil_kinematics(self, q: Array) -> tuple[tuple[float, float, float], Array]:
@@ -160,9 +190,29 @@ class WakeCoupling:
         return (x_m, y_m, angle_rad), q2
 
     def step(self, q: Array, qdot: Array, period_s: float) -> Array:
-        """Step the wake to the state (q, qdot) at the start of a period; the generalized force to hold over it.
+        """Step the wake to the state at the start of a period; return the generalized force to hold over it.
 
-        Q = Q2(q)' clip(fx, fy, M_z): the vortical force of the period that just ended (module docstring: timing).
+        Q = Q2(q)' clip(fx, fy, M_z): the vortical force of the period that just ended (docs/wake_study.md, Sec. 2,
+        "Timing").
+
+        Parameters
+        ----------
+        q : (nq,) ndarray
+            Configuration, rad and m.
+        qdot : (nq,) ndarray
+            Velocity, rad/s and m/s.
+        period_s : float
+            The period just ended, s.
+
+        Returns
+        -------
+        (nq,) ndarray
+            Q, N m and N by coordinate.
+
+        Raises
+        ------
+        StateError
+            For a wake force that is not finite.
         """
         pose, q2 = self._foil_kinematics(q)
         velocity = q2 @ np.asarray(qdot, dtype=float)
@@ -173,7 +223,20 @@ class WakeCoupling:
         return self.generalized_force
 
     def to_generalized(self, q: Array, foil_force: Array) -> Array:
-        """Q = Q2(q)' (fx, fy, M_z): a force in foil axes at F and a moment about F as a generalized force."""
+        """Q = Q2(q)' (fx, fy, M_z): a force in foil axes at F and a moment about F as a generalized force.
+
+        Parameters
+        ----------
+        q : (nq,) ndarray
+            Configuration, rad and m.
+        foil_force : (3,) ndarray
+            (fx N, fy N, M_z N m).
+
+        Returns
+        -------
+        (nq,) ndarray
+            Q, N m and N by coordinate.
+        """
         generalized: Array = self._foil_kinematics(q)[1].T @ np.asarray(foil_force, dtype=float)
         return generalized
 
@@ -191,8 +254,16 @@ class WakeCoupling:
         return clipped
 
     def thrust_n(self) -> float:
-        """The held force's tank-frame component along e_t = z x F/|F|, the direction in which the foil moves when
-        the whole vehicle turns about the hub (what propels it along alpha: Q_alpha = |F| thrust_n + M_z), N."""
+        """The held force's tank-frame component along the foil's direction of travel about the hub.
+
+        e_t = z x F/|F|, the direction in which the foil moves when the whole vehicle turns about the hub (what propels
+        it along alpha: Q_alpha = |F| thrust_n + M_z).
+
+        Returns
+        -------
+        float
+            N; 0 with the foil on the hub axis.
+        """
         x, y, angle = self._pose_now
         radius = math.hypot(x, y)
         if radius == 0.0:
@@ -201,7 +272,13 @@ class WakeCoupling:
         return (x * tank.imag - y * tank.real) / radius
 
     def vortices(self) -> WakeVortices:
-        """The free vortices now, tank frame, and the trailing edge they are shed from."""
+        """The free vortices now, tank frame, and the trailing edge they are shed from.
+
+        Returns
+        -------
+        WakeVortices
+            Copies of the positions and circulations.
+        """
         wake = self.wake
         x, y, angle = self._pose_now
         edge = complex(x, y) + complex(math.cos(angle), math.sin(angle)) * wake.plane.z_te
@@ -209,7 +286,13 @@ class WakeCoupling:
                             circulations_m2_s=wake.circulations_m2_s.copy(), trailing_edge_m=edge)
 
     def statistics(self) -> WakeStatistics:
-        """The wake's statistics now (Kelvin's total circulation measured from the velocity field)."""
+        """The wake's statistics now (Kelvin's total circulation measured from the velocity field).
+
+        Returns
+        -------
+        WakeStatistics
+            The statistics.
+        """
         wake = self.wake
         return WakeStatistics(
             time_s=wake.time_s, vortex_count=wake.vortex_count(), shed_circulation_m2_s=wake.shed_circulation(),
@@ -221,8 +304,19 @@ class WakeCoupling:
 
 
 def separation_drag(foil_velocity: ca.SX, factors: ca.SX) -> ca.SX:
-    """The foil's quadratic drag (fx, fy, M_z) in foil axes at F, N and N m, for the foil frame's velocity
-    (U, V, Omega) = Q2 qdot and factors (k_U, k_V) = 1/2 rho Cd A (kg/m) on the chordwise and normal velocities:
-    (-k_U |U| U, -k_V |V| V, 0)."""
+    """The foil's quadratic drag in foil axes at F: (-k_U |U| U, -k_V |V| V, 0).
+
+    Parameters
+    ----------
+    foil_velocity : (3,) casadi.SX
+        (U m/s, V m/s, Omega rad/s) = Q2 qdot.
+    factors : (2,) casadi.SX
+        (k_U, k_V) = 1/2 rho Cd A on the chordwise and normal velocities, kg/m.
+
+    Returns
+    -------
+    (3,) casadi.SX
+        (fx N, fy N, M_z N m).
+    """
     u, v = foil_velocity[0], foil_velocity[1]
     return ca.vertcat(-factors[0] * ca.fabs(u) * u, -factors[1] * ca.fabs(v) * v, 0)

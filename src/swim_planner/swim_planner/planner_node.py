@@ -1,26 +1,8 @@
-"""planner_node: serves maneuver requests from the primitive library.
+"""planner_node: serves maneuver requests (request_maneuver, list_primitives) from the primitive library.
 
-Service ``request_maneuver`` (swim_interfaces/srv/RequestManeuver): an explicit primitive sequence with
-repeat counts (MODE_SEQUENCE), or a goal state of the lane/energy graph with a distance to cover at least
-(MODE_GOAL, answered by the quickest path), concatenated and time-scaled. A request that cannot be planned
-gets success = false and a message saying why; nothing else changes. A request with a ``request_id`` seen among
-the last ANSWERS_KEPT gets that request's reply again (a client repeats a request whose answer DDS lost): nothing
-is planned or published twice. Topic ``plan`` (PlannedTrajectory, transient local): the last plan made.
-
-Parameters: the table PARAMETERS (description and range of each, checked when set, applied after).
-``flow_model``, ``library_path`` and ``rig_path`` are read-only. ``flow_model`` ("ideal", the paper's, or
-"circulatory") is the flow model plans are made with: the library (default: the one shipped for that model) must
-have been built with it, or the node does not start. ``default_time_scale`` is used when
-a request's time_scale is 0. Setting ``lqr_weights_path`` (a YAML of swim_controller LqrWeights fields; empty: the
-gains stored in the library) at run time retunes the plans made after it: each primitive's gains for the new
-weights are computed on its first use (0.1-0.3 s each) and kept, while other requests are answered; a file that
-does not load is refused and changes nothing. ``max_plan_duration_s`` and ``max_plan_samples``
-(maneuver.PlanBounds) bound what a request may ask for: a longer plan, a non-finite start alpha or goal distance
-is refused by name before any work is done.
-
-Service ``list_primitives`` (swim_interfaces/srv/ListPrimitives): what can be asked for, the graph's states and
-every primitive with its start and end states, their energy levels, its duration and its advance (made once at
-start: the library is read-only).
+Services, the plan topic, repeated requests and the parameters (flow model, LQ retuning, plan bounds): see
+src/swim_planner/README.md, section "planner_node". Concatenation and time scaling: docs/model_and_method.md,
+section "4. Maneuvers: library, graph, concatenation and time scaling".
 """
 from __future__ import annotations
 

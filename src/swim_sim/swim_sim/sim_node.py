@@ -1,50 +1,8 @@
 """sim_node: the simulated rig (swim_sim.plant) behind the same topics the hardware bridge serves.
 
-Topics:
-    joint_commands (sub, sensor_msgs/JointState)  torque command: names phi, theta; effort in N m
-    joint_states (pub, sensor_msgs/JointState)    alpha, [R,] phi, theta: measured positions (quantized, noisy),
-                                                  velocities (velocity_source "model") and applied efforts
-    /clock (pub, rosgraph_msgs/Clock)             simulated time, one tick per period
-    wake_statistics (pub, swim_interfaces/WakeStatistics)  with flow "wake": the vortex wake after each period
-                                                  (vortex count, circulations, the vortical force and its Q)
-    wake_vortices (pub, swim_interfaces/WakeVortices)  with flow "wake": the free vortices themselves (positions,
-                                                  circulations, the shedding edge), at most once per
-                                                  wake.vortices_period_s of simulated time (each is up to
-                                                  MAX_VORTEX_COUNT entries: every period would swamp a bag)
-Flow (``flow``, swim_sim.plant's FLOWS): "ideal" (the paper's added mass only), "circulatory" (the reduced flow
-model the circulatory plans use, with its lag states; Disturbances' foil drag is then not applied, the flow model
-has its own) or "wake" (the ideal model, the vortex wake's force and the flat-plate separation drag of
-Disturbances' foil drag coefficients). The ``wake.*`` parameters are the wake's numerics (used with "wake").
-``reset`` and ``set_state`` put the water at rest: the circulatory flow's lag states at zero, the wake emptied.
-Services: ``reset`` (std_srvs/Trigger: back to the initial state, noise restarted from the seed; time runs on),
-``set_state`` (swim_interfaces/SetVehicleState: a state within the bounds of StateBounds, else refused with the
-bound it passes and nothing changed).
-
-Hard stops: heave and pitch meet an inelastic stop at the rig's hard stops (swim_sim.plant), read with the
-physically possible joint speeds from the rig file's limits (``rig_path``): a simulated run cannot take a joint
-where the rig's cannot go.
-
-Modes: ``lockstep`` (default): each state is published, the step waits for the command stamped with that
-state's stamp, then integrates one period and publishes the next: deterministic for a seed and as fast as the
-controller answers. ``realtime``: a timer steps every period with the latest command held.
-With ``hold_until_torque`` (lock-step only; false by default, true in swim_bringup's sim.yaml) the vehicle is held
-at its initial state, simulated time and the noise sequence stopped, until the first command with a nonzero torque
-(after start, reset or set_state); an all-zero command for the held state is answered by publishing the same
-state again one period of wall time later. So a maneuver starts at the same simulated step, with the same
-disturbance sequence, however long the system idled before its goal: runs with the same seed and plan repeat bit
-for bit (the experiments compare sliding mode on and off this way).
-A state with a non-finite or absurd value is never published: the simulator stops with an error (reset or
-set_state restarts it). Malformed commands are rejected and counted.
-
-Simulated time starts at ``start_time_s`` (1 s by default: a zero stamp means "not stamped" to consumers).
-Parameters: the table PARAMETERS (swim_ros.parameters: each with its description and range; read-only where the
-node is built from it at start, such as ``seed``; ``velocity_source``, ``resend_after_s`` and ``sensors.*`` take
-effect at once when set).
-
-Speed (lock-step: each period waits for a round trip through the controller). The per-period path reuses its
-messages and fills their arrays with array('d') (rosidl's setters check a list element by element), and the
-per-period topics have no QoS event handlers: rclpy gives every publisher and subscription two by default
-(incompatible QoS and type), each a waitable the executor re-adds to its wait set on every spin, in Python.
+Topics, services, flows, hard stops, modes (lock-step, real time), the held start and the parameters: see
+src/swim_sim/README.md, section "sim_node". Why the per-period path reuses its messages and creates its topics
+without QoS event handlers: see docs/speed.md, section "The closed loop over DDS".
 """
 from __future__ import annotations
 

@@ -113,7 +113,7 @@ def test_fuzzed_commands_step_only_when_well_formed_within_the_limits(sim, drive
 
 def positions():
     """Positions: inside the stops, exactly at them (accepted), just past them (refused), absurd and malformed."""
-    at_stops = (1.0471975511965976, 1.3962634015954636)   # 60 and 80 degrees: the bridge file's hard limits
+    at_stops = (1.0471975511965976, 1.3962634015954636)   # 60 and 80 degrees: the rig file's hard stops
     just_past = tuple(math.nextafter(v, math.inf) for v in at_stops)
     borderline = at_stops + just_past
     return st.one_of(st.floats(-1.5, 1.5), st.sampled_from(borderline + tuple(-v for v in borderline)),

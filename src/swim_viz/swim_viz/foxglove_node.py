@@ -1,35 +1,8 @@
 """foxglove_node: the running system, live in the Foxglove app, and a maneuver and the e-stop from it.
 
-A foxglove-sdk WebSocket server (the Foxglove WebSocket protocol; the SDK names it ``foxglove.sdk.v1``) on host:port,
-loopback by default: the server has no authentication, so anyone who reaches the port can steer the rig.
-
-Channels (what a client can subscribe to):
-    /joint_states, /joint_commands, /tracking_state, /plan, /diagnostics, /wake_statistics, /wake_vortices,
-    /robot_description, /markers   the ROS topics as DDS carries them (CDR), schema their ros2msg definition
-    /tf, /tf_static                 foxglove.FrameTransforms, from the ROS topics
-    /scene                          foxglove.SceneUpdate: the planned and travelled paths (from /markers' line
-                                    strips) and the wake's vortices (from /wake_vortices)
-    /log                            foxglove.Log: the bridge's faults as they latch and clear (/diagnostics), the
-                                    tracker's goals as they start and end, the maneuvers called from the app
-A ROS topic is subscribed only while a client subscribes to a channel made from it (as foxglove_bridge does), so
-a server nobody watches costs the loop nothing; /diagnostics, the tracker's goal status and robot_description are
-always read (the log, and the meshes the app asks for). The per-period topics (125 Hz in real time, faster in
-lock-step) are sampled, not called back: a reader of depth 1 that no executor serves holds each one's newest
-message, and a timer at state_rate_hz sends it if it is new, so their cost does not grow with the loop's rate. The
-scene and the wake are bounded by scene_rate_hz (a message sooner is dropped). The SDK keeps at most
-message_backlog messages per client and drops the oldest past that, so a slow client never slows the loop.
-
-Services (JSON requests; a malformed one gets an error reply and changes nothing):
-    perform_maneuver      swim_viz.live.MANEUVER_REQUEST_SCHEMA, sent as a perform_maneuver action goal
-                          (maneuver_node, which checks it and plans it); the reply comes once the plan is being
-                          tracked ({"goal_id", "phase"}), or is the error that ended it first
-    cancel_maneuver       {} : cancels the maneuver this server started (the foil is held where it is)
-    emergency_stop        {} : the bridge's emergency_stop service
-    reset_emergency_stop  {} : the bridge's reset_emergency_stop service
-Client topic: /emergency_stop, JSON {"data": true} (the app's publish panel), published as std_msgs/Bool on the
-bridge's emergency_stop topic. Assets: the meshes the latest robot_description names, and nothing else.
-
-Parameters (read at start): the table PARAMETERS.
+Channels, services, the sampling of the per-period topics, the bounds that keep a slow client from slowing the
+loop, and why the server listens on loopback: see docs/visualization.md, section "Foxglove live: foxglove_node".
+Parameters: src/swim_viz/README.md, section "Nodes and parameters (read at start)".
 """
 from __future__ import annotations
 

@@ -1,15 +1,6 @@
 """marker_node: the planned and the travelled path as visualization_msgs/MarkerArray, in the tank frame.
 
-Topics:
-    plan (sub, swim_interfaces/PlannedTrajectory, latched)  the planned path: platform centre and foil point
-    joint_states (sub, sensor_msgs/JointState, best effort)  the travelled path, restarted by each new plan
-    markers (pub, visualization_msgs/MarkerArray)             at most publish_rate_hz a second, when changed
-Parameters (read at start): rig_path, lane_radius_m (swim_viz.rig_inputs), publish_rate_hz (10),
-travelled_spacing_m (a point is kept when the platform or the foil moved this far, 2 mm), travelled_max_points.
-
-The wake's vortices have no message yet (the simulator publishes only wake_statistics, without positions):
-wake_markers is where they are to be drawn, coloured by the sign of their circulation and sized by its
-strength, once a message carries them.
+Topics, namespaces and parameters: see src/swim_viz/README.md, section "Nodes and parameters (read at start)".
 """
 from __future__ import annotations
 
