@@ -12,7 +12,6 @@ import time
 import numpy as np
 
 from swim_controller.tracker import CascadeTracker, FoilRangeGuard, model_io_linearization, model_lag_rate
-from swim_hw_bridge.conversions import load_bridge_config
 from swim_model import VehicleModel, load_rig
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.maneuver import concatenate, expand_sequence
@@ -32,7 +31,7 @@ def step_times_us(flow_model: str) -> tuple[float, float]:
     model = VehicleModel(rig, constrained=True, flow=flow_model)
     tracker = CascadeTracker(model_io_linearization(model), model.torque_limits(), sample_period_s=0.001,
                              lag_rate=model_lag_rate(model),
-                             range_guard=FoilRangeGuard(load_bridge_config(None).hard_limits_rad))
+                             range_guard=FoilRangeGuard(load_rig().hard_limits_rad))
     tracker.start(trajectory)
     rng = np.random.default_rng(0)
     durations = []

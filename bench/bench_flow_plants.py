@@ -18,7 +18,6 @@ from swim_bringup.experiments import PAPER_CONSTRAINED, PAPER_LANE_KEEPING
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.testing.closed_loop import simulate
 from swim_controller.tracker import CascadeTracker, model_io_linearization
-from swim_hw_bridge.conversions import load_bridge_config
 from swim_model import VehicleModel, load_rig
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.maneuver import concatenate, expand_sequence
@@ -56,7 +55,7 @@ class TimedPlant:
         return state
 
 
-def run(flow: str, constrained: bool, rig, library, bridge) -> dict:
+def run(flow: str, constrained: bool, rig, library) -> dict:
     maneuver = PAPER_CONSTRAINED if constrained else PAPER_LANE_KEEPING
     reference = concatenate(library, rig, expand_sequence(*maneuver), 1.0)
     lane_radius_m = library.spec(maneuver[0][0]).lane_radius_m if constrained else None
@@ -64,7 +63,7 @@ def run(flow: str, constrained: bool, rig, library, bridge) -> dict:
     plant_model = vehicle_model(flow, rig, constrained, lane_radius_m)
     tracker = CascadeTracker(model_io_linearization(tracker_model), tracker_model.torque_limits(), SlidingMode(),
                              sample_period_s=rig.sample_period_s)
-    plant = TimedPlant(Plant(plant_model, Disturbances(), seed=SEED, hard_limits_rad=bridge.hard_limits_rad,
+    plant = TimedPlant(Plant(plant_model, Disturbances(), seed=SEED, hard_limits_rad=rig.hard_limits_rad,
                              flow=flow))
     started = time.perf_counter()
     result = simulate(tracker_model, tracker, reference, rig.sample_period_s, plant=plant)
@@ -84,11 +83,10 @@ def main() -> None:
     load_before = os.getloadavg()[0]
     rig = load_rig()
     library = PrimitiveLibrary.load(default_library_path(), rig)
-    bridge = load_bridge_config()
     for flow in FLOWS:   # compile every plant before timing any
         for constrained in (True, False):
             Plant(vehicle_model(flow, rig, constrained), flow=flow)
-    results = {f"{flow}_{'constrained' if constrained else 'free'}": run(flow, constrained, rig, library, bridge)
+    results = {f"{flow}_{'constrained' if constrained else 'free'}": run(flow, constrained, rig, library)
                for flow in FLOWS for constrained in (True, False)}
     wake_factors = [results[f"wake_{kind}"]["closed_loop_realtime_factor"] for kind in ("constrained", "free")]
     print(json.dumps({

@@ -10,7 +10,6 @@ with the attached flow's whole suction, 15.4 mm.
 import pytest
 from conftest import track_plan
 
-from swim_hw_bridge.conversions import load_bridge_config
 from swim_model import load_rig
 from swim_model.wake import WakeParameters
 from swim_model.wake_coupling import WakeCouplingParameters
@@ -30,7 +29,7 @@ def lane_change_end_offset_m(library, wake: WakeParameters) -> float:
     rig = load_rig()
     water = vehicle_model("wake", rig, False, rig.lane_1_radius_m)
     plant = Plant(water, Disturbances(), seed=3, wake=WakeCoupling(water, WakeCouplingParameters(wake=wake)),
-                  hard_limits_rad=load_bridge_config(None).hard_limits_rad)
+                  hard_limits_rad=rig.hard_limits_rad)
     run = track_plan(library, LANE_CHANGE, TIME_SCALE, plant)
     return abs(run.q[-1, 1] - rig.lane_2_radius_m)
 

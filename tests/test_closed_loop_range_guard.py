@@ -19,7 +19,6 @@ from conftest import track_plan
 
 from swim_bringup.experiments import PAPER_CONSTRAINED
 from swim_controller.tracker import FoilRangeGuard
-from swim_hw_bridge.conversions import load_bridge_config
 from swim_model import load_rig
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.paths import default_library_path
@@ -37,7 +36,7 @@ HUB_END_ERROR_RAD = 0.05
 
 def constrained_run(range_guard):
     rig = load_rig()
-    stops = load_bridge_config(None).hard_limits_rad
+    stops = rig.hard_limits_rad
     water = vehicle_model("wake", rig, True, rig.lane_1_radius_m)
     plant = Plant(water, Disturbances(), seed=SEED, wake=WakeCoupling(water), hard_limits_rad=stops)
     library = PrimitiveLibrary.load(default_library_path("circulatory"), rig, "circulatory")
@@ -50,7 +49,7 @@ def constrained_run(range_guard):
 
 @pytest.fixture(scope="module")
 def stops():
-    return load_bridge_config(None).hard_limits_rad
+    return load_rig().hard_limits_rad
 
 
 @pytest.fixture(scope="module")

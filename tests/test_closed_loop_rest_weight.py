@@ -18,7 +18,6 @@ import pytest
 from conftest import track_plan
 
 from swim_bringup.experiments import PAPER_CONSTRAINED
-from swim_hw_bridge.conversions import load_bridge_config
 from swim_model import load_rig
 from swim_planner.catalog import CIRCULATORY_LQR_WEIGHTS
 from swim_planner.gains import RetunedLibrary
@@ -40,7 +39,7 @@ HUB_END_ERROR_RAD = 5e-3
 def lane_keeping_end_offset_m(library) -> float:
     rig = load_rig()
     plant = Plant(vehicle_model("circulatory", rig, False, rig.lane_1_radius_m), Disturbances(), seed=1,
-                  hard_limits_rad=load_bridge_config(None).hard_limits_rad)
+                  hard_limits_rad=rig.hard_limits_rad)
     run = track_plan(library, LANE_KEEPING, 1.0, plant)
     return abs(run.q[-1, 1] - rig.lane_1_radius_m)
 
@@ -52,7 +51,7 @@ def constrained_end_errors_rad(library) -> list[float]:
     for seed in CONSTRAINED_SEEDS:
         water = vehicle_model("wake", rig, True, rig.lane_1_radius_m)
         plant = Plant(water, Disturbances(), seed=seed, wake=WakeCoupling(water),
-                      hard_limits_rad=load_bridge_config(None).hard_limits_rad)
+                      hard_limits_rad=rig.hard_limits_rad)
         run = track_plan(library, PAPER_CONSTRAINED, 1.0, plant, constrained=True)
         ends.append(float(run.error[-1, 0]))
     return ends

@@ -5,9 +5,10 @@ From the tracking_state topic (reference and measured q each control period) and
 - two-norms of the errors, ||e||_2 = sqrt(int e(t)^2 dt): longitudinal R_d (alpha - alpha_d) in m, lateral
   R - R_d in m, Cartesian |p - p_d| of the platform's position p = R (cos alpha, sin alpha) in m;
 - the final lateral offset and final alpha error, the duration, peak |torque| per motor, the fraction of
-  periods with a saturated motor, the periods with the heave or the pitch at a hard limit (at the rig's stop:
-  rig_hard_limits), and the energy used, int (|tau_h phidot| + |tau_p thetadot|) dt in J (motors do not take
-  energy back, so negative power is counted as spent too).
+  periods with a saturated motor, the periods with the heave or the pitch at a hard limit (at the rig's stop: by
+  default the shipped rig file's limits, which sim_node's stops also take; --rig for another rig's),
+  and the energy used, int (|tau_h phidot| + |tau_p thetadot|) dt in J (motors do not take energy back, so
+  negative power is counted as spent too).
 
 Of any rosbag2 bag (run_record.read_bag reads it once): its topics with their types and message counts, and those
 whose messages cannot be decoded named with why; from joint_states alone, each joint's range and peak speed and the
@@ -26,7 +27,7 @@ from swim_bringup.bag import BagError, BagInfo
 from swim_bringup.reports import RunAnalysis, RunMeasures
 from swim_bringup.run_record import JointStates, MissingTopic, RecordedBag, Run, read_bag
 from swim_control.measures import two_norm
-from swim_hw_bridge.conversions import load_bridge_config
+from swim_model import load_rig
 from swim_model.limits import HardLimits
 from swim_ros.typestore import swim_typestore
 
@@ -35,11 +36,11 @@ from swim_ros.typestore import swim_typestore
 HARD_STOP_TOLERANCE_RAD = 1.0e-4
 
 
-def rig_hard_limits(bridge_config_path: Optional[Path] = None) -> HardLimits:
+def rig_hard_limits(rig_path: Optional[Path] = None) -> HardLimits:
     """The rig's hard stops ((heave lower, upper), (pitch lower, upper), rad) that hard_stop_periods counts: the
-    bridge file's at bridge_config_path, by default the shipped one (which sim_node's stops also take).
-    BridgeConfigError if the file does not read."""
-    return load_bridge_config(bridge_config_path).hard_limits_rad
+    limits record of the rig file at rig_path, by default the shipped one (every node's when its rig_path is
+    empty). RigConfigError if the file does not read."""
+    return load_rig(rig_path).hard_limits_rad
 
 
 def _radius(run: Run, q: np.ndarray) -> np.ndarray:

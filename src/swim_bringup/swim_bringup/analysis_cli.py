@@ -2,8 +2,8 @@
 
 The measures are analysis.py's, of the last plan tracked in the bag: two-norms of the longitudinal, lateral and
 Cartesian errors, the final offsets, the duration, peak torques, saturation, the periods at a hard limit (at the
-rig's stop: by default the shipped bridge file's limits, which sim_node's stops also take; --bridge-config for
-another rig's) and the energy used.
+rig's stop: by default the shipped rig file's limits, which sim_node's stops also take; --rig for another rig's)
+and the energy used.
 
 Any rosbag2 bag opens (swim-demo's, swim-record's, one recorded by `ros2 bag record`, Humble's included; MCAP or
 sqlite3): its topics are listed with their types and message counts, and those whose messages cannot be decoded (a
@@ -28,7 +28,7 @@ from swim_bringup.analysis import BagAnalysis, bag_analysis, bag_section, rig_ha
 from swim_bringup.bag import BagError
 from swim_bringup.figures import write_joint_figure, write_run_figures
 from swim_bringup.run_record import RecordedBag, read_bag
-from swim_hw_bridge.conversions import BridgeConfigError
+from swim_model import RigConfigError
 
 #: swim-analyze's exit status: every bag analysed in full (the run's measures) ...
 EXIT_FULL_REPORT = 0
@@ -67,14 +67,14 @@ def main(argv: list[str] | None = None) -> int:
                         help="rosbag2 bags: folders, or single .mcap or .db3 files (several: a side-by-side table)")
     parser.add_argument("--output", type=Path, default=None,
                         help="folder for bag_summary.json, report.json and figures (one bag)")
-    parser.add_argument("--bridge-config", type=Path, default=None,
-                        help="the rig's bridge file, whose hard limits hard_stop_periods counts (default: the shipped "
-                             "one, which sim_node's stops also take)")
+    parser.add_argument("--rig", type=Path, default=None,
+                        help="the rig file, whose hard stops (its limits) hard_stop_periods counts (default: "
+                             "swim_model's shipped rig, every node's when its rig_path is empty)")
     args = parser.parse_args(argv)
     try:
-        hard_limits_rad = rig_hard_limits(args.bridge_config)
-    except BridgeConfigError as err:
-        print(f"swim-analyze: --bridge-config: {err}", file=sys.stderr)
+        hard_limits_rad = rig_hard_limits(args.rig)
+    except RigConfigError as err:
+        print(f"swim-analyze: --rig: {err}", file=sys.stderr)
         return EXIT_UNREADABLE
     status = EXIT_FULL_REPORT
     analyses: dict[str, tuple[RecordedBag, BagAnalysis]] = {}

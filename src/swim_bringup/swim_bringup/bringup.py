@@ -54,12 +54,13 @@ FOXGLOVE_DEFAULT_PORT = 8765
 
 def bringup_specs(plant: str, backend: Optional[str] = None, pipeline: str = "realistic", realtime: bool = False,
                   sliding_mode: bool = True, config: Optional[Path] = None,
-                  foxglove_port: Optional[int] = None) -> list[NodeSpec]:
+                  foxglove_port: Optional[int] = None, rig_path: str = "") -> list[NodeSpec]:
     """The nodes swim-bringup starts for a plant ("sim" or "bridge"), as the launch files start them: the pipeline's
     parameter files (config_dir(pipeline)) or config's, sim_node in real time if realtime (else as its file says:
     lock-step, with the tracker's stale limit raised, system.LOCKSTEP_STALE_OVERRIDE), bridge_node with backend
     (default emulated), the tracker's sliding mode on or off, the maneuver server, and foxglove_node on
-    foxglove_port (loopback) unless it is None. BringupError for a backend
+    foxglove_port (loopback) unless it is None, every node that loads the rig with rig_path (empty: the shipped rig).
+    BringupError for a backend
     with the simulator, real time with the bridge (always real time) or an unknown backend."""
     if plant not in PLANTS:
         raise BringupError(f"the set is one of {', '.join(PLANTS)}, not {plant!r}")
@@ -75,7 +76,8 @@ def bringup_specs(plant: str, backend: Optional[str] = None, pipeline: str = "re
     if foxglove_port is not None and not 0 <= foxglove_port <= 65535:
         raise BringupError(f"--foxglove takes a TCP port (0-65535), not {foxglove_port}")
     specs = closed_loop_specs(config or config_dir(pipeline), plant_overrides,
-                              (f"sliding_mode_enabled:={str(sliding_mode).lower()}",), plant=plant, maneuver=True)
+                              (f"sliding_mode_enabled:={str(sliding_mode).lower()}",), plant=plant, maneuver=True,
+                              rig_path=rig_path)
     if foxglove_port is not None:
         specs.append(NodeSpec("swim_viz", "foxglove_node", parameters=(f"port:={foxglove_port}",)))
     return specs
@@ -106,6 +108,8 @@ def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
     parser.add_argument("--foxglove", type=int, nargs="?", const=FOXGLOVE_DEFAULT_PORT, default=None, metavar="PORT",
                         help=f"also start foxglove_node, the Foxglove app's live connection, on ws://127.0.0.1:PORT "
                              f"(default {FOXGLOVE_DEFAULT_PORT}; no authentication: loopback only)")
+    parser.add_argument("--rig", default="", help="rig file every node loads (rig_path; default: swim_model's "
+                        "shipped rig)")
     parser.add_argument("--log-dir", type=Path, default=None,
                         help="folder of the nodes' logs (default runs/bringup-<time>/logs)")
     return parser.parse_args(argv)
@@ -189,7 +193,7 @@ def main(argv: Optional[list[str]] = None) -> int:
             raise BringupError(f"--config {args.config}: no such folder")
         config = args.config or config_dir(args.pipeline)
         specs = bringup_specs(args.plant, args.backend, args.pipeline, args.realtime, args.sliding_mode == "on",
-                              config, args.foxglove)
+                              config, args.foxglove, args.rig)
         missing = missing_files(specs)
         if missing:
             raise BringupError(f"no parameter file {'; '.join(missing)}")

@@ -42,6 +42,8 @@ def parse_arguments(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--config", type=Path, default=None,
                         help="folder of sim/planner/tracker YAML files (default: the pipeline's)")
     parser.add_argument("--timeout", type=float, default=600.0, help="wall-time limit of the maneuver, s")
+    parser.add_argument("--rig", default="", help="rig file every node loads (rig_path) and the analysis's hard "
+                        "stops (default: swim_model's shipped rig)")
     args = parse_with_tolerances(parser, argv)
     default = PAPER_LANE_KEEPING if args.plant == "bridge" else PAPER_CONSTRAINED
     if args.primitives is None:
@@ -73,12 +75,13 @@ def main(argv: list[str] | None = None) -> int:
     config = parameter_folder(args)
     specs = closed_loop_specs(config,
                               tracker_overrides=(f"sliding_mode_enabled:={args.sliding_mode == 'on'}".lower(),),
-                              plant=args.plant)
+                              plant=args.plant, rig_path=args.rig)
     print(f"swim-demo: bringing up {', '.join(s.executable for s in specs)} (logs in {run_dir / 'logs'})")
     try:
         with tqdm(total=100, unit="%", desc="maneuver", file=sys.stderr) as bar:
             report = run_recorded(specs, run_dir, args.primitives, args.repeats, args.time_scale, args.timeout,
-                                  args.tolerances, lambda fraction: bar.update(round(100 * fraction) - bar.n))
+                                  args.tolerances, lambda fraction: bar.update(round(100 * fraction) - bar.n),
+                                  args.rig)
     except RunError as err:
         print(f"swim-demo: {err}", file=sys.stderr)
         return 1

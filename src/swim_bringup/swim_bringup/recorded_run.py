@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 from typing import Callable, Optional
 
-from swim_bringup.analysis import run_analysis
+from swim_bringup.analysis import rig_hard_limits, run_analysis
 from swim_bringup.figures import write_run_figures
 from swim_bringup.reports import RunReport, TrackerResult
 from swim_bringup.run_client import STARTUP_TIMEOUT_S, RunClient, RunError
@@ -54,9 +54,10 @@ def run_maneuver(bag_path: Path, primitive_ids: list[str], repeat_counts: list[i
 
 def run_recorded(specs: list[NodeSpec], run_dir: Path, primitive_ids: list[str], repeat_counts: list[int],
                  time_scale: float, timeout_s: float, tolerances: Tolerances = RUN_TOLERANCES,
-                 progress: Optional[Progress] = None) -> RunReport:
+                 progress: Optional[Progress] = None, rig_path: str = "") -> RunReport:
     """One closed-loop run: bring up the nodes of specs (logs in run_dir/logs), run the maneuver recorded into
-    run_dir/bag, stop the nodes; then analyse the bag and write report.json and the figures into run_dir.
+    run_dir/bag, stop the nodes; then analyse the bag (the hard stops of the rig file at rig_path, empty: the
+    shipped rig, as the nodes' rig_path) and write report.json and the figures into run_dir.
     Returns the report: the analysis measures, the tracker's result and the wall time. RunError if a node died
     or the run could not be done."""
     started = time.monotonic()
@@ -68,15 +69,15 @@ def run_recorded(specs: list[NodeSpec], run_dir: Path, primitive_ids: list[str],
                 raise RunError(f"{', '.join(system.dead())} died (see {run_dir / 'logs'})")
         result = run_maneuver(run_dir / "bag", primitive_ids, repeat_counts, time_scale, timeout_s, on_progress,
                               tolerances)
-    return write_run_report(run_dir, result, started)
+    return write_run_report(run_dir, result, started, rig_path)
 
 
-def write_run_report(run_dir: Path, result: TrackerResult, started_s: float) -> RunReport:
-    """Read the run's bag (run_dir/bag) once, analyse it and write report.json and the figures into run_dir; the
-    report, with the tracker's result and the wall time from started_s (time.monotonic) to now. MissingTopic
-    (run_record) if the bag holds no tracked period."""
+def write_run_report(run_dir: Path, result: TrackerResult, started_s: float, rig_path: str = "") -> RunReport:
+    """Read the run's bag (run_dir/bag) once, analyse it (the hard stops of the rig file at rig_path, empty: the
+    shipped rig) and write report.json and the figures into run_dir; the report, with the tracker's result and the
+    wall time from started_s (time.monotonic) to now. MissingTopic (run_record) if the bag holds no tracked period."""
     record = read_bag(run_dir / "bag")
-    analysis = run_analysis(record)
+    analysis = run_analysis(record, rig_hard_limits(Path(rig_path) if rig_path else None))
     report = RunReport(analysis.measures, analysis.bridge, result, time.monotonic() - started_s)
     report.write(run_dir / "report.json")
     write_run_figures(record, run_dir)

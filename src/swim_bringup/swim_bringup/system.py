@@ -4,6 +4,7 @@ grace period: no orphans).
 """
 from __future__ import annotations
 
+import dataclasses
 import time
 from pathlib import Path
 from typing import Sequence
@@ -100,22 +101,31 @@ def maneuver_spec(config: Path) -> NodeSpec:
     return NodeSpec("swim_bringup", "maneuver_node", config / "maneuver.yaml")
 
 
+#: the nodes that load the rig file, each from its rig_path parameter (empty: swim_model's shipped rig)
+RIG_NODES = ("sim_node", "bridge_node", "planner_node", "tracker_node", "rig_state_publisher", "marker_node")
+
+
 def closed_loop_specs(config: Path, sim_overrides: tuple[str, ...] = (),
                       tracker_overrides: tuple[str, ...] = (), plant: str = "sim",
-                      visualization: bool = True, maneuver: bool = False) -> list[NodeSpec]:
+                      visualization: bool = True, maneuver: bool = False, rig_path: str = "") -> list[NodeSpec]:
     """The plant (sim_node or bridge_node, see PLANTS), planner and tracker with the parameter files in config,
     then the maneuver server (maneuver_spec) if maneuver, then VISUALIZATION_SPECS if visualization; sim_overrides go
     to the plant node, whichever it is. With the simulator in lock-step (unless overridden to real time) the
     tracker's stale limit is LOCKSTEP_STALE_OVERRIDE unless tracker_overrides set one. A run that drives the
-    tracker itself (swim-demo, swim-experiments) leaves the maneuver server out; swim-bringup starts it."""
+    tracker itself (swim-demo, swim-experiments) leaves the maneuver server out; swim-bringup starts it. A rig_path
+    goes to every node of RIG_NODES (empty: each loads the shipped rig)."""
     if plant not in PLANTS:
         raise ValueError(f"plant must be one of {', '.join(PLANTS)}, got {plant!r}")
     if plant == "sim" and sim_mode(config / PLANTS["sim"][2], sim_overrides) == "lockstep" \
             and not any(o.startswith("stale_after_periods:=") for o in tracker_overrides):
         tracker_overrides = (LOCKSTEP_STALE_OVERRIDE, *tracker_overrides)
     package, executable, params_file = PLANTS[plant]
-    return [NodeSpec(package, executable, config / params_file, sim_overrides),
-            NodeSpec("swim_planner", "planner_node", config / "planner.yaml"),
-            NodeSpec("swim_controller", "tracker_node", config / "tracker.yaml", tracker_overrides),
-            *([maneuver_spec(config)] if maneuver else []),
-            *(VISUALIZATION_SPECS if visualization else ())]
+    specs = [NodeSpec(package, executable, config / params_file, sim_overrides),
+             NodeSpec("swim_planner", "planner_node", config / "planner.yaml"),
+             NodeSpec("swim_controller", "tracker_node", config / "tracker.yaml", tracker_overrides),
+             *([maneuver_spec(config)] if maneuver else []),
+             *(VISUALIZATION_SPECS if visualization else ())]
+    if not rig_path:
+        return specs
+    return [dataclasses.replace(s, parameters=(*s.parameters, f"rig_path:={rig_path}")) if s.executable in RIG_NODES
+            else s for s in specs]

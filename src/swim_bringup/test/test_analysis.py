@@ -34,7 +34,7 @@ def test_an_alpha_offset_is_a_chord_of_the_lane():
 
 
 def test_a_heave_held_at_its_stop_counts_the_periods_there():
-    """A heave 1.2 sin t clamped at the shipped stops (+-60 degrees, the bridge file's) sits at one where
+    """A heave 1.2 sin t clamped at the shipped stops (+-60 degrees, the rig file's) sits at one where
     |sin t| >= (pi / 3) / 1.2: over [0, 4] s, pi - 2 asin((pi / 3) / 1.2) s of the 1 ms periods."""
     run = synthetic_run(constrained=True)
     assert measures(run).hard_stop_periods == 0          # sin t and cos t stay inside both joints' stops

@@ -17,7 +17,7 @@ from swim_bringup.analysis import analyze, analyze_bag
 from swim_bringup.analysis_cli import EXIT_FULL_REPORT, EXIT_PARTIAL_REPORT, EXIT_UNREADABLE, main
 from swim_bringup.bag import RUN_TOPICS, BagWriter, bag_info, read_messages
 from swim_ros.typestore import swim_typestore
-from swim_hw_bridge.conversions import default_config_path
+from swim_model.rig import default_rig_path
 from swim_ros.processes import run_child
 
 PERIOD_S, PERIODS = 0.008, 251                  # 2 s of tracking at the controller's period
@@ -94,24 +94,25 @@ def test_a_bag_of_relative_topic_names_is_measured_as_one_of_full_names(tmp_path
         (-ALPHA_OFFSET_RAD, 0.3 * (PERIODS - 1) * PERIOD_S - ALPHA_OFFSET_RAD))
 
 
-def test_another_rigs_stops_come_from_its_bridge_file(tmp_path, capsys):
-    """--bridge-config: the heave sin t (rad) of the recorded run reaches another rig's 45 degree stop from
-    t = asin(pi / 4) on (the shipped 60 degree one, never); a bridge file that cannot be read is refused, nothing
+def test_another_rigs_stops_come_from_its_rig_file(tmp_path, capsys):
+    """--rig: the heave sin t (rad) of the recorded run reaches another rig's 45 degree stop from
+    t = asin(pi / 4) on (the shipped 60 degree one, never); a rig file that cannot be read is refused, nothing
     analysed."""
     bag = record_constrained_run(tmp_path / "run", {t: t for t in MEASURED})
     assert analyze(bag).measures.hard_stop_periods == 0
-    document = yaml.safe_load(default_config_path().read_text())
-    document["parameters"]["heave_upper_hard_limit"]["value"] = 45
+    document = yaml.safe_load(default_rig_path().read_text())
+    document["limits"]["heave_hard_stop"]["value"] = 45
+    document["limits"]["heave_planning_range"]["value"] = 35   # the soft margin still fits below the stop
     other_rig = tmp_path / "other_rig.yaml"
     other_rig.write_text(yaml.safe_dump(document))
-    assert main([str(bag), "--bridge-config", str(other_rig), "--output", str(tmp_path / "out")]) == EXIT_FULL_REPORT
+    assert main([str(bag), "--rig", str(other_rig), "--output", str(tmp_path / "out")]) == EXIT_FULL_REPORT
     report = json.loads((tmp_path / "out" / "report.json").read_text())
     times_s = np.arange(PERIODS) * PERIOD_S
     assert report["hard_stop_periods"] == np.sum(np.sin(times_s) >= math.pi / 4 - 1e-4) > 0
     capsys.readouterr()
-    assert main([str(bag), "--bridge-config", str(tmp_path / "no_such.yaml")]) == EXIT_UNREADABLE
+    assert main([str(bag), "--rig", str(tmp_path / "no_such.yaml")]) == EXIT_UNREADABLE
     captured = capsys.readouterr()
-    assert captured.out == "" and captured.err.startswith("swim-analyze: --bridge-config: ")
+    assert captured.out == "" and captured.err.startswith("swim-analyze: --rig: ")
 
 
 def test_a_namespaced_plan_of_another_type_is_named_not_read(tmp_path, capsys):

@@ -217,7 +217,7 @@ class FoilRangeGuard:
         If a stop, the margin or a braking acceleration is out of range.
     """
 
-    hard_limits_rad: HardLimits   # ((heave lower, upper), (pitch lower, upper)), rad: the bridge file's stops
+    hard_limits_rad: HardLimits   # ((heave lower, upper), (pitch lower, upper)), rad: the rig's hard stops
     braking_acceleration_rad_s2: tuple[float, float] = GUARD_BRAKING_ACCELERATION_RAD_S2
     margin_rad: float = GUARD_MARGIN_RAD
 

@@ -30,7 +30,6 @@ from swim_control.errors import PlanError, StateMessageError
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.supervisor import Mode, Outcome, StaleStateWatch, Step, Supervisor, Tolerances
 from swim_controller.tracker import CascadeTracker, FoilRangeGuard, model_io_linearization, model_lag_rate
-from swim_hw_bridge.conversions import load_bridge_config_parameter
 from swim_model.velocity_filter import DEFAULT_CUTOFF_HZ, VelocityEstimator
 from swim_model import SwimModelError, VehicleModel, load_rig
 from swim_ros.codecs import ACTUATED_JOINTS, float_array
@@ -56,9 +55,8 @@ _SLIDING_DEFAULTS = SlidingMode()
 #: period its timer runs at), changeable at run time otherwise. The upper bounds are assumed, each far past any
 #: sensible value: they only keep a typo (an extra zero, a wrong unit) from reaching the law.
 PARAMETERS = (
-    ParameterSpec("rig_path", "", "rig YAML file (empty: the shipped rig)", read_only=True),
-    ParameterSpec("bridge_config_path", "", "hardware bridge YAML file the heave's and the pitch's hard stops are read "
-                  "from, for the range guard (empty: swim_hw_bridge's shipped bridge.yaml)", read_only=True),
+    ParameterSpec("rig_path", "", "rig YAML file, its joint limits the range guard's stops (empty: the shipped rig)",
+                  read_only=True),
     ParameterSpec("range_guard_enabled", True, "bound the law's foil acceleration so the heave and the pitch can "
                   "still brake short of their hard stops (swim_controller.tracker.FoilRangeGuard)"),
     ParameterSpec("sample_period_s", 0.008, "control period h, s (the paper's 8 ms); the stale-state timer runs at it",
@@ -177,8 +175,7 @@ class TrackerNode(Node):
         super().__init__("tracker_node")
         declare_parameters(self, PARAMETERS)
         self.rig = load_rig(self.get_parameter("rig_path").value or None)
-        stops = load_bridge_config_parameter(self.get_parameter("bridge_config_path").value).hard_limits_rad
-        self.range_guard = FoilRangeGuard(stops)
+        self.range_guard = FoilRangeGuard(self.rig.hard_limits_rad)
         self._models: dict[ModelKey, VehicleModel] = {}
         self._building: dict[ModelKey, concurrent.futures.Future] = {}
         self._goals_received = 0

@@ -7,7 +7,7 @@ from hypothesis import given, settings, strategies as st
 
 from swim_controller.tracker import CascadeTracker, FoilRangeGuard
 
-#: the rig's stops (swim_hw_bridge's bridge.yaml: heave +-60 deg, pitch +-80 deg), rad
+#: the rig's stops (swim_model's rig.yaml limits: heave +-60 deg, pitch +-80 deg), rad
 STOPS = ((-math.pi / 3, math.pi / 3), (-math.radians(80.0), math.radians(80.0)))
 PERIOD_S = 0.008   # paper Sec. 2
 

@@ -390,7 +390,7 @@ def test_parameters_are_validated_and_switch_sliding_mode_mid_plan(rig_loop, pla
         assert not result.successful and name in result.reason
     assert "type" in set_parameter("sliding_mode_enabled", 1).reason   # rclpy's own check: types are fixed
     assert "type" in set_parameter("range_guard_enabled", 1).reason
-    assert not set_parameter("bridge_config_path", "/elsewhere.yaml").successful   # read at start only
+    assert not set_parameter("rig_path", "/elsewhere.yaml").successful   # read at start only
     _, future = send(plant, client, plan_message)
     plant.step_periods(20)
     step_until(plant, lambda: tracking, TRACKING_WAIT_PERIODS)
@@ -409,16 +409,17 @@ def test_parameters_are_validated_and_switch_sliding_mode_mid_plan(rig_loop, pla
     assert result.error_code == ExecutePlan.Result.SUCCESSFUL, result.error_string
 
 
-def test_a_bridge_file_that_does_not_load_stops_the_node_with_the_reason(ros_domain, tmp_path):
-    """The range guard's stops come from the bridge file: one that cannot be read is a usage error at start."""
+def test_a_rig_file_that_does_not_load_stops_the_node_with_the_reason(ros_domain, tmp_path):
+    """The model and the range guard's stops come from the rig file: one that cannot be read is a usage error at
+    start."""
     from swim_ros.testing.fixtures import STARTUP_TIMEOUT_S, running_node
     log_path = tmp_path / "tracker.txt"
     missing = tmp_path / "missing.yaml"
-    with running_node("swim_controller", "tracker_node", log_path, "-p", f"bridge_config_path:={missing}") as process:
+    with running_node("swim_controller", "tracker_node", log_path, "-p", f"rig_path:={missing}") as process:
         process.wait(timeout=STARTUP_TIMEOUT_S)
     log = log_path.read_text()
     assert process.returncode == 2, log[-2000:]
-    assert "bridge_config_path" in log and str(missing) in log and "Traceback" not in log
+    assert "rig file" in log and str(missing) in log and "Traceback" not in log
 
 
 @pytest.mark.skipif(os.geteuid() != 0, reason="the real-time means need root here (CI runs as root)")

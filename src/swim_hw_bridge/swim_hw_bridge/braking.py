@@ -17,7 +17,6 @@ import itertools
 import numpy as np
 from swim_model import RigParameters, VehicleModel
 
-from swim_model.limits import HardLimits
 from swim_hw_bridge.safety import BRAKING_TORQUE_FRACTION, JointDynamicsBounds
 
 #: grid points per joint range when searching the largest inertia (M varies smoothly with the joint angles)
@@ -40,20 +39,18 @@ class VelocityTerms:
         return float(forward.outputs[0][2]), float(forward.outputs[0][3])
 
 
-def joint_dynamics_bounds(rig: RigParameters, hard_limits_rad: HardLimits,
-                          torque_limits_n_m: tuple[float, float], fraction: float = BRAKING_TORQUE_FRACTION
-                          ) -> JointDynamicsBounds:
-    """The (heave, pitch) decelerations the motors surely give and the accelerations they give at most over the
-    hard limits' ranges, rad/s^2, and the velocity terms (see the module docstring)."""
+def joint_dynamics_bounds(rig: RigParameters, fraction: float = BRAKING_TORQUE_FRACTION) -> JointDynamicsBounds:
+    """The (heave, pitch) decelerations the rig's motors (its torque limits) surely give and the accelerations they
+    give at most between its hard stops, rad/s^2, and the velocity terms (see the module docstring)."""
     model = VehicleModel(rig, constrained=False)
-    heave = np.linspace(*hard_limits_rad[0], GRID_POINTS)
-    pitch = np.linspace(*hard_limits_rad[1], GRID_POINTS)
+    heave = np.linspace(*rig.hard_limits_rad[0], GRID_POINTS)
+    pitch = np.linspace(*rig.hard_limits_rad[1], GRID_POINTS)
     largest_inertia, largest_mobility = np.zeros(2), np.zeros(2)
     for radius, phi, theta in itertools.product((rig.lane_1_radius_m, rig.lane_2_radius_m), heave, pitch):
         mass = model.mass_matrix([0.0, radius, phi, theta])
         largest_inertia = np.maximum(largest_inertia, np.diag(mass)[2:4])
         largest_mobility = np.maximum(largest_mobility, np.diag(np.linalg.inv(mass))[2:4])
-    torque = np.asarray(torque_limits_n_m, dtype=float)
+    torque = np.asarray(rig.torque_limits_n_m, dtype=float)
     decelerations = fraction * torque / largest_inertia
     accelerations = torque * largest_mobility
     return JointDynamicsBounds(decelerations_rad_s2=(float(decelerations[0]), float(decelerations[1])),

@@ -30,7 +30,7 @@ from swim_hw_bridge.device import Device, DeviceError
 from swim_hw_bridge.io_loop import IoLoop, Snapshot
 from swim_hw_bridge.safety import Command, FaultCode, SafetyLayer, SafetyLimits, WatchdogState, fault_names
 from swim_hw_bridge.timing import LatencyHistogram
-from swim_model import load_rig
+from swim_model import RigConfigError, load_rig
 from swim_model.vehicle import JOINT_NAMES_UNCONSTRAINED
 from swim_model.flow import FLOWS
 from swim_model.plant import PlantSettings
@@ -49,6 +49,7 @@ PARAMETERS = (
     ParameterSpec("backend", "emulated", f"device backend: {' | '.join(BACKENDS)}",
                   check=lambda value: None if value in BACKENDS else f"must be one of {', '.join(BACKENDS)}"),
     ParameterSpec("config_path", "", "bridge parameter YAML (empty: the shipped config/bridge.yaml)"),
+    ParameterSpec("rig_path", "", "rig YAML file: encoder lines, gear ratios, joint limits (empty: the shipped rig)"),
     ParameterSpec("flow", "ideal", f"the emulated rig's water: {' | '.join(FLOWS)}, as sim_node's flow (the other "
                   "backends swim in real water)", check=one_of(*FLOWS)),
     ParameterSpec("sample_period_s", 0.008, "I/O loop period, s (the paper's 8 ms)", range=(0.0005, 0.1)),
@@ -71,6 +72,7 @@ STATES_REMEMBERED = 64
 class BridgeSettings:
     backend: str
     config_path: str
+    rig_path: str
     flow: str
     sample_period_s: float
     watchdog_periods: int
@@ -166,22 +168,20 @@ class BridgeNode(LifecycleNode):
     def on_configure(self, state: State) -> TransitionCallbackReturn:
         try:
             self.settings = self._read_settings()
-            config = load_bridge_config(self.settings.config_path or None)
+            config = load_bridge_config(self.settings.config_path or None, load_rig(self.settings.rig_path or None))
             device_config = config.device_config(self.settings.backend)
             if self.settings.backend == "emulated":
                 device_config["plant"] = PlantSettings.flow_only(self.settings.flow)
             device = make_device(self.settings.backend, device_config)
             device.open()
-        except (ValueError, BridgeConfigError, UnknownBackend, DeviceError) as err:
+        except (ValueError, BridgeConfigError, RigConfigError, UnknownBackend, DeviceError) as err:
             self.get_logger().error(f"configure failed: {err}")
             return TransitionCallbackReturn.FAILURE
         try:
             device.write_currents(0.0, 0.0)
-            hard_limits = ((config.heave_lower_hard_limit_rad, config.heave_upper_hard_limit_rad),
-                           (config.pitch_lower_hard_limit_rad, config.pitch_upper_hard_limit_rad))
             limits = SafetyLimits.from_config(config, self.settings.sample_period_s, self.settings.watchdog_periods,
                                               self.settings.stale_read_limit, self.settings.read_failure_limit,
-                                              joint_dynamics_bounds(load_rig(), hard_limits, config.torque_limits_n_m))
+                                              joint_dynamics_bounds(config.rig))
             self.loop = IoLoop(device, Conversions(config), SafetyLayer(limits), self.settings.sample_period_s,
                                self.settings.overrun_limit, self._realtime(), self.settings.io_loop_priority,
                                on_period=self._state_ready.trigger)
@@ -195,7 +195,8 @@ class BridgeNode(LifecycleNode):
         self._restart_diagnostics_timer()
         self._state_label = "inactive"
         water = f" (flow {self.settings.flow})" if self.settings.backend == "emulated" else ""
-        self.get_logger().info(f"configured: backend {self.settings.backend}{water}, config {config.source_path}")
+        self.get_logger().info(f"configured: backend {self.settings.backend}{water}, config {config.source_path}, rig "
+                               f"{config.rig.source_path}")
         return super().on_configure(state)
 
     def on_activate(self, state: State) -> TransitionCallbackReturn:

@@ -178,7 +178,7 @@ class SafetyLimits:
             torque_limits_n_m=config.torque_limits_n_m, current_limits_a=config.current_limits_a,
             torque_gains_n_m_per_a=config.motor_torque_gains_n_m_per_a,
             hard_limits_rad=config.hard_limits_rad,
-            soft_limit_margins_rad=(config.heave_soft_limit_margin_rad, config.pitch_soft_limit_margin_rad),
+            soft_limit_margins_rad=config.rig.limits.soft_margins_rad,
             watchdog_timeout_s=watchdog_periods * sample_period_s, stale_read_limit=stale_read_limit,
             read_failure_limit=read_failure_limit, dynamics=dynamics, latency_s=sample_period_s)
 

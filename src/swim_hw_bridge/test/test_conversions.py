@@ -4,8 +4,9 @@ import math
 import pytest
 import yaml
 
-from swim_hw_bridge.conversions import (BridgeConfigError, config_from_mapping, default_config_path,
-                                        load_bridge_config, load_bridge_config_parameter)
+from swim_hw_bridge.conversions import BridgeConfigError, config_from_mapping, default_config_path, load_bridge_config
+from swim_model import load_rig
+from swim_model.rig import default_rig_path, rig_from_mapping
 
 INCH_M = 0.0254
 OZ_IN_N_M = 0.0283495231 * 9.80665 * 0.0254
@@ -42,16 +43,8 @@ def test_torque_to_current_through_gear_and_torque_constant(conversions):
     assert conversions.currents_to_volts(0.2, -1.0) == pytest.approx((1.0, -5.0), rel=1e-12)
 
 
-def test_limits_are_the_papers_and_agree_with_the_rig_file(config):
-    from swim_model import load_rig
-    rig = load_rig()
+def test_limits_are_the_papers_torque_limits_and_the_currents_reach_them(config):
     assert config.torque_limits_n_m == pytest.approx((177 * OZ_IN_N_M, 74.2 * OZ_IN_N_M), rel=1e-9)
-    assert config.torque_limits_n_m == pytest.approx(rig.torque_limits_n_m, rel=1e-12)
-    assert (config.heave_gear_ratio, config.pitch_gear_ratio) == (rig.heave_gear_ratio, rig.pitch_gear_ratio)
-    assert config.heave_encoder_lines_per_rev == rig.heave_encoder_lines_per_rev
-    assert config.pitch_encoder_lines_per_rev == rig.pitch_encoder_lines_per_rev
-    assert config.hub_encoder_lines_per_rev == rig.hub_encoder_lines_per_rev
-    assert config.rail_encoder_lines_per_m == pytest.approx(rig.rail_encoder_lines_per_m, rel=1e-12)
     # the current limits leave the paper's torque limits reachable (the torque limit binds first)
     for torque, gain, current in zip(config.torque_limits_n_m, config.motor_torque_gains_n_m_per_a,
                                      config.current_limits_a):
@@ -68,10 +61,10 @@ def test_every_entry_is_sourced_or_assumed():
 
 
 @pytest.mark.parametrize("edit, message", [
-    (lambda p: p.pop("heave_gear_ratio"), "missing"),
+    (lambda p: p.pop("heave_torque_constant"), "missing"),
     (lambda p: p.update(bogus={"value": 1, "unit": "1", "assumed": "x"}), "unknown"),
     (lambda p: p["heave_torque_constant"].update(unit="A"), "unit"),
-    (lambda p: p["heave_gear_ratio"].pop("source"), "exactly one"),
+    (lambda p: p["quadrature_counts_per_line"].pop("assumed"), "exactly one"),
     (lambda p: p["pitch_current_limit"].update(value=float("nan")), "finite"),
     (lambda p: p["pitch_current_limit"].update(value=-1.0), "positive"),
     (lambda p: p["heave_home_position"].update(value=90, unit="deg"), "home_position"),
@@ -91,8 +84,27 @@ def test_device_config_round_trips_and_carries_backend_options(config):
     assert BridgeConfig.from_dict(values) == config
 
 
-def test_a_nodes_bridge_config_parameter_reads_the_shipped_file_when_empty_and_names_itself_when_bad(tmp_path):
-    assert load_bridge_config_parameter("") == load_bridge_config(None)
-    missing = tmp_path / "missing.yaml"
-    with pytest.raises(ValueError, match=f"parameter bridge_config_path: {missing}"):
-        load_bridge_config_parameter(str(missing))
+def test_the_bridge_file_holds_no_fact_of_the_rig_file():
+    """Every fact in one file: no key of the rig file's parameters or limits appears in the bridge file."""
+    rig_document = yaml.safe_load(default_rig_path().read_text())
+    rig_keys = set(rig_document["parameters"]) | set(rig_document["limits"])
+    assert not rig_keys & set(shipped_document()["parameters"])
+
+
+def test_encoder_lines_gear_ratios_and_limits_are_the_rigs_the_bridge_is_loaded_for():
+    """Another rig's encoder lines, gear ratios, stops and torque limits reach the conversions and limits."""
+    document = yaml.safe_load(default_rig_path().read_text())
+    parameters, limits = document["parameters"], document["limits"]
+    parameters["heave_encoder_lines"]["value"] = 1024
+    parameters["pitch_gear_ratio"]["value"] = 50
+    limits["pitch_hard_stop"]["value"] = 90
+    limits["heave_torque_limit"].update(value=1.0, unit="N*m")
+    rig = rig_from_mapping(document, "other_rig.yaml")
+    config = load_bridge_config(None, rig)
+    shipped = load_bridge_config(None)
+    assert config.counts_per_unit[2] == pytest.approx(2 * shipped.counts_per_unit[2], rel=1e-12)
+    assert config.counts_per_unit[3] == pytest.approx(2 * shipped.counts_per_unit[3], rel=1e-12)
+    assert config.motor_torque_gains_n_m_per_a[1] == pytest.approx(2 * shipped.motor_torque_gains_n_m_per_a[1])
+    assert config.hard_limits_rad[1] == pytest.approx((-math.pi / 2, math.pi / 2), rel=1e-12)
+    assert config.torque_limits_n_m[0] == 1.0
+    assert load_rig().hard_limits_rad[1] == pytest.approx((-math.radians(80), math.radians(80)), rel=1e-12)

@@ -182,11 +182,9 @@ def bridge_node(ros_domain, tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def limits():
-    from swim_hw_bridge.conversions import load_bridge_config
-    config = load_bridge_config()
-    hard = ((config.heave_lower_hard_limit_rad, config.heave_upper_hard_limit_rad),
-            (config.pitch_lower_hard_limit_rad, config.pitch_upper_hard_limit_rad))
-    return np.array(config.torque_limits_n_m), hard
+    from swim_model import load_rig
+    rig = load_rig()
+    return np.array(rig.torque_limits_n_m), rig.hard_limits_rad
 
 
 def check_states_finite_within_torque_limits(client, torque_limits):

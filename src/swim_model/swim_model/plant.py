@@ -33,13 +33,13 @@ friction, tilt and waves.
 
 The lag states hold no energy and no momentum (swim_model.vehicle): ``energy`` is T + V for every flow model.
 
-Hard stops (hard_limits_rad, swim_model.limits.HardLimits: the rig's (lower, upper) heave and pitch stops): a
-joint reaching its stop meets an inelastic stop. Its position is held at the limit and its velocity into the stop
-removed by the same plastic impulse that stops a dry-friction coordinate (the Mm-orthogonal projection onto
-qdot_j = 0, which only removes kinetic energy); then it is locked at the stop while the force holding it pushes it
-back from the limit (a stop pushes, never pulls), and released into its range as soon as that force would have to
-pull. A period in which a joint reaches a stop, or starts at one, runs substep by substep; a run that never
-reaches a stop is integrated exactly as without stops.
+Hard stops (hard_limits_rad: the rig's (lower, upper) heave and pitch stops, RigParameters.hard_limits_rad from
+its limits record): a joint reaching its stop meets an inelastic stop. Its position is held at the limit
+and its velocity into the stop removed by the same plastic impulse that stops a dry-friction coordinate (the
+Mm-orthogonal projection onto qdot_j = 0, which only removes kinetic energy); then it is locked at the stop while
+the force holding it pushes it back from the limit (a stop pushes, never pulls), and released into its range as
+soon as that force would have to pull. A period in which a joint reaches a stop, or starts at one, runs substep
+by substep; a run that never reaches a stop is integrated exactly as without stops.
 
 Speed. Each compiled function is called through its C entry point on preallocated buffers (swim_model.codegen's
 NativeFunction): CasADi's own Python call costs ~45 us whatever the function does, while the arithmetic of a

@@ -2,7 +2,8 @@
 
 The rig file (``config/rig.yaml`` in this package by default) holds one entry per parameter with a
 value, a unit, and either the paper section it comes from (``source``) or the reason it was
-assumed (``assumed``). Loading converts every value to SI, and refuses a missing or unknown key, a
+assumed (``assumed``), and a ``limits`` section of the same entries, the joints' limits (swim_model.limits). Loading
+converts every value to SI, and refuses a missing or unknown key, a
 unit of the wrong dimension, an entry that is neither sourced nor assumed, and an impossible value
 (a negative mass, a thickness not smaller than the chord, ...), each with a message naming the key.
 """
@@ -19,6 +20,7 @@ from typing import Any, Mapping
 import yaml
 
 from swim_model.errors import RigConfigError
+from swim_model.limits import HardLimits, JointLimits, RigLimits
 from swim_model.units import NON_NEGATIVE, POSITIVE, SIGNED, EntryError, entry_to_si
 
 RIG_FORMAT_VERSION = 1
@@ -50,18 +52,27 @@ _SCHEMA: dict[str, tuple[str, str]] = {
     "pitch_rotor_inertia": ("inertia", _NONNEGATIVE),
     "heave_gear_ratio": ("ratio", _POSITIVE),
     "pitch_gear_ratio": ("ratio", _POSITIVE),
-    "heave_torque_limit": ("torque", _POSITIVE),
-    "pitch_torque_limit": ("torque", _POSITIVE),
     "heave_encoder_lines": ("lines_per_rev", _POSITIVE),
     "pitch_encoder_lines": ("lines_per_rev", _POSITIVE),
     "hub_encoder_lines": ("lines_per_rev", _POSITIVE),
     "rail_encoder_lines": ("lines_per_length", _POSITIVE),
     "sample_period": ("time", _POSITIVE),
 }
+#: the limits section: key "<joint>_<what>" -> dimension (every limit is positive); JointLimits' field is <what> with
+#: the dimension's SI suffix
+_JOINT_LIMITS: dict[str, str] = {
+    "planning_range": "angle", "soft_margin": "angle", "hard_stop": "angle", "max_speed": "angular_speed",
+    "torque_limit": "torque",
+}
+_LIMITS_SCHEMA: dict[str, str] = {
+    **{f"{joint}_{what}": dimension for joint in ("heave", "pitch") for what, dimension in _JOINT_LIMITS.items()},
+    "hub_max_speed": "angular_speed",
+    "rail_max_speed": "speed",
+}
 _SUFFIX = {
     "length": "m", "mass": "kg", "inertia": "kg_m2", "density": "kg_m3", "torque": "n_m",
     "angle": "rad", "time": "s", "ratio": "", "lines_per_rev": "per_rev",
-    "lines_per_length": "per_m",
+    "lines_per_length": "per_m", "angular_speed": "rad_s", "speed": "m_s",
 }
 
 
@@ -107,8 +118,10 @@ class RigParameters:
         Motor rotor inertias, kg m^2.
     heave_gear_ratio, pitch_gear_ratio : float
         Gear ratios N, motor turns per joint turn.
-    heave_torque_limit_n_m, pitch_torque_limit_n_m : float
-        Joint torque limits, N m.
+    limits : RigLimits
+        The joints' limits, the file's ``limits`` section (swim_model.limits): planning ranges, soft margins, hard
+        stops, largest speeds and torque limits; ``heave_torque_limit_n_m``, ``pitch_torque_limit_n_m``,
+        ``torque_limits_n_m`` and ``hard_limits_rad`` read it.
     heave_encoder_lines_per_rev, pitch_encoder_lines_per_rev, hub_encoder_lines_per_rev : float
         Encoder lines per motor (or hub) revolution.
     rail_encoder_lines_per_m : float
@@ -143,27 +156,41 @@ class RigParameters:
     pitch_rotor_inertia_kg_m2: float
     heave_gear_ratio: float
     pitch_gear_ratio: float
-    heave_torque_limit_n_m: float
-    pitch_torque_limit_n_m: float
     heave_encoder_lines_per_rev: float
     pitch_encoder_lines_per_rev: float
     hub_encoder_lines_per_rev: float
     rail_encoder_lines_per_m: float
     sample_period_s: float
+    limits: RigLimits   # the file's limits section: ranges, stops, speeds and torque limits of the joints
     source_path: str = dataclasses.field(default="", compare=False)
+
+    @property
+    def heave_torque_limit_n_m(self) -> float:
+        """The heave joint's torque limit, N m (Sec. 2)."""
+        return self.limits.heave.torque_limit_n_m
+
+    @property
+    def pitch_torque_limit_n_m(self) -> float:
+        """The pitch joint's torque limit, N m (Sec. 2)."""
+        return self.limits.pitch.torque_limit_n_m
 
     @property
     def torque_limits_n_m(self) -> tuple[float, float]:
         """(heave, pitch) joint torque limits, N m (Sec. 2)."""
-        return (self.heave_torque_limit_n_m, self.pitch_torque_limit_n_m)
+        return self.limits.torque_limits_n_m
 
-    def replace(self, **changes: float) -> "RigParameters":
-        """A copy with some values changed, validated like a loaded file.
+    @property
+    def hard_limits_rad(self) -> HardLimits:
+        """((heave lower, upper), (pitch lower, upper)): the joints' hard stops, rad."""
+        return self.limits.hard_limits_rad
+
+    def replace(self, **changes: Any) -> "RigParameters":
+        """A copy with some values (or the limits record) changed, validated like a loaded file.
 
         Parameters
         ----------
-        **changes : float
-            New values by field name, SI.
+        **changes : float or RigLimits
+            New values by field name, SI (``limits``: a RigLimits).
 
         Returns
         -------
@@ -178,20 +205,22 @@ class RigParameters:
         TypeError
             For a name that is no field.
         """
-        fields: dict[str, Any] = changes   # dataclasses.replace checks the names when it runs
-        changed = dataclasses.replace(self, **fields)
+        changed = dataclasses.replace(self, **changes)   # dataclasses.replace checks the names when it runs
         _check_consistency(changed)
         return changed
 
     def as_dict(self) -> dict[str, float]:
-        """The SI values by field name (no source path).
+        """The SI values by field name, the torque limits the primitives are solved against among them.
 
         Returns
         -------
         dict of str to float
-            Field name to value.
+            Field name to value (no source path, no limits but the two torque limits).
         """
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "source_path"}
+        values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
+                  if f.name not in ("source_path", "limits")}
+        return {**values, "heave_torque_limit_n_m": self.heave_torque_limit_n_m,
+                "pitch_torque_limit_n_m": self.pitch_torque_limit_n_m}
 
     def digest(self) -> str:
         """SHA-256 of the SI values: primitive libraries record it to detect a different rig.
@@ -274,20 +303,41 @@ def rig_from_mapping(document: Any, origin: str = "<mapping>") -> RigParameters:
     entries = document.get("parameters")
     if not isinstance(entries, Mapping):
         raise RigConfigError(f"{origin}: 'parameters' must be a mapping of parameter entries")
-    missing = sorted(set(_SCHEMA) - set(entries))
-    unknown = sorted(set(entries) - set(_SCHEMA))
-    if missing:
-        raise RigConfigError(f"{origin}: missing parameters: {', '.join(missing)}")
-    if unknown:
-        raise RigConfigError(f"{origin}: unknown parameters: {', '.join(unknown)} (misspelt?)")
-    values = {_field_name(key): _entry_to_si(key, entries[key], origin) for key in _SCHEMA}
-    rig = RigParameters(**values, source_path=origin)
+    _check_keys(entries, _SCHEMA, "parameters", origin)
+    values = {_field_name(key): _entry_to_si(key, entries[key], origin, *_SCHEMA[key]) for key in _SCHEMA}
+    rig = RigParameters(**values, limits=_limits_from_mapping(document.get("limits"), origin), source_path=origin)
     _check_consistency(rig)
     return rig
 
 
-def _entry_to_si(key: str, entry: Any, origin: str) -> float:
-    dimension, sign_rule = _SCHEMA[key]
+def _check_keys(entries: Mapping[str, Any], schema: Mapping[str, Any], section: str, origin: str) -> None:
+    missing = sorted(set(schema) - set(entries))
+    unknown = sorted(set(entries) - set(schema))
+    if missing:
+        raise RigConfigError(f"{origin}: missing {section}: {', '.join(missing)}")
+    if unknown:
+        raise RigConfigError(f"{origin}: unknown {section}: {', '.join(unknown)} (misspelt?)")
+
+
+def _limits_from_mapping(entries: Any, origin: str) -> RigLimits:
+    """The limits section in SI, checked (RigLimits: a soft margin inside the gap between range and stop)."""
+    if not isinstance(entries, Mapping):
+        raise RigConfigError(f"{origin}: 'limits' must be a mapping of limit entries")
+    _check_keys(entries, _LIMITS_SCHEMA, "limits", origin)
+    values = {key: _entry_to_si(key, entries[key], origin, dimension, _POSITIVE)
+              for key, dimension in _LIMITS_SCHEMA.items()}
+
+    def joint(name: str) -> JointLimits:
+        return JointLimits(**{f"{what}_{_SUFFIX[dimension]}": values[f"{name}_{what}"]
+                              for what, dimension in _JOINT_LIMITS.items()})
+
+    try:
+        return RigLimits(joint("heave"), joint("pitch"), values["hub_max_speed"], values["rail_max_speed"])
+    except RigConfigError as err:
+        raise RigConfigError(f"{origin}: limits: {err}") from err
+
+
+def _entry_to_si(key: str, entry: Any, origin: str, dimension: str, sign_rule: str) -> float:
     try:
         return entry_to_si(entry, dimension, sign_rule, f"{origin}: parameter '{key}'")
     except EntryError as err:
@@ -303,7 +353,6 @@ def _check_consistency(rig: RigParameters) -> None:
     for name in ("constrained_lane_radius_m", "lane_1_radius_m", "lane_2_radius_m"):
         if getattr(rig, name) >= tank_radius_m:
             raise RigConfigError(f"{where}: {name} must lie inside the tank (radius {tank_radius_m} m)")
-    for field in dataclasses.fields(rig):
-        value = getattr(rig, field.name)
-        if isinstance(value, float) and not math.isfinite(value):
-            raise RigConfigError(f"{where}: {field.name} is not finite")
+    for name, value in rig.as_dict().items():
+        if not math.isfinite(value):
+            raise RigConfigError(f"{where}: {name} is not finite")

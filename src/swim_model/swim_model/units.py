@@ -24,6 +24,8 @@ UNITS: dict[str, dict[str, float]] = {
     "ratio": {"1": 1.0},
     "lines_per_rev": {"lines/rev": 1.0},
     "lines_per_length": {"lines/m": 1.0, "lines/in": 1.0 / 0.0254},
+    "angular_speed": {"rad/s": 1.0, "rpm": 2.0 * math.pi / 60.0},
+    "speed": {"m/s": 1.0},
 }
 
 #: sign rules of a parameter file's entries

@@ -27,8 +27,32 @@ def test_paper_values_in_si():
     assert rig.heave_rotor_inertia_kg_m2 == pytest.approx(120e-7)
 
 
+def test_shipped_limits_in_si():
+    limits = load_rig().limits
+    degree = math.pi / 180
+    assert (limits.heave.planning_range_rad, limits.heave.soft_margin_rad, limits.heave.hard_stop_rad) == \
+        pytest.approx((50 * degree, 5 * degree, 60 * degree), rel=1e-12)
+    assert (limits.pitch.planning_range_rad, limits.pitch.soft_margin_rad, limits.pitch.hard_stop_rad) == \
+        pytest.approx((70 * degree, 5 * degree, 80 * degree), rel=1e-12)
+    assert load_rig().hard_limits_rad == ((-limits.heave.hard_stop_rad, limits.heave.hard_stop_rad),
+                                          (-limits.pitch.hard_stop_rad, limits.pitch.hard_stop_rad))
+    assert limits.max_speeds == (3.0, 1.0, 30.0, 45.0)
+    assert limits.torque_limits_n_m == load_rig().torque_limits_n_m
+
+
+def test_the_digest_covers_the_torque_limits_and_not_the_other_limits(document):
+    """A library records the rig digest: the torque limits it was solved against change it, the stops do not."""
+    shipped = load_rig().digest()
+    stops = copy.deepcopy(document)
+    stops["limits"]["heave_hard_stop"]["value"] = 70
+    assert rig_from_mapping(stops).digest() == shipped
+    torque = copy.deepcopy(document)
+    torque["limits"]["heave_torque_limit"]["value"] = 100
+    assert rig_from_mapping(torque).digest() != shipped
+
+
 def test_every_entry_is_sourced_or_assumed(document):
-    for key, entry in document["parameters"].items():
+    for key, entry in {**document["parameters"], **document["limits"]}.items():
         assert ("source" in entry) != ("assumed" in entry), key
         assert str(entry.get("source", entry.get("assumed"))).strip(), key
 
@@ -51,6 +75,13 @@ def test_digest_tracks_values():
     (lambda d: d["parameters"]["foil_max_thickness"].__setitem__("value", 0.07), "smaller than foil_chord"),
     (lambda d: d["parameters"]["lane_2_radius"].__setitem__("value", 0.9), "inside the tank"),
     (lambda d: d.__setitem__("format_version", 2), "format_version"),
+    (lambda d: d.pop("limits"), "'limits' must be a mapping"),
+    (lambda d: d["limits"].pop("rail_max_speed"), "missing limits: rail_max_speed"),
+    (lambda d: d["limits"]["pitch_hard_stop"].__setitem__("unit", "m"), "not a angle"),
+    (lambda d: d["limits"]["hub_max_speed"].__setitem__("value", 0.0), "must be positive"),
+    (lambda d: d["limits"]["heave_soft_margin"].__setitem__("value", 11), "heave soft margin .* must fit in the gap"),
+    (lambda d: d["limits"]["pitch_planning_range"].__setitem__("value", 80),
+     "pitch soft margin .* must fit in the gap"),
 ])
 def test_bad_files_are_refused_with_a_clear_message(document, mutate, message):
     bad = copy.deepcopy(document)

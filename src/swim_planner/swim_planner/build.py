@@ -128,9 +128,10 @@ def _stale(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec]) -> set[str
 
 
 def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], executor: concurrent.futures.Executor,
-                  limits: PlanningLimits = PlanningLimits(), progress: Progress = lambda i, s: None,
+                  limits: Optional[PlanningLimits] = None, progress: Progress = lambda i, s: None,
                   workers: Optional[int] = None) -> list[str]:
-    """Solve every spec not yet in the library; returns the ids that failed (with their reasons reported).
+    """Solve every spec not yet in the library within limits (None: PlanningLimits.of(library.rig)); returns the
+    ids that failed (with their reasons reported).
 
     workers: the executor's worker count, if known. The build then keeps that many solves running and, each time
     one ends, submits the ready spec of most ``critical_work``. None (a cluster whose size may change): every spec
@@ -142,6 +143,7 @@ def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], exe
     """
     if workers is not None and workers < 1:
         raise ValueError(f"workers must be at least 1, got {workers}")
+    limits = PlanningLimits.of(library.rig) if limits is None else limits
     known = {s.primitive_id for s in specs} | set(library.ids())
     for spec in specs:
         missing = [d for d in dependencies(spec) if d not in known]

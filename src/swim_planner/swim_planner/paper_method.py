@@ -94,7 +94,7 @@ class _CruiseObjective:
         return advance - effort, float(energy.mean()), tau
 
 
-def solve_fourier_cruise(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits = PlanningLimits(),
+def solve_fourier_cruise(model: VehicleModel, spec: PrimitiveSpec, limits: Optional[PlanningLimits] = None,
                          harmonics: int = 2, samples: int = 200, max_evaluations: int = 20000) -> FourierCruise:
     """The paper's cruise: Fourier coefficients by Nelder-Mead from a 90-deg-lead stroke."""
     if spec.primitive_type is not PrimitiveType.CRUISE:
@@ -103,6 +103,7 @@ def solve_fourier_cruise(model: VehicleModel, spec: PrimitiveSpec, limits: Plann
     if energy_j is None:
         raise ValueError(f"{spec.primitive_id}: a cruise needs energy_j")
     objective = _CruiseObjective(model, spec, samples)
+    limits = PlanningLimits.of(model.rig) if limits is None else limits
     tau_max = limits.torque_fraction * model.torque_limits()
     ranges = np.array([limits.heave_range_rad, limits.pitch_range_rad])
     start = np.zeros((2, 2 * harmonics + 1))
@@ -240,7 +241,7 @@ def _solve_segment(batch: ca.Function, samples: int, spec: PrimitiveSpec, tau_ma
 
 
 def solve_polynomial_sine_accelerate(model: VehicleModel, spec: PrimitiveSpec, end_state: tuple[Array, Array],
-                                     limits: PlanningLimits = PlanningLimits(), samples: int = 200,
+                                     limits: Optional[PlanningLimits] = None, samples: int = 200,
                                      max_evaluations: int = 20000, segments: int = 1,
                                      free: Optional[Array] = None) -> PolynomialSineAccelerate:
     """The paper's accelerate (eq. 11) from rest to the cruise start ``end_state``, by Nelder-Mead.
@@ -257,6 +258,7 @@ def solve_polynomial_sine_accelerate(model: VehicleModel, spec: PrimitiveSpec, e
     if free is None:
         free = EIGHTEEN_COEFFICIENTS if segments == 1 else NINE_COEFFICIENTS
     batch = shape_driven_batch(model, samples)
+    limits = PlanningLimits.of(model.rig) if limits is None else limits
     tau_max = limits.torque_fraction * model.torque_limits()
     target = (end_state[0][-2:], end_state[1][-2:])
     rest = (np.zeros(2), np.zeros(2))

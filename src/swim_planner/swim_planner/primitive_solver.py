@@ -188,7 +188,7 @@ class PrimitiveNlp:
     effort: ca.MX     # int (w_h tau_h^2 + w_p tau_p^2) dt over the solved horizon, in terms of Phi
 
 
-def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits = PlanningLimits(),
+def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: Optional[PlanningLimits] = None,
                     start: Optional[tuple[Array, ...]] = None, end: Optional[tuple[Array, ...]] = None,
                     guess: Optional[Primitive] = None, settings: SolverSettings = SolverSettings()) -> Primitive:
     """Solve one primitive: its NLP by IPOPT, and a cruise's cycle tiled ``spec.cycles`` times.
@@ -209,7 +209,8 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
     spec : PrimitiveSpec
         What to solve.
     limits : PlanningLimits, optional
-        The ranges and limits the primitive respects.
+        The ranges and limits the primitive respects (None: ``PlanningLimits.of(model.rig)``, the model's rig's
+        planning ranges).
     start : tuple of array, optional
         (q (nq,), qdot (nq,)) the primitive starts from (required for decelerate, cruise-to-cruise, lane change;
         alpha is ignored: it starts at 0); (q, qdot, lag (n_lag,) m/s) with the circulatory flow
@@ -241,6 +242,7 @@ def solve_primitive(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLi
     Saimek & Li 2004, Secs. 4-5, eqs. 9-15; docs/model_and_method.md section 3.1; docs/circulatory_primitives.md,
     "The problem".
     """
+    limits = PlanningLimits.of(model.rig) if limits is None else limits
     if spec.coarse_intervals is not None:
         return _solve_refined(model, spec, limits, start, end, guess, settings)
     ipopt_options = {"print_level": settings.print_level, "tol": settings.tolerance,
@@ -362,7 +364,7 @@ def continuation_bounds(model: VehicleModel, spec: PrimitiveSpec, limits: Planni
     return [None, *looser, limits.angle_of_attack_limit_rad]
 
 
-def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits = PlanningLimits(),
+def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: Optional[PlanningLimits] = None,
                   start: Optional[tuple[Array, ...]] = None, end: Optional[tuple[Array, ...]] = None,
                   guess: Optional[Primitive] = None, *, bound_angle_of_attack: bool = True) -> PrimitiveNlp:
     """The NLP of one primitive (docs/model_and_method.md section 3.1).
@@ -397,6 +399,7 @@ def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimi
         circulatory flow); a Strouhal floor with the ideal flow (its pointwise function has no lateral row); a rest
         window with the ideal flow; bad boundary conditions for the type.
     """
+    limits = PlanningLimits.of(model.rig) if limits is None else limits
     if model.n_lag:
         _check_circulatory_states(model, spec, start, end)
     elif spec.min_strouhal is not None:

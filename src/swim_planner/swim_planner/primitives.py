@@ -17,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from swim_control.riccati import TrackingGains
-from swim_model import VehicleModel
+from swim_model import RigParameters, VehicleModel
 
 Array = npt.NDArray[np.float64]
 
@@ -34,9 +34,9 @@ class PrimitiveType(str, enum.Enum):
 
 @dataclasses.dataclass(frozen=True)
 class PlanningLimits:
-    """Limits every primitive respects. The paper gives no ranges; these are assumed values.
+    """Limits every primitive respects: the joint ranges are the rig's planning ranges (PlanningLimits.of).
 
-    The comment at each field gives its reason.
+    The paper gives none of these; the others are assumed values, each with its reason in the comment at its field.
 
     Attributes
     ----------
@@ -58,8 +58,8 @@ class PlanningLimits:
         The window next to rest where the angle-of-attack bound is left out, s, circulatory flow only.
     """
 
-    heave_range_rad: float = math.radians(50.0)    # assumed: |phi| <= 50 deg keeps the peduncle off the hull
-    pitch_range_rad: float = math.radians(70.0)    # assumed: |theta| <= 70 deg, the belt drive's travel
+    heave_range_rad: float                         # |phi| <= this: the rig's heave_planning_range
+    pitch_range_rad: float                         # |theta| <= this: the rig's pitch_planning_range
     torque_fraction: float = 0.35                  # assumed: plan with 35 % of the motor limits, so that the
                                                    # paper's fastest scaling, lambda = 1.67 (Sec. 7.1), fits:
                                                    # 0.35 * 1.67^2 = 0.98
@@ -84,6 +84,13 @@ class PlanningLimits:
     # accelerate or decelerate (4.3 %) and 17 of the 401 of a free 5 s decelerate (4.2 %); the angle is unbounded
     # only there. A speed floor at every time, U tan(a) + c >= |V| with c = 1 cm/s, instead lets the accelerate
     # crawl at any angle for its first second (95th percentile 73 deg over its samples)
+
+    @classmethod
+    def of(cls, rig: RigParameters, **others: float) -> "PlanningLimits":
+        """The limits for rig: its joints' planning ranges (its limits record), the other fields as others give
+        them or their defaults."""
+        return cls(heave_range_rad=rig.limits.heave.planning_range_rad,
+                   pitch_range_rad=rig.limits.pitch.planning_range_rad, **others)
 
 @dataclasses.dataclass(frozen=True)
 class PrimitiveSpec:

@@ -15,14 +15,14 @@ import math
 import numpy as np
 import pytest
 
-from swim_model import VehicleModel
+from swim_model import VehicleModel, load_rig
 from swim_planner.catalog import circulatory_specs, default_specs
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.primitive_solver import (angle_of_attack_bounded, continuation_bounds, primitive_nlp,
                                            solve_primitive)
 from swim_planner.primitives import PlanningLimits, PrimitiveType, rest_boundary_state
 
-LIMITS = PlanningLimits()
+LIMITS = PlanningLimits.of(load_rig())
 #: the direct solve and the continuation end at the same optimum to IPOPT's tolerance (1e-8) scaled by the
 #: problem (measured: J 4e-9, q 3e-7, qdot 9e-6, lag 3e-8, u 4e-4): J, the states (rad, m, rad/s, m/s) and the
 #: foil accelerations (up to 300 rad/s^2) to 1e-5 of their range

@@ -21,7 +21,7 @@ from swim_planner.primitives import (CONVERGED_STATUSES, PlanningLimits, Primiti
                                      cruise_strouhal_number, rest_boundary_state)
 from swim_planner.testing.consistency import REPLAY_TOLERANCE, replay_open_loop
 
-LIMITS = PlanningLimits()
+LIMITS = PlanningLimits.of(load_rig())
 ALL_SPECS = circulatory_specs(load_rig())
 SPECS = ALL_SPECS
 IDS = [s.primitive_id for s in SPECS]

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from scipy.interpolate import CubicHermiteSpline
 
-from swim_model import VehicleModel
+from swim_model import VehicleModel, load_rig
 from swim_model.flow import angle_of_attack
 from swim_planner.catalog import (CIRCULATORY_ENERGY_LEVELS_J, CIRCULATORY_FREE_ACCELERATE_S,
                                   CIRCULATORY_FREE_DECELERATE_CONTINUATION_RAD,
@@ -32,7 +32,7 @@ from swim_planner.primitives import (PlanningLimits, Primitive, PrimitiveType, c
                                      cruise_strouhal_number, rest_boundary_state)
 from swim_planner.testing.consistency import REPLAY_TOLERANCE, replay_open_loop
 
-LIMITS = PlanningLimits()
+LIMITS = PlanningLimits.of(load_rig())
 PAPER_CRUISE_SPEED_M_S = (0.12, 0.18)      # paper Fig. 3, the E = 0.05 cruise
 PAPER_HEAVE_RAD = (-0.45, 0.75)            # paper Fig. 4 (with margin, as the issue states it)
 PAPER_PITCH_RAD = 0.6                      # paper Fig. 4: |theta| within about 0.6 rad

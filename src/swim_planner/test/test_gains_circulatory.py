@@ -55,7 +55,7 @@ class MemoryLibrary:
 def circulatory_cruise(rig):
     spec = next(s for s in constrained_specs(rig) if s.primitive_id == CRUISE)
     model = VehicleModel(rig, constrained=True, lane_radius_m=spec.lane_radius_m, flow="circulatory")
-    solved = solve_primitive(model, spec, PlanningLimits())
+    solved = solve_primitive(model, spec, PlanningLimits.of(model.rig))
     return model, gains_job(rig, solved, LqrWeights())
 
 

@@ -22,7 +22,6 @@ from swim_interfaces.msg import WakeStatistics, WakeVortices
 from swim_interfaces.srv import SetVehicleState
 
 from swim_control.trajectory import MAX_ABS_START_ALPHA_RAD
-from swim_hw_bridge.conversions import BridgeConfig, load_bridge_config_parameter
 from swim_model import StateError, SwimModelError, load_rig
 from swim_model.disturbances import Disturbances
 from swim_model.flow import FLOWS
@@ -53,8 +52,6 @@ SENSOR_PARAMETER_BOUND = 1.0e6
 DEFAULT_VORTICES_PERIOD_S = 0.1
 PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec("rig_path", "", "rig YAML file (empty: swim_model's shipped rig)", read_only=True),
-    ParameterSpec("bridge_config_path", "", "hardware bridge YAML file the hard stops and the physically possible "
-                  "joint speeds are read from (empty: swim_hw_bridge's shipped bridge.yaml)", read_only=True),
     ParameterSpec("constrained", False, "simulate the laterally constrained vehicle (no R)", read_only=True),
     ParameterSpec("flow", "ideal", "the water's model: 'ideal' (added mass), 'circulatory' (the reduced flow model, "
                   "its own foil drag), 'wake' (the vortex wake plus the disturbances' foil separation drag)",
@@ -101,21 +98,20 @@ class StateBounds:
     speeds: dict[str, tuple[float, str]]
 
     @classmethod
-    def of(cls, plant: Plant, config: BridgeConfig) -> "StateBounds":
+    def of(cls, plant: Plant) -> "StateBounds":
         """alpha within the plans' start-alpha bound (float64 keeps alpha to 1e-10 rad up to there), R inside
-        the tank, heave and pitch within their hard stops; speeds within the bridge file's physically possible
-        joint speeds."""
-        rig, where = plant.model.rig, f"the bridge file {config.source_path}"
+        the tank, heave and pitch within their hard stops; speeds within the rig's physically possible joint
+        speeds (its limits)."""
+        rig = plant.model.rig
+        where = f"the limits of {rig.source_path}; parameter rig_path"
         alpha = MAX_ABS_START_ALPHA_RAD
         positions = {"alpha": (-alpha, alpha, "swim_control.trajectory.MAX_ABS_START_ALPHA_RAD"),
                      "R": (0.0, 0.5 * rig.tank_diameter_m, f"the tank's radius (tank_diameter in {rig.source_path})")}
         for (name, (lower, upper)), joint in zip(plant.hard_limits_rad.items(), ("heave", "pitch")):
-            positions[name] = (lower, upper, f"the hard stops ({joint}_lower_hard_limit, {joint}_upper_hard_limit "
-                                             f"in {where}; parameter bridge_config_path)")
-        speeds = {name: (speed, f"the physically possible speed ({key}_max_speed in {where}; parameter "
-                                f"bridge_config_path)")
+            positions[name] = (lower, upper, f"the hard stops ({joint}_hard_stop in {where})")
+        speeds = {name: (speed, f"the physically possible speed ({key}_max_speed in {where})")
                   for name, key, speed in zip(("alpha", "R", "phi", "theta"), ("hub", "rail", "heave", "pitch"),
-                                              config.max_speeds)}
+                                              rig.limits.max_speeds)}
         return cls(positions, speeds)
 
     def check(self, names: Sequence[str], q: np.ndarray, qdot: np.ndarray) -> None:
@@ -136,7 +132,6 @@ class SimNode(Node):
         value = lambda name: self.get_parameter(name).value  # noqa: E731
         self.mode = value("mode")
         rig = load_rig(value("rig_path") or None)
-        bridge_config = load_bridge_config_parameter(value("bridge_config_path"))
         flow = value("flow")
         fields = dataclasses.fields
         disturbances = Disturbances(**{f.name: value(f"disturbances.{f.name}") for f in fields(Disturbances)})
@@ -144,10 +139,10 @@ class SimNode(Node):
         if flow == "wake":
             wake_parameters = parameters_from_values({n: value(f"wake.{n}") for n in parameter_defaults()})
         self.plant = make_plant(PlantSettings(flow, value("substeps"), disturbances), rig,
-                                bridge_config.hard_limits_rad, value("constrained"), value("lane_radius_m") or None,
+                                rig.hard_limits_rad, value("constrained"), value("lane_radius_m") or None,
                                 value("sample_period_s"), value("seed"), wake_parameters)
         model = self.plant.model
-        self.state_bounds = StateBounds.of(self.plant, bridge_config)
+        self.state_bounds = StateBounds.of(self.plant)
         self.sensors = Sensors(model, self._sensor_noise({}), self.plant.sample_period_s)
         self.start_time_s = float(value("start_time_s"))
         initial = value("initial_positions")   # nq entries, or at rest

@@ -55,17 +55,15 @@ def set_state(driver):
 
 @pytest.fixture(scope="module")
 def limits():
-    """(torque limits, hard limits, set_state's bounds) from the rig and bridge files, not from the node."""
+    """(torque limits, hard limits, set_state's bounds) from the rig file's limits, not from the node."""
     from swim_control.trajectory import MAX_ABS_START_ALPHA_RAD
-    from swim_hw_bridge.conversions import load_bridge_config
     from swim_model import load_rig
-    config = load_bridge_config()
-    hard = {"phi": (config.heave_lower_hard_limit_rad, config.heave_upper_hard_limit_rad),
-            "theta": (config.pitch_lower_hard_limit_rad, config.pitch_upper_hard_limit_rad)}
+    rig = load_rig()
+    hard = {"phi": rig.hard_limits_rad[0], "theta": rig.hard_limits_rad[1]}
     alpha = MAX_ABS_START_ALPHA_RAD
-    speeds = {"alpha": config.hub_max_speed_rad_s, "phi": config.heave_max_speed_rad_s,
-              "theta": config.pitch_max_speed_rad_s}
-    return np.array(load_rig().torque_limits_n_m), hard, {"alpha": (-alpha, alpha), **hard}, speeds
+    speeds = {"alpha": rig.limits.hub_max_speed_rad_s, "phi": rig.limits.heave.max_speed_rad_s,
+              "theta": rig.limits.pitch.max_speed_rad_s}
+    return np.array(rig.torque_limits_n_m), hard, {"alpha": (-alpha, alpha), **hard}, speeds
 
 
 def check_published(state, limits):
@@ -115,7 +113,7 @@ def test_fuzzed_commands_step_only_when_well_formed_within_the_limits(sim, drive
 
 def positions():
     """Positions: inside the stops, exactly at them (accepted), just past them (refused), absurd and malformed."""
-    at_stops = (1.0471975511965976, 1.3962634015954636)   # 60 and 80 degrees: the bridge file's hard limits
+    at_stops = (1.0471975511965976, 1.3962634015954636)   # 60 and 80 degrees: the rig file's hard stops
     just_past = tuple(math.nextafter(v, math.inf) for v in at_stops)
     borderline = at_stops + just_past
     return st.one_of(st.floats(-1.5, 1.5), st.sampled_from(borderline + tuple(-v for v in borderline)),

@@ -4,13 +4,12 @@ integrated bit for bit as without stops."""
 import numpy as np
 import pytest
 
-from swim_hw_bridge.conversions import load_bridge_config
-from swim_model import StateError
+from swim_model import StateError, load_rig
 from swim_model.disturbances import Disturbances
 from swim_model.plant import Plant
 from swim_sim.sensors import Sensors
 
-HARD_LIMITS = load_bridge_config().hard_limits_rad
+HARD_LIMITS = load_rig().hard_limits_rad
 #: 0.5 s of held torque: a light link at full torque crosses its whole range in about 0.2 s (measured: the heave
 #: link from mid-range reaches its stop after 0.19 s)
 HELD_PERIODS = 63
@@ -66,7 +65,7 @@ def test_contact_only_removes_energy(model):
     """No torque, no disturbances: the energy is conserved between contacts and lost at them."""
     plant = Plant(model, Disturbances.none(), hard_limits_rad=HARD_LIMITS)
     qdot = np.zeros(model.nq)
-    qdot[0], qdot[-2], qdot[-1] = 0.3, 4.0, -6.0   # well inside the bridge file's physically possible speeds
+    qdot[0], qdot[-2], qdot[-1] = 0.3, 4.0, -6.0   # well inside the rig's physically possible speeds
     plant.reset(plant.rest_positions(), qdot)
     energies, contacts = [plant.energy()], 0
     for _ in range(HELD_PERIODS):

@@ -22,14 +22,14 @@ REFUSED_START_TIMEOUT_S = 60
 
 def library_run(flow, seed, torques, after_step):
     """The run sim_node makes for these commands, in this process: the plant of the flow with sim_node's defaults
-    (disturbances, sensors drawing on the plant's generator, the shipped bridge file's hard stops). Returns
+    (disturbances, sensors drawing on the plant's generator, the shipped rig's hard stops). Returns
     ([after_step(plant, positions measured) after each step], the plant)."""
-    from swim_hw_bridge.conversions import load_bridge_config
+    from swim_model import load_rig
     from swim_model.disturbances import Disturbances
     from swim_model.plant import Plant, vehicle_model
     from swim_sim.sensors import Sensors
     model = vehicle_model(flow, constrained=True)
-    plant = Plant(model, Disturbances(), seed=seed, hard_limits_rad=load_bridge_config().hard_limits_rad,
+    plant = Plant(model, Disturbances(), seed=seed, hard_limits_rad=load_rig().hard_limits_rad,
                   flow=flow)
     sensors = Sensors(model, sample_period_s=plant.sample_period_s)
     plant.reset(plant.rest_positions(), np.zeros(model.nq))

@@ -144,8 +144,8 @@ def test_set_state_puts_the_vehicle_there(driver):
 
 
 @pytest.mark.parametrize("position, velocity, said", [
-    ((0.0, 0.0, 1.5), (), "theta = 1.5 is outside .* hard stops .*pitch_upper_hard_limit"),   # past 80 degrees
-    ((0.0, -1.1, 0.0), (), "phi = -1.1 is outside .* hard stops .*heave_lower_hard_limit"),   # past -60 degrees
+    ((0.0, 0.0, 1.5), (), "theta = 1.5 is outside .* hard stops .*pitch_hard_stop"),   # past 80 degrees
+    ((0.0, -1.1, 0.0), (), "phi = -1.1 is outside .* hard stops .*heave_hard_stop"),   # past -60 degrees
     ((2.0e6, 0.0, 0.0), (), "alpha = 2e\\+06 is outside .*MAX_ABS_START_ALPHA_RAD"),
     ((0.0, 0.0, float("nan")), (), "non-finite position"),
     ((0.0, 0.0, 0.0), (0.0, 0.0, 50.0), "theta velocity 50 is faster than 45, .*pitch_max_speed"),

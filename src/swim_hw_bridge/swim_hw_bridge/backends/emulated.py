@@ -11,7 +11,7 @@ The plant's settings (option plant, a swim_model.plant.PlantSettings: the flow, 
 the hard stops' switch) are the plant's, not the device's; bridge_node passes
 PlantSettings.flow_only(flow) for its parameter flow: the water the emulated rig swims in, the same choice as the
 simulator's, with none of the simulator's disturbances (the rig's own friction is what a dry run on hardware
-adds), and the rig's hard stops at the bridge file's hard limits.
+adds), and the rig's hard stops at its limits record's (the rig the bridge file is loaded with).
 
 The enable line is emulated as the rig wires it (see bridge_node's docstring): the amplifiers conduct only while
 enable() has been called and the last toggle_enable() edge is at most charge_pump_timeout_s old, so a bridge that
@@ -30,7 +30,7 @@ import time
 from typing import Any, cast
 
 import numpy as np
-from swim_model import SwimModelError, load_rig
+from swim_model import SwimModelError
 from swim_model.plant import Plant, PlantSettings, SimulationError, make_plant
 from swim_model.wake_coupling import WakeCoupling
 
@@ -58,7 +58,6 @@ class EmulatedDevice(Device):
         self.charge_pump_timeout_s = float(config.get("charge_pump_timeout_s", DEFAULT_CHARGE_PUMP_TIMEOUT_S))
         self.max_integration_s = float(config.get("max_integration_s", 0.05))
         self.initial_counts = tuple(int(c) for c in config.get("initial_counts", (0, 0, 0, 0)))
-        self.rig_path = str(config.get("rig_path", "")) or None
         self.counts_per_unit = np.array(self.bridge.counts_per_unit)
         self.home = np.array(self.bridge.home_positions)
         self.torque_gains = np.array(self.bridge.motor_torque_gains_n_m_per_a)
@@ -83,7 +82,7 @@ class EmulatedDevice(Device):
     def open(self) -> None:
         if self.plant is None:
             # compiles and loads the plant's integrator now, not in the first period of the loop
-            self.plant = make_plant(self.plant_settings, load_rig(self.rig_path), self.bridge.hard_limits_rad)
+            self.plant = make_plant(self.plant_settings, self.bridge.rig, self.bridge.hard_limits_rad)
             self.plant.reset(self.home, np.zeros(self.plant.model.nq))
             if self.plant.wake is not None:
                 # load the wake's compiled kernels now (numba's import and its cache, about 0.3-0.5 s), not in the
