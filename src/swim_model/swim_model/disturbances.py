@@ -86,8 +86,16 @@ THIN_AEROFOIL_LIFT_SLOPE_PER_RAD = 2.0 * math.pi
 
 
 def wave_angle_of_attack_rad() -> float:
-    """The angle of attack the waves' orbital velocity makes at the foil's mid-span, rad: u / v_ref with
-    u = a omega exp(-k z), deep-water waves (k = omega^2 / g), z half the foil's span below the surface."""
+    """The angle of attack the waves' orbital velocity makes at the foil's mid-span.
+
+    u / v_ref with u = a omega exp(-k z), deep-water waves (k = omega^2 / g), z half the foil's span below the
+    surface; a = WAVE_AMPLITUDE_M, omega = 2 pi WAVE_FREQUENCY_HZ, v_ref = FOIL_REFERENCE_SPEED_M_S.
+
+    Returns
+    -------
+    float
+        The angle of attack, rad.
+    """
     omega_rad_s = 2.0 * math.pi * WAVE_FREQUENCY_HZ
     wavenumber_per_m = omega_rad_s ** 2 / GRAVITY_M_S2
     orbital_speed_m_s = WAVE_AMPLITUDE_M * omega_rad_s * math.exp(-wavenumber_per_m * 0.5 * _RIG.foil_span_m)
@@ -96,8 +104,43 @@ def wave_angle_of_attack_rad() -> float:
 
 @dataclasses.dataclass(frozen=True)
 class Disturbances:
-    """Sizes of the disturbances; zero switches one off. The defaults are physical (module docstring); paper()
-    gives the ideal-flow pipeline's."""
+    """Sizes of the disturbances; zero switches one off.
+
+    The defaults are physical (module docstring; each with its source in docs/disturbances.md, "The sizes");
+    ``paper()`` gives the ideal-flow pipeline's. How the plant applies them: docs/disturbances.md, "How the plant
+    applies them".
+
+    Attributes
+    ----------
+    hub_viscous_n_m_s : float
+        Viscous friction b of the hub (alpha), N m s (per rad).
+    hub_coulomb_n_m : float
+        Coulomb (sliding) friction torque of the hub, N m.
+    hub_static_n_m : float
+        Static (breakaway) friction limit of the hub, N m, >= hub_coulomb_n_m.
+    rail_viscous_n_s_m : float
+        Viscous friction b of the rails (R, free vehicle only), N s/m.
+    rail_coulomb_n : float
+        Coulomb friction force of the rails, N.
+    rail_static_n : float
+        Static friction limit of the rails, N, >= rail_coulomb_n.
+    foil_normal_drag_coefficient : float
+        Cd of the quadratic drag on the foil's normal velocity V (foil frame, eq. 40), per planform area chord x
+        span, dimensionless.
+    foil_axial_drag_coefficient : float
+        Cd of the quadratic drag on the foil's chordwise velocity U, per planform area, dimensionless.
+    platform_drag_area_m2 : float
+        Cd A of the parts that move in water with the platform (tangential R alphadot, radial Rdot), m^2.
+    tilt_rad : float
+        The platform's tilt from level, rad: gravity's in-plane component m g sin(tilt) acts on the platform
+        assembly.
+    tilt_direction_rad : float
+        The tilt's downhill direction beta in the tank frame, rad (any finite angle).
+    wave_force_per_speed2_n_s2_m2 : float
+        Standard deviation of the surface waves' normal force on the foil per foil speed squared, N s^2/m^2.
+    wave_bandwidth_hz : float
+        Corner frequency of the first-order filter of the waves' noise, Hz.
+    """
 
     # rolling bearings: their friction is load-dependent (Coulomb, below); the speed-dependent lubricant drag at a
     # hub's < 1 rad/s and a platform's < 0.1 m/s is left out, and the water's drag is the drag terms below
@@ -129,7 +172,14 @@ class Disturbances:
     wave_bandwidth_hz: float = 2.0
 
     def validate(self) -> None:
-        """ValueError unless every size is finite and non-negative, and each static limit >= its Coulomb level."""
+        """Check every size.
+
+        Raises
+        ------
+        ValueError
+            Unless every size is finite and non-negative (the tilt direction: finite), and each static limit is at
+            least its Coulomb level.
+        """
         for field in dataclasses.fields(self):
             value = getattr(self, field.name)
             if field.name == "tilt_direction_rad":
@@ -143,15 +193,29 @@ class Disturbances:
 
     @classmethod
     def none(cls) -> "Disturbances":
-        """The ideal model: every disturbance off."""
+        """The ideal model: every disturbance off.
+
+        Returns
+        -------
+        Disturbances
+            Every size zero.
+        """
         return cls(**{field.name: 0.0 for field in dataclasses.fields(cls)})
 
     @classmethod
     def paper(cls) -> "Disturbances":
-        """The sizes of the paper's pipeline (ideal flow). The ideal-flow model the plans are made with has only
-        added-mass thrust, far less than a real foil's lift, so the disturbances it can reject are small: these are
-        the sizes under which the paper's constrained maneuver still tracks to centimetres (the paper's rig did,
-        Sec. 7.1); with a flat plate's 1.2 or a 0.1 degree tilt the vehicle loses the plan. All assumed."""
+        """The sizes of the paper's pipeline (ideal flow).
+
+        The ideal-flow model the plans are made with has only added-mass thrust, far less than a real foil's lift,
+        so the disturbances it can reject are small: these are the sizes under which the paper's constrained
+        maneuver still tracks to centimetres (the paper's rig did, Sec. 7.1); with a flat plate's 1.2 or a
+        0.1 degree tilt the vehicle loses the plan. All assumed.
+
+        Returns
+        -------
+        Disturbances
+            The paper pipeline's sizes (docs/disturbances.md, "The sizes", its paper column).
+        """
         return cls(
             hub_viscous_n_m_s=0.002,          # a ball-bearing hub, a few mN m at 1 rad/s
             hub_coulomb_n_m=0.003,            # sliding friction torque of the hub bearing and encoder
@@ -169,13 +233,34 @@ class Disturbances:
 
     @classmethod
     def separation_drag(cls) -> "Disturbances":
-        """Every disturbance off but the foil's quadratic drag: a flat plate broadside normal to the chord and a
-        thin section's skin friction along it, the separated flow the attached vortex wake lacks."""
+        """Every disturbance off but the foil's quadratic drag.
+
+        A flat plate broadside normal to the chord and a thin section's skin friction along it: the separated flow
+        the attached vortex wake lacks (swim_model.wake_coupling).
+
+        Returns
+        -------
+        Disturbances
+            FLAT_PLATE_BROADSIDE_DRAG_COEFFICIENT normal and THIN_SECTION_AXIAL_DRAG_COEFFICIENT axial, the rest
+            zero.
+        """
         return dataclasses.replace(cls.none(), foil_normal_drag_coefficient=FLAT_PLATE_BROADSIDE_DRAG_COEFFICIENT,
                                    foil_axial_drag_coefficient=THIN_SECTION_AXIAL_DRAG_COEFFICIENT)
 
     def coulomb_and_static(self, constrained: bool) -> list[tuple[int, float, float]]:
-        """(coordinate index, Coulomb level, static limit) of each coordinate with dry friction."""
+        """(coordinate index, Coulomb level, static limit) of each coordinate with dry friction.
+
+        Parameters
+        ----------
+        constrained : bool
+            Whether the rails are locked (q = (alpha, phi, theta)): then the hub alone has dry friction.
+
+        Returns
+        -------
+        list of (int, float, float)
+            Index into q (0 the hub, 1 the rails), Coulomb level and static limit (N m for the hub, N for the
+            rails); a coordinate whose static limit is zero is left out.
+        """
         pairs = [(0, self.hub_coulomb_n_m, self.hub_static_n_m)]
         if not constrained:
             pairs.append((1, self.rail_coulomb_n, self.rail_static_n))

@@ -1,51 +1,10 @@
 """The simulated vehicle: swim_model's dynamics plus the disturbances, one control period at a time. No ROS.
 
 The one plant of the workspace: swim_sim's simulator steps it a fixed control period at a time, swim_hw_bridge's
-emulated rig one read interval at a time (``step``'s period_s). ``PlantSettings`` are what either builds it with
-(``make_plant``).
-
-Over a period the commanded torque is held (zero-order hold, as a DAC holds it) and clipped at the motor
-limits (paper Sec. 2). The period is integrated by ``substeps`` classical RK4 steps of
-
-    Mm(q) qddot + Cm(q, qdot) qdot = B tau - b o qdot + Q2(q)' F_drag + Q_platform + Q_tilt + f_held,
-
-with viscous friction b, quadratic drag and the tilt's gravity force inside the compiled right-hand side, and
-f_held (dry friction and the surface-wave force) held over each substep. Dry friction is a switch model: a
-coordinate whose velocity crosses zero stops there; while stopped it is held by the force
-F = -(W^-1 a0) (a0 its acceleration without that force, W the stuck block of Mm^-1) as long as |F| stays below
-the static limit; beyond it the coordinate breaks away with Coulomb friction opposing its motion.
-A period with no stopped coordinate and no velocity sign change runs as one compiled call (the fast path).
-
-Flow models (``flow``, swim_model.flow's FLOWS): how the water acts on the foil beyond the disturbances' platform,
-friction, tilt and waves.
-
-- ``"ideal"``: the paper's potential flow, the added mass in Mm only (``VehicleModel(flow="ideal")``), plus the
-  quadratic foil drag of Disturbances (``foil_axial_drag_coefficient``, ``foil_normal_drag_coefficient``).
-- ``"circulatory"``: the reduced flow model the circulatory plans are made with (``VehicleModel(flow=
-  "circulatory")``, swim_model.flow): its generalized force Q_flow(q, qdot, z) joins the right-hand side and its two
-  lag states z (m/s) the state, x = (q, qdot, z), zdot = g(Q2 qdot, z), integrated in the same compiled RK4 period.
-  The flow model's own profile drag and post-stall normal force are the foil's drag, so Disturbances' foil drag
-  coefficients are not applied (nothing is counted twice); friction, tilt, platform drag and waves are.
-  Stopped coordinates (friction, hard stops) lock q and qdot only: the lag states run on, driven by the foil's
-  motion.
-- ``"wake"``: the ideal model plus the free-vortex wake's force (swim_model.wake_coupling, held over each period)
-  plus the flat-plate separation drag the attached-flow wake lacks, which is Disturbances' quadratic foil drag.
-
-The lag states hold no energy and no momentum (swim_model.vehicle): ``energy`` is T + V for every flow model.
-
-Hard stops (hard_limits_rad: the rig's (lower, upper) heave and pitch stops, RigParameters.hard_limits_rad from
-its limits record): a joint reaching its stop meets an inelastic stop. Its position is held at the limit
-and its velocity into the stop removed by the same plastic impulse that stops a dry-friction coordinate (the
-Mm-orthogonal projection onto qdot_j = 0, which only removes kinetic energy); then it is locked at the stop while
-the force holding it pushes it back from the limit (a stop pushes, never pulls), and released into its range as
-soon as that force would have to pull. A period in which a joint reaches a stop, or starts at one, runs substep
-by substep; a run that never reaches a stop is integrated exactly as without stops.
-
-Speed. Each compiled function is called through its C entry point on preallocated buffers (swim_model.codegen's
-NativeFunction): CasADi's own Python call costs ~45 us whatever the function does, while the arithmetic of a
-whole 8-substep period is 6 us (constrained) to 12 us (free). A period is then three native calls: the wave
-force, the period itself (with the lock mask only when a coordinate is stopped: the locked variant's extra
-algebra doubles the free vehicle's cost) and, when a coordinate is stopped, the force holding it.
+emulated rig one read interval at a time (``Plant.step``'s period_s). ``PlantSettings`` are what either builds it
+with (``make_plant``). The equations it integrates over a period (the held torque, the RK4 substeps, dry
+friction's switch model, the flows, the hard stops) are in docs/disturbances.md, "How the plant applies them";
+what keeps a period cheap is in docs/speed.md, "The plant alone".
 """
 from __future__ import annotations
 
@@ -72,11 +31,32 @@ BLOW_UP_SPEED = 1.0e3
 
 
 class SimulationError(RuntimeError):
-    """The integration blew up (non-finite or absurd state): the simulator stops instead of publishing it."""
+    """The integration blew up (non-finite or absurd state): the simulator stops instead of publishing it.
+
+    A state is absurd when a speed or lag state exceeds ``BLOW_UP_SPEED``.
+    """
 
 
 @dataclasses.dataclass(frozen=True)
 class PlantState:
+    """The plant's state at the end of a period, a copy (``Plant.state``, ``Plant.step``).
+
+    Attributes
+    ----------
+    time_s : float
+        Simulated time, s.
+    q : (nq,) ndarray
+        Configuration (alpha, [R,] phi, theta), rad and m.
+    qdot : (nq,) ndarray
+        Velocity, rad/s and m/s.
+    torque : (2,) ndarray
+        Joint torques (heave, pitch) applied over the last period, after the motor limits, N m.
+    saturated : tuple of (bool, bool)
+        Whether the heave and pitch commands were clipped at their motor limits over the last period.
+    lag : (n_lag,) ndarray
+        The circulatory flow's lag states z (``VehicleModel.lag_names``), m/s; empty for the ideal and wake flows.
+    """
+
     time_s: float
     q: Array
     qdot: Array
@@ -88,21 +68,47 @@ class PlantState:
 
 def vehicle_model(flow: str, rig: Optional[RigParameters] = None, constrained: bool = False,
                   lane_radius_m: Optional[float] = None) -> VehicleModel:
-    """The VehicleModel a plant of this flow (FLOWS) integrates: the circulatory one for "circulatory", else the
-    ideal one (the wake's force is added by the plant). ValueError for another flow."""
+    """The VehicleModel a plant of this flow integrates.
+
+    The circulatory model for "circulatory", else the ideal one (the wake's force is added by the plant).
+
+    Parameters
+    ----------
+    flow : {"ideal", "circulatory", "wake"}
+        One of swim_model.flow's FLOWS.
+    rig : RigParameters, optional
+        Rig parameters (default: the shipped rig file).
+    constrained : bool, optional
+        Lock the rails: q = (alpha, phi, theta).
+    lane_radius_m : float, optional
+        R of the locked rails, m (default: the rig's ``constrained_lane_radius_m``).
+
+    Returns
+    -------
+    VehicleModel
+        The model of ``FLOWS[flow]``.
+
+    Raises
+    ------
+    ValueError
+        For a flow not in FLOWS.
+    """
     _check_flow(flow)
     return VehicleModel(rig, constrained=constrained, lane_radius_m=lane_radius_m, flow=FLOWS[flow])
 
 
 def _check_flow(flow: str) -> None:
-    """ValueError naming FLOWS unless flow is one of them."""
+    """Raise ValueError naming FLOWS unless flow is one of them."""
     if flow not in FLOWS:
         raise ValueError(f"flow must be one of {', '.join(FLOWS)}, got {flow!r}")
 
 
 def _parameter_vector(model: VehicleModel, disturbances: Disturbances, foil_drag: bool = True) -> Array:
-    """p = (b per coordinate, k_foil_U, k_foil_V, k_platform, m g sin(tilt), tilt direction); the foil's drag
-    factors k_foil zero without foil_drag (the circulatory flow carries its own)."""
+    """Parameter vector of the compiled dynamics.
+
+    p = (b per coordinate, k_foil_U, k_foil_V, k_platform, m g sin(tilt), tilt direction); the foil's drag
+    factors k_foil zero without foil_drag (the circulatory flow carries its own).
+    """
     rig = model.rig
     viscous = np.zeros(model.nq)
     viscous[0] = disturbances.hub_viscous_n_m_s
@@ -120,9 +126,12 @@ def _parameter_vector(model: VehicleModel, disturbances: Disturbances, foil_drag
 
 
 def _dynamics(model: VehicleModel, substeps: int) -> list[ca.Function]:
-    """The plant's compiled functions, symbolic: the RK4 step, the force holding stopped coordinates, the tilt's
-    potential energy, the wave force's shape and the whole period with and without a lock mask. The state is
-    x = (q, qdot), or (q, qdot, z) with the circulatory flow (the flow's force in the bias, z's rate appended)."""
+    """The plant's compiled functions, symbolic.
+
+    The RK4 step, the force holding stopped coordinates, the tilt's potential energy, the wave force's shape and
+    the whole period with and without a lock mask. The state is x = (q, qdot), or (q, qdot, z) with the
+    circulatory flow (the flow's force in the bias, z's rate appended).
+    """
     s = model.symbolic
     nq = model.nq
     q, qdot, tau = s.q, s.qdot, s.tau
@@ -180,10 +189,13 @@ def _dynamics(model: VehicleModel, substeps: int) -> list[ca.Function]:
 
 
 def _period(step: ca.Function, name: str, nq: int, nx: int, substeps: int) -> ca.Function:
-    """substeps steps with the inputs held: (x, tau, held, p, [lock,] h) -> (x at the end, crossing, highest,
-    lowest), where crossing[i] is the smallest qdot_i(t_k) sign(qdot_i(t_0)) over the substeps: <= 0 where a
-    velocity reached or crossed zero inside the period, and highest[i], lowest[i] are the largest and smallest
-    q_i(t_k) over the substeps (past a hard stop: the plant then redoes the period substep by substep)."""
+    """Chain substeps steps with the inputs held into one function of the period.
+
+    (x, tau, held, p, [lock,] h) -> (x at the end, crossing, highest, lowest), where crossing[i] is the smallest
+    qdot_i(t_k) sign(qdot_i(t_0)) over the substeps: <= 0 where a velocity reached or crossed zero inside the
+    period, and highest[i], lowest[i] are the largest and smallest q_i(t_k) over the substeps (past a hard stop:
+    the plant then redoes the period substep by substep).
+    """
     x0 = ca.MX.sym("x", nx)
     held_inputs = [ca.MX.sym(n, *step.size_in(i)) for i, n in enumerate(step.name_in()) if i > 0]
     states = step.mapaccum(substeps)(x0, *(ca.repmat(v, 1, substeps) for v in held_inputs))
@@ -197,12 +209,70 @@ def _period(step: ca.Function, name: str, nq: int, nx: int, substeps: int) -> ca
 class Plant:
     """The vehicle and its disturbances, stepped by control periods. Deterministic for a seed.
 
-    model: the vehicle (``vehicle_model(flow, ...)`` makes the one a flow needs: the circulatory flow integrates
+    Each period holds the torque, clips it at the motor limits and integrates ``substeps`` RK4 steps of the
+    vehicle's equations of motion (paper eqs. 6-7) with the disturbances' forces, dry friction's stick-slip and the
+    joints' inelastic hard stops (docs/disturbances.md, "How the plant applies them").
+
+    Parameters
+    ----------
+    model : VehicleModel
+        The vehicle (``vehicle_model(flow, ...)`` makes the one a flow needs: the circulatory flow integrates
         VehicleModel(flow="circulatory"), the others the ideal one).
-    wake: the vortex wake's coupling for flow "wake" (None: built with WakeCouplingParameters' defaults).
-    hard_limits_rad: the joints' hard stops ((heave lower, upper), (pitch lower, upper)), rad; None: no stops.
-    flow: one of FLOWS (module docstring); None: taken from the arguments ("circulatory" for a circulatory model,
-        "wake" with a wake, else "ideal"). A model or a wake that does not fit the flow is a ValueError."""
+    disturbances : Disturbances, optional
+        Sizes of the disturbances (default: the physical ones, ``Disturbances()``).
+    sample_period_s : float, optional
+        The control period ``step`` integrates by default, s (default: the rig's ``sample_period_s``).
+    substeps : int, optional
+        Classical RK4 steps per period, >= 1.
+    seed : int, optional
+        Seed of the surface waves' noise; ``reset`` restarts it.
+    wake : WakeCoupling, optional
+        The vortex wake's coupling for flow "wake" (default: built with WakeCouplingParameters' defaults).
+    hard_limits_rad : HardLimits, optional
+        The joints' hard stops ((heave lower, upper), (pitch lower, upper)), rad (default: no stops).
+    flow : {"ideal", "circulatory", "wake"}, optional
+        One of swim_model.flow's FLOWS (default: taken from the arguments, "circulatory" for a circulatory model,
+        "wake" with a wake, else "ideal").
+
+    Attributes
+    ----------
+    flow : str
+        The flow the plant integrates, one of FLOWS.
+    model : VehicleModel
+        The vehicle.
+    disturbances : Disturbances
+        Sizes of the disturbances.
+    wake : WakeCoupling or None
+        The vortex wake's force, held over each period (swim_model.wake_coupling); None: off.
+    sample_period_s : float
+        The default period of ``step``, s.
+    substeps : int
+        RK4 steps per period.
+    seed : int
+        Seed of the waves' noise.
+    time_s : float
+        Simulated time, s.
+    q, qdot : (nq,) ndarray
+        Configuration (rad and m) and velocity (rad/s and m/s).
+    lag : (n_lag,) ndarray
+        The circulatory flow's lag states, m/s (empty for the other flows).
+    torque : (2,) ndarray
+        Joint torques (heave, pitch) applied over the last period, N m.
+    saturated : tuple of (bool, bool)
+        Whether the heave and pitch commands were clipped over the last period.
+    stuck : dict of int to bool
+        Coordinate index -> whether dry friction holds it at rest.
+    at_stop : dict of int to int
+        Joint index -> +1 held at its upper hard stop, -1 at its lower one, 0 free.
+    rng : numpy.random.Generator
+        The waves' noise.
+
+    Raises
+    ------
+    ValueError
+        For invalid disturbances, a flow not in FLOWS, a model or a wake that does not fit the flow, a hard stop
+        without finite limits lower < upper, a sample period <= 0 or substeps < 1.
+    """
 
     def __init__(self, model: VehicleModel, disturbances: Disturbances = Disturbances(),
                  sample_period_s: Optional[float] = None, substeps: int = 8, seed: int = 0,
@@ -254,7 +324,13 @@ class Plant:
         self.reset(self.rest_positions(), np.zeros(model.nq))
 
     def rest_positions(self) -> Array:
-        """q of the vehicle at rest at the origin: every coordinate zero, R (free vehicle) on its lane."""
+        """Configuration of the vehicle at rest at the origin.
+
+        Returns
+        -------
+        (nq,) ndarray
+            q with every coordinate zero and R (free vehicle) on its lane, rad and m.
+        """
         q = np.zeros(self.model.nq)
         if not self.model.constrained:
             q[1] = self.model.lane_radius_m
@@ -263,15 +339,38 @@ class Plant:
     # ----- state ---------------------------------------------------------------------------------
     @property
     def hard_limits_rad(self) -> dict[str, tuple[float, float]]:
-        """Joint name -> (lower, upper) of its hard stop, rad (empty: no stops)."""
+        """Joint name -> (lower, upper) of its hard stop, rad (empty: no stops).
+
+        Returns
+        -------
+        dict of str to (float, float)
+            The stops by joint name ("phi", "theta"), rad.
+        """
         return {self.model.joint_names[i]: limits for i, limits in self._stops.items()}
 
     def reset(self, q: npt.ArrayLike, qdot: npt.ArrayLike, time_s: float = 0.0,
               lag: Optional[npt.ArrayLike] = None) -> None:
-        """Put the vehicle at (q, qdot) and the circulatory flow's lag states at lag (m/s; None: zeros, the flow at
-        rest; the other flows have none); restarts the noise from the seed and the wake from rest, so runs repeat
-        bit for bit. StateError for a non-finite entry, a wrong size or a joint past its hard stop; nothing changes
-        then."""
+        """Put the vehicle at (q, qdot) and restart the noise and the wake.
+
+        The noise restarts from the seed and the wake from rest, so runs repeat bit for bit; a prepared period
+        (``prepare_period``) is discarded.
+
+        Parameters
+        ----------
+        q : (nq,) array_like
+            Configuration, rad and m.
+        qdot : (nq,) array_like
+            Velocity, rad/s and m/s.
+        time_s : float, optional
+            Simulated time, s.
+        lag : (n_lag,) array_like, optional
+            The circulatory flow's lag states, m/s (default: zeros, the flow at rest; the other flows have none).
+
+        Raises
+        ------
+        StateError
+            For a non-finite entry, a wrong size or a joint past its hard stop; nothing changes then.
+        """
         q, qdot = (self.model._vector(v, self.model.nq, n) for v, n in ((q, "q"), (qdot, "qdot")))
         lag = np.zeros(self.model.n_lag) if lag is None else self.model._vector(lag, self.model.n_lag, "lag")
         for i, (lower, upper) in self._stops.items():
@@ -293,11 +392,28 @@ class Plant:
 
     @property
     def state(self) -> PlantState:
+        """The state at the end of the last period, a copy.
+
+        Returns
+        -------
+        PlantState
+            Time, q, qdot, the applied torque, the saturation flags and the lag states.
+        """
         return PlantState(self.time_s, self.q.copy(), self.qdot.copy(), self.torque.copy(), self.saturated,
                           self.lag.copy())
 
     def energy(self) -> float:
-        """T + V: kinetic energy (eq. 5) plus the tilt's gravity potential, J (the lag states hold none)."""
+        """T + V: kinetic energy plus the tilt's gravity potential (the lag states hold none).
+
+        Returns
+        -------
+        float
+            T + V, J.
+
+        References
+        ----------
+        Saimek & Li (2004), eq. 5 (T = 1/2 qdot' Mm qdot).
+        """
         self._potential.inputs[0][:] = self.q
         self._potential()
         potential = float(self._potential.outputs[0][0])
@@ -305,11 +421,32 @@ class Plant:
 
     # ----- one period ----------------------------------------------------------------------------
     def step(self, torque: npt.ArrayLike, period_s: Optional[float] = None) -> PlantState:
-        """Hold torque (clipped at the motor limits; non-finite -> zero) over one period and integrate.
+        """Hold torque over one period and integrate.
 
-        period_s: this period's length, s (None: sample_period_s), for a caller whose periods vary (the emulated
-        rig's reads); the disturbances held over it are stepped over the period that ended last (the first: over
-        this one). ValueError unless it is finite and > 0."""
+        The torque is clipped at the motor limits (paper Sec. 2); a non-finite or wrongly sized one is taken as
+        zero.
+
+        Parameters
+        ----------
+        torque : (2,) array_like
+            Commanded joint torques (heave, pitch), N m.
+        period_s : float, optional
+            This period's length, s (default: sample_period_s), for a caller whose periods vary (the emulated rig's
+            reads); the disturbances held over it are stepped over the period that ended last (the first: over this
+            one).
+
+        Returns
+        -------
+        PlantState
+            The state at the end of the period.
+
+        Raises
+        ------
+        ValueError
+            For a period_s that is not finite and > 0.
+        SimulationError
+            When the integration blows up (a non-finite state, or a speed or lag state above BLOW_UP_SPEED).
+        """
         if period_s is None:
             period_s = self.sample_period_s
         elif not (math.isfinite(period_s) and period_s > 0.0):
@@ -338,7 +475,7 @@ class Plant:
         return self.state
 
     def _set_period(self, period_s: float) -> None:
-        """The compiled steps' substep length for periods of period_s seconds."""
+        """Set the compiled steps' substep length for periods of period_s seconds."""
         step_s = period_s / self.substeps
         self._step.inputs[5][0] = self._period_locked.inputs[5][0] = self._period_unlocked.inputs[4][0] = step_s
         self._period_s = period_s
@@ -350,13 +487,17 @@ class Plant:
         never on its torque; a caller that waits for the torque (sim_node in lock-step, after publishing the state)
         can step the wake while the controller computes. ``step`` then gives the same numbers bit for bit as
         without it (the same computations in the same order, the noise drawn in the same sequence); ``reset``
-        discards a prepared period. Once per period: a second call before ``step`` does nothing."""
+        discards a prepared period. Once per period: a second call before ``step`` does nothing.
+        """
         if self._prepared_force is None:
             self._prepared_force = self._period_force(self.sample_period_s)
 
     def _period_force(self, period_s: float) -> Array:
-        """The generalized force held over the period of period_s seconds from the current state: the waves', plus
-        the wake's, each stepped over the period that ended last (the first period: over period_s)."""
+        """Generalized force held over the period of period_s seconds from the current state.
+
+        The waves', plus the wake's, each stepped over the period that ended last (the first period: over
+        period_s).
+        """
         interval_s = period_s if self._last_period_s is None else self._last_period_s
         force = self._wave_force(interval_s)
         if self.wake is not None:
@@ -364,8 +505,10 @@ class Plant:
         return force
 
     def _wave_force(self, interval_s: float) -> Array:
-        """The surface-wave generalized force for this period, the filter stepped over interval_s: std ~
-        |v_foil|^2, first-order filtered noise."""
+        """Surface-wave generalized force for this period, the filter stepped over interval_s.
+
+        Its standard deviation grows as |v_foil|^2; the noise is first-order filtered.
+        """
         coefficient = self.disturbances.wave_force_per_speed2_n_s2_m2
         if coefficient == 0.0:
             return np.zeros(self.model.nq)
@@ -377,8 +520,11 @@ class Plant:
         return wave.outputs[0].copy()
 
     def _fast_period(self, x: Array, torque: Array, wave: Array) -> Optional[Array]:
-        """The whole period in one compiled call, unless a moving dry-friction coordinate's velocity reaches zero
-        in it or a joint passes a hard stop (None: redo the period substep by substep)."""
+        """Integrate the whole period in one compiled call.
+
+        None when a moving dry-friction coordinate's velocity reaches zero in it or a joint passes a hard stop: the
+        caller then redoes the period substep by substep.
+        """
         held, lock = self._friction(x, torque, wave)
         if lock.any():
             period = self._period_locked
@@ -397,8 +543,10 @@ class Plant:
         return self._pin_stopped(x, period.outputs[0].copy())
 
     def _pin_stopped(self, x: Array, x_next: Array) -> Array:
-        """Stopped coordinates (stuck by friction, held at a stop) exactly where they stopped (the constraint
-        leaves round-off, ~1e-20)."""
+        """Put stopped coordinates (stuck by friction, held at a stop) exactly where they stopped.
+
+        The constraint leaves round-off, ~1e-20.
+        """
         for i, _, _ in self._dry:
             if self.stuck[i]:
                 x_next[i], x_next[self.model.nq + i] = x[i], 0.0
@@ -408,8 +556,10 @@ class Plant:
         return x_next
 
     def _substep_period(self, x: Array, torque: Array, wave: Array) -> Array:
-        """The period substep by substep: dry-friction coordinates stop where their velocity reaches zero, joints
-        stop where they reach a hard stop."""
+        """Integrate the period substep by substep.
+
+        Dry-friction coordinates stop where their velocity reaches zero, joints where they reach a hard stop.
+        """
         nq = self.model.nq
         step = self._step
         for _ in range(self.substeps):
@@ -433,10 +583,12 @@ class Plant:
         return x
 
     def _stop(self, x: Array, indices: list[int]) -> None:
-        """Stop coordinate indices[0] by a plastic impulse, the others (already stopped) staying stopped: for one
-        coordinate i, qdot -= Mm^-1 e_i v_i / (Mm^-1)_ii; for a set S, qdot -= Mm^-1 E (E' Mm^-1 E)^-1 E' qdot
-        (E the columns of I in S). The Mm-orthogonal projection onto v_S = 0, which never adds kinetic energy
-        (for one coordinate it removes v_i^2 / (2 (Mm^-1)_ii))."""
+        """Stop coordinate indices[0] by a plastic impulse, the others (already stopped) staying stopped.
+
+        For one coordinate i, qdot -= Mm^-1 e_i v_i / (Mm^-1)_ii; for a set S, qdot -= Mm^-1 E (E' Mm^-1 E)^-1 E'
+        qdot (E the columns of I in S). The Mm-orthogonal projection onto v_S = 0, which never adds kinetic energy
+        (for one coordinate it removes v_i^2 / (2 (Mm^-1)_ii)).
+        """
         nq = self.model.nq
         self._mass.inputs[0][:] = x[:nq]
         self._mass()
@@ -452,11 +604,13 @@ class Plant:
         x[nq + np.array(indices)] = 0.0
 
     def _friction(self, x: Array, torque: Array, wave: Array) -> tuple[Array, Array]:
-        """(held force, lock mask) for the next step: stopped coordinates stay locked while the force holding
-        them is within their static limit, else break away (against Coulomb friction); moving ones feel
-        -Coulomb sign(v). A joint at a hard stop stays locked while the force holding it pushes back from the
-        limit, and is released when it would have to pull. Mutates x only to give a breaking-away coordinate its
-        direction of motion."""
+        """Return (held force, lock mask) for the next step.
+
+        Stopped coordinates stay locked while the force holding them is within their static limit, else break away
+        (against Coulomb friction); moving ones feel -Coulomb sign(v). A joint at a hard stop stays locked while
+        the force holding it pushes back from the limit, and is released when it would have to pull. Mutates x
+        only to give a breaking-away coordinate its direction of motion.
+        """
         nq = self.model.nq
         held, lock = wave.copy(), np.zeros(nq)
         for i, _, _ in self._dry:
@@ -485,9 +639,25 @@ class Plant:
 
 @dataclasses.dataclass(frozen=True)
 class PlantSettings:
-    """What a plant integrates beyond its vehicle: the water (flow, one of swim_model.flow's FLOWS), RK4 steps per
-    period (substeps), the disturbances, and whether the joints meet their hard stops (hard_stops; the stops'
-    values are the rig's, make_plant's hard_limits_rad)."""
+    """What a plant integrates beyond its vehicle (``make_plant`` builds the plant of them).
+
+    Attributes
+    ----------
+    flow : {"ideal", "circulatory", "wake"}
+        The water, one of swim_model.flow's FLOWS.
+    substeps : int
+        Classical RK4 steps per period, an integer >= 1.
+    disturbances : Disturbances
+        Sizes of the disturbances (default: none, the water's model alone).
+    hard_stops : bool
+        Whether the joints meet their hard stops (the stops' values are the rig's, make_plant's
+        hard_limits_rad).
+
+    Raises
+    ------
+    ValueError
+        For a flow not in FLOWS, substeps that is not an integer >= 1, or invalid disturbances.
+    """
 
     flow: str = "ideal"
     substeps: int = 8
@@ -495,6 +665,7 @@ class PlantSettings:
     hard_stops: bool = True
 
     def __post_init__(self) -> None:
+        """Check the settings (the class's Raises)."""
         _check_flow(self.flow)
         if not (isinstance(self.substeps, int) and self.substeps >= 1):
             raise ValueError(f"substeps must be an integer >= 1, got {self.substeps!r}")
@@ -502,9 +673,27 @@ class PlantSettings:
 
     @classmethod
     def flow_only(cls, flow: str) -> "PlantSettings":
-        """The water of flow and none of the rig's own disturbances (friction, tilt, waves): the emulated rig's, on
-        which a dry run on hardware adds the rig's own. The wake's water holds the separation drag the attached
-        wake lacks (Disturbances.separation_drag, swim_model.wake_coupling); the other flows' water adds nothing."""
+        """The water of flow and none of the rig's own disturbances (friction, tilt, waves).
+
+        The emulated rig's, on which a dry run on hardware adds the rig's own. The wake's water holds the
+        separation drag the attached wake lacks (Disturbances.separation_drag, swim_model.wake_coupling); the
+        other flows' water adds nothing.
+
+        Parameters
+        ----------
+        flow : {"ideal", "circulatory", "wake"}
+            The water, one of swim_model.flow's FLOWS.
+
+        Returns
+        -------
+        PlantSettings
+            The settings with 8 substeps and the hard stops on.
+
+        Raises
+        ------
+        ValueError
+            For a flow not in FLOWS.
+        """
         return cls(flow, disturbances=Disturbances.separation_drag() if flow == "wake" else Disturbances.none())
 
 
@@ -512,10 +701,37 @@ def make_plant(settings: PlantSettings, rig: Optional[RigParameters], hard_limit
                constrained: bool = False, lane_radius_m: Optional[float] = None,
                sample_period_s: Optional[float] = None, seed: int = 0,
                wake_parameters: Optional[WakeCouplingParameters] = None) -> Plant:
-    """The plant of settings for the rig's vehicle (None: the shipped rig; constrained and lane_radius_m as
-    VehicleModel takes them), with the joints' hard stops at hard_limits_rad while settings.hard_stops, the wake of
-    wake_parameters in flow "wake" (None: WakeCouplingParameters' defaults), periods of sample_period_s (None: the
-    rig's) and the noise of seed."""
+    """Build the plant of settings for the rig's vehicle.
+
+    Parameters
+    ----------
+    settings : PlantSettings
+        The flow, substeps, disturbances and whether the hard stops are on.
+    rig : RigParameters or None
+        Rig parameters (None: the shipped rig file).
+    hard_limits_rad : HardLimits
+        The joints' hard stops ((heave lower, upper), (pitch lower, upper)), rad; used while settings.hard_stops.
+    constrained : bool, optional
+        Lock the rails: q = (alpha, phi, theta), as VehicleModel takes it.
+    lane_radius_m : float, optional
+        R of the locked rails, m (default: the rig's ``constrained_lane_radius_m``).
+    sample_period_s : float, optional
+        The control period, s (default: the rig's ``sample_period_s``).
+    seed : int, optional
+        Seed of the waves' noise.
+    wake_parameters : WakeCouplingParameters, optional
+        The wake's parameters in flow "wake" (default: WakeCouplingParameters' defaults).
+
+    Returns
+    -------
+    Plant
+        The plant, at rest at the origin.
+
+    Raises
+    ------
+    ValueError
+        For hard limits that are not finite with lower < upper, or a sample period <= 0.
+    """
     model = vehicle_model(settings.flow, rig, constrained, lane_radius_m)
     wake = None
     if settings.flow == "wake":
