@@ -115,7 +115,7 @@ def test_the_bridge_enforces_the_rigs_stops_and_torque_limits(node_arguments):
         shipped_bound = joint_dynamics_bounds(SHIPPED)
         assert all(d < s for d, s in zip(limits.dynamics.decelerations_rad_s2, shipped_bound.decelerations_rad_s2))
         # the emulated rig's own stops are the same rig's
-        assert node.device.hard_stops_rad == expected_stops()
+        assert tuple(node.device.plant.hard_limits_rad.values()) == expected_stops()
     finally:
         node.trigger_cleanup()
         node.destroy_node()
