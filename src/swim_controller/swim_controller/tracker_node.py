@@ -95,8 +95,8 @@ RESULT_CODES = {
 
 _SLIDING_DEFAULTS = SlidingMode()
 #: the tracker's parameters (swim_ros.parameters): fixed at start where the node builds from them (the rig, the
-#: period its timer runs at, autostart), changeable at run time otherwise. The upper bounds are assumed, each far past any
-#: sensible value: they only keep a typo (an extra zero, a wrong unit) from reaching the law.
+#: period its timer runs at, autostart), changeable at run time otherwise. The upper bounds are assumed, each far
+#: past any sensible value: they only keep a typo (an extra zero, a wrong unit) from reaching the law.
 PARAMETERS = (
     ParameterSpec("rig_path", "", "rig YAML file (empty: the shipped rig)", read_only=True),
     ParameterSpec("bridge_config_path", "", "hardware bridge YAML file the heave's and the pitch's hard stops are read "
