@@ -52,6 +52,13 @@ def test_the_readme_tables_are_the_node_tables():
     assert stale == [], f"README parameter tables differ from the nodes' tables in {stale}: run python {__file__}"
 
 
+def test_no_node_reads_a_parameter_but_through_its_settings():
+    """The nodes read their NodeSettings snapshot's fields (swim_ros.parameters), never get_parameter."""
+    readers = [name for name in NODE_TABLES if "get_parameter(" in
+               Path(importlib.import_module(name.split(":")[0]).__file__ or "").read_text()]
+    assert readers == []
+
+
 def test_a_row_that_drifts_from_its_table_is_rendered_back():
     text = readme("swim_controller").read_text()
     drifted = text.replace("| `sample_period_s` | `0.008` | [0.001, 0.1] | no |",
