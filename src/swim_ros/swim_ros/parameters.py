@@ -238,6 +238,7 @@ class NodeSettings(Generic[SettingsT]):
                  check: Optional[Callable[[SettingsT], Optional[str]]] = None) -> None:
         check_settings_type(settings_type, table)
         self._node, self._table, self._settings_type = node, tuple(table), settings_type
+        self._names = frozenset(spec.name for spec in table)
         self._on_change, self._check = on_change, check
         declare_parameters(node, table)
         self.current: SettingsT = read_settings(node, table, settings_type)
@@ -264,7 +265,7 @@ class NodeSettings(Generic[SettingsT]):
         return {spec.name: self._node.get_parameter(spec.name).value for spec in self._table}
 
     def _refresh(self, parameters: Sequence[Any]) -> None:
-        if not any(parameter.name in {spec.name for spec in self._table} for parameter in parameters):
+        if not any(parameter.name in self._names for parameter in parameters):   # rclpy's own (use_sim_time)
             return
         previous = self.current
         self.current = settings_from_values(self._settings_type, self._flat_values())
