@@ -5,6 +5,7 @@ src/swim_bringup/README.md, section "maneuver_node".
 """
 from __future__ import annotations
 
+import dataclasses
 import functools
 import threading
 import time
@@ -26,7 +27,7 @@ from swim_model.velocity_filter import VelocityEstimator
 from swim_ros.calls import (CallFailed, GoalStatusWatch, RetryPolicy, ServedElsewhere, call_service, cancel_goal,
                             new_request_id, send_goal)
 from swim_ros.entry import run_node
-from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, positive
+from swim_ros.parameters import NodeSettings, ParameterSpec, positive
 from swim_ros.qos import per_period_subscription
 from swim_ros.trajectory_messages import state_from_message
 
@@ -74,11 +75,22 @@ PARAMETERS = (
 )
 
 
+@dataclasses.dataclass(frozen=True)
+class ManeuverSettings:
+    """PARAMETERS' values (swim_ros.parameters.NodeSettings)."""
+
+    rest_angular_speed_rad_s: float
+    rest_linear_speed_m_s: float
+    rest_wait_s: float
+    lane_tolerance_m: float
+    state_max_age_s: float
+    node_timeout_s: float
+
+
 class ManeuverNode(Node):
     def __init__(self) -> None:
         super().__init__("maneuver_node")
-        declare_parameters(self, PARAMETERS)
-        self.add_on_set_parameters_callback(functools.partial(check_parameters, PARAMETERS))
+        self.parameters = NodeSettings(self, PARAMETERS, ManeuverSettings)
         group = ReentrantCallbackGroup()
         self._state_lock = threading.Lock()
         self._latest_state: Optional[tuple[JointState, float]] = None   # message, monotonic time of receipt
@@ -100,17 +112,15 @@ class ManeuverNode(Node):
             self._latest_state = (message, time.monotonic())
         self._state_arrived.set()
 
-    def _value(self, name: str) -> Any:
-        return self.get_parameter(name).value
-
     def _policy(self) -> RetryPolicy:
-        timeout_s = self._value("node_timeout_s")
+        timeout_s = self.parameters.current.node_timeout_s
         return RetryPolicy(attempt_timeout_s=timeout_s, attempts=3, discovery_timeout_s=timeout_s)
 
     # ----- the goal's steps --------------------------------------------------------------------------------------
     def _vehicle(self) -> VehicleState:
         """The vehicle from the latest joint_states; ManeuverGoalError if there is none recent or it is malformed."""
-        max_age_s, timeout_s = self._value("state_max_age_s"), self._value("node_timeout_s")
+        settings = self.parameters.current
+        max_age_s, timeout_s = settings.state_max_age_s, settings.node_timeout_s
         deadline_s = time.monotonic() + timeout_s
         while True:
             with self._state_lock:
@@ -165,14 +175,15 @@ class ManeuverNode(Node):
     def _start(self, goal: ManeuverGoal, catalog) -> tuple[VehicleState, str]:
         """The vehicle and the graph state the maneuver starts in (maneuver.start_state), waiting up to rest_wait_s
         for a vehicle that is coming to rest."""
-        deadline_s = time.monotonic() + self._value("rest_wait_s")
+        settings = self.parameters.current
+        deadline_s = time.monotonic() + settings.rest_wait_s
         start_states = {p.primitive_id: p.start_state for p in catalog.primitives}
-        bounds = RestBounds(self._value("rest_angular_speed_rad_s"), self._value("rest_linear_speed_m_s"))
+        bounds = RestBounds(settings.rest_angular_speed_rad_s, settings.rest_linear_speed_m_s)
         while True:
             vehicle = self._vehicle()
             try:
                 return vehicle, start_state(goal, vehicle, catalog.states, start_states, bounds,
-                                            self._value("lane_tolerance_m"))
+                                            settings.lane_tolerance_m)
             except NotAtRest:
                 if time.monotonic() > deadline_s:
                     raise

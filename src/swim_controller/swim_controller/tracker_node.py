@@ -18,9 +18,11 @@ from typing import Callable, Generator, Optional
 
 import numpy as np
 from builtin_interfaces.msg import Time
-from rclpy.action import ActionServer, CancelResponse
-from rclpy.node import Node
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.lifecycle import Node as LifecycleNode
+from rclpy.lifecycle import State, TransitionCallbackReturn
 from rclpy.task import Future
+from rclpy.timer import Timer
 from sensor_msgs.msg import JointState
 from swim_interfaces.action import ExecutePlan
 from swim_interfaces.msg import TrackingState
@@ -31,14 +33,15 @@ from swim_controller.sliding_mode import SlidingMode
 from swim_controller.supervisor import Mode, Outcome, StaleStateWatch, Step, Supervisor, Tolerances
 from swim_controller.tracker import CascadeTracker, FoilRangeGuard, model_io_linearization, model_lag_rate
 from swim_model.velocity_filter import DEFAULT_CUTOFF_HZ, VelocityEstimator
-from swim_model import SwimModelError, VehicleModel, load_rig
+from swim_model import RigParameters, SwimModelError, VehicleModel, load_rig
 from swim_ros.codecs import ACTUATED_JOINTS, float_array
 from swim_ros.entry import run_node
-from swim_ros.parameters import (ParameterSpec, check_parameters, declare_parameters, positive, realtime_parameters,
-                                 realtime_settings)
+from swim_ros.lifecycle import configure_and_activate, guard_change_state_service
+from swim_ros.parameters import (NodeSettings, ParameterSpec, RealtimeParameterSettings, positive,
+                                 realtime_parameters)
 from swim_ros.qos import per_period_publisher, per_period_subscription
-from swim_ros.realtime import (NO_REALTIME_MEANS, PeriodicCollector, RealtimeSettings, make_process_realtime,
-                               make_thread_background)
+from swim_ros.realtime import (NO_REALTIME_MEANS, PeriodicCollector, RealtimeSettings, make_process_ordinary,
+                               make_process_realtime, make_thread_background)
 from swim_ros.trajectory_messages import state_from_message, trajectory_from_message
 
 RESULT_CODES = {
@@ -52,8 +55,8 @@ RESULT_CODES = {
 
 _SLIDING_DEFAULTS = SlidingMode()
 #: the tracker's parameters (swim_ros.parameters): fixed at start where the node builds from them (the rig, the
-#: period its timer runs at), changeable at run time otherwise. The upper bounds are assumed, each far past any
-#: sensible value: they only keep a typo (an extra zero, a wrong unit) from reaching the law.
+#: period its timer runs at, autostart), changeable at run time otherwise. The upper bounds are assumed, each far
+#: past any sensible value: they only keep a typo (an extra zero, a wrong unit) from reaching the law.
 PARAMETERS = (
     ParameterSpec("rig_path", "", "rig YAML file, its joint limits the range guard's stops (empty: the shipped rig)",
                   read_only=True),
@@ -77,10 +80,39 @@ PARAMETERS = (
     ParameterSpec("velocity_cutoff_hz", DEFAULT_CUTOFF_HZ,
                   "cut-off of the velocity filter used when states carry no velocities, Hz", range=(0.0, 1e4),
                   check=positive),
+    ParameterSpec("autostart", True, "configure and activate at start-up (false: wait for a lifecycle manager's "
+                  "configure and activate on tracker_node/change_state)", read_only=True),
 ) + realtime_parameters(70, "node's threads (executor, middleware; the model builder's runs at the ordinary "
                         "policy)")
 #: states between two garbage collections after a command (collect_garbage_between_periods): 1 s at 8 ms
 GC_INTERVAL_STATES = 125
+
+
+@dataclasses.dataclass(frozen=True)
+class TrackerSettings(RealtimeParameterSettings):
+    """PARAMETERS' values (swim_ros.parameters.NodeSettings): what the periods, the watchdog and the action read."""
+
+    rig_path: str
+    range_guard_enabled: bool
+    sample_period_s: float
+    stale_after_periods: int
+    sliding_mode_enabled: bool
+    disturbance_bound_n_m: float
+    boundary_layer: float
+    disturbance_bound_margin: float
+    time_scale: float
+    feedback_rate_hz: float
+    velocity_cutoff_hz: float
+    autostart: bool
+
+    @property
+    def sliding_mode(self) -> SlidingMode:
+        return SlidingMode(self.disturbance_bound_n_m, self.boundary_layer, self.disturbance_bound_margin)
+
+    @property
+    def stale_limit_s(self) -> float:
+        """How long without a valid state before the torque is zeroed, s."""
+        return self.stale_after_periods * self.sample_period_s
 
 
 @dataclasses.dataclass(frozen=True)
@@ -170,12 +202,25 @@ class ActiveGoal:
             self.done.set_result(outcome)
 
 
-class TrackerNode(Node):
-    def __init__(self) -> None:
+class TrackerNode(LifecycleNode):
+    """The tracker as a lifecycle node (lifecycle_msgs ChangeState on tracker_node/change_state): configure loads
+    the rig and the range guard's stops and builds the start-up models; activate serves joint_states and
+    execute_plan (goals are refused while inactive); deactivate zeroes the torque and ends the goal under way
+    (PREEMPTED); cleanup drops the models. owns_process: the node is its process's (main() makes it so) and
+    applies the real-time means to it while active."""
+
+    def __init__(self, owns_process: bool = False) -> None:
         super().__init__("tracker_node")
-        declare_parameters(self, PARAMETERS)
-        self.rig = load_rig(self.get_parameter("rig_path").value or None)
-        self.range_guard = FoilRangeGuard(self.rig.hard_limits_rad)
+        self.owns_process = owns_process
+        guard_change_state_service(self)
+        self.parameters = NodeSettings(self, PARAMETERS, TrackerSettings, on_change=self._apply_parameters)
+        self.settings = self.parameters.current
+        self.active = False
+        self.configure_error: Optional[str] = None   # why the last configure failed
+        self.rig: Optional[RigParameters] = None     # the rig and what is built from it: set by configure
+        self.range_guard: Optional[FoilRangeGuard] = None
+        self._builder: Optional[ModelBuilder] = None
+        self._stale_timer: Optional[Timer] = None
         self._models: dict[ModelKey, VehicleModel] = {}
         self._building: dict[ModelKey, concurrent.futures.Future] = {}
         self._goals_received = 0
@@ -184,14 +229,12 @@ class TrackerNode(Node):
         self._goal: Optional[ActiveGoal] = None
         self._last_q: Optional[np.ndarray] = None
         self._last_state_stamp = Time()      # zero: "not stamped", before any valid state
-        self._stale_watch = StaleStateWatch(time.monotonic(), self.get_parameter("sample_period_s").value)
+        self._stale_watch = StaleStateWatch(time.monotonic(), self.settings.sample_period_s)
         self._last_tracking: Optional[TrackingState] = None
-        self._velocity = VelocityEstimator(self.get_parameter("velocity_cutoff_hz").value)
+        self._velocity = VelocityEstimator(self.settings.velocity_cutoff_hz)
         self.rejected_states = 0
         self.commands_sent = 0
-        self._collector: Optional[PeriodicCollector] = None   # set by make_realtime
-        self.add_on_set_parameters_callback(functools.partial(check_parameters, PARAMETERS))
-        self.add_post_set_parameters_callback(self._apply_parameters)
+        self._collector: Optional[PeriodicCollector] = None   # set by _make_realtime
 
         self.command_publisher = per_period_publisher(self, JointState, "joint_commands")
         self.tracking_publisher = per_period_publisher(self, TrackingState, "tracking_state")
@@ -203,37 +246,95 @@ class TrackerNode(Node):
         # blocking a thread; rclpy's MultiThreadedExecutor with a mutually exclusive group stalled here
         # (the subscription stopped being served after a few periods, ros2/rclcpp#832 family).
         per_period_subscription(self, JointState, "joint_states", self._on_state)
-        self.create_timer(self.get_parameter("sample_period_s").value, self._check_stale)
         self._action = ActionServer(self, ExecutePlan, "execute_plan", execute_callback=self._execute,
-                                    cancel_callback=self._on_cancel)
-        for constrained in (True, False):   # the rig's two vehicles on its default lane, ready for a first goal
-            key = self._model_key(constrained, self.rig.constrained_lane_radius_m, "ideal")
-            self._models[key] = build_model(self.rig, key)
+                                    goal_callback=self._on_goal, cancel_callback=self._on_cancel)
         # a build's end wakes the executor (guard conditions may be triggered from any thread)
         self._model_built = self.create_guard_condition(lambda: None)
-        self._builder = ModelBuilder(self.rig, self._wake_after_build)
+
+    # ----- lifecycle -------------------------------------------------------------------------------
+    def on_configure(self, state: State) -> TransitionCallbackReturn:
+        """Load the rig (with the range guard's stops, its limits record) and build the ideal flow's models of the rig's two vehicles on
+        its default lane, ready for a first goal (about half a second, or a few seconds to compile them)."""
+        self.settings = self.parameters.current
+        try:
+            rig = load_rig(self.settings.rig_path or None)
+            models = {}
+            for constrained in (True, False):
+                key = ModelKey(constrained, rig.constrained_lane_radius_m, "ideal")
+                models[key] = build_model(rig, key)
+        except (ValueError, SwimModelError) as err:
+            self.configure_error = str(err)
+            self.get_logger().error(f"configure failed: {err}")
+            return TransitionCallbackReturn.FAILURE
+        self.configure_error = None
+        self.rig, self.range_guard, self._models = rig, FoilRangeGuard(rig.hard_limits_rad), models
+        self._builder = ModelBuilder(rig, self._wake_after_build, self._realtime())
+        self._stale_timer = self.create_timer(self.settings.sample_period_s, self._check_stale)
+        return super().on_configure(state)
+
+    def on_activate(self, state: State) -> TransitionCallbackReturn:
+        self._stale_watch.state_arrived(time.monotonic())   # the first state is due within the limit from now
+        self.active = True
+        self._make_realtime()
         self.get_logger().info("tracker ready: waiting for joint_states and execute_plan goals")
+        return super().on_activate(state)
+
+    def on_deactivate(self, state: State) -> TransitionCallbackReturn:
+        self._stop_serving()
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state: State) -> TransitionCallbackReturn:
+        self._release()
+        return super().on_cleanup(state)
+
+    def on_shutdown(self, state: State) -> TransitionCallbackReturn:
+        self._stop_serving()
+        self._release()
+        return super().on_shutdown(state)
+
+    def _stop_serving(self) -> None:
+        """Zero torque, the goal under way ended (PREEMPTED), no more states served; the process at the ordinary
+        policy again."""
+        if self.active:
+            self.active = False
+            if self._supervisor is not None:
+                self._supervisor.state_lost()
+            if self._goal is not None:
+                self._goal.finish(Outcome.PREEMPTED, "preempted: tracker_node deactivated")
+            self._supervisor = None
+            self._publish_command(np.zeros(2), self._last_state_stamp)
+        if self.owns_process and self.settings.realtime.realtime:
+            make_process_ordinary()
+        if self._collector is not None:
+            self._collector.stop()
+            self._collector = None
+
+    def _release(self) -> None:
+        """Drop what configure built: the models, the model builder, the stale-state timer."""
+        if self._builder is not None:
+            self._builder.stop()
+            self._builder = None
+        if self._stale_timer is not None:
+            self.destroy_timer(self._stale_timer)
+            self._stale_timer = None
+        self._models, self._building, self.rig, self.range_guard = {}, {}, None, None
 
     # ----- parameters ------------------------------------------------------------------------------
-    def _apply_parameters(self, parameters) -> None:
+    def _apply_parameters(self, previous: TrackerSettings, current: TrackerSettings) -> None:
         """Post-set: accepted values take effect (the active goal's law included)."""
-        values = {p.name: p.value for p in parameters}
+        self.settings = current
         if self._supervisor is not None:
             tracker = self._supervisor.tracker
-            if "sliding_mode_enabled" in values:
-                tracker.sliding_mode_enabled = values["sliding_mode_enabled"]
-            bound = values.get("disturbance_bound_n_m", tracker.sliding_mode.disturbance_bound_n_m)
-            layer = values.get("boundary_layer", tracker.sliding_mode.boundary_layer)
-            margin = values.get("disturbance_bound_margin", tracker.sliding_mode.disturbance_bound_margin)
-            tracker.sliding_mode = SlidingMode(bound, layer, margin)
-            if "range_guard_enabled" in values:
-                tracker.range_guard = self.range_guard if values["range_guard_enabled"] else None
-        if "velocity_cutoff_hz" in values:
-            self._velocity = VelocityEstimator(values["velocity_cutoff_hz"])
+            tracker.sliding_mode_enabled = current.sliding_mode_enabled
+            tracker.sliding_mode = current.sliding_mode
+            tracker.range_guard = self.range_guard if current.range_guard_enabled else None
+        if current.velocity_cutoff_hz != previous.velocity_cutoff_hz:
+            self._velocity = VelocityEstimator(current.velocity_cutoff_hz)
 
     def _model_key(self, constrained: bool, lane_radius_m: float, flow_model: str) -> ModelKey:
         """One model per flow and lane for the constrained vehicle, one per flow for the free vehicle (its lane
         is a coordinate, the model the same for every starting lane)."""
+        assert self.rig is not None   # goals are accepted while active only
         return ModelKey(constrained, lane_radius_m if constrained else self.rig.constrained_lane_radius_m, flow_model)
 
     async def _model(self, key: ModelKey, give_up: Callable[[], bool]) -> Optional[VehicleModel]:
@@ -247,6 +348,7 @@ class TrackerNode(Node):
             self.get_logger().info(f"building the {key.flow_model} flow's "
                                    f"{'constrained' if key.constrained else 'free'} vehicle model "
                                    f"(lane {key.lane_radius_m} m) for this plan")
+            assert self._builder is not None   # goals are accepted while active only
             future = self._building[key] = self._builder.submit(key)
         if not await _Awaited(future, give_up):
             return None
@@ -265,32 +367,38 @@ class TrackerNode(Node):
         except Exception:  # noqa: BLE001 - the node is being destroyed: nothing waits any more
             pass
 
-    def make_realtime(self) -> None:
-        """The real-time means of the parameters for this process (main() calls it once the start-up's models are
+    def _realtime(self) -> RealtimeSettings:
+        """The means this node applies: its parameters' if it owns its process, none otherwise."""
+        return self.settings.realtime if self.owns_process else NO_REALTIME_MEANS
+
+    def _make_realtime(self) -> None:
+        """The real-time means of the parameters for this process (on activation, once the start-up's models are
         built): its threads at realtime_priority, memory locked, the collector between periods. Said once at info
         level, or as one warning with what was refused and why."""
-        settings = realtime_settings(self)
+        if not self.owns_process:
+            return
+        settings = self._realtime()
         outcome = make_process_realtime(settings)
-        self._builder.realtime = settings
+        if self._builder is not None:
+            self._builder.realtime = settings
         (self.get_logger().warning if outcome.refused else self.get_logger().info)(outcome.summary())
         if settings.collect_garbage_between_periods:
             self._collector = PeriodicCollector(GC_INTERVAL_STATES)
 
     def destroy_node(self) -> None:
-        self._builder.stop()
+        self._release()
         super().destroy_node()
 
     def _make_tracker(self, model: VehicleModel) -> CascadeTracker:
-        parameter = self.get_parameter
-        return CascadeTracker(model_io_linearization(model), model.torque_limits(),
-                              SlidingMode(parameter("disturbance_bound_n_m").value, parameter("boundary_layer").value,
-                                          parameter("disturbance_bound_margin").value),
-                              parameter("sliding_mode_enabled").value, parameter("sample_period_s").value,
-                              model_lag_rate(model),
-                              self.range_guard if parameter("range_guard_enabled").value else None)
+        settings = self.settings
+        return CascadeTracker(model_io_linearization(model), model.torque_limits(), settings.sliding_mode,
+                              settings.sliding_mode_enabled, settings.sample_period_s, model_lag_rate(model),
+                              self.range_guard if settings.range_guard_enabled else None)
 
     # ----- the control period ----------------------------------------------------------------------
     def _on_state(self, message: JointState) -> None:
+        if not self.active:
+            return
         supervisor = self._supervisor
         names = None
         if supervisor is not None:
@@ -336,8 +444,7 @@ class TrackerNode(Node):
     def _publish_feedback(self, goal: ActiveGoal) -> None:
         """At most feedback_rate_hz: the latest tracking state and the fraction of the plan done."""
         now = time.monotonic()
-        if self._last_tracking is None or now - goal.last_feedback_monotonic < 1.0 / self.get_parameter(
-                "feedback_rate_hz").value:
+        if self._last_tracking is None or now - goal.last_feedback_monotonic < 1.0 / self.settings.feedback_rate_hz:
             return
         goal.last_feedback_monotonic = now
         progress = min(goal.supervisor.elapsed_s / goal.duration_s, 1.0)
@@ -345,8 +452,8 @@ class TrackerNode(Node):
                                                           state=self._last_tracking, progress=progress))
 
     def _check_stale(self) -> None:
-        limit = self.get_parameter("stale_after_periods").value * self.get_parameter("sample_period_s").value
-        if not self._stale_watch.stale(time.monotonic(), limit):
+        limit = self.settings.stale_limit_s
+        if not self.active or not self._stale_watch.stale(time.monotonic(), limit):
             return
         if self._supervisor is not None and self._supervisor.mode is not Mode.STOPPED:
             self._supervisor.state_lost()
@@ -389,6 +496,10 @@ class TrackerNode(Node):
         return message
 
     # ----- the action ------------------------------------------------------------------------------
+    def _on_goal(self, request: ExecutePlan.Goal) -> GoalResponse:
+        """Goals are served while active only."""
+        return GoalResponse.ACCEPT if self.active else GoalResponse.REJECT
+
     def _on_cancel(self, handle) -> CancelResponse:
         """Cancel the active goal: hold the foil where it is now; or a goal still waiting for its vehicle model:
         it never starts."""
@@ -412,6 +523,7 @@ class TrackerNode(Node):
                                     request.goal_tolerance_alpha_rad, request.goal_tolerance_r_m)
             tolerances.validate()
             trajectory = trajectory_from_message(request.plan)
+            assert self.rig is not None   # goals are accepted while active only
             tank_radius_m = 0.5 * self.rig.tank_diameter_m
             if trajectory.lane_radius_m >= tank_radius_m:   # the rig file's rule for its own lanes
                 raise PlanError(f"plan lane radius {trajectory.lane_radius_m!r} m is not inside the tank "
@@ -421,10 +533,11 @@ class TrackerNode(Node):
                 handle.publish_feedback(ExecutePlan.Feedback(phase=ExecutePlan.Feedback.PHASE_WAITING_FOR_MODEL))
             self._waiting_for_model.append(handle)
             try:
-                model = await self._model(key, lambda: handle.is_cancel_requested or arrival != self._goals_received)
+                model = await self._model(key, lambda: (handle.is_cancel_requested or arrival != self._goals_received
+                                                        or not self.active))
             finally:
                 self._waiting_for_model.remove(handle)
-            time_scale = self.get_parameter("time_scale").value
+            time_scale = self.settings.time_scale
             # refused past the motor limits, with the largest feasible time scale named
             if model is not None and time_scale != 1.0:
                 trajectory = trajectory.time_scaled(time_scale, model.torque_limits())
@@ -436,11 +549,12 @@ class TrackerNode(Node):
             handle.canceled()
             return ExecutePlan.Result(error_code=ExecutePlan.Result.CANCELED,
                                       error_string="canceled while its vehicle model was built: not started")
-        if arrival != self._goals_received:
+        if arrival != self._goals_received or not self.active:
             handle.abort()
             return ExecutePlan.Result(error_code=ExecutePlan.Result.PREEMPTED,
-                                      error_string="preempted by a new goal while its vehicle model was built")
-        assert model is not None   # give_up held only for a cancel or a newer goal, both answered above
+                                      error_string="preempted by a new goal while its vehicle model was built"
+                                      if self.active else "preempted: tracker_node deactivated")
+        assert model is not None   # give_up held only for a cancel, a newer goal or a deactivate, answered above
         if self._goal is not None:
             self._goal.finish(Outcome.PREEMPTED, "preempted by a new goal")
         goal = ActiveGoal(handle, Supervisor(self._make_tracker(model)), trajectory.duration_s)
@@ -470,9 +584,16 @@ class TrackerNode(Node):
         return result
 
 
+def autostart(node: TrackerNode) -> None:
+    """With the autostart parameter: configure, then activate; a configure that fails is a usage error at start
+    (ValueError with its reason: run_node stops the process with it)."""
+    if node.settings.autostart and not configure_and_activate(node) and node.configure_error is not None:
+        raise ValueError(node.configure_error)
+
+
 def main(args: list[str] | None = None) -> None:
-    run_node(TrackerNode, args, name="tracker_node", fatal_errors=(ValueError, SwimModelError),
-             start=TrackerNode.make_realtime)
+    run_node(functools.partial(TrackerNode, owns_process=True), args, name="tracker_node",
+             fatal_errors=(ValueError, SwimModelError), start=autostart)
 
 
 if __name__ == "__main__":

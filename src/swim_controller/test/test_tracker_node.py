@@ -475,3 +475,46 @@ def test_a_time_scale_past_the_motor_limits_refuses_the_goal(rig_loop, plan_mess
         assert run_until(plant, future, 100).error_code == ExecutePlan.Result.CANCELED
     finally:
         parameters.set([Parameter("time_scale", value=1.0)])
+
+
+def test_the_lifecycle_serves_only_while_active(ros_domain, rclpy_context, tmp_path):
+    """With autostart false the node waits unconfigured: no command for a state until it is configured and
+    activated; deactivated, it answers none again, and activates again; a transition the state does not have is
+    refused and leaves the node running."""
+    import rclpy
+    from lifecycle_msgs.msg import Transition
+    from rclpy.executors import SingleThreadedExecutor
+    from swim_ros.calls import change_lifecycle_state
+    namespace = "lifecycle_test"
+    log_path = tmp_path / "tracker.txt"
+    with running_node("swim_controller", "tracker_node", log_path, "-r", f"__ns:=/{namespace}", "-p",
+                      "autostart:=false", "-p", f"stale_after_periods:={STALE_AFTER_PERIODS}") as process:
+        node = rclpy.create_node("lifecycle_test_plant", namespace=namespace, context=rclpy_context)
+        executor = SingleThreadedExecutor(context=rclpy_context)
+        executor.add_node(node)
+        plant = LockStepPlant(node, executor)
+
+        def answered() -> bool:
+            stamp = plant.state_message().header.stamp
+            plant.publisher.publish(plant.state_message())
+            found = spin_until(executor, lambda: any(c.header.stamp == stamp for c in plant.commands), 1.0)
+            plant.time_s += PERIOD_S
+            return found
+
+        def transition(transition_id: int) -> bool:
+            return change_lifecycle_state(node, executor, f"/{namespace}/tracker_node", transition_id, POLICY)
+        try:
+            assert not transition(Transition.TRANSITION_ACTIVATE)   # unconfigured: refused, the node runs on
+            assert process.poll() is None and not answered()
+            assert transition(Transition.TRANSITION_CONFIGURE) and not answered()
+            assert transition(Transition.TRANSITION_ACTIVATE)
+            assert answered() and not np.any(plant.commands[-1].effort)   # no goal: zero torque
+            assert transition(Transition.TRANSITION_DEACTIVATE)
+            plant.commands.clear()
+            assert not answered()
+            assert transition(Transition.TRANSITION_ACTIVATE) and answered()
+            assert transition(Transition.TRANSITION_DEACTIVATE) and transition(Transition.TRANSITION_CLEANUP)
+            assert process.poll() is None, log_path.read_text()[-2000:]
+        finally:
+            executor.shutdown()
+            node.destroy_node()

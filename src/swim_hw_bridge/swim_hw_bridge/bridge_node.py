@@ -13,9 +13,6 @@ import time
 from typing import Optional
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from lifecycle_msgs.srv import ChangeState
-
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.duration import Duration
 from rclpy.lifecycle import Node as LifecycleNode
 from rclpy.lifecycle import State, TransitionCallbackReturn
@@ -36,7 +33,8 @@ from swim_model.flow import FLOWS
 from swim_model.plant import PlantSettings
 from swim_ros.codecs import MessageError, torque_from_command
 from swim_ros.entry import run_node
-from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, one_of, realtime_parameters
+from swim_ros.lifecycle import configure_and_activate, guard_change_state_service
+from swim_ros.parameters import NodeSettings, ParameterSpec, RealtimeParameterSettings, one_of, realtime_parameters
 from swim_ros.qos import RECORDABLE_QOS
 from swim_ros.realtime import (NO_REALTIME_MEANS, RealtimeOutcome, RealtimeSettings, make_process_ordinary,
                                make_process_realtime, memory_locked_kib)
@@ -69,7 +67,9 @@ STATES_REMEMBERED = 64
 
 
 @dataclasses.dataclass(frozen=True)
-class BridgeSettings:
+class BridgeSettings(RealtimeParameterSettings):
+    """PARAMETERS' values (swim_ros.parameters.NodeSettings), as the node was last configured with them."""
+
     backend: str
     config_path: str
     rig_path: str
@@ -82,16 +82,6 @@ class BridgeSettings:
     diagnostics_rate_hz: float
     autostart: bool
     io_loop_priority: int
-    realtime_policy: str
-    realtime_priority: int
-    lock_memory: bool
-    cpu_affinity: str
-    collect_garbage_between_periods: bool
-
-    @property
-    def realtime(self) -> RealtimeSettings:
-        return RealtimeSettings(self.realtime_policy, self.realtime_priority, self.lock_memory, self.cpu_affinity,
-                                self.collect_garbage_between_periods)
 
 
 class BridgeNode(LifecycleNode):
@@ -101,10 +91,9 @@ class BridgeNode(LifecycleNode):
     def __init__(self, owns_process: bool = False) -> None:
         super().__init__("bridge_node")
         self.owns_process = owns_process
-        self._guard_change_state_service()
-        declare_parameters(self, PARAMETERS)
-        self.add_on_set_parameters_callback(functools.partial(check_parameters, PARAMETERS))
-        self.settings = self._read_settings()
+        guard_change_state_service(self)
+        self.parameters = NodeSettings(self, PARAMETERS, BridgeSettings)
+        self.settings = self.parameters.current   # what the last configure took
         self.state_publisher = self.create_lifecycle_publisher(JointState, "joint_states", RECORDABLE_QOS)
         self.diagnostics_publisher = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.create_subscription(JointState, "joint_commands", self._on_command, 10)
@@ -126,48 +115,10 @@ class BridgeNode(LifecycleNode):
         self._diagnostics_timer = self.create_timer(1.0 / self.settings.diagnostics_rate_hz,
                                                     self._publish_diagnostics)
 
-    def _guard_change_state_service(self) -> None:
-        """rclpy 7.1.6 raises out of the change_state service for a transition the current state does not have
-        (activate while unconfigured), which ends spin() and the process; answer success=False instead.
-
-        Why through a private attribute: there is no public way in this rclpy. The crash is ros2/rclpy#1209; its
-        fix (ros2/rclpy#1319: __change_state catches the RCLError and returns ERROR) is in rclpy 8 (rolling), not
-        in Jazzy's 7.1.x, the newest on PyPI being 7.1.6. The public alternative, LifecycleNode(...,
-        enable_communication_interface=False) and our own lifecycle services around the public trigger_*
-        methods, would mean serving change_state, get_state (7.1 has no public current-state getter: we would
-        track it ourselves), get_available_states, get_available_transitions, get_transition_graph and the
-        transition_event topic by hand: far more to get wrong than wrapping one callback. On an rclpy that has
-        the fix, or no such attribute, this does nothing harmful: the wrapper only catches what escapes."""
-        service = getattr(self, "_service_change_state", None)
-        if service is None:
-            return
-        inner = service.callback
-
-        def change_state(request: ChangeState.Request, response: ChangeState.Response) -> ChangeState.Response:
-            try:
-                return inner(request, response)
-            except _rclpy.RCLError as err:
-                self.get_logger().warning(f"transition {request.transition.id} '{request.transition.label}' "
-                                          f"refused: {err}")
-                response.success = False
-                return response
-
-        service.callback = change_state
-
-    # --- parameters ---------------------------------------------------------------------------------------
-    def _read_settings(self) -> BridgeSettings:
-        """The parameters now, checked; raises ValueError with the first reason."""
-        values = {spec.name: self.get_parameter(spec.name).value for spec in PARAMETERS}
-        for spec in PARAMETERS:
-            reason = spec.reason_invalid(values[spec.name])
-            if reason is not None:
-                raise ValueError(reason)
-        return BridgeSettings(**values)
-
     # --- lifecycle --------------------------------------------------------------------------------------------
     def on_configure(self, state: State) -> TransitionCallbackReturn:
+        self.settings = self.parameters.current
         try:
-            self.settings = self._read_settings()
             config = load_bridge_config(self.settings.config_path or None, load_rig(self.settings.rig_path or None))
             device_config = config.device_config(self.settings.backend)
             if self.settings.backend == "emulated":
@@ -449,8 +400,8 @@ def overrun_phrase(snapshot: Snapshot) -> str:
 
 def autostart(node: BridgeNode) -> None:
     """With the autostart parameter: configure, then activate (each only if the one before succeeded)."""
-    if node.settings.autostart and node.trigger_configure() == TransitionCallbackReturn.SUCCESS:
-        node.trigger_activate()
+    if node.settings.autostart:
+        configure_and_activate(node)
 
 
 def main(args: list[str] | None = None) -> None:

@@ -11,7 +11,6 @@ import dataclasses
 import functools
 import threading
 
-from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
@@ -29,7 +28,7 @@ from swim_planner.maneuver import (DEFAULT_BOUNDS, PlanBounds, check_plan_size, 
                                    expand_sequence)
 from swim_planner.paths import default_library_path
 from swim_ros.entry import run_node
-from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, one_of, positive
+from swim_ros.parameters import NodeSettings, ParameterSpec, one_of, positive
 from swim_ros.qos import LATCHED_QOS
 from swim_ros.trajectory_messages import trajectory_to_message
 
@@ -73,6 +72,28 @@ PARAMETERS = (
 )
 
 
+@dataclasses.dataclass(frozen=True)
+class PlannerSettings:
+    """PARAMETERS' values (swim_ros.parameters.NodeSettings); the plan bounds checked together (ValueError)."""
+
+    flow_model: str
+    library_path: str
+    rig_path: str
+    default_time_scale: float
+    lqr_weights_path: str
+    max_plan_duration_s: float
+    max_plan_samples: int
+
+    def __post_init__(self) -> None:
+        self.bounds.validate()
+
+    @property
+    def bounds(self) -> PlanBounds:
+        """The bounds of the plans served."""
+        return PlanBounds(max_duration_s=self.max_plan_duration_s, max_samples=self.max_plan_samples,
+                          max_abs_start_alpha_rad=DEFAULT_BOUNDS.max_abs_start_alpha_rad)
+
+
 class AnswerMemory:
     """Replies by request id, the latest ANSWERS_KEPT. A repeat that arrives while the first is still being
     planned waits for that reply instead of planning again."""
@@ -103,18 +124,15 @@ class AnswerMemory:
 class PlannerNode(Node):
     def __init__(self) -> None:
         super().__init__("planner_node")
-        declare_parameters(self, PARAMETERS)
-        self.bounds = self._bounds({})
-        rig_path = self.get_parameter("rig_path").value or None
-        flow_model = self.get_parameter("flow_model").value
-        library_path = self.get_parameter("library_path").value or default_library_path(flow_model)
-        self.rig = load_rig(rig_path)
-        self.library = PrimitiveLibrary.load(library_path, self.rig, flow_model)
+        self.parameters = NodeSettings(self, PARAMETERS, PlannerSettings, on_change=self._apply_parameters)
+        settings = self.parameters.current
+        flow_model = settings.flow_model
+        self.rig = load_rig(settings.rig_path or None)
+        self.library = PrimitiveLibrary.load(settings.library_path or default_library_path(flow_model), self.rig,
+                                             flow_model)
         self.graph = build_graph(self.library)
-        self._plan_library = self._retuned(self.get_parameter("lqr_weights_path").value)
+        self._plan_library = self._retuned(settings.lqr_weights_path)
         self.answers = AnswerMemory()
-        self.add_on_set_parameters_callback(self._check_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
         for line in self.graph.mismatches:
             self.get_logger().warning(f"junction mismatch, primitive dropped from the graph: {line}")
         self.plan_publisher = self.create_publisher(PlannedTrajectory, "plan", LATCHED_QOS)
@@ -134,38 +152,20 @@ class PlannerNode(Node):
             return self.library
         return RetunedLibrary(self.library, load_lqr_weights(lqr_weights_path, self.library.lqr_weights))
 
-    def _bounds(self, changed: dict) -> PlanBounds:
-        """PlanBounds from the parameters, with changed (name -> value) applied; ValueError if not valid."""
-        def value(name: str):
-            return changed.get(name, self.get_parameter(name).value)
-        bounds = PlanBounds(max_duration_s=value("max_plan_duration_s"), max_samples=value("max_plan_samples"),
-                            max_abs_start_alpha_rad=DEFAULT_BOUNDS.max_abs_start_alpha_rad)
-        bounds.validate()
-        return bounds
+    @property
+    def bounds(self) -> PlanBounds:
+        return self.parameters.current.bounds
 
-    def _check_parameters(self, parameters) -> SetParametersResult:
-        """On-set: the table's ranges and checks, and the plan bounds together."""
-        result = check_parameters(PARAMETERS, parameters)
-        changed = {p.name: p.value for p in parameters if p.name in ("max_plan_duration_s", "max_plan_samples")}
-        if result.successful and changed:
+    def _apply_parameters(self, previous: PlannerSettings, current: PlannerSettings) -> None:
+        """Post-set: new bounds (read from the settings by each request) and LQ weights serve the requests that
+        come after."""
+        if current.lqr_weights_path != previous.lqr_weights_path:
             try:
-                self._bounds(changed)
-            except ValueError as err:
-                return SetParametersResult(successful=False, reason=str(err))
-        return result
-
-    def _apply_parameters(self, parameters) -> None:
-        """Post-set: new bounds and LQ weights serve the requests that come after."""
-        names = {p.name: p.value for p in parameters}
-        if "max_plan_duration_s" in names or "max_plan_samples" in names:
-            self.bounds = self._bounds({})
-        if "lqr_weights_path" in names:
-            try:
-                self._plan_library = self._retuned(names["lqr_weights_path"])
+                self._plan_library = self._retuned(current.lqr_weights_path)
             except PlannerError as err:   # the file changed between the check and now: keep the weights in use
                 self.get_logger().error(f"LQ weights not applied, those in use kept: {err}")
                 return
-            self.get_logger().info(f"LQ weights for new plans: {names['lqr_weights_path'] or 'those stored'}")
+            self.get_logger().info(f"LQ weights for new plans: {current.lqr_weights_path or 'those stored'}")
 
     def on_list(self, request: ListPrimitives.Request, response: ListPrimitives.Response) -> ListPrimitives.Response:
         return self._primitive_list
@@ -200,8 +200,9 @@ class PlannerNode(Node):
         return response
 
     def plan(self, request: RequestManeuver.Request) -> Trajectory:
-        time_scale = request.time_scale or self.get_parameter("default_time_scale").value
-        bounds, library = self.bounds, self._plan_library
+        settings = self.parameters.current
+        time_scale = request.time_scale or settings.default_time_scale
+        bounds, library = settings.bounds, self._plan_library
         check_start_alpha(request.start_alpha_rad, bounds)
         if request.mode == RequestManeuver.Request.MODE_SEQUENCE:
             check_plan_size(library, list(request.primitive_ids), list(request.repeat_counts), time_scale, bounds)

@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any, Callable, Optional, Sequence, Union
+import typing
+from typing import Any, Callable, Generic, Mapping, Optional, Sequence, TypeVar, Union
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
@@ -25,6 +26,8 @@ from rclpy.node import Node
 from swim_ros.realtime import SCHEDULING_POLICIES, RealtimeSettings, parse_cpu_list
 
 ParameterValue = Union[bool, int, float, str, list]
+#: a node's settings type: a frozen dataclass with a field per parameter of its table (check_settings_type)
+SettingsT = TypeVar("SettingsT")
 #: a rule beyond the range: the reason a value is not valid, or None if it is
 Check = Callable[[Any], Optional[str]]
 
@@ -141,8 +144,143 @@ def realtime_parameters(priority: int, thread: str) -> tuple[ParameterSpec, ...]
     )
 
 
-def realtime_settings(node: Node) -> RealtimeSettings:
-    """The node's real-time parameters (declared from realtime_parameters) as RealtimeSettings."""
-    get = node.get_parameter
-    return RealtimeSettings(get("realtime_policy").value, get("realtime_priority").value, get("lock_memory").value,
-                            get("cpu_affinity").value, get("collect_garbage_between_periods").value)
+@dataclasses.dataclass(frozen=True)
+class RealtimeParameterSettings:
+    """The fields of realtime_parameters' table, for the settings type of a node that declares it to derive from
+    (NodeSettings)."""
+
+    realtime_policy: str
+    realtime_priority: int
+    lock_memory: bool
+    cpu_affinity: str
+    collect_garbage_between_periods: bool
+
+    @property
+    def realtime(self) -> RealtimeSettings:
+        return RealtimeSettings(self.realtime_policy, self.realtime_priority, self.lock_memory, self.cpu_affinity,
+                                self.collect_garbage_between_periods)
+
+
+def _field_types(settings_type: type) -> dict[str, Any]:
+    params = getattr(settings_type, "__dataclass_params__", None)
+    if not dataclasses.is_dataclass(settings_type) or params is None or not params.frozen:
+        raise TypeError(f"{settings_type.__name__} must be a frozen dataclass")
+    hints = typing.get_type_hints(settings_type)
+    return {field.name: hints[field.name] for field in dataclasses.fields(settings_type)}
+
+
+def _group_kind(field_type: Any) -> Optional[str]:
+    """How a settings field holds the parameters named "<field>.<name>": "dataclass" (a field per name), "dict"
+    (every such parameter, by name), or None (the field is one parameter)."""
+    if isinstance(field_type, type) and dataclasses.is_dataclass(field_type):
+        return "dataclass"
+    return "dict" if typing.get_origin(field_type) is dict else None
+
+
+def check_settings_type(settings_type: type, table: Sequence[ParameterSpec]) -> None:
+    """TypeError unless settings_type is a frozen dataclass holding table's parameters, each once: a field named
+    as the parameter, typed as its default; or, for the parameters named "<group>.<name>", a field <group> that is
+    a dataclass with a field per name, or a dict of them all."""
+    names = [spec.name for spec in table]
+    defaults = {spec.name: spec.default for spec in table}
+    held: list[str] = []
+    for name, field_type in _field_types(settings_type).items():
+        kind = _group_kind(field_type)
+        if kind == "dataclass":
+            held += [f"{name}.{field.name}" for field in dataclasses.fields(field_type)]
+        elif kind == "dict":
+            held += [parameter for parameter in names if parameter.startswith(f"{name}.")]
+        else:
+            held.append(name)
+            expected = typing.get_origin(field_type) or field_type
+            if name in defaults and isinstance(expected, type) and not isinstance(defaults[name], expected):
+                raise TypeError(f"{settings_type.__name__}.{name} is {expected.__name__}, the parameter's default "
+                                f"{defaults[name]!r}")
+    missing, extra = sorted(set(names) - set(held)), sorted(set(held) - set(names))
+    if missing or extra or len(held) != len(set(held)):
+        raise TypeError(f"{settings_type.__name__} does not hold its table's parameters: missing {missing}, "
+                        f"not parameters {extra}")
+
+
+def settings_from_values(settings_type: type[SettingsT], values: Mapping[str, Any]) -> SettingsT:
+    """settings_type (check_settings_type) made from values, parameter name -> value; the groups' dataclasses
+    check themselves (ValueError, TypeError)."""
+    arguments: dict[str, Any] = {}
+    for name, field_type in _field_types(settings_type).items():
+        kind = _group_kind(field_type)
+        prefix = f"{name}."
+        group = {key[len(prefix):]: value for key, value in values.items() if key.startswith(prefix)}
+        arguments[name] = (field_type(**group) if kind == "dataclass" else group if kind == "dict"
+                           else values[name])
+    return settings_type(**arguments)
+
+
+def read_settings(node: Node, table: Sequence[ParameterSpec], settings_type: type[SettingsT]) -> SettingsT:
+    """The node's parameters of table now, as settings_type; ValueError with the first reason a value is not
+    valid."""
+    values = {spec.name: node.get_parameter(spec.name).value for spec in table}
+    for spec in table:
+        reason = spec.reason_invalid(values[spec.name])
+        if reason is not None:
+            raise ValueError(reason)
+    return settings_from_values(settings_type, values)
+
+
+class NodeSettings(Generic[SettingsT]):
+    """A node's parameters as one frozen snapshot, the shape of ros2_controllers' generate_parameter_library:
+    the table is declared on node (a start-up value that is not valid: ValueError naming it), a set is refused
+    with the first reason (the table's ranges and checks, the snapshot it would make, then check on that
+    snapshot) and changes nothing; once accepted, ``current`` is the new snapshot and on_change(previous,
+    current) runs (the post-set callback). Hot paths read ``current``'s fields, never get_parameter."""
+
+    def __init__(self, node: Node, table: Sequence[ParameterSpec], settings_type: type[SettingsT], *,
+                 on_change: Optional[Callable[[SettingsT, SettingsT], None]] = None,
+                 check: Optional[Callable[[SettingsT], Optional[str]]] = None) -> None:
+        check_settings_type(settings_type, table)
+        self._node, self._table, self._settings_type = node, tuple(table), settings_type
+        self._names = frozenset(spec.name for spec in table)
+        self._on_change, self._check = on_change, check
+        declare_parameters(node, table)
+        self.current: SettingsT = read_settings(node, table, settings_type)
+        if check is not None:
+            reason = check(self.current)
+            if reason is not None:
+                raise ValueError(reason)
+        node.add_on_set_parameters_callback(self._check_set)
+        node.add_post_set_parameters_callback(self._refresh)
+
+    def _check_set(self, parameters: Sequence[Any]) -> SetParametersResult:
+        result = check_parameters(self._table, parameters)
+        if not result.successful:
+            return result
+        values = {**self._flat_values(), **{parameter.name: parameter.value for parameter in parameters}}
+        try:
+            candidate = settings_from_values(self._settings_type, values)
+        except (ValueError, TypeError) as err:
+            return SetParametersResult(successful=False, reason=str(err))
+        reason = self._check(candidate) if self._check is not None else None
+        return SetParametersResult(successful=reason is None, reason=reason or "")
+
+    def _flat_values(self) -> dict[str, Any]:
+        return {spec.name: self._node.get_parameter(spec.name).value for spec in self._table}
+
+    def _refresh(self, parameters: Sequence[Any]) -> None:
+        if not any(parameter.name in self._names for parameter in parameters):   # rclpy's own (use_sim_time)
+            return
+        previous = self.current
+        self.current = settings_from_values(self._settings_type, self._flat_values())
+        if self._on_change is not None:
+            self._on_change(previous, self.current)
+
+
+def markdown_table(table: Sequence[ParameterSpec]) -> str:
+    """table as a README's markdown table: name, default, range, when it can change, what it is."""
+    rows = ["| parameter | default | range | set at run time | what |", "|---|---|---|---|---|"]
+    for spec in table:
+        default = "true" if spec.default is True else "false" if spec.default is False else \
+            '""' if spec.default == "" else f"{spec.default!r}" if isinstance(spec.default, list) else f"{spec.default}"
+        bounds = f"[{spec.range[0]:g}, {spec.range[1]:g}]" if spec.range is not None else ""
+        description = spec.description.replace("|", "\\|")
+        rows.append(f"| `{spec.name}` | `{default}` | {bounds} | {'no' if spec.read_only else 'yes'} | "
+                    f"{description} |")
+    return "\n".join(rows) + "\n"

@@ -1,12 +1,14 @@
 """Parameters from one table: ranges and read_only through ParameterDescriptor, checks on set, start-up values
 refused by name, accepted values applied after the set."""
+import dataclasses
 import functools
 import math
 
 import pytest
 from rclpy.parameter import Parameter
 
-from swim_ros.parameters import ParameterSpec, check_parameters, declare_parameters, positive
+from swim_ros.parameters import (NodeSettings, ParameterSpec, check_parameters, check_settings_type, declare_parameters,
+                                 markdown_table, positive)
 
 TABLE = (
     ParameterSpec("period_s", 0.008, "control period, s", range=(0.001, 0.1), read_only=True),
@@ -62,3 +64,82 @@ def test_a_bad_start_up_value_names_the_parameter(rclpy_context, overrides, mess
             declare_parameters(made, TABLE)
     finally:
         made.destroy_node()
+
+
+@dataclasses.dataclass(frozen=True)
+class Gains:
+    low: float = 1.0
+    high: float = 2.0
+
+    def __post_init__(self) -> None:
+        if self.low > self.high:
+            raise ValueError(f"gains.low {self.low} is above gains.high {self.high}")
+
+
+@dataclasses.dataclass(frozen=True)
+class TableSettings:
+    period_s: float
+    depth: int
+    gain: float
+    path: str
+    gains: Gains
+    extra: dict[str, float]
+
+
+GROUPED_TABLE = TABLE + (ParameterSpec("gains.low", 1.0, "lower gain"), ParameterSpec("gains.high", 2.0, "upper"),
+                         ParameterSpec("extra.a", 0.5, "a"), ParameterSpec("extra.b", 0.25, "b"))
+
+
+@pytest.fixture()
+def settings_node(rclpy_context):
+    import rclpy
+    made = rclpy.create_node("parameter_settings", context=rclpy_context)
+    changes = []
+    settings = NodeSettings(made, GROUPED_TABLE, TableSettings,
+                            on_change=lambda previous, current: changes.append((previous, current)),
+                            check=lambda s: "depth must not be 7" if s.depth == 7 else None)
+    yield made, settings, changes
+    made.destroy_node()
+
+
+def test_the_snapshot_holds_the_table_and_follows_accepted_sets(settings_node):
+    node, settings, changes = settings_node
+    assert settings.current == TableSettings(0.008, 5, 1.0, "", Gains(1.0, 2.0), {"a": 0.5, "b": 0.25})
+    first = settings.current
+    result = node.set_parameters_atomically([Parameter("depth", value=8), Parameter("gains.high", value=3.0),
+                                             Parameter("extra.b", value=0.75)])
+    assert result.successful
+    assert settings.current == dataclasses.replace(first, depth=8, gains=Gains(1.0, 3.0), extra={"a": 0.5, "b": 0.75})
+    assert changes == [(first, settings.current)]
+
+
+@pytest.mark.parametrize("parameters, reason", [
+    ([Parameter("gains.low", value=5.0)], "gains.low 5.0 is above gains.high 2.0"),   # the group's own check
+    ([Parameter("depth", value=7)], "depth must not be 7"),                            # the node's check
+    ([Parameter("gain", value=0.0)], "parameter gain must be above zero"),             # the table's check
+])
+def test_a_set_the_snapshot_refuses_changes_nothing(settings_node, parameters, reason):
+    node, settings, changes = settings_node
+    before = settings.current
+    result = node.set_parameters_atomically(parameters)
+    assert not result.successful and reason in result.reason
+    assert settings.current == before and changes == []
+    assert [node.get_parameter(name).value for name in ("gains.low", "depth", "gain")] == [1.0, 5, 1.0]
+
+
+@pytest.mark.parametrize("fields, message", [
+    ({"period_s": float, "depth": int, "gain": float}, r"missing \['path'\]"),
+    ({"period_s": float, "depth": int, "gain": float, "path": str, "speed": float}, r"not parameters \['speed'\]"),
+    ({"period_s": float, "depth": float, "gain": float, "path": str}, "depth is float"),
+])
+def test_a_settings_type_that_does_not_match_its_table_is_refused(fields, message):
+    settings_type = dataclasses.make_dataclass("Wrong", list(fields.items()), frozen=True)
+    with pytest.raises(TypeError, match=message):
+        check_settings_type(settings_type, TABLE)
+
+
+def test_the_markdown_table_has_a_row_per_parameter_with_its_facts():
+    rows = markdown_table(TABLE).splitlines()
+    assert len(rows) == 2 + len(TABLE)
+    assert rows[2] == "| `period_s` | `0.008` | [0.001, 0.1] | no | control period, s |"
+    assert rows[5] == '| `path` | `""` |  | yes | a file |'

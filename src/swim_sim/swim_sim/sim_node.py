@@ -13,7 +13,6 @@ from typing import Any, Optional, Sequence, cast
 
 import numpy as np
 from builtin_interfaces.msg import Time
-from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
@@ -28,8 +27,7 @@ from swim_model.flow import FLOWS
 from swim_model.plant import Plant, PlantSettings, SimulationError, make_plant
 from swim_ros.codecs import MessageError, float_array, joint_state_arrays, stamp_of, torque_from_command
 from swim_ros.entry import run_node
-from swim_ros.parameters import (ParameterSpec, ParameterValue, check_parameters, declare_parameters, finite,
-                                 one_of)
+from swim_ros.parameters import NodeSettings, ParameterSpec, ParameterValue, finite, one_of
 from swim_ros.qos import per_period_publisher, per_period_subscription
 from swim_sim.sensors import SensorNoise, Sensors
 from swim_sim.wake_coupling import parameter_defaults, parameters_from_values
@@ -90,6 +88,38 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
 
 
 @dataclasses.dataclass(frozen=True)
+class SimSettings:
+    """PARAMETERS' values (swim_ros.parameters.NodeSettings): the disturbances.* and sensors.* groups as their
+    dataclasses, the wake.* group by name."""
+
+    rig_path: str
+    constrained: bool
+    flow: str
+    lane_radius_m: float
+    sample_period_s: float
+    substeps: int
+    mode: str
+    seed: int
+    start_time_s: float
+    initial_positions: list[float]
+    velocity_source: str
+    resend_after_s: float
+    hold_until_torque: bool
+    disturbances: Disturbances
+    sensors: SensorNoise
+    wake: dict[str, float]
+
+
+def sensor_noise_reason(settings: SimSettings) -> Optional[str]:
+    """The sensors' noise checked as a whole (it validates itself): why it is not valid, or None."""
+    try:
+        settings.sensors.validate()
+    except ValueError as err:
+        return str(err)
+    return None
+
+
+@dataclasses.dataclass(frozen=True)
 class StateBounds:
     """What set_state accepts, per coordinate name: (lower, upper) positions and the largest speed, each with
     where the bound comes from (said in a refusal, with how to change it)."""
@@ -128,37 +158,32 @@ class StateBounds:
 class SimNode(Node):
     def __init__(self) -> None:
         super().__init__("sim_node")
-        declare_parameters(self, PARAMETERS)
-        value = lambda name: self.get_parameter(name).value  # noqa: E731
-        self.mode = value("mode")
-        rig = load_rig(value("rig_path") or None)
-        flow = value("flow")
-        fields = dataclasses.fields
-        disturbances = Disturbances(**{f.name: value(f"disturbances.{f.name}") for f in fields(Disturbances)})
-        wake_parameters = None
-        if flow == "wake":
-            wake_parameters = parameters_from_values({n: value(f"wake.{n}") for n in parameter_defaults()})
-        self.plant = make_plant(PlantSettings(flow, value("substeps"), disturbances), rig,
-                                rig.hard_limits_rad, value("constrained"), value("lane_radius_m") or None,
-                                value("sample_period_s"), value("seed"), wake_parameters)
+        self.parameters = NodeSettings(self, PARAMETERS, SimSettings, on_change=self._apply_parameters,
+                                       check=sensor_noise_reason)
+        settings = self.settings = self.parameters.current
+        self.mode = settings.mode
+        rig = load_rig(settings.rig_path or None)
+        flow = settings.flow
+        wake_parameters = parameters_from_values(settings.wake) if flow == "wake" else None
+        self.plant = make_plant(PlantSettings(flow, settings.substeps, settings.disturbances), rig,
+                                rig.hard_limits_rad, settings.constrained, settings.lane_radius_m or None,
+                                settings.sample_period_s, settings.seed, wake_parameters)
         model = self.plant.model
         self.state_bounds = StateBounds.of(self.plant)
-        self.sensors = Sensors(model, self._sensor_noise({}), self.plant.sample_period_s)
-        self.start_time_s = float(value("start_time_s"))
-        initial = value("initial_positions")   # nq entries, or at rest
+        self.sensors = Sensors(model, settings.sensors, self.plant.sample_period_s)
+        self.start_time_s = float(settings.start_time_s)
+        initial = settings.initial_positions   # nq entries, or at rest
         self.initial_q = np.asarray(initial, dtype=float) if len(initial) == model.nq else self.plant.rest_positions()
         self.plant.reset(self.initial_q, np.zeros(model.nq), self.start_time_s)
         self.failed: Optional[str] = None
         self.rejected_commands = 0
         self._latest_torque = np.zeros(2)
         self._published_stamp: Optional[Time] = None
-        self._velocity_source = value("velocity_source")
-        self.add_on_set_parameters_callback(self._check_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
+        self._velocity_source = settings.velocity_source
         self._state_message = JointState(name=list(model.joint_names))   # reused every period
         self._clock_message = Clock()
         self._efforts = np.zeros(model.nq)   # the unactuated coordinates' entries stay zero
-        self._hold_enabled = bool(value("hold_until_torque")) and self.mode == "lockstep"
+        self._hold_enabled = settings.hold_until_torque and self.mode == "lockstep"
         self.holding = self._hold_enabled
         self._held_state_answered = False
 
@@ -168,7 +193,7 @@ class SimNode(Node):
             if self.plant.wake is not None else None
         self.vortices_publisher = per_period_publisher(self, WakeVortices, "wake_vortices") \
             if self.plant.wake is not None else None
-        self._vortices_period_s = float(value("wake.vortices_period_s"))
+        self._vortices_period_s = float(settings.wake["vortices_period_s"])
         self._vortices_due_s = -math.inf   # simulated time from which the next wake_vortices is sent
         per_period_subscription(self, JointState, "joint_commands", self._on_command)
         self.create_service(Trigger, "reset", self._on_reset)
@@ -177,7 +202,7 @@ class SimNode(Node):
             self.create_timer(self.plant.sample_period_s, self._on_tick)
         else:
             # a controller that starts late, or missed a state, still gets it
-            self.create_timer(0.25 * value("resend_after_s"), self._resend)
+            self.create_timer(0.25 * settings.resend_after_s, self._resend)
             if self._hold_enabled:
                 self.create_timer(self.plant.sample_period_s, self._republish_held_state)
         self._publish_state()
@@ -186,30 +211,14 @@ class SimNode(Node):
                                f"flow {flow}, {self.mode}, period {self.plant.sample_period_s * 1e3:g} ms")
 
     # ----- parameters ------------------------------------------------------------------------------
-    def _sensor_noise(self, changes: dict[str, Any]) -> SensorNoise:
-        """The sensors' noise from the current parameters with changes (name -> new value) applied."""
-        return SensorNoise(**{f.name: changes.get(f"sensors.{f.name}", self.get_parameter(f"sensors.{f.name}").value)
-                              for f in dataclasses.fields(SensorNoise)})
-
-    def _check_parameters(self, parameters: list[Any]) -> SetParametersResult:
-        """On-set: the table's ranges and checks, then the sensors' noise as a whole (it validates itself)."""
-        result = check_parameters(PARAMETERS, parameters)
-        changes = {p.name: p.value for p in parameters}
-        if result.successful and any(name.startswith("sensors.") for name in changes):
-            try:
-                self._sensor_noise(changes).validate()
-            except ValueError as err:
-                return SetParametersResult(successful=False, reason=str(err))
-        return result
-
-    def _apply_parameters(self, parameters: list[Any]) -> None:
-        """Post-set: accepted values take effect (resend_after_s is read where it is used)."""
-        changes = {p.name: p.value for p in parameters}
-        if "velocity_source" in changes:
-            self._velocity_source = changes["velocity_source"]
+    def _apply_parameters(self, previous: SimSettings, current: SimSettings) -> None:
+        """Post-set: accepted values take effect (resend_after_s is read from the settings where it is used)."""
+        self.settings = current
+        if current.velocity_source != previous.velocity_source:
+            self._velocity_source = current.velocity_source
             self._state_message.velocity = float_array(())   # the reused message's velocities: filled or left out
-        if any(name.startswith("sensors.") for name in changes):
-            self.sensors = Sensors(self.plant.model, self._sensor_noise({}), self.plant.sample_period_s)
+        if current.sensors != previous.sensors:
+            self.sensors = Sensors(self.plant.model, current.sensors, self.plant.sample_period_s)
 
     # ----- stepping ------------------------------------------------------------------------------
     def _on_command(self, message: JointState) -> None:
@@ -234,7 +243,7 @@ class SimNode(Node):
     def _resend(self) -> None:
         """Lock-step: publish the waiting state again if no command has come for it within resend_after_s."""
         waited_s = time.monotonic() - self._published_monotonic
-        if self.failed is None and waited_s >= self.get_parameter("resend_after_s").value:
+        if self.failed is None and waited_s >= self.settings.resend_after_s:
             self._publish_state(advance=False)
 
     def _republish_held_state(self) -> None:

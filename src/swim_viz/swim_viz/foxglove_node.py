@@ -6,6 +6,7 @@ Parameters: src/swim_viz/README.md, section "Nodes and parameters (read at start
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 import threading
@@ -39,7 +40,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 from swim_ros.calls import (CallFailed, GoalStatusWatch, ServedElsewhere, call_service, cancel_goal, goal_result,
                             send_goal)
 from swim_ros.entry import run_node
-from swim_ros.parameters import ParameterSpec, declare_parameters, positive
+from swim_ros.parameters import NodeSettings, ParameterSpec, positive
 from swim_ros.qos import LATCHED_QOS, per_period_subscription
 from swim_ros.typestore import message_definition
 from swim_viz.live import (MANEUVER_REQUEST_SCHEMA, LogLine, RateGate, fault_changes, parse_maneuver_request,
@@ -61,6 +62,19 @@ PARAMETERS = (
                   "(planning, and a model build the first time), s", range=(0.0, 3600.0), read_only=True,
                   check=positive),
 )
+
+
+@dataclasses.dataclass(frozen=True)
+class FoxgloveSettings:
+    """PARAMETERS' values (swim_ros.parameters.NodeSettings)."""
+
+    host: str
+    port: int
+    state_rate_hz: float
+    scene_rate_hz: float
+    message_backlog: int
+    maneuver_start_timeout_s: float
+
 
 #: the ROS topics sent as they are: name -> (type, its class, per-period stream: sampled at state_rate_hz)
 FORWARDED_TOPICS: dict[str, tuple[str, Any, bool]] = {
@@ -169,10 +183,9 @@ class _ClientTopics(ServerListener):
 class FoxgloveNode(Node):
     def __init__(self) -> None:
         super().__init__("foxglove_node")
-        declare_parameters(self, PARAMETERS)
-        value = lambda name: self.get_parameter(name).value  # noqa: E731
-        state_rate_hz, scene_rate_hz = value("state_rate_hz"), value("scene_rate_hz")
-        self.maneuver_start_timeout_s = value("maneuver_start_timeout_s")
+        self.settings = NodeSettings(self, PARAMETERS, FoxgloveSettings).current   # all read-only
+        state_rate_hz, scene_rate_hz = self.settings.state_rate_hz, self.settings.scene_rate_hz
+        self.maneuver_start_timeout_s = self.settings.maneuver_start_timeout_s
         self._mesh_uris: set[str] = set()
         self._faults: dict[str, str] = {}          # bridge diagnostics name -> its last faults
         self._tracker_goals: dict[bytes, int] = {}  # goal id -> its last status
@@ -222,10 +235,11 @@ class FoxgloveNode(Node):
         ]
         self.listener = _ClientTopics(self)
         self.server = foxglove.start_server(
-            name="swim", host=value("host"), port=value("port"), supported_encodings=["json"],
+            name="swim", host=self.settings.host, port=self.settings.port, supported_encodings=["json"],
             capabilities=[Capability.Services, Capability.ClientPublish], services=services,
-            server_listener=self.listener, asset_handler=self._asset, message_backlog_size=value("message_backlog"))
-        self.get_logger().info(f"Foxglove server on ws://{value('host')}:{self.server.port} "
+            server_listener=self.listener, asset_handler=self._asset,
+            message_backlog_size=self.settings.message_backlog)
+        self.get_logger().info(f"Foxglove server on ws://{self.settings.host}:{self.server.port} "
                                f"(no authentication: keep it on a trusted network)")
 
     def close(self) -> None:

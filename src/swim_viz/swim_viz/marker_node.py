@@ -4,6 +4,7 @@ Topics, namespaces and parameters: see src/swim_viz/README.md, section "Nodes an
 """
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 from geometry_msgs.msg import Point
@@ -13,10 +14,10 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from swim_model import SwimModelError
 from swim_ros.entry import run_node
-from swim_ros.parameters import ParameterSpec, declare_parameters
+from swim_ros.parameters import NodeSettings, ParameterSpec
 from swim_ros.qos import LATCHED_QOS
 from swim_viz.markers import PathLine, TravelledPath, planned_paths
-from swim_viz.rig_inputs import PARAMETERS, LatestJointState, load_rig_and_lane, rate_parameter
+from swim_viz.rig_inputs import PARAMETERS, LatestJointState, RigInputSettings, load_rig_and_lane, rate_parameter
 
 #: the paths change slowly on screen: ten redraws a second
 DEFAULT_RATE_HZ = 10.0
@@ -34,6 +35,14 @@ NODE_PARAMETERS = PARAMETERS + (
 )
 
 
+@dataclasses.dataclass(frozen=True)
+class MarkerSettings(RigInputSettings):
+    """NODE_PARAMETERS' values (swim_ros.parameters.NodeSettings)."""
+
+    travelled_spacing_m: float
+    travelled_max_points: int
+
+
 def line_marker(line: PathLine, marker_id: int, stamp: Any) -> Marker:
     """A LINE_STRIP marker of the polyline."""
     marker = Marker(type=Marker.LINE_STRIP, action=Marker.ADD, ns=line.namespace, id=marker_id)
@@ -48,17 +57,16 @@ def line_marker(line: PathLine, marker_id: int, stamp: Any) -> Marker:
 class MarkerNode(Node):
     def __init__(self) -> None:
         super().__init__("marker_node")
-        declare_parameters(self, NODE_PARAMETERS)
-        self.rig, self.lane_radius_m = load_rig_and_lane(self)
-        value = lambda name: self.get_parameter(name).value  # noqa: E731
-        self.travelled = TravelledPath(self.rig, value("travelled_spacing_m"), value("travelled_max_points"))
+        self.settings = NodeSettings(self, NODE_PARAMETERS, MarkerSettings).current   # all read-only
+        self.rig, self.lane_radius_m = load_rig_and_lane(self.settings)
+        self.travelled = TravelledPath(self.rig, self.settings.travelled_spacing_m, self.settings.travelled_max_points)
         self.planned: list[PathLine] = []
         self.changed = False
         self.rejected_plans = 0
         self.publisher = self.create_publisher(MarkerArray, "markers", 10)
         self.create_subscription(PlannedTrajectory, "plan", self._on_plan, LATCHED_QOS)
         self.joint_states = LatestJointState(self, self.lane_radius_m, self._on_positions)
-        self.create_timer(1.0 / value("publish_rate_hz"), self._publish)
+        self.create_timer(1.0 / self.settings.publish_rate_hz, self._publish)
 
     def _on_plan(self, plan: Any) -> None:
         lane_radius_m = plan.lane_radius_m if plan.constrained else self.lane_radius_m

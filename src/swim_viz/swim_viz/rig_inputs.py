@@ -7,6 +7,7 @@ Parameters shared by rig_state_publisher and marker_node (read once at start):
 """
 from __future__ import annotations
 
+import dataclasses
 from typing import Any, Callable, Optional
 
 from rclpy.node import Node
@@ -30,11 +31,21 @@ def rate_parameter(default_hz: float) -> ParameterSpec:
                          read_only=True, check=positive)
 
 
-def load_rig_and_lane(node: Node) -> tuple[RigParameters, float]:
-    """The rig and the lane radius (m) of node's parameters (declared from PARAMETERS). Raises
-    swim_model.SwimModelError for a rig file that does not load."""
-    rig = load_rig(node.get_parameter("rig_path").value or None)
-    return rig, float(node.get_parameter("lane_radius_m").value) or rig.constrained_lane_radius_m
+@dataclasses.dataclass(frozen=True)
+class RigInputSettings:
+    """The values of PARAMETERS and rate_parameter's, for a node's settings type to derive from
+    (swim_ros.parameters.NodeSettings)."""
+
+    rig_path: str
+    lane_radius_m: float
+    publish_rate_hz: float
+
+
+def load_rig_and_lane(settings: RigInputSettings) -> tuple[RigParameters, float]:
+    """The rig and the lane radius (m) of a node's settings. Raises swim_model.SwimModelError for a rig file that
+    does not load."""
+    rig = load_rig(settings.rig_path or None)
+    return rig, float(settings.lane_radius_m) or rig.constrained_lane_radius_m
 
 
 class LatestJointState:

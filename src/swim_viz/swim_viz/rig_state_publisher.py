@@ -12,6 +12,7 @@ the foil's mesh is written; empty: $ROS_HOME/swim_viz, ~/.ros/swim_viz by defaul
 """
 from __future__ import annotations
 
+import dataclasses
 import os
 from pathlib import Path
 from typing import Any, Sequence
@@ -24,10 +25,10 @@ from tf2_msgs.msg import TFMessage
 
 from swim_model import SwimModelError
 from swim_ros.entry import run_node
-from swim_ros.parameters import ParameterSpec, declare_parameters
+from swim_ros.parameters import NodeSettings, ParameterSpec
 from swim_ros.qos import LATCHED_QOS
 from swim_viz.frames import FrameTransform, fixed_transforms, moving_transforms
-from swim_viz.rig_inputs import PARAMETERS, LatestJointState, load_rig_and_lane, rate_parameter
+from swim_viz.rig_inputs import PARAMETERS, LatestJointState, RigInputSettings, load_rig_and_lane, rate_parameter
 from swim_viz.urdf import rig_urdf, write_foil_mesh
 
 #: tf2's own QoS for /tf (tf2_ros TransformBroadcaster): reliable, volatile, the last 100
@@ -40,6 +41,13 @@ NODE_PARAMETERS = PARAMETERS + (
     ParameterSpec("mesh_dir", "", "folder the foil's STL mesh is written to (empty: $ROS_HOME/swim_viz)",
                   read_only=True),
 )
+
+
+@dataclasses.dataclass(frozen=True)
+class RigStateSettings(RigInputSettings):
+    """NODE_PARAMETERS' values (swim_ros.parameters.NodeSettings)."""
+
+    mesh_dir: str
 
 
 def mesh_directory(configured: str) -> Path:
@@ -68,9 +76,9 @@ def transform_messages(transforms: Sequence[FrameTransform], stamp: Any) -> list
 class RigStatePublisher(Node):
     def __init__(self) -> None:
         super().__init__("rig_state_publisher")
-        declare_parameters(self, NODE_PARAMETERS)
-        self.rig, lane_radius_m = load_rig_and_lane(self)
-        mesh_path = write_foil_mesh(self.rig, mesh_directory(self.get_parameter("mesh_dir").value))
+        self.settings = NodeSettings(self, NODE_PARAMETERS, RigStateSettings).current   # all read-only
+        self.rig, lane_radius_m = load_rig_and_lane(self.settings)
+        mesh_path = write_foil_mesh(self.rig, mesh_directory(self.settings.mesh_dir))
         self.description = rig_urdf(self.rig, mesh_path.resolve().as_uri())
         self.create_publisher(String, "robot_description", LATCHED_QOS).publish(String(data=self.description))
         static = TFMessage(transforms=transform_messages(fixed_transforms(self.rig), self.get_clock().now().to_msg()))
@@ -78,7 +86,7 @@ class RigStatePublisher(Node):
         self.tf_publisher = self.create_publisher(TFMessage, "/tf", TF_QOS)
         self.joint_states = LatestJointState(self, lane_radius_m)
         self.published = 0
-        self.create_timer(1.0 / self.get_parameter("publish_rate_hz").value, self._publish)
+        self.create_timer(1.0 / self.settings.publish_rate_hz, self._publish)
         self.get_logger().info(f"rig from {self.rig.source_path}, foil mesh {mesh_path}")
 
     def _publish(self) -> None:
