@@ -76,6 +76,8 @@ def test_the_tracker_guards_the_rigs_stops_with_its_torque_limits(node_arguments
     from swim_controller.tracker_node import TrackerNode
     node = TrackerNode()
     try:
+        node.trigger_configure()
+        assert node.range_guard is not None and node.rig is not None, "configure failed"
         assert node.range_guard.hard_limits_rad == expected_stops()
         assert node.rig.torque_limits_n_m == TORQUE_LIMITS_N_M
     finally:

@@ -253,8 +253,9 @@ class TrackerNode(LifecycleNode):
 
     # ----- lifecycle -------------------------------------------------------------------------------
     def on_configure(self, state: State) -> TransitionCallbackReturn:
-        """Load the rig (with the range guard's stops, its limits record) and build the ideal flow's models of the rig's two vehicles on
-        its default lane, ready for a first goal (about half a second, or a few seconds to compile them)."""
+        """Load the rig (the range guard's stops are its limits record's) and build the ideal flow's models of the
+        rig's two vehicles on its default lane, ready for a first goal (about half a second, or a few seconds to
+        compile them)."""
         self.settings = self.parameters.current
         try:
             rig = load_rig(self.settings.rig_path or None)
