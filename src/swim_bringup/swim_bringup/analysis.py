@@ -39,7 +39,8 @@ HARD_STOP_TOLERANCE_RAD = 1.0e-4
 def rig_hard_limits(rig_path: Optional[Path] = None) -> HardLimits:
     """The rig's hard stops ((heave lower, upper), (pitch lower, upper), rad) that hard_stop_periods counts: the
     limits record of the rig file at rig_path, by default the shipped one (every node's when its rig_path is
-    empty). RigConfigError if the file does not read."""
+    empty). RigConfigError if the file does not read.
+    """
     return load_rig(rig_path).hard_limits_rad
 
 
@@ -49,14 +50,16 @@ def _radius(run: Run, q: np.ndarray) -> np.ndarray:
 
 def platform_xy_m(run: Run, q: np.ndarray) -> np.ndarray:
     """The platform's position p = R (cos alpha, sin alpha) in the tank's plane, m, (n, 2), at the run's joint
-    positions q (n, nq): run.q or run.q_reference."""
+    positions q (n, nq): run.q or run.q_reference.
+    """
     alpha = q[:, run.joint_names.index("alpha")]
     return _radius(run, q)[:, None] * np.column_stack([np.cos(alpha), np.sin(alpha)])
 
 
 def hard_stop_periods(run: Run, hard_limits_rad: HardLimits) -> int:
     """The periods in which the heave or the pitch (the run's last two joints) is at or past one of its hard limits
-    ((heave lower, upper), (pitch lower, upper), rad), to within HARD_STOP_TOLERANCE_RAD."""
+    ((heave lower, upper), (pitch lower, upper), rad), to within HARD_STOP_TOLERANCE_RAD.
+    """
     (heave_lower, heave_upper), (pitch_lower, pitch_upper) = hard_limits_rad
     foil = run.q[:, -2:]
     at_stop = ((foil <= np.array([heave_lower, pitch_lower]) + HARD_STOP_TOLERANCE_RAD)
@@ -93,7 +96,8 @@ def measures(run: Run, hard_limits_rad: Optional[HardLimits] = None) -> RunMeasu
 def run_analysis(record: RecordedBag, hard_limits_rad: Optional[HardLimits] = None) -> RunAnalysis:
     """The measures of the last plan tracked in the bag read (hard_limits_rad: as measures'), and the bridge's if a
     bridge ran. The record's run_error (MissingTopic, BagError, ValueError) if it holds no run, its bridge_error if
-    the bridge's reports could not be read."""
+    the bridge's reports could not be read.
+    """
     if record.run is None:
         assert record.run_error is not None, "a RecordedBag without run has its run_error"
         raise record.run_error
@@ -105,13 +109,15 @@ def run_analysis(record: RecordedBag, hard_limits_rad: Optional[HardLimits] = No
 
 def analyze(bag_path: Path, hard_limits_rad: Optional[HardLimits] = None) -> RunAnalysis:
     """run_analysis of the bag at bag_path. BagError if the bag cannot be read; MissingTopic if it lacks what the
-    measures need."""
+    measures need.
+    """
     return run_analysis(read_bag(bag_path), hard_limits_rad)
 
 
 @dataclasses.dataclass(frozen=True)
 class JointMotion:
     """One joint's range and peak speed in a bag's joint_states, in the joint's unit (rad or m, per s)."""
+
     joint_name: str
     samples: int
     min_position: float
@@ -122,6 +128,7 @@ class JointMotion:
 @dataclasses.dataclass(frozen=True)
 class JointStatesSummary:
     """What a bag's joint_states alone tell, by log time (when the recorder received each message)."""
+
     topic: str
     messages: int
     duration_s: float                # first to last message
@@ -148,7 +155,9 @@ def joint_states_summary(joint_states: JointStates) -> JointStatesSummary:
 @dataclasses.dataclass(frozen=True)
 class BagAnalysis:
     """What swim-analyze makes of one bag: its topics, the joint motion when it has joint_states, the run's measures
-    when it has what they need, and what it lacks, each with why."""
+    when it has what they need, and what it lacks, each with why.
+    """
+
     info: BagInfo
     unknown_types: tuple[str, ...]           # the bag's message types this environment does not know (ours and
     #                                          ROS 2 Jazzy's); the bag's own definitions may still decode them
@@ -159,7 +168,8 @@ class BagAnalysis:
 
     def to_json(self) -> dict[str, Any]:
         """bag_summary.json: the bag, its topics (each with whether its type is known here and, when its messages
-        cannot be decoded, why), the joint motion, the run's measures (report.json's keys), what is missing."""
+        cannot be decoded, why), the joint motion, the run's measures (report.json's keys), what is missing.
+        """
         undecodable = dict(self.undecodable)
         return {"bag": str(self.info.path), "storage": self.info.storage, "complete": self.info.complete,
                 "topics": [{**dataclasses.asdict(topic), "type_known": topic.msgtype not in self.unknown_types,
@@ -172,7 +182,8 @@ class BagAnalysis:
 
 def bag_analysis(record: RecordedBag, hard_limits_rad: Optional[HardLimits] = None) -> BagAnalysis:
     """All that swim-analyze can tell of the bag read (hard_limits_rad: as measures'): what it lacks or holds
-    unreadably is named in `missing`."""
+    unreadably is named in `missing`.
+    """
     known_types = swim_typestore().fielddefs
     missing = []
     joints = None
@@ -197,7 +208,8 @@ def bag_analysis(record: RecordedBag, hard_limits_rad: Optional[HardLimits] = No
 
 def analyze_bag(bag_path: Path, hard_limits_rad: Optional[HardLimits] = None) -> BagAnalysis:
     """bag_analysis of the bag at bag_path (a bag folder, or one .mcap or .db3 file). BagError if there is no
-    readable bag there."""
+    readable bag there.
+    """
     return bag_analysis(read_bag(bag_path), hard_limits_rad)
 
 
@@ -237,7 +249,8 @@ def bag_section(label: str, analysis: BagAnalysis) -> str:
 
 def summary_table(reports: Mapping[str, RunAnalysis]) -> str:
     """The measures of several runs (a RunReport is one) side by side, one column per run; a measure that only
-    some runs have (the bridge's) is blank for the others."""
+    some runs have (the bridge's) is blank for the others.
+    """
     columns = [report.measure_values() for report in reports.values()]
     rows = list(dict.fromkeys(key for values in columns for key in values))
     width = max(len(r) for r in rows)

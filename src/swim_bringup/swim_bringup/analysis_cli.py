@@ -44,7 +44,8 @@ def _label(bag: Path) -> str:
 
 def write_outputs(record: RecordedBag, analysis: BagAnalysis, output_dir: Path) -> list[Path]:
     """bag_summary.json always; joint_states.png with joint_states; with the run's measures, report.json and the
-    run's figures (figures.write_run_figures)."""
+    run's figures (figures.write_run_figures).
+    """
     output_dir.mkdir(parents=True, exist_ok=True)
     paths = [output_dir / "bag_summary.json"]
     paths[0].write_text(json.dumps(analysis.to_json(), indent=2))

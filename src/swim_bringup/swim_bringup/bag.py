@@ -74,7 +74,8 @@ class BagWriter:
 
     def add_topic(self, topic: str, msgtype: str, offered_qos: Sequence[Qos] = ()) -> None:
         """A connection for topic, of type msgtype (e.g. 'sensor_msgs/msg/JointState'), with the QoS profiles its
-        publishers offer (for metadata.yaml and a player). BagError for a type the type store does not know."""
+        publishers offer (for metadata.yaml and a player). BagError for a type the type store does not know.
+        """
         assert self._writer is not None, "BagWriter.add_topic after close()"
         if msgtype not in self.store.fielddefs:
             raise BagError(f"unknown message type {msgtype} (topic {topic}): not a ROS 2 Jazzy type nor ours")
@@ -89,7 +90,8 @@ class BagWriter:
 
     def flush(self) -> None:
         """End the chunk under way, if any, and put everything written on disk: a recorder killed after this
-        leaves a bag that reads up to here."""
+        leaves a bag that reads up to here.
+        """
         assert self._writer is not None, "BagWriter.flush after close()"
         storage: Any = self._writer.storage   # rosbags' MCAP storage: chunks of up to 1 MiB, on its own file
         if storage.chunk.bio.tell():
@@ -106,7 +108,9 @@ class BagWriter:
 @dataclasses.dataclass(frozen=True)
 class TopicInfo:
     """A topic of a bag: its name as recorded, its type (e.g. 'sensor_msgs/msg/JointState') and how many messages
-    the bag holds on it."""
+    the bag holds on it.
+    """
+
     name: str
     msgtype: str
     message_count: int
@@ -115,6 +119,7 @@ class TopicInfo:
 @dataclasses.dataclass(frozen=True)
 class BagInfo:
     """What a bag holds, from its metadata (a bag cut before close(): from a linear read of its complete chunks)."""
+
     path: Path
     storage: str                 # 'mcap' or 'sqlite3'
     complete: bool               # False: cut before close(), no metadata.yaml; read up to its last complete chunk
@@ -137,7 +142,8 @@ def _open_reader(path: Path) -> Reader | None:
     """An open rosbags Reader of the bag folder or storage file at path; None for an MCAP bag that rosbags cannot
     open, which the mcap library reads instead (_mcap_file gives its file): one with a schema encoding rosbags has no
     format for (rosbag2's 'unknown'), or one MCAP file cut short (no summary, no closing magic: its recorder was
-    killed). BagError if it is not a readable bag."""
+    killed). BagError if it is not a readable bag.
+    """
     if not path.exists():
         raise BagError(f"{path}: no such file or folder")
     try:
@@ -163,7 +169,8 @@ def _cut_short(file: Path) -> bool:
 
 def _mcap_summary(file: Path) -> Any:
     """The summary of the MCAP file (the mcap library's Summary); None for a file without one (cut short, or
-    closed without it). BagError if it does not read."""
+    closed without it). BagError if it does not read.
+    """
     from mcap.exceptions import McapError
     from mcap.reader import make_reader
     if _cut_short(file):
@@ -177,7 +184,8 @@ def _mcap_summary(file: Path) -> Any:
 
 def _mcap_file(path: Path, why: str) -> Path:
     """The one MCAP file of the bag at path (path itself, or the one its folder holds), for the mcap library to read
-    where rosbags cannot (why); BagError if there is not exactly one."""
+    where rosbags cannot (why); BagError if there is not exactly one.
+    """
     files = [path] if path.is_file() else sorted(path.glob("*.mcap"))
     if len(files) != 1 or files[0].suffix != ".mcap":
         raise BagError(f"{path}: {why}, and the mcap library reads one MCAP file: "
@@ -216,7 +224,8 @@ def _linear_topics(path: Path, records: Iterator[tuple[str, str, int, bytes | No
 
 def _mcap_topics(path: Path) -> tuple[BagInfo, dict[str, tuple[str, MessageDefinition]]]:
     """_bag_topics of an MCAP bag rosbags cannot open, with the mcap library: every channel of its summary, its
-    schema's name as type; without summary or statistics, from a linear read."""
+    schema's name as type; without summary or statistics, from a linear read.
+    """
     file = _mcap_file(path, "rosbags cannot open it")
     summary = _mcap_summary(file)
     if summary is None or summary.statistics is None:
@@ -232,7 +241,8 @@ def _mcap_topics(path: Path) -> tuple[BagInfo, dict[str, tuple[str, MessageDefin
 
 def _schema_definition(schema: Any) -> tuple[str, MessageDefinition]:
     """The type name and the definition an MCAP schema (the mcap library's record; None: a channel without schema)
-    carries; a definition of an encoding rosbags has no format for (rosbag2's 'unknown') is no definition."""
+    carries; a definition of an encoding rosbags has no format for (rosbag2's 'unknown') is no definition.
+    """
     if schema is None:
         return "", MessageDefinition(MessageDefinitionFormat.NONE, "")
     return schema.name, MessageDefinition(SCHEMA_FORMATS.get(schema.encoding, MessageDefinitionFormat.NONE),
@@ -241,19 +251,22 @@ def _schema_definition(schema: Any) -> tuple[str, MessageDefinition]:
 
 def bag_info(path: Path) -> BagInfo:
     """The topics of the bag at path (a folder, or one .mcap or .db3 file) with their types and message counts.
-    BagError if there is no readable bag there."""
+    BagError if there is no readable bag there.
+    """
     return _bag_topics(path)[0]
 
 
 def undecodable_topics(path: Path) -> dict[str, str]:
     """The topics of the bag at path whose messages cannot be decoded, each with why: of a type that neither the bag
-    defines (in a definition that parses) nor this environment knows. BagError if there is no readable bag there."""
+    defines (in a definition that parses) nor this environment knows. BagError if there is no readable bag there.
+    """
     return bag_contents(path)[1]
 
 
 def bag_contents(path: Path) -> tuple[BagInfo, dict[str, str]]:
     """bag_info and undecodable_topics of the bag at path, from one read of its index. BagError if there is no
-    readable bag there."""
+    readable bag there.
+    """
     info, definitions = _bag_topics(path)
     decoder = BagDecoder(Path(path))
     return info, {topic: why for topic, (msgtype, definition) in definitions.items()
@@ -269,7 +282,8 @@ IDL_SEPARATOR = "=" * 80 + "\n"
 
 def definition_types(msgtype: str, definition: MessageDefinition) -> dict[str, Any]:
     """The types of a bag's own definition of msgtype (msgtype and every type it uses, as the bag's recorder knew
-    them), parsed by rosbags; empty when the bag has no definition or one rosbags cannot parse."""
+    them), parsed by rosbags; empty when the bag has no definition or one rosbags cannot parse.
+    """
     try:
         if definition.format == MessageDefinitionFormat.MSG:
             return dict(get_types_from_msg(definition.data, msgtype))
@@ -297,7 +311,8 @@ def _no_definition(msgtype: str, definition: MessageDefinition) -> str:
 
 class BagDecoder:
     """Decodes the messages of one bag: each by its own type's definition in the bag (the one it was recorded with),
-    or by the installed one (swim_typestore) where the bag has none."""
+    or by the installed one (swim_typestore) where the bag has none.
+    """
 
     def __init__(self, path: Path) -> None:
         self.path = path
@@ -354,7 +369,8 @@ def read_messages(path: Path, topics: tuple[str, ...]) -> Iterator[tuple[str, in
     as recorded; a topic not in the bag gives nothing), in log-time order; of a bag cut before close() (no
     metadata.yaml), the messages of its complete chunks in the order written. BagError if the bag cannot be read
     or a message asked for cannot be decoded (its type neither defined in the bag nor known here, its bytes not of
-    its type). Each message is decoded by its type's definition in the bag (BagDecoder)."""
+    its type). Each message is decoded by its type's definition in the bag (BagDecoder).
+    """
     decoder = BagDecoder(Path(path))
     for topic, timestamp, msgtype, definition, raw in _raw_messages(Path(path), topics, decoder.store):
         yield topic, timestamp, decoder.decode(topic, timestamp, msgtype, definition, raw)
@@ -368,7 +384,8 @@ def read_topics(path: Path, topics: tuple[str, ...]) -> dict[str, TopicMessages]
     """Each topic asked (names exactly as recorded) with its messages, (log time ns, decoded message) in
     read_messages' order, from one read of the bag; a topic not in the bag has none. A topic whose messages cannot
     be decoded gets the BagError that says why, and the others their messages; a bag whose messages cannot be read
-    gives that BagError to every topic not already failed."""
+    gives that BagError to every topic not already failed.
+    """
     path = Path(path)
     decoder = BagDecoder(path)
     read: dict[str, TopicMessages] = {topic: [] for topic in topics}
@@ -394,7 +411,8 @@ def read_topics(path: Path, topics: tuple[str, ...]) -> dict[str, TopicMessages]
 def _raw_messages(path: Path, topics: tuple[str, ...], check: TopicCheck) -> Iterator[RawMessage]:
     """The stored messages of the topics asked, in log-time order (of a cut bag: in the order written); check is
     called for each topic asked that the bag's index lists, before any message is read (a cut bag has no index).
-    BagError if the bag cannot be read."""
+    BagError if the bag cannot be read.
+    """
     if _is_cut_bag(path):
         for topic, msgtype, timestamp, raw, definition in _cut_bag_records(path):
             if raw is not None and topic in topics:
@@ -421,7 +439,8 @@ def _raw_messages(path: Path, topics: tuple[str, ...], check: TopicCheck) -> Ite
 
 def _mcap_messages(path: Path, topics: tuple[str, ...], check: TopicCheck) -> Iterator[RawMessage]:
     """_raw_messages of an MCAP bag rosbags cannot open, with the mcap library: by its index in log-time order;
-    without summary, linearly in the order written."""
+    without summary, linearly in the order written.
+    """
     from mcap.exceptions import McapError
     from mcap.reader import make_reader
     file = _mcap_file(path, "rosbags cannot open it")
@@ -447,7 +466,8 @@ def read_cut_bag(path: Path) -> Iterator[tuple[str, str, int, bytes | None]]:
     """(topic, type name, log time ns, CDR bytes) of every message in the complete chunks of a bag folder's MCAP
     file that has no summary (its recorder was killed), in the order written, read linearly with the mcap library
     (Foxglove's reader) up to the first incomplete record; and (topic, type name, 0, None) for each channel as it
-    is declared (a topic recorded without messages). BagError if the folder has no single MCAP file."""
+    is declared (a topic recorded without messages). BagError if the folder has no single MCAP file.
+    """
     for topic, msgtype, timestamp, raw, _ in _cut_bag_records(path):
         yield topic, msgtype, timestamp, raw
 
@@ -468,7 +488,8 @@ def _cut_bag_records(path: Path) -> Iterator[tuple[str, str, int, bytes | None, 
 def _mcap_records(file: Path) -> Iterator[tuple[str, str, int, bytes | None, MessageDefinition]]:
     """(topic, type name, log time ns, CDR bytes, the definition of its type the file carries) of every message of
     the MCAP file, read linearly in the order written up to the first incomplete record (a file cut short); and
-    (topic, type name, 0, None, definition) for each channel as it is declared. BagError if it is not MCAP."""
+    (topic, type name, 0, None, definition) for each channel as it is declared. BagError if it is not MCAP.
+    """
     from mcap.exceptions import EndOfFile, McapError
     from mcap.records import Channel, Message, Schema
     from mcap.stream_reader import StreamReader

@@ -61,7 +61,8 @@ def bringup_specs(plant: str, backend: Optional[str] = None, pipeline: str = "re
     (default emulated), the tracker's sliding mode on or off, the maneuver server, and foxglove_node on
     foxglove_port (loopback) unless it is None, every node that loads the rig with rig_path (empty: the shipped rig).
     BringupError for a backend
-    with the simulator, real time with the bridge (always real time) or an unknown backend."""
+    with the simulator, real time with the bridge (always real time) or an unknown backend.
+    """
     if plant not in PLANTS:
         raise BringupError(f"the set is one of {', '.join(PLANTS)}, not {plant!r}")
     if plant == "sim" and backend is not None:
@@ -117,7 +118,8 @@ def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
 
 class StopRequest:
     """The stop signals, recorded instead of acted on: the loop that watches the nodes stops them at its next look.
-    A handler that raised could interrupt a node's start between its fork and its record, orphaning it."""
+    A handler that raised could interrupt a node's start between its fork and its record, orphaning it.
+    """
 
     def __init__(self) -> None:
         self.signal: Optional[int] = None
@@ -165,7 +167,8 @@ def report_death(node: NodeProcess) -> None:
 
 def watch(system: System, stop: StopRequest, keep_going: bool) -> int:
     """Look at the nodes every POLL_S until a stop signal (0), a node's death without keep_going (1), or, with
-    keep_going, every node dead (1). Each death is reported once."""
+    keep_going, every node dead (1). Each death is reported once.
+    """
     reported: set[int] = set()
     while stop.signal is None:
         for node in system.nodes:

@@ -90,7 +90,8 @@ def run_outcome(run: SeedRun) -> str:
 def compare(experiment: Experiment, runs: Mapping[int, SlidingModePair[SeedRun]]) -> Optional[ExperimentRow]:
     """One experiment's row from its runs by seed, with (on) and without (off) sliding mode, beside the paper's;
     None if no seed has both runs reported. Each quantity of today's row is the seed value of largest magnitude
-    over the seeds reported, the outcome "ok" only if every run's is; the statistics are over the paired seeds."""
+    over the seeds reported, the outcome "ok" only if every run's is; the statistics are over the paired seeds.
+    """
     seeds = sorted(runs)
     paired = [seed for seed in seeds if all(isinstance(run, RunReport)
                                             for run in (runs[seed].sliding_on, runs[seed].sliding_off))]
@@ -167,7 +168,8 @@ def _spread(statistics: NormStatistics, sliding_mode: bool) -> str:
 
 def results_table(rows: Sequence[ExperimentRow], pipeline: str) -> str:
     """Markdown: the pipeline's runs (outcome, duration, the largest final offsets over seeds), then each two-norm's
-    statistics over seeds beside the paper's change (results.md)."""
+    statistics over seeds beside the paper's change (results.md).
+    """
     seeds = sorted({seed for row in rows for seed in row.per_seed.seeds})
     lines = [f"## Pipeline {pipeline}: seeds {', '.join(map(str, seeds))}", "",
              "| experiment | outcome (on/off) | duration s (paper) | final lateral offset cm, largest (on/off) "

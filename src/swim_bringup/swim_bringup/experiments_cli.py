@@ -47,6 +47,7 @@ def default_jobs() -> int:
 @dataclasses.dataclass(frozen=True)
 class RunTask:
     """One run of an experiment (picklable: it goes to the run's process, on this host or a Dask worker)."""
+
     experiment: Experiment
     sliding_mode: bool
     seed: int                        # sim_node's seed
@@ -58,7 +59,8 @@ class RunTask:
 
 def run_one(task: RunTask) -> RunReport:
     """One closed-loop run in a fresh bring-up on the current ROS domain; its report (analysis measures, the
-    action's result, wall time)."""
+    action's result, wall time).
+    """
     task.run_dir.mkdir(parents=True, exist_ok=True)
     specs = closed_loop_specs(
         task.config, sim_overrides=(f"constrained:={str(task.experiment.constrained).lower()}", f"seed:={task.seed}"),

@@ -46,7 +46,8 @@ def write_joint_figure(joints: Mapping[str, JointSeries], path: Path) -> Path:
 def write_run_figures(record: RecordedBag, output_dir: Path) -> list[Path]:
     """Desired vs actual alpha and alphadot (Figs. 19-20 style), heave and pitch, the Cartesian path; with the vortex
     wake recorded, its last vortices over the path (wake.png). The record's run_error if it holds no run, its
-    wake_error if the wake could not be read."""
+    wake_error if the wake could not be read.
+    """
     if record.run is None:
         assert record.run_error is not None, "a RecordedBag without run has its run_error"
         raise record.run_error
@@ -96,7 +97,8 @@ def write_run_figures(record: RecordedBag, output_dir: Path) -> list[Path]:
 
 def write_errors_figure(rows: Sequence[ExperimentRow], path: Path) -> Path:
     """The two-norms of every seed with and without sliding mode: one row of panels per experiment, one column per
-    two-norm, each seed's pair joined by a line; the panel's title gives the mean change and its interval."""
+    two-norm, each seed's pair joined by a line; the panel's title gives the mean change and its interval.
+    """
     figure, axes = pyplot().subplots(max(len(rows), 1), len(NORMS),
                                      figsize=(4.0 * len(NORMS), 1.0 + 2.2 * len(rows)), squeeze=False)
     for axis_row, row in zip(axes, rows):

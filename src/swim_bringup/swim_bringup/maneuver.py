@@ -36,7 +36,8 @@ class NotAtRest(ManeuverGoalError):
 @dataclasses.dataclass(frozen=True)
 class RestBounds:
     """The joint speeds under which the vehicle counts as at rest: every angular joint (alpha, phi, theta) under
-    angular_speed_rad_s, the platform's R under linear_speed_m_s."""
+    angular_speed_rad_s, the platform's R under linear_speed_m_s.
+    """
 
     angular_speed_rad_s: float
     linear_speed_m_s: float
@@ -81,7 +82,8 @@ class VehicleState:
 @dataclasses.dataclass(frozen=True)
 class ManeuverGoal:
     """An operator's request: a sequence (primitive_ids with repeat_counts) or a goal state at least goal_alpha_rad
-    from the start; the time scale (0: the planner's default) and the tracker's tolerances."""
+    from the start; the time scale (0: the planner's default) and the tracker's tolerances.
+    """
 
     mode: int
     primitive_ids: tuple[str, ...] = ()
@@ -93,7 +95,8 @@ class ManeuverGoal:
 
     def validate(self) -> None:
         """ManeuverGoalError unless the goal names a sequence or a goal state, with its fields consistent. The time
-        scale and the ids are the planner's to judge (it names what it refuses)."""
+        scale and the ids are the planner's to judge (it names what it refuses).
+        """
         if self.mode == MODE_SEQUENCE:
             if not self.primitive_ids:
                 raise ManeuverGoalError("the goal gives neither a sequence (mode 0 with primitive_ids) nor a goal "
@@ -122,7 +125,8 @@ class ManeuverGoal:
 
 def rest_state_of(vehicle: VehicleState, states: Sequence[str], lane_tolerance_m: float) -> str:
     """The graph's rest state the vehicle is in: the constrained vehicle's, or the free vehicle's on the lane nearest
-    its R; ManeuverGoalError when the graph has none or R is farther than lane_tolerance_m from every lane."""
+    its R; ManeuverGoalError when the graph has none or R is farther than lane_tolerance_m from every lane.
+    """
     if vehicle.constrained:
         if CONSTRAINED_REST_STATE not in states:
             raise ManeuverGoalError("the vehicle is the constrained one (joint_states without R) and the planner's "
@@ -146,7 +150,8 @@ def start_state(goal: ManeuverGoal, vehicle: VehicleState, states: Sequence[str]
     """The graph state a from-rest maneuver starts in, after the checks: the goal is valid, the vehicle at rest
     (every joint speed under bounds: NotAtRest otherwise), and a sequence's first primitive (start_states: id -> its
     start state) starts in the vehicle's rest state. ManeuverGoalError with the reason otherwise; ids the planner
-    does not know are left for it to refuse."""
+    does not know are left for it to refuse.
+    """
     goal.validate()
     rest = rest_state_of(vehicle, states, lane_tolerance_m)
     moving = vehicle.speeds_over(bounds)

@@ -220,7 +220,8 @@ def maneuver_goal(args: argparse.Namespace) -> ManeuverGoal:
 # ----- a session on the ROS domain ------------------------------------------------------------------------------
 class Session:
     """An rclpy context, node and executor of the command's own, on the environment's ROS domain. RunClient has the
-    same context, node, executor and close(), and stands in for it when a run is recorded."""
+    same context, node, executor and close(), and stands in for it when a run is recorded.
+    """
 
     def __init__(self) -> None:
         import rclpy
@@ -240,7 +241,8 @@ class Session:
 
 def spin_until_settled(session: Any, done: Callable[[], bool], timeout_s: float) -> None:
     """Spin until done() holds or the ROS graph's nodes and topics have not changed for GRAPH_STABLE_S, at most
-    timeout_s."""
+    timeout_s.
+    """
     from swim_ros.calls import spin_until
     seen: list[Any] = [None, time.monotonic()]   # the graph last seen, when it changed
 
@@ -307,7 +309,9 @@ def list_command(args: argparse.Namespace) -> int:
 @dataclasses.dataclass(frozen=True)
 class PlanArrays:
     """A PlannedTrajectory's arrays, shaped: times (N,), s; q and qdot (N, nq) in joint_names' order (rad, m);
-    feed-forward torques (N, 2) heave and pitch, N m; radius (N,), m: R, or the constrained plan's lane."""
+    feed-forward torques (N, 2) heave and pitch, N m; radius (N,), m: R, or the constrained plan's lane.
+    """
+
     joint_names: tuple[str, ...]
     time_s: np.ndarray
     q: np.ndarray
@@ -349,7 +353,9 @@ def repeats_of(primitive_ids: Sequence[str]) -> list[tuple[str, int]]:
 @dataclasses.dataclass(frozen=True)
 class PlanSummary:
     """What a plan asks of the vehicle and its motors. Per motor (heave, pitch): the peak |feed-forward torque|, N m,
-    its fraction of the motor's limit, and the primitive it falls in (a junction sample is the earlier one's)."""
+    its fraction of the motor's limit, and the primitive it falls in (a junction sample is the earlier one's).
+    """
+
     sequence: tuple[tuple[str, int], ...]   # the primitives in order, consecutive repeats counted
     time_scales: tuple[float, ...]          # the segments' lambdas, each once
     start_alpha_rad: float
@@ -407,7 +413,8 @@ class PlanSummary:
 
 def write_plan_figure(plan: Any, torque_limits_n_m: Sequence[float], path: Path) -> Path:
     """The plan drawn: alpha and alphadot, heave and pitch, the feed-forward torques against the motors' limits,
-    against plan time, the primitives' junctions marked."""
+    against plan time, the primitives' junctions marked.
+    """
     from swim_bringup.figures import pyplot, save_figure
     arrays = PlanArrays.of(plan)
     figure, axes = pyplot().subplots(4, 1, sharex=True, figsize=(8, 10))
@@ -438,7 +445,8 @@ def write_plan_figure(plan: Any, torque_limits_n_m: Sequence[float], path: Path)
 def latest_vehicle(session: Any, timeout_s: float) -> Optional[VehicleState]:
     """The vehicle as the latest joint_states gives it, or None when, once the graph has settled, no node publishes
     joint_states and no plant node (PLANT_NODES) is up; CommandError if one is and no joint_states arrives within
-    timeout_s (a plant's publisher may be discovered after the plant)."""
+    timeout_s (a plant's publisher may be discovered after the plant).
+    """
     from rclpy.qos import QoSProfile, QoSReliabilityPolicy
     from sensor_msgs.msg import JointState
     from swim_ros.calls import spin_until
@@ -470,7 +478,8 @@ def latest_vehicle(session: Any, timeout_s: float) -> Optional[VehicleState]:
 
 def plan_request(goal: ManeuverGoal, vehicle: Optional[VehicleState], states: Sequence[str]) -> Any:
     """The RequestManeuver a goal makes from where the vehicle is: its alpha (0 without one) and, for a goal state,
-    the rest state of its vehicle on the lane nearest its R (without one: the planner's default start)."""
+    the rest state of its vehicle on the lane nearest its R (without one: the planner's default start).
+    """
     from swim_interfaces.srv import RequestManeuver
     from swim_ros.calls import new_request_id
     request = RequestManeuver.Request(mode=goal.mode, primitive_ids=list(goal.primitive_ids),
@@ -523,7 +532,8 @@ def plan_command(args: argparse.Namespace) -> int:
 class InterruptWatch:
     """Ctrl-C as a request, never as an exception in the middle of a callback (a bag write): the signal handler sets
     requested and triggers a guard condition of the session's node; the executor runs its callback between other
-    callbacks, and it raises Interrupted there while armed, which ends the wait under way (goal_result) at once."""
+    callbacks, and it raises Interrupted there while armed, which ends the wait under way (goal_result) at once.
+    """
 
     def __init__(self, node: Any) -> None:
         self.requested = False
@@ -617,7 +627,8 @@ class ManeuverRun:
 
     def fly(self, goal: ManeuverGoal, timeout_s: float, on_feedback: Callable[[Any], None]) -> Any:
         """Send the goal and return its result (PerformManeuver.Result): at its end, or after a cancel on Ctrl-C
-        (self.interrupt.requested then holds). CommandError if it was not accepted or gave no result."""
+        (self.interrupt.requested then holds). CommandError if it was not accepted or gave no result.
+        """
         from swim_ros.calls import CallFailed, cancel_goal, goal_result, send_goal
         executor = self.session.executor
         self.interrupt.armed = False   # a goal sent is never left without its handle: Ctrl-C waits for it
@@ -708,7 +719,8 @@ def run_command(args: argparse.Namespace) -> int:
 
 def report_recorded_run(run_dir: Path, result: Any, started_s: float) -> int:
     """report.json and figures of a recorded run, a summary printed; EXIT_FAILED when the bridge latched a fault
-    during it (the motors were then off), else EXIT_DONE."""
+    during it (the motors were then off), else EXIT_DONE.
+    """
     from swim_bringup.reports import TrackerResult
     tracker_result = TrackerResult(error_code=result.error_code, error_string=result.error_string,
                                    final_alpha_error_rad=result.final_alpha_error_rad, duration_s=result.duration_s)
@@ -808,7 +820,8 @@ def status_command(args: argparse.Namespace) -> int:
 
 def trigger(service: str, wait_s: float) -> int:
     """Call the bridge's std_srvs/Trigger service (the e-stop and its reset: asking twice does what asking once
-    does, so a lost answer is asked again); print its answer."""
+    does, so a lost answer is asked again); print its answer.
+    """
     from std_srvs.srv import Trigger
     session = Session()
     try:
@@ -832,7 +845,8 @@ def reset_command(args: argparse.Namespace) -> int:
 
 def bridge_command(args: argparse.Namespace) -> int:
     """A lifecycle transition of bridge_node (swim_ros.calls.change_lifecycle_state: asked again only after its
-    state shows it was not made)."""
+    state shows it was not made).
+    """
     from swim_ros.calls import CallFailed, change_lifecycle_state
     session = Session()
     try:

@@ -150,7 +150,8 @@ class ManeuverNode(Node):
         """(the planner's reply, its request id) for the goal from where the vehicle is. The primitive list kept
         from an earlier goal serves only while it passes the checks and names the library the plan came from;
         otherwise the planner is asked for its list again (it may serve another library now) and the goal checked
-        and planned on that. ManeuverGoalError, NotAtRest or CallFailed when it cannot be."""
+        and planned on that. ManeuverGoalError, NotAtRest or CallFailed when it cannot be.
+        """
         lists = (False, True) if self._catalog is not None else (True,)
         for fresh in lists:
             catalog = self._catalog if not fresh and self._catalog is not None else self._primitive_list()
@@ -174,7 +175,8 @@ class ManeuverNode(Node):
 
     def _start(self, goal: ManeuverGoal, catalog) -> tuple[VehicleState, str]:
         """The vehicle and the graph state the maneuver starts in (maneuver.start_state), waiting up to rest_wait_s
-        for a vehicle that is coming to rest."""
+        for a vehicle that is coming to rest.
+        """
         settings = self.parameters.current
         deadline_s = time.monotonic() + settings.rest_wait_s
         start_states = {p.primitive_id: p.start_state for p in catalog.primitives}
@@ -202,7 +204,8 @@ class ManeuverNode(Node):
 
     def _execute(self, handle) -> PerformManeuver.Result:
         """The goal's whole flight; an unexpected error ends it with the error, never with rclpy's default result
-        (whose error code would read as SUCCESSFUL)."""
+        (whose error code would read as SUCCESSFUL).
+        """
         try:
             return self._fly(handle)
         except Exception as err:  # noqa: BLE001 - reported to the client, the node serves the next goal
@@ -274,7 +277,8 @@ class ManeuverNode(Node):
 
     def _tracker_result(self, handle, tracked, policy: RetryPolicy):
         """The tracker's result for the goal tracked, passing a cancel of ours on once; None if the tracker left
-        the graph for longer than the policy's attempt timeout without answering."""
+        the graph for longer than the policy's attempt timeout without answering.
+        """
         event = threading.Event()
         futures = []
 
@@ -316,7 +320,8 @@ class ManeuverNode(Node):
 def vehicle_of(message) -> VehicleState:
     """The vehicle a sensor_msgs/JointState gives, by swim_ros.trajectory_messages.state_from_message's checks (the
     vehicle's joints in any order, finite values, lengths that agree); its speeds zero when the message carries none.
-    StateMessageError otherwise."""
+    StateMessageError otherwise.
+    """
     _, q, qdot = state_from_message(message, None, VelocityEstimator(), 0.0)
     return VehicleState(JOINT_NAMES_UNCONSTRAINED if len(q) == len(JOINT_NAMES_UNCONSTRAINED)
                         else JOINT_NAMES_CONSTRAINED, q, qdot)

@@ -71,7 +71,8 @@ def run_isolated(function: Callable[[T], R], task: T, run: str, timeout_s: float
     """function(task) in a new Python process with a ROS domain of its own; its result. RunFailed(run, reason) if
     the function raised (reason: the exception's type and message), its process died (its exit code and the end
     of its output) or it ran longer than timeout_s (then it is interrupted like Ctrl-C, and killed after
-    INTERRUPT_GRACE_S)."""
+    INTERRUPT_GRACE_S).
+    """
     environment = {key: value for key, value in os.environ.items() if key != "ROS_DOMAIN_ID"}
     environment["PYTHONPATH"] = os.pathsep.join(path for path in sys.path if path)   # the caller's imports
     with tempfile.TemporaryDirectory(prefix="swim_run_") as folder:
@@ -123,7 +124,8 @@ def _untrack(process: subprocess.Popen[str]) -> None:
 
 def _interrupt_runs(stopping: bool) -> None:
     """With stopping, SIGINT to every run process under way, and to any that starts from now on; without, runs
-    start normally again."""
+    start normally again.
+    """
     global _stopping
     with _running_lock:
         _stopping = stopping
@@ -139,7 +141,8 @@ def run_all(function: Callable[[T], R], tasks: Mapping[str, T], executor: concur
     with each as it ends. A run that failed has its RunFailed; the executor's own failures (a lost Dask worker)
     are named the same way. If the caller stops while waiting (Ctrl-C, SIGTERM as Ctrl-C), the runs not started
     are cancelled and those under way on this host interrupted (they stop their nodes), then the exception goes
-    on."""
+    on.
+    """
     _interrupt_runs(stopping=False)
     futures = {executor.submit(run_isolated, function, task, run, timeout_s): run for run, task in tasks.items()}
     outcomes: dict[str, Outcome[R]] = {}
@@ -167,7 +170,8 @@ def _run_in_this_process(call: Path, answer: Path) -> None:
     SIGINT, how run_isolated stops a run, is Ctrl-C here even where the caller was started with SIGINT ignored (a
     command put in the background by a shell without job control: Python then leaves it ignored, and the process
     inherits that), and so is SIGTERM (the parent-death signal among others): the run stops its nodes before the
-    process ends."""
+    process ends.
+    """
     signal.signal(signal.SIGINT, signal.default_int_handler)
     interrupt_on_sigterm()
     from swim_ros.domains import RUN_DOMAINS, claim_ros_domain

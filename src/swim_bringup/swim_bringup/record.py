@@ -116,7 +116,8 @@ def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
 
 class StopRequest:
     """Set by SIGINT or SIGTERM; the recording loop ends at its next turn (within POLL_PERIOD_S), never in the
-    middle of writing a message."""
+    middle of writing a message.
+    """
 
     def __init__(self) -> None:
         self.requested = False

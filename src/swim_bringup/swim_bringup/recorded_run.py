@@ -38,7 +38,8 @@ def run_maneuver(bag_path: Path, primitive_ids: list[str], repeat_counts: list[i
                  timeout_s: float, progress: Optional[Progress] = None,
                  tolerances: Tolerances = RUN_TOLERANCES) -> TrackerResult:
     """Request the maneuver, execute it, record the run into the bag at bag_path; the tracker's result. RunError
-    if the run could not be done."""
+    if the run could not be done.
+    """
     with RunClient(bag_path) as client:
         client.wait_for_nodes(STARTUP_TIMEOUT_S)
         handle = client.execute(client.request(primitive_ids, repeat_counts, time_scale), progress, tolerances)
@@ -59,7 +60,8 @@ def run_recorded(specs: list[NodeSpec], run_dir: Path, primitive_ids: list[str],
     run_dir/bag, stop the nodes; then analyse the bag (the hard stops of the rig file at rig_path, empty: the
     shipped rig, as the nodes' rig_path) and write report.json and the figures into run_dir.
     Returns the report: the analysis measures, the tracker's result and the wall time. RunError if a node died
-    or the run could not be done."""
+    or the run could not be done.
+    """
     started = time.monotonic()
     with System(specs, run_dir / "logs") as system:
         def on_progress(fraction: float) -> None:
@@ -75,7 +77,8 @@ def run_recorded(specs: list[NodeSpec], run_dir: Path, primitive_ids: list[str],
 def write_run_report(run_dir: Path, result: TrackerResult, started_s: float, rig_path: str = "") -> RunReport:
     """Read the run's bag (run_dir/bag) once, analyse it (the hard stops of the rig file at rig_path, empty: the
     shipped rig) and write report.json and the figures into run_dir; the report, with the tracker's result and the
-    wall time from started_s (time.monotonic) to now. MissingTopic (run_record) if the bag holds no tracked period."""
+    wall time from started_s (time.monotonic) to now. MissingTopic (run_record) if the bag holds no tracked period.
+    """
     record = read_bag(run_dir / "bag")
     analysis = run_analysis(record, rig_hard_limits(Path(rig_path) if rig_path else None))
     report = RunReport(analysis.measures, analysis.bridge, result, time.monotonic() - started_s)
@@ -96,7 +99,8 @@ def add_tolerance_arguments(parser: argparse.ArgumentParser) -> None:
 
 def parse_with_tolerances(parser: argparse.ArgumentParser, argv: Optional[list[str]]) -> argparse.Namespace:
     """parser's arguments plus the tolerance options; args.tolerances is the Tolerances they name (a negative or
-    non-finite one is a usage error)."""
+    non-finite one is a usage error).
+    """
     add_tolerance_arguments(parser)
     args = parser.parse_args(argv)
     try:
@@ -108,7 +112,8 @@ def parse_with_tolerances(parser: argparse.ArgumentParser, argv: Optional[list[s
 
 def tolerances_of(args: argparse.Namespace) -> Tolerances:
     """The Tolerances that the options of add_tolerance_arguments name; ValueError if one is negative or not
-    finite."""
+    finite.
+    """
     tolerances = Tolerances(**{field.name: getattr(args, field.name) for field in dataclasses.fields(Tolerances)})
     tolerances.validate()
     return tolerances

@@ -53,7 +53,8 @@ class TopicRecorder:
         """Write the messages queued now on every subscription into the bag (at most RECORD_DEPTH a topic), each
         stamped with the wall time it is taken; returns how many. Polled by a process that only records, in place
         of an executor, which wakes and builds its wait set for each arriving message: several times the cost of
-        writing it."""
+        writing it.
+        """
         return sum(self._take(topic, RECORD_DEPTH) for topic in self.subscriptions)
 
     def _take(self, topic: str, most: int) -> int:
@@ -75,7 +76,8 @@ class TopicRecorder:
 def recording_qos(publishers: Sequence[Any]) -> "QoSProfile":
     """The subscription that receives what every publisher (rclpy TopicEndpointInfo) sends: reliable if all of
     them are, else best effort; transient local if all of them are (a latched topic), else volatile; a queue of
-    RECORD_DEPTH (depth 1 for a transient-local topic: its publishers keep their last message for late readers)."""
+    RECORD_DEPTH (depth 1 for a transient-local topic: its publishers keep their last message for late readers).
+    """
     from rclpy.qos import QoSDurabilityPolicy, QoSProfile, QoSReliabilityPolicy
     reliable = all(p.qos_profile.reliability == QoSReliabilityPolicy.RELIABLE for p in publishers)
     latched = bool(publishers) and all(p.qos_profile.durability == QoSDurabilityPolicy.TRANSIENT_LOCAL
@@ -92,7 +94,8 @@ def _qos_time(duration: Any) -> QosTime:
 
 def offered_qos(publishers: Sequence[Any]) -> list[Qos]:
     """The publishers' QoS profiles as rosbag2's metadata.yaml lists them (rosbags' Qos). A history the graph does
-    not report (a remote publisher's) is written as system_default: rosbag2's readers accept no 'unknown'."""
+    not report (a remote publisher's) is written as system_default: rosbag2's readers accept no 'unknown'.
+    """
     profiles = []
     for publisher in publishers:
         profile = publisher.qos_profile

@@ -41,6 +41,7 @@ def _record(cls: type[T], data: Mapping[str, Any], what: str) -> T:
 @dataclasses.dataclass(frozen=True)
 class RunMeasures:
     """The paper's measures of one tracked plan (analysis.measures)."""
+
     duration_s: float
     longitudinal_error_two_norm_m_s05: float      # R_d (alpha - alpha_d)
     lateral_error_two_norm_m_s05: float           # R - R_d (0 for the constrained vehicle)
@@ -59,7 +60,9 @@ class RunMeasures:
 @dataclasses.dataclass(frozen=True)
 class BridgeMeasures:
     """What a bridge_node's /diagnostics tell of a run (analysis.bridge_measures). The loop's timing, from its
-    last report: None where the bridge did not report it."""
+    last report: None where the bridge did not report it.
+    """
+
     bridge_faults: str          # the faults latched during the run, joined by "|"; "NONE" if none
     bridge_overruns: int        # the bridge's count of overrun periods at its last report
     bridge_worst_lateness_ms: Optional[float] = None  # the latest end of a period past its deadline
@@ -74,7 +77,9 @@ class BridgeMeasures:
 @dataclasses.dataclass(frozen=True)
 class RunAnalysis:
     """The measures of a recorded run (analysis.analyze): the bridge's only for a run on the bridge. Its JSON form
-    is one flat object, the bridge's keys after the measures'."""
+    is one flat object, the bridge's keys after the measures'.
+    """
+
     measures: RunMeasures
     bridge: Optional[BridgeMeasures]
 
@@ -108,6 +113,7 @@ def _analysis_from_json(data: Mapping[str, Any], other_keys: list[str]) -> tuple
 @dataclasses.dataclass(frozen=True)
 class TrackerResult:
     """How the tracker's ExecutePlan goal ended (its action result)."""
+
     error_code: int             # 0: the plan was completed (swim_interfaces/action/ExecutePlan)
     error_string: str
     final_alpha_error_rad: float
@@ -121,7 +127,9 @@ class TrackerResult:
 @dataclasses.dataclass(frozen=True)
 class RunReport(RunAnalysis):
     """One closed-loop run (report.json): the analysis of its bag, the tracker's result and the wall time of the
-    whole run (bring-up, maneuver, shutdown, analysis)."""
+    whole run (bring-up, maneuver, shutdown, analysis).
+    """
+
     result: TrackerResult
     wall_time_s: float
 
@@ -144,6 +152,7 @@ class RunReport(RunAnalysis):
 @dataclasses.dataclass(frozen=True)
 class SlidingModePair(Generic[T]):
     """One quantity of an experiment's two runs, with and without the sliding-mode term."""
+
     sliding_on: T
     sliding_off: T
 
@@ -152,7 +161,9 @@ class SlidingModePair(Generic[T]):
 class NormComparison:
     """A two-norm with and without sliding mode, m s^0.5 (over seeds: the seed's of largest magnitude), and the
     relative change sliding mode brought, here (over seeds: the mean of each seed's change) and in the paper (None:
-    not computable, or not reported there)."""
+    not computable, or not reported there).
+    """
+
     sliding_on: float
     sliding_off: float
     change: Optional[float]          # (on - off) / off: negative where sliding mode lowers the error
@@ -162,6 +173,7 @@ class NormComparison:
 @dataclasses.dataclass(frozen=True)
 class SeedRuns:
     """An experiment's runs seed by seed: each list in the order of seeds, None where a run gave no report."""
+
     seeds: list[int]
     outcome: SlidingModePair[list[str]]          # "ok", or why the run failed or gave no report
     duration_s: SlidingModePair[list[Optional[float]]]
@@ -199,7 +211,9 @@ def _norm_statistics(data: Mapping[str, Any]) -> NormStatistics:
 class ExperimentRow:
     """One experiment's runs over seeds set beside the paper's (experiments.compare). Each of the quantities of a
     pair of runs is the seed's value of largest magnitude (sign kept; outcome "ok" only when every seed's is);
-    per_seed holds them all, statistics the two-norms' over the paired_seeds (those with both runs reported)."""
+    per_seed holds them all, statistics the two-norms' over the paired_seeds (those with both runs reported).
+    """
+
     experiment: str
     time_scale: float
     duration_s: float                # of the runs with sliding mode
@@ -233,6 +247,7 @@ class ExperimentRow:
 @dataclasses.dataclass(frozen=True)
 class FailedRun:
     """A run of swim-experiments that gave no report, and why."""
+
     run: str             # <experiment>/seed<k>/sliding_<on|off>
     reason: str
 
@@ -240,7 +255,9 @@ class FailedRun:
 @dataclasses.dataclass(frozen=True)
 class ExperimentsSummary:
     """swim-experiments' results (experiments.json): the pipeline (config/ folder) and seeds run, the experiments
-    with at least one seed run with and without sliding mode, the wall time, and the runs that gave no report."""
+    with at least one seed run with and without sliding mode, the wall time, and the runs that gave no report.
+    """
+
     pipeline: str
     seeds: list[int]
     experiments: list[ExperimentRow]

@@ -39,7 +39,8 @@ class RunError(RuntimeError):
 
 class RunClient:
     """Planner and tracker clients plus a recorder of topics (fully qualified name -> type name) into the bag at
-    bag_path. ValueError for a relative name: the client's waits look the loop's topics up by LOOP_TOPICS' names."""
+    bag_path. ValueError for a relative name: the client's waits look the loop's topics up by LOOP_TOPICS' names.
+    """
 
     def __init__(self, bag_path: Path, topics: dict[str, str] = RUN_TOPICS) -> None:
         relative = [topic for topic in topics if not topic.startswith("/")]
@@ -98,7 +99,8 @@ class RunClient:
     def close(self) -> None:
         """Finish the bag and leave DDS; safe to call twice. The node and its subscriptions are destroyed here,
         not left to the garbage collector: a closed client's readers would stay matched, and every publisher of
-        the next run on the domain would keep sending them each period (docs/benchmarks.md, bench_record)."""
+        the next run on the domain would keep sending them each period (docs/benchmarks.md, bench_record).
+        """
         import rclpy
         if self.bag is not None:
             self.bag.close()
@@ -165,7 +167,8 @@ class RunClient:
     def execute(self, plan, progress: Optional[Callable[[float], None]] = None,
                 tolerances: Optional[Tolerances] = None):
         """Send the plan to the tracker with tolerances (default: none checked); returns the accepted goal's
-        handle (RunError if refused)."""
+        handle (RunError if refused).
+        """
         from swim_interfaces.action import ExecutePlan
         goal = ExecutePlan.Goal(plan=plan)
         if tolerances is not None:
@@ -194,7 +197,8 @@ class RunClient:
         """Record until the plan's last period (plan time duration_s) is in the bag on every loop topic, and the
         plan itself, then a few more periods. The recorder may lag a faster-than-real-time loop, and by more on
         joint_states and joint_commands, which flowed (and queued) before the plan while tracking_state did not.
-        RunError if that does not happen within DRAIN_TIMEOUT_S."""
+        RunError if that does not happen within DRAIN_TIMEOUT_S.
+        """
         deadline = time.monotonic() + DRAIN_TIMEOUT_S
         final_stamp_ns, checked = None, None
         while not self._recorded_up_to(final_stamp_ns):
@@ -213,7 +217,8 @@ class RunClient:
 
     def _recorded_up_to(self, stamp_ns: Optional[int]) -> bool:
         """Every loop topic recorded up to stamp_ns, and the plan recorded: a plan of thousands of samples goes out
-        in fragments, and one lost beside a fast loop is repaired only at the writer's next heartbeat."""
+        in fragments, and one lost beside a fast loop is repaired only at the writer's next heartbeat.
+        """
         return stamp_ns is not None and ("/plan" not in self.recordings or "/plan" in self.latest_cdr) and all(
             topic in self.latest_cdr and header_stamp_ns(self.latest_cdr[topic]) >= stamp_ns
             for topic in LOOP_TOPICS if topic in self.recordings)
@@ -227,6 +232,7 @@ class RunClient:
 
 def header_stamp_ns(cdr: bytes) -> int:
     """The header stamp of a serialized message that starts with a std_msgs/Header (CDR: a 4-byte encapsulation
-    header, its second byte 1 for little-endian, then the stamp's int32 sec and uint32 nanosec)."""
+    header, its second byte 1 for little-endian, then the stamp's int32 sec and uint32 nanosec).
+    """
     sec, nanosec = struct.unpack_from("<iI" if cdr[1] == 1 else ">iI", cdr, 4)
     return sec * 1_000_000_000 + nanosec

@@ -37,7 +37,8 @@ def find_topic(info: BagInfo, name: str) -> str:
     """The bag's name for the run topic `name` (a key of bag.RUN_TOPICS, /joint_states): the topic recorded under
     that full name (swim-demo's, swim-record's and rosbag2's) or its relative one (joint_states) or, failing both,
     under one namespace (/test/joint_states). MissingTopic if there is none, several, one of another type than
-    RUN_TOPICS gives, or one without messages."""
+    RUN_TOPICS gives, or one without messages.
+    """
     bare = name.lstrip("/")
     candidates = ([topic for topic in info.topics if topic.name.lstrip("/") == bare]
                   or [topic for topic in info.topics if topic.name.endswith("/" + bare)])
@@ -56,6 +57,7 @@ def find_topic(info: BagInfo, name: str) -> str:
 @dataclasses.dataclass
 class Run:
     """The tracked periods of one plan: n periods of a vehicle of nq joints (the foil's heave and pitch last)."""
+
     time_s: np.ndarray            # plan time of each tracked period, (n,)
     q: np.ndarray                 # measured, (n, nq); rad, or m for R
     qdot: np.ndarray              # measured, (n, nq); rad/s, or m/s for R
@@ -72,7 +74,8 @@ def run_of(bag_path: Path, tracking_topic: str, tracking_states: Iterable[Any], 
     """The tracked periods of the last plan in tracking_states (swim_interfaces/TrackingState messages in log-time
     order, recorded on tracking_topic of the bag at bag_path); the lane radius from the last of plans
     (PlannedTrajectory messages; no_plan: why there are none). MissingTopic if no period is tracked, the joints have
-    no alpha, or the constrained vehicle has no plan; ValueError if the messages do not make a run."""
+    no alpha, or the constrained vehicle has no plan; ValueError if the messages do not make a run.
+    """
     rows: list[Any] = []   # the tracking_state messages (the typestore's class)
     for message in tracking_states:
         if rows and message.plan_time_s < rows[-1].plan_time_s:
@@ -101,7 +104,8 @@ def bridge_measures_of(diagnostic_arrays: Iterable[Any]) -> Optional[BridgeMeasu
     """From a bridge_node's diagnostic_msgs/DiagnosticArray messages, in order (None without any of its I/O loop's
     reports): the faults it latched during the run (a latched fault holds the motors at zero until reset: the
     vehicle did not swim as commanded from then on), its count of overrun periods, and its loop's timing from its
-    last report that gives it."""
+    last report that gives it.
+    """
     faults: set[str] = set()
     overruns = None
     timing: dict[str, str] = {}
@@ -138,7 +142,9 @@ def bridge_measures_of(diagnostic_arrays: Iterable[Any]) -> Optional[BridgeMeasu
 class JointSeries:
     """One joint's samples in a bag's joint_states: log time (when the recorder received the message) in s from
     the topic's first message, position and velocity in the joint's unit (rad for a revolute joint, m for a
-    prismatic one such as R; per s for the velocity), each (n,); velocity is empty when the messages carry none."""
+    prismatic one such as R; per s for the velocity), each (n,); velocity is empty when the messages carry none.
+    """
+
     time_s: np.ndarray
     position: np.ndarray
     velocity: np.ndarray
@@ -147,7 +153,9 @@ class JointSeries:
 @dataclasses.dataclass(frozen=True)
 class JointStates:
     """A bag's joint_states: the topic, its messages' log times (s from the first message, (messages,)) and each
-    joint's samples by name, in the order the joints first appear."""
+    joint's samples by name, in the order the joints first appear.
+    """
+
     topic: str
     message_time_s: np.ndarray
     joints: dict[str, JointSeries]
@@ -156,7 +164,8 @@ class JointStates:
 def joint_series(topic: str, messages: Iterable[tuple[int, Any]]) -> JointStates:
     """The joint states of sensor_msgs/JointState messages recorded on topic, (log time ns, message) each. A
     message whose position (velocity) list is shorter than its names gives no position (velocity) for the joints
-    past its end."""
+    past its end.
+    """
     log_ns: list[int] = []
     samples: dict[str, tuple[list[int], list[float], list[float]]] = {}
     for stamp_ns, message in messages:
@@ -181,7 +190,9 @@ def joint_series(topic: str, messages: Iterable[tuple[int, Any]]) -> JointStates
 @dataclasses.dataclass(frozen=True)
 class WakeSnapshot:
     """The last vortex wake recorded (swim_interfaces/WakeVortices, tank frame): the vortices' x and y, m, and
-    their circulations, m^2/s, counter-clockwise positive, each (k,)."""
+    their circulations, m^2/s, counter-clockwise positive, each (k,).
+    """
+
     x_m: np.ndarray
     y_m: np.ndarray
     circulations_m2_s: np.ndarray
@@ -191,7 +202,9 @@ class WakeSnapshot:
 class RecordedBag:
     """A bag read once: its index, the topics whose messages cannot be decoded (topic, why), and each part of the
     run the bag holds, or the error that says why it is not there (MissingTopic for what the bag lacks, BagError
-    for what cannot be read, ValueError for messages that do not make a run)."""
+    for what cannot be read, ValueError for messages that do not make a run).
+    """
+
     info: BagInfo
     undecodable: tuple[tuple[str, str], ...]
     joint_states: Optional[JointStates]
@@ -221,7 +234,8 @@ def _messages(read: dict[str, TopicMessages], topic: str) -> list[tuple[int, Any
 
 def read_bag(bag_path: Path) -> RecordedBag:
     """The bag at bag_path (a bag folder, or one .mcap or .db3 file), read once. BagError if there is no readable
-    bag there; anything else the bag lacks or holds unreadably is the record's error for that part."""
+    bag there; anything else the bag lacks or holds unreadably is the record's error for that part.
+    """
     info, undecodable = bag_contents(bag_path)
     joint_topic, tracking_topic, plan_topic, diagnostics_topic = (
         _found(info, name) for name in ("/joint_states", "/tracking_state", "/plan", "/diagnostics"))

@@ -34,6 +34,7 @@ def relative_change(with_sliding: float, without_sliding: float) -> Optional[flo
 @dataclasses.dataclass(frozen=True)
 class Spread:
     """A measure over seeds: its mean and sample standard deviation (n - 1 in the denominator; None for n = 1)."""
+
     mean: float
     std: Optional[float]
 
@@ -57,7 +58,9 @@ def t_quantile(probability: float, degrees_of_freedom: int) -> float:
 @dataclasses.dataclass(frozen=True)
 class PairedChange:
     """Sliding mode's relative change of a two-norm over seeds: the change per seed, their mean, and the paired
-    t interval of the mean at CONFIDENCE (None with one seed), and whether it excludes zero (False without one)."""
+    t interval of the mean at CONFIDENCE (None with one seed), and whether it excludes zero (False without one).
+    """
+
     per_seed: list[float]
     mean: float
     interval: Optional[tuple[float, float]]
@@ -78,7 +81,9 @@ class PairedChange:
 class NormStatistics:
     """A two-norm over seeds, m s^0.5, with (on) and without (off) sliding mode; sliding mode's change (None where
     a run without it has a zero two-norm: the constrained vehicle's lateral error) and the paper's change (None:
-    not reported there)."""
+    not reported there).
+    """
+
     sliding_on: Spread
     sliding_off: Spread
     change: Optional[PairedChange]

@@ -22,7 +22,8 @@ PIPELINES = ("realistic", "paper")
 
 def config_dir(pipeline: str = "realistic") -> Path:
     """The installed folder of a pipeline's parameter files (sim, planner, tracker, bridge YAML): swim_bringup's
-    config/ for "realistic", config/paper/ for "paper". ValueError for another pipeline."""
+    config/ for "realistic", config/paper/ for "paper". ValueError for another pipeline.
+    """
     if pipeline not in PIPELINES:
         raise ValueError(f"pipeline must be one of {', '.join(PIPELINES)}, got {pipeline!r}")
     from ament_index_python.packages import get_package_share_directory
@@ -77,7 +78,8 @@ LOCKSTEP_STALE_OVERRIDE = "stale_after_periods:=250"
 
 def sim_mode(params_file: Path, overrides: tuple[str, ...]) -> str:
     """sim_node's mode as a run would start it: the last mode:= override, else its parameter file's, else
-    sim_node's default (lockstep)."""
+    sim_node's default (lockstep).
+    """
     for override in reversed(overrides):
         if override.startswith("mode:="):
             return override.split(":=", 1)[1]
@@ -97,7 +99,8 @@ VISUALIZATION_SPECS = (NodeSpec("swim_viz", "rig_state_publisher", parameters=("
 
 def maneuver_spec(config: Path) -> NodeSpec:
     """The operator's maneuver server with config's maneuver.yaml: the perform_maneuver action, which plans through
-    the planner and tracks through the tracker from where the vehicle is."""
+    the planner and tracks through the tracker from where the vehicle is.
+    """
     return NodeSpec("swim_bringup", "maneuver_node", config / "maneuver.yaml")
 
 
@@ -113,7 +116,8 @@ def closed_loop_specs(config: Path, sim_overrides: tuple[str, ...] = (),
     to the plant node, whichever it is. With the simulator in lock-step (unless overridden to real time) the
     tracker's stale limit is LOCKSTEP_STALE_OVERRIDE unless tracker_overrides set one. A run that drives the
     tracker itself (swim-demo, swim-experiments) leaves the maneuver server out; swim-bringup starts it. A rig_path
-    goes to every node of RIG_NODES (empty: each loads the shipped rig)."""
+    goes to every node of RIG_NODES (empty: each loads the shipped rig).
+    """
     if plant not in PLANTS:
         raise ValueError(f"plant must be one of {', '.join(PLANTS)}, got {plant!r}")
     if plant == "sim" and sim_mode(config / PLANTS["sim"][2], sim_overrides) == "lockstep" \

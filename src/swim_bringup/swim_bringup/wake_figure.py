@@ -26,7 +26,8 @@ TANK_VIEW_MARGIN = 1.05
 
 def marker_areas_pt2(circulations_m2_s: npt.ArrayLike) -> np.ndarray:
     """Marker area of each vortex, pt^2, shape (k,): LARGEST_MARKER_AREA_PT2 |Gamma| / max |Gamma| (zeros when
-    every circulation is zero)."""
+    every circulation is zero).
+    """
     strength = np.abs(np.asarray(circulations_m2_s, dtype=float))
     largest = strength.max(initial=0.0)
     return np.zeros_like(strength) if largest == 0.0 else LARGEST_MARKER_AREA_PT2 * strength / largest

@@ -126,7 +126,8 @@ class ModelKey:
 
 def build_model(rig, key: ModelKey) -> VehicleModel:
     """The vehicle model of key with the compiled entry points the tracker calls loaded (compiled to C the first
-    time, cached on disk after)."""
+    time, cached on disk after).
+    """
     model = VehicleModel(rig, constrained=key.constrained, lane_radius_m=key.lane_radius_m, flow=key.flow_model)
     model_io_linearization(model)
     model_lag_rate(model)
@@ -136,7 +137,8 @@ def build_model(rig, key: ModelKey) -> VehicleModel:
 class ModelBuilder:
     """Builds vehicle models one at a time on a daemon thread of its own (a process that stops mid-compilation
     leaves no library behind: swim_model writes it under another name and renames it). on_built is called on that
-    thread after each build, to wake the thread that waits for it."""
+    thread after each build, to wake the thread that waits for it.
+    """
 
     def __init__(self, rig, on_built: Callable[[], None],
                  realtime: RealtimeSettings = NO_REALTIME_MEANS) -> None:
@@ -170,7 +172,8 @@ class ModelBuilder:
 
 class _Awaited:
     """A concurrent.futures.Future awaited in an rclpy coroutine: yields (the executor resumes the coroutine on its
-    next wake-up) until the future is done, giving True, or until give_up() holds, giving False."""
+    next wake-up) until the future is done, giving True, or until give_up() holds, giving False.
+    """
 
     def __init__(self, future: concurrent.futures.Future, give_up: Callable[[], bool]) -> None:
         self.future = future
@@ -207,7 +210,8 @@ class TrackerNode(LifecycleNode):
     the rig and the range guard's stops and builds the start-up models; activate serves joint_states and
     execute_plan (goals are refused while inactive); deactivate zeroes the torque and ends the goal under way
     (PREEMPTED); cleanup drops the models. owns_process: the node is its process's (main() makes it so) and
-    applies the real-time means to it while active."""
+    applies the real-time means to it while active.
+    """
 
     def __init__(self, owns_process: bool = False) -> None:
         super().__init__("tracker_node")
@@ -255,7 +259,8 @@ class TrackerNode(LifecycleNode):
     def on_configure(self, state: State) -> TransitionCallbackReturn:
         """Load the rig (the range guard's stops are its limits record's) and build the ideal flow's models of the
         rig's two vehicles on its default lane, ready for a first goal (about half a second, or a few seconds to
-        compile them)."""
+        compile them).
+        """
         self.settings = self.parameters.current
         try:
             rig = load_rig(self.settings.rig_path or None)
@@ -295,7 +300,8 @@ class TrackerNode(LifecycleNode):
 
     def _stop_serving(self) -> None:
         """Zero torque, the goal under way ended (PREEMPTED), no more states served; the process at the ordinary
-        policy again."""
+        policy again.
+        """
         if self.active:
             self.active = False
             if self._supervisor is not None:
@@ -334,13 +340,15 @@ class TrackerNode(LifecycleNode):
 
     def _model_key(self, constrained: bool, lane_radius_m: float, flow_model: str) -> ModelKey:
         """One model per flow and lane for the constrained vehicle, one per flow for the free vehicle (its lane
-        is a coordinate, the model the same for every starting lane)."""
+        is a coordinate, the model the same for every starting lane).
+        """
         assert self.rig is not None   # goals are accepted while active only
         return ModelKey(constrained, lane_radius_m if constrained else self.rig.constrained_lane_radius_m, flow_model)
 
     async def _model(self, key: ModelKey, give_up: Callable[[], bool]) -> Optional[VehicleModel]:
         """The vehicle a plan runs on, built once, off this thread (ModelBuilder): awaiting it lets the executor
-        serve everything else meanwhile. None if give_up() holds first (the build goes on for the next goal)."""
+        serve everything else meanwhile. None if give_up() holds first (the build goes on for the next goal).
+        """
         model = self._models.get(key)
         if model is not None:
             return model
@@ -375,7 +383,8 @@ class TrackerNode(LifecycleNode):
     def _make_realtime(self) -> None:
         """The real-time means of the parameters for this process (on activation, once the start-up's models are
         built): its threads at realtime_priority, memory locked, the collector between periods. Said once at info
-        level, or as one warning with what was refused and why."""
+        level, or as one warning with what was refused and why.
+        """
         if not self.owns_process:
             return
         settings = self._realtime()
@@ -503,7 +512,8 @@ class TrackerNode(LifecycleNode):
 
     def _on_cancel(self, handle) -> CancelResponse:
         """Cancel the active goal: hold the foil where it is now; or a goal still waiting for its vehicle model:
-        it never starts."""
+        it never starts.
+        """
         if any(waiting is handle for waiting in self._waiting_for_model):
             return CancelResponse.ACCEPT
         goal = self._goal
@@ -515,7 +525,8 @@ class TrackerNode(LifecycleNode):
 
     async def _execute(self, handle) -> ExecutePlan.Result:
         """Validate the plan, make it the active one (preempting any other), await its end. A goal that waited for
-        its vehicle model while a newer goal arrived is preempted by that one, never the other way round."""
+        its vehicle model while a newer goal arrived is preempted by that one, never the other way round.
+        """
         request = handle.request
         self._goals_received += 1
         arrival = self._goals_received
@@ -587,7 +598,8 @@ class TrackerNode(LifecycleNode):
 
 def autostart(node: TrackerNode) -> None:
     """With the autostart parameter: configure, then activate; a configure that fails is a usage error at start
-    (ValueError with its reason: run_node stops the process with it)."""
+    (ValueError with its reason: run_node stops the process with it).
+    """
     if node.settings.autostart and not configure_and_activate(node) and node.configure_error is not None:
         raise ValueError(node.configure_error)
 

@@ -26,7 +26,8 @@ GRID_POINTS = 13
 class VelocityTerms:
     """The (heave, pitch) accelerations of the velocity terms, -(M^-1 Cm(q, qdot) qdot)_j, rad/s^2: the free
     vehicle's forward dynamics at zero torque, through its native entry point (microseconds a call, so the I/O
-    loop can ask every period; its buffers are its own: one calling thread)."""
+    loop can ask every period; its buffers are its own: one calling thread).
+    """
 
     def __init__(self, model: VehicleModel) -> None:
         self._forward = model.native_function("forward_dynamics")
@@ -41,7 +42,8 @@ class VelocityTerms:
 
 def joint_dynamics_bounds(rig: RigParameters, fraction: float = BRAKING_TORQUE_FRACTION) -> JointDynamicsBounds:
     """The (heave, pitch) decelerations the rig's motors (its torque limits) surely give and the accelerations they
-    give at most between its hard stops, rad/s^2, and the velocity terms (see the module docstring)."""
+    give at most between its hard stops, rad/s^2, and the velocity terms (see the module docstring).
+    """
     model = VehicleModel(rig, constrained=False)
     heave = np.linspace(*rig.hard_limits_rad[0], GRID_POINTS)
     pitch = np.linspace(*rig.hard_limits_rad[1], GRID_POINTS)

@@ -86,7 +86,8 @@ class BridgeSettings(RealtimeParameterSettings):
 
 class BridgeNode(LifecycleNode):
     """owns_process: the node is its process's (main() makes it so) and applies the real-time means to it; a node
-    made in another's process (a test's, a benchmark's) leaves that process's scheduling and collector alone."""
+    made in another's process (a test's, a benchmark's) leaves that process's scheduling and collector alone.
+    """
 
     def __init__(self, owns_process: bool = False) -> None:
         super().__init__("bridge_node")
@@ -171,7 +172,8 @@ class BridgeNode(LifecycleNode):
 
     def _make_realtime(self) -> None:
         """The process's threads at realtime_priority while active (the I/O loop sets its own thread above them),
-        memory locked; said once at info level, or as one warning with what was refused and why."""
+        memory locked; said once at info level, or as one warning with what was refused and why.
+        """
         if not self.owns_process:
             return
         outcome = make_process_realtime(self._realtime())
@@ -182,7 +184,8 @@ class BridgeNode(LifecycleNode):
 
     def _reset_command_timing(self) -> None:
         """The command timing of an activation, from its start: the receipt of each command past the state it
-        answers (the latency) and past the command before less the period (the jitter)."""
+        answers (the latency) and past the command before less the period (the jitter).
+        """
         self.command_latency = LatencyHistogram()
         self.command_jitter = LatencyHistogram()
         self._state_samples: collections.OrderedDict[int, float] = collections.OrderedDict()
@@ -332,7 +335,8 @@ class BridgeNode(LifecycleNode):
 
     def _timing_values(self, snapshot: Snapshot) -> dict[str, object]:
         """How the periods went since the activation: overruns by cause and the worst one, the wake-up lateness,
-        the commands' latency and jitter (median and p99, ms), and the real-time means in effect."""
+        the commands' latency and jitter (median and p99, ms), and the real-time means in effect.
+        """
         loop = self.loop
         by_cause = dict(zip(("late_wakeup", "slow_read", "slow_write", "slow_work"), snapshot.overruns_by_cause))
         values: dict[str, object] = {f"overruns_{cause}": count for cause, count in by_cause.items()}

@@ -159,7 +159,8 @@ def default_config_path() -> Path:
 
 def load_bridge_config(path: str | Path | None = None, rig: RigParameters | None = None) -> BridgeConfig:
     """Read and check a bridge file (the shipped one when path is None or empty) for rig (None: swim_model's
-    shipped rig). Raises BridgeConfigError."""
+    shipped rig). Raises BridgeConfigError.
+    """
     source = Path(path) if path else default_config_path()
     try:
         document = yaml.safe_load(source.read_text())

@@ -91,7 +91,8 @@ class Command:
 
 def soft_limit_scale(position: float, torque: float, lower: float, upper: float, margin: float) -> float:
     """Factor in [0, 1] for torque at position: 1 away from the limits and for torque pointing inward,
-    falling linearly to 0 at the hard limit for torque pointing outward (see the module docstring)."""
+    falling linearly to 0 at the hard limit for torque pointing outward (see the module docstring).
+    """
     if torque > 0.0:
         return min(max((upper - position) / margin, 0.0), 1.0)
     if torque < 0.0:
@@ -118,7 +119,8 @@ def braking_speed_limit(distance_rad: float, deceleration_rad_s2: float, latency
     drive_acceleration_rad_s2 for latency_s, then brakes at deceleration_rad_s2, stops by the limit:
     with u = v + A L the speed when braking starts, d = v L + A L^2 / 2 + u^2 / (2 a), so
     u = a (sqrt(L^2 + (2 d + A L^2) / a) - L) and v = u - A L; 0 at or past the limit, when even v = 0 is too
-    fast, or when the joint cannot be braked at all (a <= 0)."""
+    fast, or when the joint cannot be braked at all (a <= 0).
+    """
     if distance_rad <= 0.0 or deceleration_rad_s2 <= 0.0:
         return 0.0
     if math.isinf(deceleration_rad_s2):
@@ -148,7 +150,8 @@ class JointDynamicsBounds:
 class Motion:
     """What the braking rule reads of the rig's motion at a sample: the (alpha rad, R m, phi rad, theta rad)
     positions, their mean rates over the last sample interval (the difference quotient of the last two samples,
-    rad/s and m/s) and that interval, s (0: none yet, rates zero)."""
+    rad/s and m/s) and that interval, s (0: none yet, rates zero).
+    """
 
     positions: tuple[float, float, float, float]
     mean_rates: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
@@ -209,7 +212,8 @@ class SafetyLayer:
 
     def reset(self, now_s: float) -> None:
         """Clear every latched fault; output resumes only with a command received after now_s. A joint found past
-        its hard limit at the next check_positions is recovering (see the module docstring)."""
+        its hard limit at the next check_positions is recovering (see the module docstring).
+        """
         self.faults = FaultCode.NONE
         self.recovering = [True, True]
         self.arm(now_s)
@@ -235,7 +239,8 @@ class SafetyLayer:
 
     def check_positions(self, heave_rad: float, pitch_rad: float) -> None:
         """Latch HARD_LIMIT when a joint is past (or cannot be placed within) its hard limits, unless it is
-        recovering from a reset (a NaN position always latches)."""
+        recovering from a reset (a NaN position always latches).
+        """
         for joint, (position, (lower, upper)) in enumerate(zip((heave_rad, pitch_rad), self.limits.hard_limits_rad)):
             inside = lower <= position <= upper   # false for NaN
             if inside or math.isnan(position):
@@ -247,7 +252,8 @@ class SafetyLayer:
     def output(self, now_s: float, command: Command | None, heave_rad: float, pitch_rad: float,
                motion: Motion | None = None) -> tuple[float, float, float, float]:
         """(heave_a, pitch_a, heave_n_m, pitch_n_m): currents to write and the joint torques they make, for the
-        joints' positions (rad) and the rig's motion (None: at rest as far as is known)."""
+        joints' positions (rad) and the rig's motion (None: at rest as far as is known).
+        """
         requested = self._requested(now_s, command)
         if requested is None:
             self._last_torques = [0.0, 0.0]
@@ -271,7 +277,8 @@ class SafetyLayer:
     def _requested(self, now_s: float, command: Command | None) -> tuple[float, float] | None:
         """The (heave, pitch) torque asked of the joints before the limits: the command's, or zero while waiting
         for one or with the watchdog expired; None for zero output whatever the braking rule says (a latched
-        fault)."""
+        fault).
+        """
         if command is None or command.received_monotonic_s <= self._resume_after_s:
             self.watchdog = WatchdogState.WAITING
             return None if self.faults else (0.0, 0.0)
@@ -289,7 +296,8 @@ class SafetyLayer:
     def _joint(self, joint: int, torque_n_m: float, position: float, motion: Motion,
                velocity_term_rad_s2: float) -> tuple[float, float, bool]:
         """(current A, joint torque N m, clipped?) for one motor; a NaN position gives a NaN current, which
-        the caller catches."""
+        the caller catches.
+        """
         limits = self.limits
         torque_limit = limits.torque_limits_n_m[joint]
         clipped = abs(torque_n_m) > torque_limit
@@ -316,7 +324,8 @@ class SafetyLayer:
     def _braking(self, joint: int, position: float, motion: Motion, velocity_term_rad_s2: float) -> int:
         """Rule 6 for a joint within its limits, whose velocity terms accelerate it by velocity_term_rad_s2: +1
         braking it short of its upper limit, -1 of its lower one, 0 not (kept in self.braking: once braking, until
-        stopped)."""
+        stopped).
+        """
         limits, dynamics = self.limits, self.limits.dynamics
         lower, upper = limits.hard_limits_rad[joint]
         drive, deceleration = dynamics.drive_accelerations_rad_s2[joint], dynamics.decelerations_rad_s2[joint]

@@ -28,7 +28,8 @@ class OverrunCause(enum.IntEnum):
 
 def overrun_cause(wake_lateness_s: float, read_s: float, write_s: float, work_s: float) -> OverrunCause:
     """The largest part of a late period: its wake-up lateness, its read, its write, or the rest of its work
-    (work_s: the whole period's work, read and write included)."""
+    (work_s: the whole period's work, read and write included).
+    """
     rest_s = work_s - read_s - write_s
     parts = ((wake_lateness_s, OverrunCause.LATE_WAKEUP), (read_s, OverrunCause.SLOW_READ),
              (write_s, OverrunCause.SLOW_WRITE), (rest_s, OverrunCause.SLOW_WORK))
@@ -64,7 +65,8 @@ class LatencyHistogram:
 
     def percentile_s(self, percent: float) -> float:
         """The upper edge of the bin holding the percent-th percentile, at most the largest duration (nan while
-        empty)."""
+        empty).
+        """
         counts = self.counts.copy()   # the loop's thread may add meanwhile
         total = int(counts.sum())
         if total == 0:

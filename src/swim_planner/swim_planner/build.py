@@ -37,7 +37,8 @@ def local_executor(workers: int) -> concurrent.futures.ProcessPoolExecutor:
     spin: the free R = 0.43 m, E = 0.05 decelerate took 66 s of CPU for 43 s of wall time with them, 43 s for the
     same wall time on one thread, so workers that share the cores slow each other down. The workers are spawned,
     not forked, so none inherits a BLAS this process may have started already. They die with this process
-    (swim_ros.processes), which a worker waiting for its next job would otherwise outlive for good."""
+    (swim_ros.processes), which a worker waiting for its next job would otherwise outlive for good.
+    """
     return concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
                                                   initializer=_start_worker, initargs=(os.getpid(),))
 
@@ -57,7 +58,8 @@ def solve_job(rig: RigParameters, spec: PrimitiveSpec, limits: PlanningLimits, s
     and the lag states with the circulatory flow), or None.
     guess: a primitive on the same grid to start from, or the cruise this primitive joins (its stroke
     seeds the initial guess of an accelerate or decelerate).
-    flow_model: swim_model's flow model the primitive is solved with ("ideal" or "circulatory")."""
+    flow_model: swim_model's flow model the primitive is solved with ("ideal" or "circulatory").
+    """
     model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m, flow=flow_model)
     primitive = solve_from_guess_or_blend(model, spec, limits, start, end, guess, settings)
     return gains_job(rig, primitive, lqr_weights)
@@ -69,7 +71,8 @@ def solve_from_guess_or_blend(model: VehicleModel, spec: PrimitiveSpec, limits: 
     """solve_primitive from guess, and if IPOPT gives up there, once more from the plain blend of the boundary
     states (guess None) before the PrimitiveSolveError: IPOPT's infeasibility verdicts depend on where it starts,
     and where a start leads it depends on the round-off of the machine's linear algebra. What a library build
-    solves each primitive with."""
+    solves each primitive with.
+    """
     try:
         return solve_primitive(model, spec, limits, start=start, end=end, guess=guess, settings=settings)
     except PrimitiveSolveError:
@@ -84,7 +87,8 @@ def dependencies(spec: PrimitiveSpec) -> list[str]:
 
 def expected_work(spec: PrimitiveSpec) -> int:
     """A spec's solve cost in collocation intervals times NLP solves: its continuation's steps (a first one without
-    the bound, each looser bound, the last) on its coarser grid if it has one, then one solve on its own grid."""
+    the bound, each looser bound, the last) on its coarser grid if it has one, then one solve on its own grid.
+    """
     continuation = spec.angle_of_attack_continuation_rad
     steps = len(continuation) + 2 if continuation else 1
     if spec.coarse_intervals is None:
@@ -96,7 +100,8 @@ def critical_work(specs: Sequence[PrimitiveSpec]) -> dict[str, int]:
     """{id: the spec's expected_work plus the most expected_work of any chain of specs that join it} (its
     "bottom level"): a build starts the ready spec of most critical work first, so a cruise whose decelerate is long
     goes before a short transition, and the long solves before the short ones, which fill in at the end
-    (list scheduling, longest path first)."""
+    (list scheduling, longest path first).
+    """
     joined_by: dict[str, list[PrimitiveSpec]] = {}
     for spec in specs:
         for dependency in dependencies(spec):
@@ -137,7 +142,8 @@ def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], exe
     one ends, submits the ready spec of most ``critical_work``. None (a cluster whose size may change): every spec
     is submitted as soon as what it joins is solved, those ready together in that order.
 
-    Raises:
+    Raises
+    ------
         ValueError: workers below 1, or a spec that joins a primitive neither in specs nor in the library; nothing
             is solved or stored then.
     """
@@ -206,7 +212,8 @@ def measure_disturbance_bounds(library: PrimitiveLibrary, specs: Sequence[Primit
                                executor: concurrent.futures.Executor,
                                progress: Progress = lambda i, s: None) -> list[str]:
     """Measure and store D(t) of every spec's primitive in the library that has none (disturbance_job, on the
-    executor); returns the ids whose measurement failed (their reasons reported) or whose wake history is missing."""
+    executor); returns the ids whose measurement failed (their reasons reported) or whose wake history is missing.
+    """
     jobs: dict[concurrent.futures.Future, str] = {}
     failed: list[str] = []
     for spec in specs:

@@ -125,7 +125,8 @@ def _neighbour_pairs(energy_levels_j: tuple[float, ...]) -> list[tuple[float, fl
 def constrained_specs(rig: RigParameters,
                       energy_levels_j: tuple[float, ...] = ENERGY_LEVELS_J) -> list[PrimitiveSpec]:
     """The constrained graph: a cruise, its accelerate and its decelerate at each level (ascending), and the
-    cruise-to-cruise edges between neighbouring levels."""
+    cruise-to-cruise edges between neighbouring levels.
+    """
     lane = rig.constrained_lane_radius_m
     specs = []
     for energy in energy_levels_j:
@@ -146,7 +147,8 @@ def constrained_specs(rig: RigParameters,
 
 def free_specs(rig: RigParameters, energy_levels_j: tuple[float, ...] = ENERGY_LEVELS_J) -> list[PrimitiveSpec]:
     """The free two-lane graph: in each lane the constrained graph's primitives, and a lane change each way at
-    every level."""
+    every level.
+    """
     lanes = (rig.lane_1_radius_m, rig.lane_2_radius_m)
     specs = []
     for lane, energy in itertools.product(lanes, energy_levels_j):
@@ -190,7 +192,8 @@ def circulatory_specs(rig: RigParameters) -> list[PrimitiveSpec]:
     those of CIRCULATORY_LONGER_S (which take precedence); the cruises stroke at a Strouhal number of at least
     CIRCULATORY_CONSTRAINED_MIN_STROUHAL (constrained) or CIRCULATORY_FREE_MIN_STROUHAL (free); the constrained
     decelerates turn the foil back to rest within CIRCULATORY_CONSTRAINED_DECELERATE_REST_WINDOW_S at no more than
-    CIRCULATORY_CONSTRAINED_DECELERATE_FOIL_RATE_RAD_S."""
+    CIRCULATORY_CONSTRAINED_DECELERATE_FOIL_RATE_RAD_S.
+    """
     specs = constrained_specs(rig, CIRCULATORY_ENERGY_LEVELS_J) + free_specs(rig, CIRCULATORY_ENERGY_LEVELS_J)
     unknown = set(CIRCULATORY_LONGER_S) - {s.primitive_id for s in specs}
     assert not unknown, f"CIRCULATORY_LONGER_S names no spec of the set: {sorted(unknown)}"

@@ -48,7 +48,8 @@ class Transcription:
 
     def points(self) -> ca.MX:
         """(x; u) at the knots, then at the midpoints: the 2N + 1 points where a pointwise function is
-        evaluated (``knots`` and ``midpoints`` split its values)."""
+        evaluated (``knots`` and ``midpoints`` split its values).
+        """
         return ca.horzcat(ca.vertcat(self.x, self.u), ca.vertcat(self.x_mid, self.u_mid))
 
     def knots(self, values: ca.MX) -> ca.MX:
@@ -89,7 +90,8 @@ def hermite_simpson(grid: Transcription, state_derivative: ca.MX) -> None:
 
 def simpson_integral(grid: Transcription, integrand: ca.MX) -> ca.MX:
     """Integral over [0, T] by Simpson's rule on each interval, given the integrand over ``grid.points()``
-    (a row; several rows give several integrals)."""
+    (a row; several rows give several integrals).
+    """
     at_knots, at_mid = grid.knots(integrand), grid.midpoints(integrand)
     return grid.step_s / 6.0 * (ca.sum2(at_knots[:, :-1]) + 4.0 * ca.sum2(at_mid) + ca.sum2(at_knots[:, 1:]))
 

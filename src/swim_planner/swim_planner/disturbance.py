@@ -130,13 +130,15 @@ def _foil_velocity_maps(model: VehicleModel, q: Array) -> Array:
 
 def generalized_force(model: VehicleModel, q: npt.ArrayLike, foil_force: npt.ArrayLike) -> Array:
     """Q = Q2(q)' f at n samples: q (n, nq), f (n, 3) = (fx N, fy N, mz N m) in foil axes at F; Q (n, nq), N m on
-    the angles, N on R (virtual work: Q . qdot = f . (U, V, Omega))."""
+    the angles, N on R (virtual work: Q . qdot = f . (U, V, Omega)).
+    """
     return np.einsum("nij,ni->nj", _foil_velocity_maps(model, np.atleast_2d(q)), np.atleast_2d(foil_force))
 
 
 def matched_disturbance(model: VehicleModel, q: npt.ArrayLike, force_q: npt.ArrayLike) -> tuple[Array, Array]:
     """(d, unmatched): d = dQ_psi - Mm21 Mm11^-1 dQ_y (N m, heave and pitch), the torque on the motors that moves
-    the foil as dQ does; unmatched = Mm11^-1 dQ_y (rad/s^2, m/s^2), the rest of Mm^-1 dQ (module docstring)."""
+    the foil as dQ does; unmatched = Mm11^-1 dQ_y (rad/s^2, m/s^2), the rest of Mm^-1 dQ (module docstring).
+    """
     mass = model.mass_matrix(q)
     force = np.asarray(force_q, dtype=float).reshape(-1)
     ny = model.n_unactuated
@@ -146,7 +148,8 @@ def matched_disturbance(model: VehicleModel, q: npt.ArrayLike, force_q: npt.Arra
 
 def _motion(lead_in: Sequence[Primitive], primitive: Primitive) -> tuple[Array, Array, Array, Array]:
     """(t, q, qdot, lag) of the lead-in primitives run one after another and then ``primitive``, on one time axis
-    where ``primitive`` keeps its own times (the lead-in at negative times) and alpha is continuous (P1)."""
+    where ``primitive`` keeps its own times (the lead-in at negative times) and alpha is continuous (P1).
+    """
     chain = [*lead_in, primitive]
     for previous, following in zip(chain, chain[1:]):
         mismatch = junction_mismatch(previous, following)
@@ -182,7 +185,8 @@ def measuring_wake(rig: RigParameters) -> WakeParameters:
 
 def wake_record(rig: RigParameters) -> dict:
     """measuring_wake's parameters as the manifest records them (JSON values): a D(t) measured in another wake
-    is measured again (PrimitiveLibrary.needs_disturbance_bound)."""
+    is measured again (PrimitiveLibrary.needs_disturbance_bound).
+    """
     return dataclasses.asdict(measuring_wake(rig))
 
 
@@ -263,7 +267,8 @@ def lead_in_ids(spec: PrimitiveSpec) -> list[str]:
     """The primitives whose motion before ``spec``'s gives the wake its history: the primitive its start joins
     (a cruise for a decelerate, cruise-to-cruise or lane change), a cruise itself once (a cruise follows a cruise
     in every maneuver but the first, and the accelerate before that one ends on the cruise's stroke), none from rest
-    (an accelerate: the water is still)."""
+    (an accelerate: the water is still).
+    """
     if spec.start_from is not None:
         return [spec.start_from]
     return [spec.primitive_id] if spec.primitive_type is PrimitiveType.CRUISE else []
@@ -273,7 +278,8 @@ def disturbance_job(rig: RigParameters, primitive: Primitive, lead_in: Sequence[
                     half_width_s: float = ENVELOPE_HALF_WIDTH_S) -> tuple[str, Array, dict]:
     """(primitive id, stored bound (N,) N m, measurement record) of a circulatory primitive, in a worker process:
     ``flow_force_mismatch`` along it after ``lead_in`` (``lead_in_ids``), D's envelope (``bound_envelope``), and
-    what the manifest records of how it was measured (JSON values)."""
+    what the manifest records of how it was measured (JSON values).
+    """
     spec = primitive.spec
     model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m, flow="circulatory")
     profile = flow_force_mismatch(model, primitive, lead_in=lead_in)

@@ -29,7 +29,8 @@ def gains_job(rig: RigParameters, primitive: Primitive, lqr_weights: LqrWeights)
     """The primitive with its LQ gains P(t), G'P computed (swim_control.riccati), once, off-line.
 
     A primitive with lag states was solved with the circulatory flow model: its gains are for that model, on the
-    extended error state (int e_y, e_q, edot_q, e_z)."""
+    extended error state (int e_y, e_q, edot_q, e_z).
+    """
     spec = primitive.spec
     flow = "ideal" if primitive.lag is None else "circulatory"
     model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m, flow=flow)
@@ -45,7 +46,8 @@ def gains_job(rig: RigParameters, primitive: Primitive, lqr_weights: LqrWeights)
 
 def load_lqr_weights(path: str | Path, base: LqrWeights = LqrWeights()) -> LqrWeights:
     """LqrWeights from a YAML mapping of its field names, the others those of base (a library's own weights, or
-    the package defaults)."""
+    the package defaults).
+    """
     names = {field.name for field in dataclasses.fields(LqrWeights)}
     try:
         values = yaml.safe_load(Path(path).read_text()) or {}

@@ -184,7 +184,8 @@ NINE_COEFFICIENTS = np.array([[True] * 3 + [False] * 2] + [[True] * 2 + [False] 
 
 def _stroke_start(free: Array, duration_s: float) -> Array:
     """Amplitudes growing linearly from 0, phases advancing at 2 pi rad/s, pitch 90 deg ahead: a swimming
-    stroke to start the search from, not the answer."""
+    stroke to start the search from, not the answer.
+    """
     start = np.zeros(free.shape)
     start[0, 1], start[2, 1] = 0.3 / duration_s, 0.5 / duration_s
     start[1, 1], start[3, 0], start[3, 1] = 2 * math.pi, math.pi / 2, 2 * math.pi
@@ -197,7 +198,8 @@ def _solve_segment(batch: ca.Function, samples: int, spec: PrimitiveSpec, tau_ma
     """Nelder-Mead on one segment of eq. 11; imposed end values are penalties (fmin takes no constraints).
 
     start: (psi, psidot) at the segment's start, psidot None where the foil velocity may jump;
-    end: (psi, psidot) to reach, or None for a free end."""
+    end: (psi, psidot) to reach, or None for a free end.
+    """
     times = np.linspace(0.0, duration_s, samples)
     weights = np.array([spec.heave_effort_weight, spec.pitch_effort_weight])
 
@@ -250,7 +252,8 @@ def solve_polynomial_sine_accelerate(model: VehicleModel, spec: PrimitiveSpec, e
     segments = 2: the paper's composite, two halves of ``free`` (default NINE_COEFFICIENTS) each, solved in
     turn: the first from rest with a free end, the second from the first's end configuration (its foil
     velocity may jump there, Sec. 4.3) to the cruise's start state. With p_alpha = 0 the halves' indices
-    add up, so solving them in turn is the paper's "suboptimal" composite, not a joint optimum."""
+    add up, so solving them in turn is the paper's "suboptimal" composite, not a joint optimum.
+    """
     if spec.primitive_type is not PrimitiveType.ACCELERATE:
         raise ValueError("solve_polynomial_sine_accelerate solves accelerates")
     if segments not in (1, 2):

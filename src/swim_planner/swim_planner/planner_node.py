@@ -96,7 +96,8 @@ class PlannerSettings:
 
 class AnswerMemory:
     """Replies by request id, the latest ANSWERS_KEPT. A repeat that arrives while the first is still being
-    planned waits for that reply instead of planning again."""
+    planned waits for that reply instead of planning again.
+    """
 
     def __init__(self, size: int = ANSWERS_KEPT) -> None:
         self.size = size
@@ -158,7 +159,8 @@ class PlannerNode(Node):
 
     def _apply_parameters(self, previous: PlannerSettings, current: PlannerSettings) -> None:
         """Post-set: new bounds (read from the settings by each request) and LQ weights serve the requests that
-        come after."""
+        come after.
+        """
         if current.lqr_weights_path != previous.lqr_weights_path:
             try:
                 self._plan_library = self._retuned(current.lqr_weights_path)

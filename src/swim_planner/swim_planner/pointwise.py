@@ -43,7 +43,8 @@ class PointwiseFunction:
     @classmethod
     def compiled(cls, phi: ca.SX, y: ca.SX, theta: ca.SX, tag: str) -> "PointwiseFunction":
         """The three functions of the SX expression phi(y, theta), compiled to C (once per machine: the library
-        is cached under the hash of its source) or, without a C compiler, in CasADi's virtual machine."""
+        is cached under the hash of its source) or, without a C compiler, in CasADi's virtual machine.
+        """
         weights = ca.SX.sym("w", phi.numel())
         functions = [ca.Function(f"{tag}_phi", [y, theta], [phi]),
                      ca.Function(f"{tag}_jac", [y, theta], [ca.jacobian(phi, y)]),
@@ -58,7 +59,8 @@ class PointwiseFunction:
 @dataclasses.dataclass(frozen=True)
 class PointwiseNlp:
     """The NLP above. ``phi_placeholder`` is the m x P symbol standing for Phi in f and g; ``points`` the ny x P
-    expression of the y_p in z; ``theta`` the value of phi's parameters."""
+    expression of the y_p in z; ``theta`` the value of phi's parameters.
+    """
 
     z: ca.MX
     f: ca.MX
@@ -89,7 +91,8 @@ def _constant(expression: ca.MX, symbols: list[ca.MX], what: str) -> ca.DM:
 
 def _block_diagonal(block: ca.Sparsity, count: int) -> ca.Sparsity:
     """The sparsity of blockdiag(block, ..., block): its nonzeros are ordered as those of a horizontal
-    concatenation of the blocks (column-major, blocks in turn), which is what a mapped function returns."""
+    concatenation of the blocks (column-major, blocks in turn), which is what a mapped function returns.
+    """
     return ca.kron(ca.DM.eye(count), ca.DM(block, 1.0)).sparsity()
 
 
@@ -149,7 +152,8 @@ def derivative_functions(nlp: PointwiseNlp, structure: Structure) -> dict[str, c
 def simple_bounds(structure: Structure, lbg: Array, ubg: Array) -> tuple[list[int], Array, Array]:
     """The rows of g that bound a single variable, g_i = a z_j + c, as bounds on z_j (intersected when several
     bound one variable): IPOPT keeps a bound in its barrier term, with no row in its linear system. Returns
-    the rows to keep as constraints, lbx and ubx."""
+    the rows to keep as constraints, lbx and ubx.
+    """
     a = structure.a.sparse().tocsr()
     coupled = np.diff(structure.b_g.sparse().tocsr().indptr) > 0
     lbx, ubx = np.full(a.shape[1], -np.inf), np.full(a.shape[1], np.inf)
@@ -183,7 +187,8 @@ def solve(nlp: PointwiseNlp, z0: Array, lbg: Array, ubg: Array, ipopt_options: d
     """Solve lbg <= g <= ubg, min f by IPOPT from z0, single-variable rows of g moved to bounds on z.
 
     derivatives "pointwise": the assembled ones of ``derivative_functions``; "casadi": CasADi's AD of the NLP
-    written with the SX phi (``expand`` turns it into one SX graph first)."""
+    written with the SX phi (``expand`` turns it into one SX graph first).
+    """
     structure = Structure.of(nlp)
     lbg, ubg = np.asarray(lbg, dtype=float).ravel(), np.asarray(ubg, dtype=float).ravel()
     keep, lbx, ubx = simple_bounds(structure, lbg, ubg)

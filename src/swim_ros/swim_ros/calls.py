@@ -41,7 +41,8 @@ class Spinner(Protocol):
 
 class ServedElsewhere:
     """A Spinner for a caller inside a callback of a multi-threaded executor: the executor's other threads serve
-    the answers, so waiting is sleeping, poll_s at a time (the answer is seen at most poll_s late)."""
+    the answers, so waiting is sleeping, poll_s at a time (the answer is seen at most poll_s late).
+    """
 
     def __init__(self, poll_s: float = 0.001) -> None:
         if not poll_s > 0.0:
@@ -67,7 +68,8 @@ class RetryPolicy:
 
     The defaults are assumed: a lost answer is a start-up event (discovery), so three tries of 10 s cover a
     loaded 2-core host; a server that is merely slow (a new primitive's gains, 0.1-0.3 s) answers well within
-    one try."""
+    one try.
+    """
 
     attempt_timeout_s: float = 10.0    # one try's wait for an answer, s
     attempts: int = 3                  # tries before CallFailed
@@ -104,7 +106,8 @@ def repeat_until_answered(executor: Spinner, send: Callable[[], Future], name: s
                           cancel: Optional[Callable[[Future], None]] = None) -> Any:
     """send() up to policy.attempts times, each time the answers so far are overdue; the first answer of any try.
 
-    send must be safe to repeat (see the module docstring). cancel(future) forgets a try that did not answer."""
+    send must be safe to repeat (see the module docstring). cancel(future) forgets a try that did not answer.
+    """
     start = time.monotonic()
     futures: list[Future] = []
     try:
@@ -186,7 +189,8 @@ def change_lifecycle_state(node: Node, executor: Spinner, target_node: str, tran
     failed.
 
     A transition is not idempotent (configure twice fails the second time), so it is sent again only after
-    get_state shows it did not happen: a node found in the transition's goal state has made it."""
+    get_state shows it did not happen: a node found in the transition's goal state has made it.
+    """
     from lifecycle_msgs.msg import Transition
     from lifecycle_msgs.srv import ChangeState, GetState
     goal_state_id = transition_goal_state(transition_id)
@@ -233,7 +237,8 @@ def send_goal(executor: Spinner, action_client: Any, goal: Any, status: GoalStat
 
     A goal whose answer is overdue is sent again with the same goal id. The server refuses an id it already
     has without starting it again; if the status topic then lists the id, the first try was accepted and its
-    handle is made here, so the caller can follow it as any other."""
+    handle is made here, so the caller can follow it as any other.
+    """
     from action_msgs.msg import GoalStatus
     from rclpy.action.client import ClientGoalHandle
     from unique_identifier_msgs.msg import UUID
@@ -263,7 +268,8 @@ def send_goal(executor: Spinner, action_client: Any, goal: Any, status: GoalStat
 
 def goal_result(executor: Spinner, handle: Any, timeout_s: float, resend_after_s: float = 10.0) -> Any:
     """The goal's result (the action's GetResult response), asking again every resend_after_s while none
-    came (a result request is idempotent); CallFailed after timeout_s."""
+    came (a result request is idempotent); CallFailed after timeout_s.
+    """
     tries = max(1, int(timeout_s // resend_after_s))
     policy = RetryPolicy(attempt_timeout_s=timeout_s / tries, attempts=tries, discovery_timeout_s=0.0)
     return repeat_until_answered(executor, handle.get_result_async, "goal result", policy)

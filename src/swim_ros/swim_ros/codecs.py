@@ -23,7 +23,8 @@ class MessageError(ValueError):
 
 def float_array(values: npt.ArrayLike) -> array.array:
     """values, flattened, as array('d'): a message's float64[] field takes it without checking each element
-    (a list of 200,000 floats costs rosidl's setter about 40 ms)."""
+    (a list of 200,000 floats costs rosidl's setter about 40 ms).
+    """
     converted = array.array("d")
     converted.frombytes(np.ascontiguousarray(values, dtype=np.float64).tobytes())
     return converted
@@ -43,7 +44,8 @@ def seconds_of(stamp: Time) -> float:
 def joint_state_arrays(names: Sequence[str], positions: Sequence[float], velocities: Sequence[float],
                        joint_names: Sequence[str]) -> tuple[np.ndarray, Optional[np.ndarray]]:
     """(q, qdot) in joint_names' order from a sensor_msgs/JointState's name, position and velocity (any order);
-    qdot None when the message has no velocities. Raises MessageError."""
+    qdot None when the message has no velocities. Raises MessageError.
+    """
     names, joint_names = list(names), list(joint_names)
     if sorted(names) != sorted(joint_names) or len(set(names)) != len(names):
         raise MessageError(f"joint names {names}, expected {joint_names} (any order)")
@@ -65,7 +67,8 @@ def joint_state_arrays(names: Sequence[str], positions: Sequence[float], velocit
 
 def torque_from_command(names: Sequence[str], efforts: Sequence[float]) -> tuple[float, float]:
     """(heave, pitch) joint torques, N m, from a joint_commands message's names and efforts: names exactly
-    ACTUATED_JOINTS once each (any order), one finite effort per name. Raises MessageError."""
+    ACTUATED_JOINTS once each (any order), one finite effort per name. Raises MessageError.
+    """
     names = list(names)
     if sorted(names) != sorted(ACTUATED_JOINTS):
         raise MessageError(f"joint names must be {list(ACTUATED_JOINTS)} (any order), got {names}")

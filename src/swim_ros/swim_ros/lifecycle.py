@@ -1,5 +1,6 @@
 """What swim's lifecycle nodes share: a change_state service that answers a transition the state does not have,
-and the one-command start (configure, then activate) behind their autostart parameter."""
+and the one-command start (configure, then activate) behind their autostart parameter.
+"""
 from __future__ import annotations
 
 from lifecycle_msgs.srv import ChangeState
@@ -19,7 +20,8 @@ def guard_change_state_service(node: LifecycleNode) -> None:
     methods, would mean serving change_state, get_state (7.1 has no public current-state getter: we would
     track it ourselves), get_available_states, get_available_transitions, get_transition_graph and the
     transition_event topic by hand: far more to get wrong than wrapping one callback. On an rclpy that has
-    the fix, or no such attribute, this does nothing harmful: the wrapper only catches what escapes."""
+    the fix, or no such attribute, this does nothing harmful: the wrapper only catches what escapes.
+    """
     service = getattr(node, "_service_change_state", None)
     if service is None:
         return

@@ -35,7 +35,8 @@ Check = Callable[[Any], Optional[str]]
 @dataclasses.dataclass(frozen=True)
 class ParameterSpec:
     """One parameter of a node: name, default (its type is the parameter's type), what it is (with its unit),
-    an inclusive range for numbers, read_only if it is fixed once the node has started, and an extra check."""
+    an inclusive range for numbers, read_only if it is fixed once the node has started, and an extra check.
+    """
 
     name: str
     default: ParameterValue
@@ -59,7 +60,8 @@ class ParameterSpec:
 
     def reason_invalid(self, value: Any) -> Optional[str]:
         """Why value is not valid for this parameter (range and check), or None. rclpy checks the range too;
-        this also serves the values a node is started with."""
+        this also serves the values a node is started with.
+        """
         if self.range is not None:
             low, high = self.range
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:
@@ -73,7 +75,8 @@ class ParameterSpec:
 
 def declare_parameters(node: Node, table: Sequence[ParameterSpec]) -> None:
     """Declare every parameter of table on node; ValueError naming the first start-up value that is not valid
-    (rclpy's own range refusal included), so run_node reports it as a fatal start-up error."""
+    (rclpy's own range refusal included), so run_node reports it as a fatal start-up error.
+    """
     from rclpy.exceptions import InvalidParameterValueException
     for spec in table:
         try:
@@ -87,7 +90,8 @@ def declare_parameters(node: Node, table: Sequence[ParameterSpec]) -> None:
 
 def check_parameters(table: Sequence[ParameterSpec], parameters: Sequence[Any]) -> SetParametersResult:
     """The on-set callback: refuses the whole set, with the first reason, if any value is not valid. Parameters
-    not in table (rclpy's own, such as use_sim_time) pass."""
+    not in table (rclpy's own, such as use_sim_time) pass.
+    """
     specs = {spec.name: spec for spec in table}
     for parameter in parameters:
         spec = specs.get(parameter.name)
@@ -116,7 +120,8 @@ def one_of(*choices: str) -> Check:
 
 def realtime_parameters(priority: int, thread: str) -> tuple[ParameterSpec, ...]:
     """The real-time means of a periodic node (swim_ros.realtime.RealtimeSettings), fixed at start; priority is
-    the default priority of thread (which of the node's threads it sets: "node's threads", ...)."""
+    the default priority of thread (which of the node's threads it sets: "node's threads", ...).
+    """
 
     def cpu_list(value: Any) -> Optional[str]:
         if value == "":
@@ -147,7 +152,8 @@ def realtime_parameters(priority: int, thread: str) -> tuple[ParameterSpec, ...]
 @dataclasses.dataclass(frozen=True)
 class RealtimeParameterSettings:
     """The fields of realtime_parameters' table, for the settings type of a node that declares it to derive from
-    (NodeSettings)."""
+    (NodeSettings).
+    """
 
     realtime_policy: str
     realtime_priority: int
@@ -171,7 +177,8 @@ def _field_types(settings_type: type) -> dict[str, Any]:
 
 def _group_kind(field_type: Any) -> Optional[str]:
     """How a settings field holds the parameters named "<field>.<name>": "dataclass" (a field per name), "dict"
-    (every such parameter, by name), or None (the field is one parameter)."""
+    (every such parameter, by name), or None (the field is one parameter).
+    """
     if isinstance(field_type, type) and dataclasses.is_dataclass(field_type):
         return "dataclass"
     return "dict" if typing.get_origin(field_type) is dict else None
@@ -180,7 +187,8 @@ def _group_kind(field_type: Any) -> Optional[str]:
 def check_settings_type(settings_type: type, table: Sequence[ParameterSpec]) -> None:
     """TypeError unless settings_type is a frozen dataclass holding table's parameters, each once: a field named
     as the parameter, typed as its default; or, for the parameters named "<group>.<name>", a field <group> that is
-    a dataclass with a field per name, or a dict of them all."""
+    a dataclass with a field per name, or a dict of them all.
+    """
     names = [spec.name for spec in table]
     defaults = {spec.name: spec.default for spec in table}
     held: list[str] = []
@@ -204,7 +212,8 @@ def check_settings_type(settings_type: type, table: Sequence[ParameterSpec]) -> 
 
 def settings_from_values(settings_type: type[SettingsT], values: Mapping[str, Any]) -> SettingsT:
     """settings_type (check_settings_type) made from values, parameter name -> value; the groups' dataclasses
-    check themselves (ValueError, TypeError)."""
+    check themselves (ValueError, TypeError).
+    """
     arguments: dict[str, Any] = {}
     for name, field_type in _field_types(settings_type).items():
         kind = _group_kind(field_type)
@@ -217,7 +226,8 @@ def settings_from_values(settings_type: type[SettingsT], values: Mapping[str, An
 
 def read_settings(node: Node, table: Sequence[ParameterSpec], settings_type: type[SettingsT]) -> SettingsT:
     """The node's parameters of table now, as settings_type; ValueError with the first reason a value is not
-    valid."""
+    valid.
+    """
     values = {spec.name: node.get_parameter(spec.name).value for spec in table}
     for spec in table:
         reason = spec.reason_invalid(values[spec.name])
@@ -231,7 +241,8 @@ class NodeSettings(Generic[SettingsT]):
     the table is declared on node (a start-up value that is not valid: ValueError naming it), a set is refused
     with the first reason (the table's ranges and checks, the snapshot it would make, then check on that
     snapshot) and changes nothing; once accepted, ``current`` is the new snapshot and on_change(previous,
-    current) runs (the post-set callback). Hot paths read ``current``'s fields, never get_parameter."""
+    current) runs (the post-set callback). Hot paths read ``current``'s fields, never get_parameter.
+    """
 
     def __init__(self, node: Node, table: Sequence[ParameterSpec], settings_type: type[SettingsT], *,
                  on_change: Optional[Callable[[SettingsT, SettingsT], None]] = None,

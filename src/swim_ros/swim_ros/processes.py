@@ -57,7 +57,8 @@ def with_parent_death_signal(command: Sequence[str], starter_pid: Optional[int] 
     """command run with PARENT_DEATH_SIGNAL set, started by the process starter_pid (default: this one): setpriv
     sets the signal, a shell checks the parent is still the starter and executes command, so command keeps the
     pid the starter was given. command as it is where setpriv is missing (the starter's own stop is then the only
-    one)."""
+    one).
+    """
     setpriv = shutil.which("setpriv")
     if setpriv is None:
         return list(command)
@@ -71,7 +72,8 @@ def executable_command(command: Sequence[str], environment: Optional[Mapping[str
     looks (lib/<package>/<executable> under AMENT_PREFIX_PATH of environment, default this process's), so the
     executable is the starter's child itself, as ros2 launch runs a node: ros2cli's `ros2 run` runs it as a child
     of its own, out of reach of the parent-death signal. command as it is otherwise, or when nothing is found
-    (`ros2 run` then says so)."""
+    (`ros2 run` then says so).
+    """
     if len(command) < 4 or list(command[:2]) != ["ros2", "run"]:
         return list(command)
     package, executable = command[2], command[3]
@@ -86,7 +88,8 @@ def executable_command(command: Sequence[str], environment: Optional[Mapping[str
 def start_child(command: Sequence[str], **popen_arguments: Any) -> subprocess.Popen[Any]:
     """subprocess.Popen(command, **popen_arguments) as a child that dies with this process: the one way every
     process of the workspace starts another (the rule in this module's docstring). Call it from a thread that
-    outlives the child (the main thread, or one that waits for it)."""
+    outlives the child (the main thread, or one that waits for it).
+    """
     environment = popen_arguments.get("env")
     return subprocess.Popen(with_parent_death_signal(executable_command(command, environment)), **popen_arguments)
 
@@ -95,7 +98,8 @@ def run_child(command: Sequence[str], *, timeout_s: Optional[float] = None, inpu
               capture_output: bool = False, **popen_arguments: Any) -> subprocess.CompletedProcess[Any]:
     """subprocess.run for a child that dies with this process (start_child): command run to its end, its output
     captured if capture_output. Killed if it runs longer than timeout_s (subprocess.TimeoutExpired) or if this
-    process stops waiting for it (Ctrl-C)."""
+    process stops waiting for it (Ctrl-C).
+    """
     if capture_output:
         popen_arguments["stdout"] = popen_arguments["stderr"] = subprocess.PIPE
     if input is not None:
@@ -113,7 +117,8 @@ def run_child(command: Sequence[str], *, timeout_s: Optional[float] = None, inpu
 def end_with_starter(starter_pid: int) -> None:
     """From inside a Python child that was not started by start_child (a multiprocessing worker), what start_child
     gives its children: SIGTERM when the starter (process starter_pid, its parent) dies, and an exit now if it has
-    died already. Nothing where prctl(2) is missing (not Linux)."""
+    died already. Nothing where prctl(2) is missing (not Linux).
+    """
     if not sys.platform.startswith("linux"):
         return
     libc = ctypes.CDLL(None, use_errno=True)
@@ -126,7 +131,8 @@ def end_with_starter(starter_pid: int) -> None:
 def interrupt_on_sigterm() -> None:
     """From now on SIGTERM is Ctrl-C (KeyboardInterrupt in the main thread), so that a CLI's `with` blocks and
     `finally` clauses stop what it started the graceful way; Python's default SIGTERM ends the process at once and
-    leaves its children to their parent-death signal. Call it from the main thread."""
+    leaves its children to their parent-death signal. Call it from the main thread.
+    """
     signal.signal(signal.SIGTERM, signal.default_int_handler)
 
 
@@ -183,7 +189,8 @@ class NodeProcess:
 def main(argv: Sequence[str]) -> None:
     """`python -m swim_ros.processes STARTER_PID COMMAND [ARGUMENTS...]`: start_child for a shell script. The
     script passes its own pid ($$) and runs this in the foreground or background; this process becomes COMMAND
-    (same pid), which ends when the script ends."""
+    (same pid), which ends when the script ends.
+    """
     if len(argv) < 2 or not argv[0].isdigit():
         sys.exit("usage: python -m swim_ros.processes STARTER_PID COMMAND [ARGUMENTS...]")
     command = with_parent_death_signal(executable_command(argv[1:]), int(argv[0]))

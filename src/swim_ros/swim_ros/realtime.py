@@ -50,7 +50,8 @@ class RealtimeSettings:
     """What a node asks for. policy: a key of SCHEDULING_POLICIES; priority: 1-98 for fifo and rr (ignored for
     other); lock_memory: mlockall of the current and future pages; cpu_affinity: taskset's list form ("1",
     "0,2", "2-3"), empty for every CPU; collect_garbage_between_periods: PeriodicCollector instead of automatic
-    collection."""
+    collection.
+    """
 
     policy: str = "fifo"
     priority: int = 70
@@ -158,7 +159,8 @@ def _lock_memory() -> Optional[str]:
     stacks and middleware segments for a node here) held this host's kernel long enough to delay a real-time
     task on the same CPU by 6 ms; a page the loop touches is still never paged out once touched. Future pages are
     locked only without a limit: under a finite memlock limit an allocation past it would fail later, in a
-    period."""
+    period.
+    """
     import resource
     soft, _ = resource.getrlimit(resource.RLIMIT_MEMLOCK)
     if soft != resource.RLIM_INFINITY and not _has_capability(_CAP_IPC_LOCK):
@@ -172,7 +174,8 @@ def _lock_memory() -> Optional[str]:
 
 def make_process_realtime(settings: RealtimeSettings) -> RealtimeOutcome:
     """Apply settings to the whole process: the policy to every thread it has (threads made later inherit it from
-    their creator), the CPU set to every thread, and mlockall. Never raises for a refusal: see RealtimeOutcome."""
+    their creator), the CPU set to every thread, and mlockall. Never raises for a refusal: see RealtimeOutcome.
+    """
     reason = settings_reason_invalid(settings)
     if reason is not None:
         raise ValueError(reason)
@@ -213,7 +216,8 @@ def make_process_ordinary() -> None:
 
 def make_thread_realtime(settings: RealtimeSettings, priority: int) -> Optional[str]:
     """The calling thread at settings' policy and this priority (nothing for "other"); the refusal's reason, or
-    None."""
+    None.
+    """
     return _set_policy(0, settings, priority) if settings.realtime else None
 
 
@@ -222,7 +226,8 @@ def make_thread_background(settings: RealtimeSettings) -> None:
     priority, below every periodic thread, with SCHED_RESET_ON_FORK so that what it starts (a C compiler) runs as
     an ordinary process. Why not the ordinary policy: a thread that busy ordinary processes preempt while it holds
     the interpreter lock would hold up the periodic threads that wait for it. The ordinary policy where settings
-    are not real-time or the host refuses."""
+    are not real-time or the host refuses.
+    """
     if settings.realtime:
         try:
             os.sched_setscheduler(0, SCHEDULING_POLICIES[settings.policy] | os.SCHED_RESET_ON_FORK,
@@ -235,7 +240,8 @@ def make_thread_background(settings: RealtimeSettings) -> None:
 
 def make_thread_ordinary() -> None:
     """The calling thread back to the ordinary policy (a compilation thread in a real-time process: what it starts,
-    a C compiler, inherits the policy)."""
+    a C compiler, inherits the policy).
+    """
     try:
         os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
     except OSError:
@@ -269,7 +275,8 @@ class PeriodicCollector:
     whose walk would take some 40 ms at every collection). What this gives up: a reference cycle that becomes
     garbage after surviving a collection is not freed (objects freed by their reference count are). The longest
     collection is kept (longest_s) for the node's diagnostics. stop() gives the collector back to automatic
-    collection."""
+    collection.
+    """
 
     def __init__(self, interval_periods: int) -> None:
         if interval_periods < 1:

@@ -67,7 +67,8 @@ def trajectory_from_message(plan: PlannedTrajectory) -> Trajectory:
     interface version, more than MAX_TRACKED_SAMPLES samples, joints that are not the vehicle's, a flow model
     that is not swim_model's, arrays of the wrong length (the lag states: N x n_lag, none for the ideal flow; the
     disturbance bounds: N or none), non-finite or (the disturbance bounds) negative values, times out of order or
-    not from 0, values or their rates past MAX_PLAN_MAGNITUDE, segments that do not tile the samples."""
+    not from 0, values or their rates past MAX_PLAN_MAGNITUDE, segments that do not tile the samples.
+    """
     if plan.interface_version not in READABLE_INTERFACE_VERSIONS:
         missing = OLDER_PLAN_VERSIONS.get(plan.interface_version)
         older = f" (a version {plan.interface_version} plan {missing}: plan it again with this version's planner)" \
@@ -115,7 +116,8 @@ def trajectory_from_message(plan: PlannedTrajectory) -> Trajectory:
 def check_plan_range(trajectory: Trajectory) -> None:
     """PlanError unless the sample times run from 0 to at most MAX_PLAN_MAGNITUDE s and every value of the plan and
     its change per second between two samples is within MAX_PLAN_MAGNITUDE: then the tracker's references, its
-    errors and its law's products are finite (a Trajectory checks only that the values are)."""
+    errors and its law's products are finite (a Trajectory checks only that the values are).
+    """
     time_s = trajectory.time_s
     if not (time_s[0] == 0.0 and time_s[-1] <= MAX_PLAN_MAGNITUDE):
         raise PlanError(f"plan sample times must run from 0 s to at most {MAX_PLAN_MAGNITUDE:g} s, got "
@@ -139,7 +141,8 @@ def state_from_message(message, joint_names: Optional[Sequence[str]], velocity: 
     The time is the message's stamp, or receipt_time_s when the stamp is zero (a source that does not stamp).
     Velocities come from the message, or, when it has none, from the filtered differences of positions.
     joint_names None (no plan yet): either vehicle's joints are accepted.
-    Raises StateMessageError for unknown or missing joints, wrong lengths and non-finite values."""
+    Raises StateMessageError for unknown or missing joints, wrong lengths and non-finite values.
+    """
     if joint_names is None:
         joint_names = JOINT_NAMES_UNCONSTRAINED if len(message.name) == len(JOINT_NAMES_UNCONSTRAINED) \
             else JOINT_NAMES_CONSTRAINED

@@ -34,7 +34,9 @@ _NAMESPACE = {"p": "http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles"}
 @dataclass(frozen=True)
 class TransportChoice:
     """What use_large_message_transport decided: the profile set (None: Fast DDS's defaults or the user's), why
-    (a sentence for the process's log), and whether that is worth a warning (the profile did not fit)."""
+    (a sentence for the process's log), and whether that is worth a warning (the profile did not fit).
+    """
+
     profile: Optional[Path]
     reason: str
     warning: bool = False
@@ -65,7 +67,8 @@ def free_shm_bytes(shm_dir: Path = SHM_DIR) -> Optional[int]:
 
 def choose_transport(segment_size_bytes: int, free_bytes: Optional[int]) -> bool:
     """Whether a segment of segment_size_bytes fits a /dev/shm with free_bytes free (None: no /dev/shm, as on
-    other systems than Linux, where Fast DDS keeps its segments elsewhere: fits)."""
+    other systems than Linux, where Fast DDS keeps its segments elsewhere: fits).
+    """
     return free_bytes is None or free_bytes >= FREE_SHM_FACTOR * segment_size_bytes
 
 
@@ -73,7 +76,8 @@ def use_large_message_transport(shm_dir: Path = SHM_DIR) -> TransportChoice:
     """Point Fast DDS at swim's profile if it fits; call before rclpy.init (the first participant reads it).
 
     Left alone: another RMW than Fast DDS, a profile the user chose through FASTRTPS_DEFAULT_PROFILES_FILE or
-    FASTDDS_DEFAULT_PROFILES_FILE, and a /dev/shm (shm_dir) too small for the segment (FREE_SHM_FACTOR)."""
+    FASTDDS_DEFAULT_PROFILES_FILE, and a /dev/shm (shm_dir) too small for the segment (FREE_SHM_FACTOR).
+    """
     if os.environ.get("RMW_IMPLEMENTATION", FASTDDS_RMW) != FASTDDS_RMW:
         return TransportChoice(None, "another RMW than Fast DDS: its own transport")
     if any(os.environ.get(variable) for variable in PROFILE_VARIABLES):

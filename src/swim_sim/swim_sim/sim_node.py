@@ -90,7 +90,8 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
 @dataclasses.dataclass(frozen=True)
 class SimSettings:
     """PARAMETERS' values (swim_ros.parameters.NodeSettings): the disturbances.* and sensors.* groups as their
-    dataclasses, the wake.* group by name."""
+    dataclasses, the wake.* group by name.
+    """
 
     rig_path: str
     constrained: bool
@@ -122,7 +123,8 @@ def sensor_noise_reason(settings: SimSettings) -> Optional[str]:
 @dataclasses.dataclass(frozen=True)
 class StateBounds:
     """What set_state accepts, per coordinate name: (lower, upper) positions and the largest speed, each with
-    where the bound comes from (said in a refusal, with how to change it)."""
+    where the bound comes from (said in a refusal, with how to change it).
+    """
 
     positions: dict[str, tuple[float, float, str]]
     speeds: dict[str, tuple[float, str]]
@@ -131,7 +133,8 @@ class StateBounds:
     def of(cls, plant: Plant) -> "StateBounds":
         """alpha within the plans' start-alpha bound (float64 keeps alpha to 1e-10 rad up to there), R inside
         the tank, heave and pitch within their hard stops; speeds within the rig's physically possible joint
-        speeds (its limits)."""
+        speeds (its limits).
+        """
         rig = plant.model.rig
         where = f"the limits of {rig.source_path}; parameter rig_path"
         alpha = MAX_ABS_START_ALPHA_RAD
@@ -248,7 +251,8 @@ class SimNode(Node):
 
     def _republish_held_state(self) -> None:
         """Holding: the held state again, at most once a period of wall time and only once it was answered (a
-        zero command answered at once would otherwise make an idle loop as fast as the CPU allows)."""
+        zero command answered at once would otherwise make an idle loop as fast as the CPU allows).
+        """
         if self.holding and self._held_state_answered and self.failed is None:
             self._held_state_answered = False
             self._publish_state(advance=False)
@@ -270,7 +274,8 @@ class SimNode(Node):
 
     def _prepare_period(self) -> None:
         """The next period's wake and waves, computed while the controller computes its torque (they do not depend
-        on it: Plant.prepare_period)."""
+        on it: Plant.prepare_period).
+        """
         try:
             self.plant.prepare_period()
         except SwimModelError as err:   # the wake met a non-finite value

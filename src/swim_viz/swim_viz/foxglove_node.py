@@ -145,7 +145,8 @@ def _empty_request(payload: bytes) -> None:
 
 class _ClientTopics(ServerListener):
     """What clients watch (their subscriptions, counted per channel), and the topics they publish on: /emergency_stop
-    (JSON {"data": bool}) to the bridge's topic."""
+    (JSON {"data": bool}) to the bridge's topic.
+    """
 
     def __init__(self, node: "FoxgloveNode") -> None:
         self.node = node

@@ -26,7 +26,8 @@ NO_FAULT = "NONE"
 
 class RateGate:
     """Lets a message through when at least 1/max_rate_hz has passed since the last one let through (times in s on
-    any monotonic clock); max_rate_hz 0 lets every message through."""
+    any monotonic clock); max_rate_hz 0 lets every message through.
+    """
 
     def __init__(self, max_rate_hz: float) -> None:
         if not (math.isfinite(max_rate_hz) and max_rate_hz >= 0.0):
@@ -86,7 +87,8 @@ def _number(request: Mapping[str, Any], name: str, minimum: Optional[float]) -> 
 
 def parse_maneuver_request(payload: bytes) -> dict[str, Any]:
     """A maneuver call's JSON payload (MANEUVER_REQUEST_SCHEMA) as PerformManeuver goal fields; the planner and
-    the maneuver action check the rest (known primitives, a vehicle at rest) when the goal arrives."""
+    the maneuver action check the rest (known primitives, a vehicle at rest) when the goal arrives.
+    """
     try:
         request = json.loads(payload)
     except (UnicodeDecodeError, json.JSONDecodeError) as err:
@@ -130,7 +132,8 @@ class LogLine:
 
 def fault_changes(previous: str, current: str, source: str = "bridge") -> list[LogLine]:
     """The faults latched and cleared between two reports of a bridge's faults ('|'-separated names, NO_FAULT for
-    none), as log lines."""
+    none), as log lines.
+    """
     def names(faults: str) -> set[str]:
         return {name for name in faults.split("|") if name and name != NO_FAULT}
     before, after = names(previous), names(current)
@@ -168,7 +171,8 @@ WAKE_PLANE_Z_M = 0.0
 def wake_entity(entity_id: str, frame_id: str, x_m: npt.ArrayLike, y_m: npt.ArrayLike,
                 circulations_m2_s: npt.ArrayLike, stamp_ns: int) -> SceneEntity:
     """The wake's free vortices (positions in frame_id, m; circulations, m^2/s, counter-clockwise positive) as a
-    scene entity of spheres."""
+    scene entity of spheres.
+    """
     x, y, gamma = (np.asarray(v, dtype=float) for v in (x_m, y_m, circulations_m2_s))
     if not (x.shape == y.shape == gamma.shape):
         raise ValueError(f"the wake's arrays differ in length: {x.shape}, {y.shape}, {gamma.shape}")

@@ -49,7 +49,8 @@ def planned_paths(rig: RigParameters, joint_names: Sequence[str], flat_positions
                   lane_radius_m: float) -> list[PathLine]:
     """The paths of a plan: its positions (N x nq, row-major, as PlannedTrajectory stores them) with its joint
     names; lane_radius_m for a constrained plan (no R). At most MAX_PLANNED_POINTS points each, the last
-    sample always kept. Raises ValueError for names or sizes that do not fit."""
+    sample always kept. Raises ValueError for names or sizes that do not fit.
+    """
     names = list(joint_names)
     flat = np.asarray(flat_positions, dtype=float)
     if not names or flat.size % len(names) or flat.size == 0:
@@ -63,7 +64,8 @@ def planned_paths(rig: RigParameters, joint_names: Sequence[str], flat_positions
 
 class TravelledPath:
     """The paths travelled, from joint positions as they come: a point is kept when a traced frame has moved
-    spacing_m from the last kept point, and the most recent max_points are kept."""
+    spacing_m from the last kept point, and the most recent max_points are kept.
+    """
 
     def __init__(self, rig: RigParameters, spacing_m: float, max_points: int) -> None:
         if not (spacing_m >= 0.0 and max_points >= 2):

@@ -34,7 +34,8 @@ def rate_parameter(default_hz: float) -> ParameterSpec:
 @dataclasses.dataclass(frozen=True)
 class RigInputSettings:
     """The values of PARAMETERS and rate_parameter's, for a node's settings type to derive from
-    (swim_ros.parameters.NodeSettings)."""
+    (swim_ros.parameters.NodeSettings).
+    """
 
     rig_path: str
     lane_radius_m: float
@@ -43,7 +44,8 @@ class RigInputSettings:
 
 def load_rig_and_lane(settings: RigInputSettings) -> tuple[RigParameters, float]:
     """The rig and the lane radius (m) of a node's settings. Raises swim_model.SwimModelError for a rig file that
-    does not load."""
+    does not load.
+    """
     rig = load_rig(settings.rig_path or None)
     return rig, float(settings.lane_radius_m) or rig.constrained_lane_radius_m
 
@@ -51,7 +53,8 @@ def load_rig_and_lane(settings: RigInputSettings) -> tuple[RigParameters, float]
 class LatestJointState:
     """A best-effort subscription to joint_states that keeps only the latest message: what a node that publishes
     at its own rate needs, at the cost of one stored reference per message (a control loop is never held up:
-    best effort, so a slow reader is simply passed by)."""
+    best effort, so a slow reader is simply passed by).
+    """
 
     def __init__(self, node: Node, lane_radius_m: float,
                  each: Optional[Callable[[JointPositions], None]] = None) -> None:
@@ -79,7 +82,8 @@ class LatestJointState:
 
     def take(self) -> Optional[tuple[Any, JointPositions]]:
         """The latest message and its positions, once (None when none came since the last take, or it was
-        malformed: then counted and logged)."""
+        malformed: then counted and logged).
+        """
         message, self.latest = self.latest, None
         positions = None if message is None else self._positions(message)
         return None if positions is None else (message, positions)

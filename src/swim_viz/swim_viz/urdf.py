@@ -44,7 +44,8 @@ COLOURS = {"water": (0.2, 0.45, 0.8, 0.25), "rail": (0.6, 0.6, 0.6, 1.0), "platf
 
 def foil_outline_m(rig: RigParameters, points: int = FOIL_OUTLINE_POINTS) -> npt.NDArray[np.float64]:
     """The foil's section in its frame, (points, 2): x along the chord toward the leading edge, y normal, m;
-    counter-clockwise from the trailing edge (the Joukowski map of eq. 1 for the rig's chord and thickness)."""
+    counter-clockwise from the trailing edge (the Joukowski map of eq. 1 for the rig's chord and thickness).
+    """
     foil = JoukowskiFoil(rig.foil_chord_m, rig.foil_max_thickness_m, rig.foil_span_m)
     profile = foil.profile(points)
     return np.column_stack([profile.real, profile.imag])
@@ -53,7 +54,8 @@ def foil_outline_m(rig: RigParameters, points: int = FOIL_OUTLINE_POINTS) -> npt
 def extruded_stl(outline_m: npt.NDArray[np.float64], top_z_m: float, bottom_z_m: float) -> bytes:
     """A binary STL of the closed prism over a counter-clockwise outline (N, 2), star-shaped about the origin,
     between two heights (m): N side quads as 2 triangles each, and each cap as a fan of N triangles about
-    the origin; outward normals."""
+    the origin; outward normals.
+    """
     outline = np.asarray(outline_m, dtype=float)
     if outline.ndim != 2 or outline.shape[1] != 2 or len(outline) < 3:
         raise ValueError(f"an outline is (N >= 3, 2) points, got shape {outline.shape}")
@@ -85,7 +87,8 @@ def foil_mesh(rig: RigParameters) -> bytes:
 
 def write_foil_mesh(rig: RigParameters, directory: Path) -> Path:
     """Write foil_mesh to directory (made if missing), named for its content so that rigs of other foils never
-    share a file; its path."""
+    share a file; its path.
+    """
     mesh = foil_mesh(rig)
     path = Path(directory) / f"foil_{hashlib.sha256(mesh).hexdigest()[:16]}.stl"
     if not path.is_file() or path.read_bytes() != mesh:
@@ -114,7 +117,8 @@ def _visual(link: ET.Element, material: str, geometry: str, size: dict[str, str]
 
 def rig_urdf(rig: RigParameters, foil_mesh_uri: str) -> str:
     """The URDF of the rig (frames: swim_viz.frames), the foil drawn by the mesh at foil_mesh_uri (write_foil_mesh;
-    a file:// or package:// URI)."""
+    a file:// or package:// URI).
+    """
     robot = ET.Element("robot", name=ROBOT_NAME)
     for name, rgba in COLOURS.items():
         ET.SubElement(ET.SubElement(robot, "material", name=name), "color", rgba=_vector(*rgba))

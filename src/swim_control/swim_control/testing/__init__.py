@@ -1,2 +1,3 @@
 """Fixtures for the tests of swim_control and of the packages above it (the rig, its models, smooth strokes with
-their gains, one-segment trajectories): nothing a user runs imports it."""
+their gains, one-segment trajectories): nothing a user runs imports it.
+"""

@@ -1,6 +1,7 @@
 """Pytest fixtures of smooth strokes to linearize about (made here, not planned: the LQ stage and Theorem 1 hold
 about any trajectory, so these tests need no planner): the rig, its vehicle models, the strokes with P and G'P, and
-one-segment trajectories. A package's conftest imports the fixtures it uses by name."""
+one-segment trajectories. A package's conftest imports the fixtures it uses by name.
+"""
 import dataclasses
 import math
 
@@ -28,6 +29,7 @@ class StrokeSpec:
 @dataclasses.dataclass(frozen=True)
 class Stroke:
     """What the tests read of a primitive: samples of q, qdot, u = psi_ddot, and P, G'P for the default weights."""
+
     spec: StrokeSpec
     time_s: np.ndarray
     q: np.ndarray
@@ -39,7 +41,8 @@ class Stroke:
 def make_stroke(model: VehicleModel, spec: StrokeSpec, period_s: float = 1.0, cycles: int = 2,
                 cycle_samples: bool = False) -> Stroke:
     """Heave 0.1 + 0.3 sin(w t), pitch 0.4 cos(w t) (rad), alpha advancing 0.05 rad/s, R 1 cm about the lane:
-    a smooth periodic stroke of the rig's size, with exact derivatives."""
+    a smooth periodic stroke of the rig's size, with exact derivatives.
+    """
     samples_per_cycle = 2 * spec.intervals
     time_s = np.linspace(0.0, cycles * period_s, cycles * samples_per_cycle + 1)
     w = 2.0 * math.pi / period_s
@@ -78,7 +81,8 @@ def strokes(model_for):
 def one_segment_trajectory(time_s, q, qdot, foil_acceleration=None, torque=None, gain=0.0, lqr_gain=None,
                            riccati_input_gain=None, time_scale=1.0) -> Trajectory:
     """A Trajectory of the samples given as one segment at time_scale: u and tau zero unless given, every gain
-    entry equal to gain unless the gains are given."""
+    entry equal to gain unless the gains are given.
+    """
     samples, nq = np.shape(q)
     n = error_state_size(nq, nq - 2)
     zero = np.zeros((samples, 2))

@@ -1,2 +1,3 @@
 """The closed loop in one process (the tracker driving a model or a plant, no ROS), for tests and benchmarks only:
-nothing a user runs imports it."""
+nothing a user runs imports it.
+"""

@@ -27,7 +27,8 @@ DEFAULT_GAIT = SinusoidalGait(heave_amplitude_rad=0.3, pitch_amplitude_rad=0.4, 
 @dataclasses.dataclass(frozen=True)
 class CirculatoryRun:
     """The circulatory vehicle every step_s: q (n + 1, nq), qdot, lag (n + 1, 2) m/s, and the torque (N m) held over
-    each period of period_s = substeps * step_s."""
+    each period of period_s = substeps * step_s.
+    """
 
     model: VehicleModel
     step_s: float
@@ -48,7 +49,8 @@ def gait_run(model: VehicleModel, duration_s: float, gait: SinusoidalGait = DEFA
     """The model (circulatory) from the gait's shape at t = 0, its unactuated coordinates at rest (alpha = 0, R on
     the model's lane) and the water still (lag = 0): the torques are chosen period by period to follow the gait from
     the state reached, then the whole run is integrated again from the start by integrate_rk4 with those torques
-    (the run returned: the model's own motion under known torques)."""
+    (the run returned: the model's own motion under known torques).
+    """
     ny = model.n_unactuated
     psi0, psidot0, _ = gait.shape(0.0)
     q0 = np.concatenate([[0.0] if ny == 1 else [0.0, model.lane_radius_m], psi0])
@@ -74,7 +76,8 @@ def plan_from_run(run: CirculatoryRun, duration_s: float, sample_stride: int = 4
                   gains: Optional[tuple[Array, Array]] = None, seed: int = 4) -> Trajectory:
     """A circulatory plan of the run's first duration_s: a sample every sample_stride steps, u = psiddot of the
     model under the torque held there, tau that torque, the run's lag states. gains: (K, G'P), each
-    (N, 2, ny + 2 nq + n_lag); default arbitrary (normal, seeded): the plan's shape, not tuned gains."""
+    (N, 2, ny + 2 nq + n_lag); default arbitrary (normal, seeded): the plan's shape, not tuned gains.
+    """
     model = run.model
     index = np.arange(0, round(duration_s / run.step_s) + 1, sample_stride)
     torque = run.period_torque[np.minimum(index // run.substeps, len(run.period_torque) - 1)]

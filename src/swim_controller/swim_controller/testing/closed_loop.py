@@ -52,7 +52,8 @@ class Run:
 
     def two_norm(self, column: int, until_s: Optional[float] = None) -> float:
         """sqrt(int e^2 dt) of one coordinate's error (the paper's measure, Sec. 7; measures.two_norm), over the
-        run or over its samples before until_s."""
+        run or over its samples before until_s.
+        """
         kept = slice(None) if until_s is None else self.time_s < until_s
         return two_norm(self.time_s[kept], self.error[kept, column])
 

@@ -331,7 +331,8 @@ class FrameDecoder:
 @dataclasses.dataclass(frozen=True)
 class _Payload:
     """A message's payload: its fields, in declaration order, are the values of its LAYOUT (a tuple field gives
-    one value per item), as parse_payload reads them back."""
+    one value per item), as parse_payload reads them back.
+    """
 
     LAYOUT: ClassVar[struct.Struct]
 

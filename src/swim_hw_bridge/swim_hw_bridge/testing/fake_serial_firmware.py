@@ -277,7 +277,8 @@ class FakeSerialFirmware:
 class PtyRig:
     """A pty pair behind a stable symlink ``link``, a FakeSerialFirmware on the master end: the serial port a
     SerialDevice (or bridge_node with backend serial) opens by the link's name. ``plug_in()`` again after the
-    firmware disconnected is a board re-enumerating behind the same name."""
+    firmware disconnected is a board re-enumerating behind the same name.
+    """
 
     def __init__(self, link: Path, counts: Sequence[int] = (0, 0, 0, 0), **firmware_options: Any) -> None:
         self.link = Path(link)

@@ -1,2 +1,3 @@
 """Checks used by the tests only (the open-loop replay of a primitive through the model). Nothing a user runs
-imports them."""
+imports them.
+"""

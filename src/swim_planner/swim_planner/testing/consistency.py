@@ -60,7 +60,8 @@ def replay_open_loop(model: VehicleModel, time_s: Array, q: Array, qdot: Array, 
                      window_s: float = REPLAY_WINDOW_S, lag: Array | None = None) -> ReplayResult:
     """Integrate the primitive's torque signal window by window; compare with its states.
 
-    lag: the stored lag states (samples, 2), m/s, for a model of the circulatory flow (required there)."""
+    lag: the stored lag states (samples, 2), m/s, for a model of the circulatory flow (required there).
+    """
     if model.n_lag:
         if lag is None:
             raise ValueError("replay_open_loop: a circulatory-flow model needs the primitive's lag states")
@@ -82,7 +83,8 @@ def replay_open_loop(model: VehicleModel, time_s: Array, q: Array, qdot: Array, 
 def _windows(rhs: Callable[[float, Array], Array], state_at: Callable[[float], Array], time_s: Array, q: Array,
              qdot: Array, window_s: float) -> ReplayResult:
     """Integrate x' = rhs(t, x) from state_at(start) over each window; the largest deviation of (q, qdot), the
-    first 2 nq entries of x."""
+    first 2 nq entries of x.
+    """
     nq = q.shape[1]
     worst_position = worst_velocity = 0.0
     starts = np.arange(time_s[0], time_s[-1] - 1e-9, window_s)

@@ -66,7 +66,8 @@ LATEST_VALUE_TIMEOUT_S = 30.0
 
 class BrowserError(RuntimeError):
     """The browser did not start, a CDP command failed, or a page did not show what was waited for (the message
-    says what the page's status element said)."""
+    says what the page's status element said).
+    """
 
 
 def find_chromium() -> Optional[str]:
@@ -80,7 +81,8 @@ def find_chromium() -> Optional[str]:
 
 def browser_unavailable(page_dir: Optional[Path] = None) -> Optional[str]:
     """Why a browser test cannot run on this machine (for pytest.skip), or None: no Chromium on PATH, the
-    websockets library missing, or page_dir's bundled script not built."""
+    websockets library missing, or page_dir's bundled script not built.
+    """
     if find_chromium() is None:
         return ("no chromium on PATH: scripts/setup.sh installs Debian's chromium when run as root with apt "
                 "(apt-get install chromium)")
@@ -108,7 +110,8 @@ class _QuietHandler(http.server.SimpleHTTPRequestHandler):
 @contextlib.contextmanager
 def serve_folder(folder: Path) -> Iterator[str]:
     """folder served over HTTP on 127.0.0.1 at a free port by a thread of this process, while the block runs; its
-    base URL (http://127.0.0.1:PORT/). The server is shut down and its socket closed when the block ends."""
+    base URL (http://127.0.0.1:PORT/). The server is shut down and its socket closed when the block ends.
+    """
     handler = functools.partial(_QuietHandler, directory=str(folder))
     server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
     server.daemon_threads = True
@@ -132,7 +135,8 @@ class Page:
 
     def evaluate(self, expression: str) -> Any:
         """The value of a JavaScript expression in the page (JSON-able values; None for undefined and null).
-        BrowserError if it throws."""
+        BrowserError if it throws.
+        """
         reply = self._browser.command("Runtime.evaluate", {"expression": expression, "returnByValue": True},
                                       session_id=self.session_id)
         if "exceptionDetails" in reply:
@@ -147,7 +151,8 @@ class Page:
     def wait_for_element_json(self, element_id: str, accept: Callable[[Any], bool], timeout_s: float,
                               status_element_id: Optional[str] = None) -> Any:
         """The JSON value of the element's text as soon as accept(value) is true, looking every PAGE_POLL_PERIOD_S.
-        BrowserError after timeout_s, with the last text seen and the status element's text if one is named."""
+        BrowserError after timeout_s, with the last text seen and the status element's text if one is named.
+        """
         deadline = time.monotonic() + timeout_s
         text: Optional[str] = None
         while True:
@@ -169,7 +174,8 @@ class Page:
 class HeadlessChromium:
     """Headless Chromium with a profile of its own in a temporary folder, driven over its DevTools WebSocket
     (the browser endpoint; pages through Target.attachToTarget's flat sessions). Use as a context manager:
-    everything it started, and the profile, is gone when the block ends, however it ends."""
+    everything it started, and the profile, is gone when the block ends, however it ends.
+    """
 
     def __init__(self, executable: Optional[str] = None) -> None:
         self.executable = executable or find_chromium()
@@ -217,7 +223,8 @@ class HeadlessChromium:
 
     def _read_stderr(self) -> None:
         """Reads the browser's stderr to its end (so the pipe never fills): the DevTools endpoint, and the last
-        lines for a failure's message."""
+        lines for a failure's message.
+        """
         assert self._process is not None and self._process.stderr is not None
         for raw in self._process.stderr:
             line = raw.decode(errors="replace").rstrip()
@@ -234,7 +241,8 @@ class HeadlessChromium:
     def command(self, method: str, params: Optional[dict[str, Any]] = None, session_id: Optional[str] = None,
                 timeout_s: float = CDP_REPLY_TIMEOUT_S) -> dict[str, Any]:
         """A CDP command's result (to the browser, or to a page's session), skipping the events that come
-        between. BrowserError for an error reply or none within timeout_s."""
+        between. BrowserError for an error reply or none within timeout_s.
+        """
         if self._connection is None:
             raise BrowserError("the browser is not running")
         command_id = next(self._command_ids)
@@ -265,7 +273,8 @@ class HeadlessChromium:
 
     def close(self) -> None:
         """Ends the DevTools connection, the browser (SIGTERM, then SIGKILL to its whole process group after
-        BROWSER_STOP_GRACE_S) and removes its profile. Safe to call more than once."""
+        BROWSER_STOP_GRACE_S) and removes its profile. Safe to call more than once.
+        """
         if self._connection is not None:
             with contextlib.suppress(Exception):
                 self._connection.close()
@@ -295,7 +304,8 @@ class LatestMessagePage:
     """The swim_viz test page of page_dir (index.html and its bundle) in headless Chromium, connected to the
     foxglove.websocket.v1 server at ws_url and subscribed to topic; field picks the value it shows (a dotted path;
     by default the message's first float64 scalar). Use as a context manager; ``latest(...)`` reads what it shows
-    as often as wanted."""
+    as often as wanted.
+    """
 
     def __init__(self, page_dir: Path, ws_url: str, topic: str, field: Optional[str] = None) -> None:
         self.page_dir = Path(page_dir)
@@ -325,7 +335,8 @@ class LatestMessagePage:
                accept: Callable[[dict[str, Any]], bool] = lambda shown: True) -> dict[str, Any]:
         """The latest message the page shows, {"topic", "field", "sec", "nanosec", "value", "count"} (sec and
         nanosec: its header.stamp, None without a header), once it has shown one that accept takes. BrowserError
-        after timeout_s, with the page's status."""
+        after timeout_s, with the page's status.
+        """
         assert self.page is not None, "LatestMessagePage used outside its with block"
         return self.page.wait_for_element_json(
             LATEST_ELEMENT_ID, lambda shown: isinstance(shown, dict) and shown.get("count", 0) > 0 and accept(shown),
@@ -335,6 +346,7 @@ class LatestMessagePage:
 def latest_page_value(page_dir: Path, ws_url: str, topic: str, timeout_s: float = LATEST_VALUE_TIMEOUT_S,
                       field: Optional[str] = None) -> dict[str, Any]:
     """The first message of topic that the test page of page_dir shows in a real browser connected to ws_url (see
-    LatestMessagePage.latest); the browser and the page's server are gone when it returns."""
+    LatestMessagePage.latest); the browser and the page's server are gone when it returns.
+    """
     with LatestMessagePage(page_dir, ws_url, topic, field) as page:
         return page.latest(timeout_s)

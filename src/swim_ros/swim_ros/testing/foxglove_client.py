@@ -38,7 +38,8 @@ CLIENT_SERVICE_CALL_REQUEST = 0x02
 @dataclasses.dataclass(frozen=True)
 class MessageFrame:
     """One message of a subscribed channel: its topic, the server's log time (ns), the payload as sent, and when
-    this client read it (time.monotonic, s)."""
+    this client read it (time.monotonic, s).
+    """
 
     topic: str
     log_time_ns: int
@@ -57,7 +58,8 @@ class ServiceReply:
 
 class FoxgloveClient:
     """A connection to url (``ws://host:port``); text messages other than the awaited ones are kept in ``info``,
-    ``channels``, ``services`` and ``statuses`` as they come."""
+    ``channels``, ``services`` and ``statuses`` as they come.
+    """
 
     def __init__(self, url: str, open_timeout_s: float = 10.0) -> None:
         self.port = int(url.rsplit(":", 1)[1].split("/")[0])
@@ -183,7 +185,8 @@ class FoxgloveClient:
 
     def fetch_asset(self, uri: str, timeout_s: float = 10.0) -> tuple[Optional[bytes], str]:
         """The asset at uri as the server gives it (the 3D panel asks for a URDF's meshes so): (its bytes, "") or
-        (None, the server's error)."""
+        (None, the server's error).
+        """
         request_id = self._new_id()
         self.connection.send(json.dumps({"op": "fetchAsset", "uri": uri, "requestId": request_id}))
         if not self.wait_for(lambda: request_id in self._assets, timeout_s):
@@ -203,7 +206,8 @@ class FoxgloveClient:
 
 def decode_protobuf(schema_name: str, file_descriptor_set: bytes, payload: bytes) -> Any:
     """A protobuf message (a foxglove schema's, e.g. foxglove.FrameTransforms) decoded by the schema it came with: its
-    name and a serialized FileDescriptorSet (what a channel advertises, base64-decoded: ``channel_schema``)."""
+    name and a serialized FileDescriptorSet (what a channel advertises, base64-decoded: ``channel_schema``).
+    """
     from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
     files = descriptor_pb2.FileDescriptorSet.FromString(file_descriptor_set)
     pool = descriptor_pool.DescriptorPool()
@@ -214,7 +218,8 @@ def decode_protobuf(schema_name: str, file_descriptor_set: bytes, payload: bytes
 
 def channel_schema(channel: dict[str, Any]) -> bytes:
     """An advertised channel's schema as bytes: binary schemas (protobuf's) come base64-encoded, text ones as they
-    are."""
+    are.
+    """
     if channel.get("schemaEncoding") == "protobuf":
         return base64.b64decode(channel["schema"])
     return str(channel["schema"]).encode()
@@ -229,7 +234,8 @@ def free_port() -> int:
 
 def connect_when_listening(port: int, stop: threading.Event) -> Optional[FoxgloveClient]:
     """A client of the server on 127.0.0.1:port, connected as soon as it listens (a node that is still starting),
-    or None if stop is set first."""
+    or None if stop is set first.
+    """
     while not stop.is_set():
         try:
             return FoxgloveClient(f"ws://127.0.0.1:{port}")
@@ -240,7 +246,8 @@ def connect_when_listening(port: int, stop: threading.Event) -> Optional[Foxglov
 
 def transform_key(sec: int, nanosec: int, parent: str, child: str, translation: Any, rotation: Any) -> tuple:
     """A transform (tf2's or Foxglove's: translation x, y, z and rotation x, y, z, w) as a comparable tuple, its
-    numbers to 1e-12."""
+    numbers to 1e-12.
+    """
     return (int(sec), int(nanosec), parent, child, *(round(v, 12) for v in (
         translation.x, translation.y, translation.z, rotation.x, rotation.y, rotation.z, rotation.w)))
 
@@ -253,7 +260,8 @@ def tf_message_keys(message: Any) -> set[tuple]:
 
 def frame_transforms_keys(client: FoxgloveClient, topic: str = "/tf") -> list[tuple]:
     """The transform_keys of every foxglove.FrameTransforms message client received on topic, decoded by the
-    channel's advertised schema."""
+    channel's advertised schema.
+    """
     channel = client.channel(topic)
     keys = []
     for message in client.messages(topic):
@@ -267,7 +275,8 @@ class ClientThread(threading.Thread):
     """A client on a thread of its own, as a Foxglove app beside a run: it connects as soon as the server on
     127.0.0.1:port listens, subscribes to topics (None: every channel, once at least min_channels are advertised),
     and then reads until stopped, or never reads (read False: a stalled app). ``subscribed`` is set once it has
-    subscribed; ``client`` holds what it received."""
+    subscribed; ``client`` holds what it received.
+    """
 
     def __init__(self, port: int, topics: Optional[Sequence[str]] = None, read: bool = True,
                  min_channels: int = 1) -> None:

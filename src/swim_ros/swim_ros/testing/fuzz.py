@@ -28,7 +28,8 @@ if PROFILE not in ("ci", "long"):
 def fuzz_settings(ci_examples: int) -> settings:
     """Settings for one surface: ci_examples examples (times LONG_RUN_FACTOR in the long run), derandomized so a CI
     run repeats, no per-example deadline (each test asserts its own, over DDS), and the module's node and client
-    shared by every example (module-scoped fixtures)."""
+    shared by every example (module-scoped fixtures).
+    """
     return settings(max_examples=ci_examples * (LONG_RUN_FACTOR if PROFILE == "long" else 1), derandomize=True,
                     deadline=None, database=None, print_blob=True,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture,
@@ -49,7 +50,8 @@ def any_float() -> st.SearchStrategy[float]:
 
 def unicode_name() -> st.SearchStrategy[str]:
     """A name no node knows: random unicode, empty included; no surrogates (rosidl strings are UTF-8) and no NUL (a
-    C string ends there, so "alpha\\0" would arrive as a known name)."""
+    C string ends there, so "alpha\\0" would arrive as a known name).
+    """
     return st.text(st.characters(exclude_categories=["Cs"], exclude_characters="\x00"), max_size=12)
 
 
@@ -57,7 +59,8 @@ def unicode_name() -> st.SearchStrategy[str]:
 @dataclasses.dataclass(frozen=True)
 class JointStateFields:
     """A sensor_msgs/JointState's name, position, velocity and effort, and why it is malformed (None: it is not;
-    a well-formed message may still be out of a node's bounds, which the test decides)."""
+    a well-formed message may still be out of a node's bounds, which the test decides).
+    """
 
     name: list[str]
     position: list[float]
@@ -72,7 +75,8 @@ def joint_states(draw: Any, joints: tuple[str, ...], value: st.SearchStrategy[fl
                  field: str = "position") -> JointStateFields:
     """A JointState for joints: well formed (the joints once each, any order, one finite value each in `field`,
     velocities empty or one each) with values from value, or malformed in one way (unknown, missing or repeated
-    names, random unicode, a length that does not match, a non-finite value)."""
+    names, random unicode, a length that does not match, a non-finite value).
+    """
     velocity_value = value if velocity_value is None else velocity_value
     names = list(draw(st.permutations(joints)))
     values = [draw(value) for _ in names]
@@ -157,7 +161,8 @@ def set_and_check_parameter(parameters: Any, name: str, value: Any, read_only: A
     """Set one fuzzed value on a node (swim_ros.calls.ParameterCalls) and check the reply: answered within
     deadline_s; a read-only or unknown ("fuzz." prefixed) name or a non-finite number refused; an accepted value
     read back; a refusal with a reason. counts["accepted"] or counts["refused"] goes up by one. A value rclpy
-    itself cannot carry (a list of mixed types) never reaches the node and is skipped."""
+    itself cannot carry (a list of mixed types) never reaches the node and is skipped.
+    """
     from rclpy.parameter import Parameter
     try:
         parameter = Parameter(name, value=value)
@@ -181,7 +186,8 @@ def fuzz_parameter_sets(parameters: Any, specs: Sequence[Any], ci_examples: int,
     table) on one node through parameters (swim_ros.calls.ParameterCalls), each checked by set_and_check_parameter
     and the node alive() after it; then every changeable parameter set back to its launch value (launched: name ->
     value, else its default), which must be accepted. Returns the counts of accepted and refused sets; a run with
-    no refusal fails (the unknown and non-finite ones must be refused)."""
+    no refusal fails (the unknown and non-finite ones must be refused).
+    """
     from rclpy.parameter import Parameter
     launched = launched or {}
     read_only = {spec.name for spec in specs if spec.read_only}
