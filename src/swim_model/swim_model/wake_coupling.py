@@ -117,7 +117,7 @@ class WakeVortices:
     Attributes
     ----------
     time_s : float
-        The wake's time, s.
+        The wake's time, s, as ``WakeStatistics.time_s``.
     positions_m : (N,) ndarray of complex
         x + iy in the tank frame, m, oldest first.
     circulations_m2_s : (N,) ndarray
