@@ -539,7 +539,7 @@ class VehicleModel:
         Parameters
         ----------
         q, qdot : (nq,) array_like
-            The state p is taken at: rad and m, rad/s and m/s.
+            The state at which p is taken: rad and m, rad/s and m/s.
         lag : (n_lag,) array_like, optional
             The flow's lag states, m/s: they hold no momentum, so ``lag`` is only checked.
 
@@ -581,7 +581,7 @@ class VehicleModel:
         Parameters
         ----------
         q, qdot : (nq,) array_like
-            The state, as in the class docstring.
+            The state (rad and m, rad/s and m/s), as in the class docstring.
         psi_ddot : (2,) array_like
             (phiddot, thetaddot), rad/s^2.
         lag : (n_lag,) array_like, optional
