@@ -126,7 +126,7 @@ class VehicleModel:
     Parameters
     ----------
     rig : RigParameters, optional
-        Rig parameters (default: the shipped rig file).
+        The rig's lengths, masses, inertias, foil and gear ratios (default: the shipped rig file, ``load_rig()``).
     constrained : bool, optional
         Lock the rails: q = (alpha, phi, theta).
     lane_radius_m : float, optional

@@ -193,10 +193,8 @@ class WakeCoupling:
 
         Parameters
         ----------
-        q : (nq,) ndarray
-            Configuration, rad and m.
-        qdot : (nq,) ndarray
-            Velocity, rad/s and m/s.
+        q, qdot : (nq,) ndarray
+            The state at the start of the period: configuration, rad and m, and velocity, rad/s and m/s.
         period_s : float
             The period just ended, s.
 
