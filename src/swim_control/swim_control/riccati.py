@@ -428,7 +428,7 @@ def backward_transitions(time_s: Array, linearization: Linearization, state_weig
     Raises
     ------
     GainComputationError
-        If the time grid is not strictly increasing with at least two samples.
+        If the time grid has fewer than two samples or is not strictly increasing.
 
     References
     ----------

@@ -87,6 +87,8 @@ class Tolerances:
     def validate(self) -> None:
         """Check the tolerances.
 
+        A zero tolerance switches its check off.
+
         Raises
         ------
         ValueError

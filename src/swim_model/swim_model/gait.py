@@ -24,12 +24,14 @@ Array = npt.NDArray[np.float64]
 class SinusoidalGait:
     """phi = phi0 + A sin(w t), theta = B sin(w t + lead): pitch leads heave by ``pitch_lead_rad``.
 
+    ``mirrored`` gives the gait that runs the same (phi, theta) loop the other way round.
+
     Attributes
     ----------
     heave_amplitude_rad : float
-        A, rad.
+        A, the heave's swing about its bias, rad.
     pitch_amplitude_rad : float
-        B, rad.
+        B, rad (the pitch swings about zero).
     frequency_hz : float
         w / (2 pi), Hz.
     pitch_lead_rad : float

@@ -258,12 +258,12 @@ class JoukowskiFoil:
         Parameters
         ----------
         points : int, optional
-            Number of points.
+            Number of points, as for ``JoukowskiMap.profile``, which gives them.
 
         Returns
         -------
         (points,) ndarray of complex
-            z = x + iy, m.
+            The map's profile z = x + iy, m.
         """
         return self.map.profile(points)
 
@@ -273,12 +273,12 @@ class JoukowskiFoil:
         Parameters
         ----------
         rho_kg_m3 : float
-            Water density, kg/m^3.
+            Water density, kg/m^3 (``JoukowskiMap.added_mass_per_span``'s density).
 
         Returns
         -------
         AddedMass
-            Per span: kg/m, kg, kg m.
+            The map's coefficients per metre of span.
         """
         return self.map.added_mass_per_span(rho_kg_m3)
 
@@ -288,7 +288,7 @@ class JoukowskiFoil:
         Parameters
         ----------
         rho_kg_m3 : float
-            Water density, kg/m^3.
+            Density of the water around the foil, kg/m^3.
 
         Returns
         -------

@@ -48,7 +48,7 @@ def unit_across(angle: ca.SX) -> ca.SX:
     Parameters
     ----------
     angle : casadi.SX
-        Angle from the tank frame's +x, counter-clockwise, rad.
+        The angle of e_r (``unit_along``), rad; the result points a quarter turn counter-clockwise from it.
 
     Returns
     -------
@@ -130,10 +130,9 @@ def foil_velocity_map(c: Coordinates, q: ca.SX, rig: RigParameters) -> ca.SX:
 
     Parameters
     ----------
-    c : Coordinates
-        The coordinates as expressions of q.
-    q : (nq,) casadi.SX
-        The model's configuration symbols, rad and m.
+    c, q : Coordinates and (nq,) casadi.SX
+        The coordinates as expressions of the model's configuration symbols q (rad and m), which Q2 is the
+        Jacobian by.
     rig : RigParameters
         Ld, Lh and Lf.
 
@@ -191,10 +190,9 @@ def rigid_mass_matrix(c: Coordinates, q: ca.SX, rig: RigParameters) -> ca.SX:
 
     Parameters
     ----------
-    c : Coordinates
-        The coordinates as expressions of q.
-    q : (nq,) casadi.SX
-        The model's configuration symbols, rad and m.
+    c, q : Coordinates and (nq,) casadi.SX
+        The coordinates, and the configuration symbols (rad and m) they are expressions of: the bodies' Jacobians
+        J_v and J_w are taken by q.
     rig : RigParameters
         Lengths, masses, inertias and gear ratios.
 

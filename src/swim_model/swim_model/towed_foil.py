@@ -107,7 +107,7 @@ class TowedFoilKinematics:
         Parameters
         ----------
         t : (n,) ndarray
-            Times, s.
+            Times, s; the pitch is psi ahead of the heave at each.
 
         Returns
         -------
@@ -125,7 +125,7 @@ class TowedFoilKinematics:
         Parameters
         ----------
         t : (n,) ndarray
-            Times, s.
+            Times since the tow began (the pivot at X = 0 at t = 0), s.
 
         Returns
         -------
@@ -142,7 +142,7 @@ class TowedFoilKinematics:
         Parameters
         ----------
         t : (n,) ndarray
-            Times, s.
+            Times, s, at which F's velocity is taken.
 
         Returns
         -------
@@ -162,7 +162,7 @@ class TowedFoilKinematics:
         Parameters
         ----------
         t : (n,) ndarray
-            Times, s.
+            Times, s: the rates are exact derivatives, not differences.
 
         Returns
         -------
@@ -183,7 +183,7 @@ class TowedFoilKinematics:
         Parameters
         ----------
         t : (n,) ndarray
-            Times, s.
+            Times, s, at which the pivot's velocity is taken.
 
         Returns
         -------

@@ -126,7 +126,7 @@ class VehicleModel:
     Parameters
     ----------
     rig : RigParameters, optional
-        Rig parameters (default: the shipped rig file).
+        The rig's lengths, masses, inertias, foil and gear ratios (default: the shipped rig file, ``load_rig()``).
     constrained : bool, optional
         Lock the rails: q = (alpha, phi, theta).
     lane_radius_m : float, optional
@@ -330,7 +330,7 @@ class VehicleModel:
         Parameters
         ----------
         q : (nq,) array_like
-            Configuration, rad and m.
+            Configuration of the rig, rad and m.
 
         Returns
         -------
@@ -408,6 +408,11 @@ class VehicleModel:
                              "m/s (zeros for a flow at rest)")
         return [self._vector(lag, self.n_lag, "lag")]
 
+    def _require_circulatory(self, method: str, missing: str) -> None:
+        """Refuse a method of the circulatory flow's on the ideal-flow model, which has no ``missing``."""
+        if self.n_lag == 0:
+            raise StateError(f"{method}: the ideal-flow model has no {missing}")
+
     def _call(self, name: str, *args: Array) -> Sequence[Array]:
         outputs = self.numeric[name].call(list(args))
         return [np.asarray(o, dtype=float) for o in outputs]
@@ -437,10 +442,8 @@ class VehicleModel:
 
         Parameters
         ----------
-        q : (nq,) array_like
-            Configuration, rad and m.
-        qdot : (nq,) array_like
-            Velocity, rad/s and m/s.
+        q, qdot : (nq,) array_like
+            Configuration (rad and m) and velocity (rad/s and m/s).
 
         Returns
         -------
@@ -455,10 +458,8 @@ class VehicleModel:
 
         Parameters
         ----------
-        q : (nq,) array_like
-            Configuration, rad and m.
-        qdot : (nq,) array_like
-            Velocity, rad/s and m/s.
+        q, qdot : (nq,) array_like
+            The state: configuration, rad and m, and velocity, rad/s and m/s.
         tau : (2,) array_like
             Joint torques (heave, pitch), N m.
         lag : (n_lag,) array_like, optional
@@ -481,12 +482,8 @@ class VehicleModel:
 
         Parameters
         ----------
-        q : (nq,) array_like
-            Configuration, rad and m.
-        qdot : (nq,) array_like
-            Velocity, rad/s and m/s.
-        qddot : (nq,) array_like
-            Acceleration, rad/s^2 and m/s^2.
+        q, qdot, qddot : (nq,) array_like
+            Configuration, velocity and acceleration: rad and m, then per s, then per s^2.
         lag : (n_lag,) array_like, optional
             The flow's lag states, m/s (circulatory flow only).
 
@@ -504,14 +501,8 @@ class VehicleModel:
 
         Parameters
         ----------
-        q : (nq,) array_like
-            Configuration, rad and m.
-        qdot : (nq,) array_like
-            Velocity, rad/s and m/s.
-        qddot : (nq,) array_like
-            Acceleration, rad/s^2 and m/s^2.
-        lag : (n_lag,) array_like, optional
-            The flow's lag states, m/s (circulatory flow only).
+        q, qdot, qddot, lag
+            As for ``generalized_force``, whose actuated rows this is.
 
         Returns
         -------
@@ -525,10 +516,8 @@ class VehicleModel:
 
         Parameters
         ----------
-        q : (nq,) array_like
-            Configuration, rad and m.
-        qdot : (nq,) array_like
-            Velocity, rad/s and m/s.
+        q, qdot : (nq,) array_like
+            Configuration and velocity, rad and m, rad/s and m/s.
         lag : (n_lag,) array_like, optional
             The flow's lag states, m/s: they hold no energy, so ``lag`` is only checked.
 
@@ -549,10 +538,8 @@ class VehicleModel:
 
         Parameters
         ----------
-        q : (nq,) array_like
-            Configuration, rad and m.
-        qdot : (nq,) array_like
-            Velocity, rad/s and m/s.
+        q, qdot : (nq,) array_like
+            The state at which p is taken: rad and m, rad/s and m/s.
         lag : (n_lag,) array_like, optional
             The flow's lag states, m/s: they hold no momentum, so ``lag`` is only checked.
 
@@ -571,12 +558,10 @@ class VehicleModel:
 
         Parameters
         ----------
-        q : (nq,) array_like
-            Configuration, rad and m.
-        qdot : (nq,) array_like
-            Velocity, rad/s and m/s.
+        q, qdot : (nq,) array_like
+            The state Mio and Cio are evaluated at (rad and m, rad/s and m/s).
         lag : (n_lag,) array_like, optional
-            The flow's lag states, m/s (circulatory flow only).
+            The flow's lag states, m/s (circulatory flow only): the flow's force enters Cio qdot.
 
         Returns
         -------
@@ -595,10 +580,8 @@ class VehicleModel:
 
         Parameters
         ----------
-        q : (nq,) array_like
-            Configuration, rad and m.
-        qdot : (nq,) array_like
-            Velocity, rad/s and m/s.
+        q, qdot : (nq,) array_like
+            The state (rad and m, rad/s and m/s), as in the class docstring.
         psi_ddot : (2,) array_like
             (phiddot, thetaddot), rad/s^2.
         lag : (n_lag,) array_like, optional
@@ -622,7 +605,7 @@ class VehicleModel:
         Parameters
         ----------
         q : (nq,) array_like
-            Configuration, rad and m.
+            Configuration at which Q2 is taken, rad and m.
 
         Returns
         -------
@@ -636,10 +619,8 @@ class VehicleModel:
 
         Parameters
         ----------
-        q : (nq,) array_like
-            Configuration, rad and m.
-        qdot : (nq,) array_like
-            Velocity, rad/s and m/s.
+        q, qdot : (nq,) array_like
+            The state at which the foil's velocity Q2(q) qdot is taken: rad and m, rad/s and m/s.
 
         Returns
         -------
@@ -654,10 +635,8 @@ class VehicleModel:
 
         Parameters
         ----------
-        q : (nq,) array_like
-            Configuration, rad and m.
-        qdot : (nq,) array_like
-            Velocity, rad/s and m/s.
+        q, qdot : (nq,) array_like
+            Configuration and velocity; the foil's velocity Q2(q) qdot sets the flow.
         lag : (n_lag,) array_like
             The flow's lag states, m/s.
 
@@ -673,8 +652,7 @@ class VehicleModel:
         StateError
             On the ideal-flow model, which has no circulatory force.
         """
-        if self.n_lag == 0:
-            raise StateError("flow_force: the ideal-flow model has no circulatory force")
+        self._require_circulatory("flow_force", "circulatory force")
         f, generalized = self._call("flow_force", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
                                     *self._lag(lag))
         return f.reshape(-1), generalized.reshape(-1)
@@ -684,12 +662,8 @@ class VehicleModel:
 
         Parameters
         ----------
-        q : (nq,) array_like
-            Configuration, rad and m.
-        qdot : (nq,) array_like
-            Velocity, rad/s and m/s.
-        lag : (n_lag,) array_like
-            The flow's lag states, m/s.
+        q, qdot, lag
+            The state, as for ``flow_force``.
 
         Returns
         -------
@@ -701,8 +675,7 @@ class VehicleModel:
         StateError
             On the ideal-flow model, which has no lag states.
         """
-        if self.n_lag == 0:
-            raise StateError("lag_rate: the ideal-flow model has no lag states")
+        self._require_circulatory("lag_rate", "lag states")
         return self._call("lag_rate", self._vector(q, self.nq, "q"), self._vector(qdot, self.nq, "qdot"),
                           *self._lag(lag))[0].reshape(-1)
 
@@ -712,16 +685,14 @@ class VehicleModel:
 
         Parameters
         ----------
-        q : (nq,) array_like
-            Configuration, rad and m.
-        qdot : (nq,) array_like
-            Velocity, rad/s and m/s.
+        q, qdot : (nq,) array_like
+            The state at the step's start, rad and m, rad/s and m/s.
         tau : (2,) array_like
             Joint torques (heave, pitch), N m.
         step_s : float
             Step length, s.
         lag : (n_lag,) array_like, optional
-            The flow's lag states, m/s (circulatory flow only).
+            The lag states at the step's start, m/s (circulatory flow only).
 
         Returns
         -------

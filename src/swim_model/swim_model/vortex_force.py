@@ -246,7 +246,7 @@ class CirclePlane:
         Parameters
         ----------
         zeta : ndarray of complex
-            Circle-plane points, m.
+            Circle-plane points where F' and F'' are evaluated, m.
 
         Returns
         -------
@@ -263,7 +263,7 @@ class CirclePlane:
         Parameters
         ----------
         z : ndarray of complex
-            Foil-frame points, m.
+            Foil-frame points to map back, m.
 
         Returns
         -------
@@ -281,7 +281,7 @@ class CirclePlane:
         Parameters
         ----------
         zeta : ndarray of complex
-            Circle-plane points, m.
+            Circle-plane points, m, off the circle's centre.
 
         Returns
         -------
@@ -338,10 +338,8 @@ class CirclePlane:
         ----------
         zeta : ndarray of complex
             Circle-plane points where it is evaluated, m.
-        zeta_k : (N,) ndarray of complex
-            The free vortices' circle-plane positions, m.
-        gamma_k : (N,) ndarray
-            Their circulations, m^2/s.
+        zeta_k, gamma_k : (N,) ndarray of complex and (N,) ndarray
+            The free vortices' circle-plane positions, m, and their circulations, m^2/s.
 
         Returns
         -------
@@ -362,10 +360,8 @@ class CirclePlane:
 
         Parameters
         ----------
-        zeta_k : (N,) ndarray of complex
-            The free vortices' circle-plane positions, m.
-        gamma_k : (N,) ndarray
-            Their circulations, m^2/s.
+        zeta_k, gamma_k : (N,) ndarray of complex and (N,) ndarray
+            The free vortices (positions, m; circulations, m^2/s), each moved by the others and by the images.
         velocity : tuple of 3 floats
             Foil velocity (U m/s, V m/s, Omega rad/s).
         core_radius_m : float or (N,) ndarray
@@ -393,10 +389,8 @@ class CirclePlane:
         ----------
         zeta_new : complex
             The new vortex's circle-plane position, m.
-        zeta_k : (N,) ndarray of complex
-            The free vortices' circle-plane positions, m.
-        gamma_k : (N,) ndarray
-            Their circulations, m^2/s.
+        zeta_k, gamma_k : (N,) ndarray of complex and (N,) ndarray
+            The vortices shed before it: positions, m, and circulations, m^2/s.
         velocity : tuple of 3 floats
             Foil velocity (U m/s, V m/s, Omega rad/s).
 
@@ -434,10 +428,8 @@ class CirclePlane:
 
         Parameters
         ----------
-        zeta_k : (N,) ndarray of complex
-            The free vortices' circle-plane positions, m.
-        gamma_k : (N,) ndarray
-            Their circulations, m^2/s.
+        zeta_k, gamma_k : (N,) ndarray of complex and (N,) ndarray
+            The free vortices whose flow is added at both edges, as for ``vortex_potential_derivative``.
         velocity : tuple of 3 floats
             Foil velocity (U m/s, V m/s, Omega rad/s).
 
@@ -488,10 +480,8 @@ class CirclePlane:
 
         Parameters
         ----------
-        zeta_k : (N,) ndarray of complex
-            The free vortices' circle-plane positions, m.
-        gamma_k : (N,) ndarray
-            Their circulations, m^2/s.
+        zeta_k, gamma_k : (N,) ndarray of complex and (N,) ndarray
+            The free vortices (``vortex_potential_derivative``); the contour encloses them all.
         velocity : tuple of 3 floats
             Foil velocity (U m/s, V m/s, Omega rad/s).
         samples : int, optional
@@ -513,10 +503,8 @@ class CirclePlane:
 
         Parameters
         ----------
-        zeta_k : (N,) ndarray of complex
-            The free vortices' circle-plane positions, m.
-        gamma_k : (N,) ndarray
-            Their circulations, m^2/s.
+        zeta_k, gamma_k
+            The free vortices, as for ``impulse_terms``.
         rho_kg_m3 : float
             Water density, kg/m^3.
 
@@ -532,17 +520,15 @@ class CirclePlane:
 
         Parameters
         ----------
-        zeta_k : (N,) ndarray of complex
-            The free vortices' circle-plane positions, m.
-        gamma_k : (N,) ndarray
-            Their circulations, m^2/s.
+        zeta_k, gamma_k
+            The free vortices (``impulse_terms``' arguments).
         rho_kg_m3 : float
             Water density, kg/m^3.
 
         Returns
         -------
         float
-            L_v, kg m/s per metre of span.
+            L_v, kg m/s per metre of span, counter-clockwise positive.
         """
         return angular_impulse_from_terms(self.impulse_terms(zeta_k, gamma_k)[1], rho_kg_m3)
 
@@ -552,10 +538,8 @@ class CirclePlane:
 
         Parameters
         ----------
-        zeta_k : (N,) ndarray of complex
-            The free vortices' circle-plane positions, m.
-        gamma_k : (N,) ndarray
-            Their circulations, m^2/s.
+        zeta_k, gamma_k : (N,) ndarray of complex and (N,) ndarray
+            The free vortices' circle-plane positions, m, and circulations, m^2/s, one term of each sum per vortex.
 
         Returns
         -------

@@ -117,7 +117,7 @@ class WakeVortices:
     Attributes
     ----------
     time_s : float
-        The wake's time, s.
+        The wake's time, s, as ``WakeStatistics.time_s``.
     positions_m : (N,) ndarray of complex
         x + iy in the tank frame, m, oldest first.
     circulations_m2_s : (N,) ndarray
@@ -193,10 +193,8 @@ class WakeCoupling:
 
         Parameters
         ----------
-        q : (nq,) ndarray
-            Configuration, rad and m.
-        qdot : (nq,) ndarray
-            Velocity, rad/s and m/s.
+        q, qdot : (nq,) ndarray
+            The state at the start of the period: configuration, rad and m, and velocity, rad/s and m/s.
         period_s : float
             The period just ended, s.
 
