@@ -210,7 +210,7 @@ class Trajectory:
     _times: list[float] = dataclasses.field(init=False, repr=False)
     _sizes: tuple[int, int, int] = dataclasses.field(init=False, repr=False)   # (nq, n_lag, n), read per sample
 
-    def __post_init__(self) -> None:
+    def __post_init__(self) -> None:  # noqa: C901 - one guard per field, read as one checklist of a valid plan
         """Check every field and build the interpolation rows (Raises, above)."""
         set_field = object.__setattr__   # frozen: fields are set here once, checked
         set_field(self, "time_s", np.asarray(self.time_s, dtype=float))

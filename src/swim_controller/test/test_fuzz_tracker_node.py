@@ -288,7 +288,7 @@ def remake(edit, plan, torque_limits):
                                lane_radius_m=edit.lane_radius_m or plan.lane_radius_m, library_digest=digest)
 
 
-def break_plan(defect, edit, message, tolerances):
+def break_plan(defect, edit, message, tolerances):  # noqa: C901 - one branch per defect the fuzzer draws
     """The defect (a key of PLAN_DEFECTS) made in the encoded plan (message, PlannedTrajectory) or the tolerances
     (a list), the way edit.variant picks; False if that way happens to leave the plan valid (unicode joint names
     that are the plan's own), else True."""

@@ -297,12 +297,13 @@ def _positive(name: str, value: float) -> float:
     return value
 
 
-def oscillating_foil(foil: JoukowskiFoil, speed_m_s: float, heave_amplitude_m: float, pitch_amplitude_rad: float,
-                     frequency_hz: float, phase_rad: float, pivot_from_leading_edge_m: float,
-                     model: str = "circulatory", cycles: int | None = None, *, averaged_cycles: int = 2,
-                     steps_per_cycle: int | None = None, water_density_kg_m3: float = WATER_DENSITY_KG_M3,
-                     flow_parameters: "FlowParameters | None" = None,
-                     wake_parameters: WakeParameters | None = None) -> OscillatingFoilResult:
+def oscillating_foil(  # noqa: C901 - the public entry: each keyword checked, then the wake run or the reduced run
+        foil: JoukowskiFoil, speed_m_s: float, heave_amplitude_m: float, pitch_amplitude_rad: float,
+        frequency_hz: float, phase_rad: float, pivot_from_leading_edge_m: float,
+        model: str = "circulatory", cycles: int | None = None, *, averaged_cycles: int = 2,
+        steps_per_cycle: int | None = None, water_density_kg_m3: float = WATER_DENSITY_KG_M3,
+        flow_parameters: "FlowParameters | None" = None,
+        wake_parameters: WakeParameters | None = None) -> OscillatingFoilResult:
     """Tow the foil at constant speed while it heaves and pitches; return thrust, power and efficiency.
 
     Parameters
