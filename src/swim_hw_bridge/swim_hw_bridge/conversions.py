@@ -149,6 +149,7 @@ class BridgeConfig:
 
     @property
     def current_limits_a(self) -> tuple[float, float]:
+        """The (heave, pitch) current limits, A."""
         return (self.heave_current_limit_a, self.pitch_current_limit_a)
 
 
@@ -158,8 +159,10 @@ def default_config_path() -> Path:
 
 
 def load_bridge_config(path: str | Path | None = None, rig: RigParameters | None = None) -> BridgeConfig:
-    """Read and check a bridge file (the shipped one when path is None or empty) for rig (None: swim_model's
-    shipped rig). Raises BridgeConfigError.
+    """Read and check a bridge file for a rig.
+
+    The shipped bridge file when path is None or empty; swim_model's shipped rig when rig is None. Raises
+    BridgeConfigError.
     """
     source = Path(path) if path else default_config_path()
     try:
@@ -230,11 +233,11 @@ class Conversions:
                 h[2] + unwrapped_counts[2] * s[2], h[3] + unwrapped_counts[3] * s[3])
 
     def torques_to_currents(self, heave_n_m: float, pitch_n_m: float) -> tuple[float, float]:
-        """i = tau / (N Kt), amperes, for (heave, pitch) joint torques in N m."""
+        """The currents i = tau / (N Kt), amperes, for (heave, pitch) joint torques in N m."""
         return (heave_n_m / self.torque_gains_n_m_per_a[0], pitch_n_m / self.torque_gains_n_m_per_a[1])
 
     def currents_to_torques(self, heave_a: float, pitch_a: float) -> tuple[float, float]:
-        """tau = N Kt i, N m."""
+        """The joint torques tau = N Kt i, N m, for (heave, pitch) currents in A."""
         return (heave_a * self.torque_gains_n_m_per_a[0], pitch_a * self.torque_gains_n_m_per_a[1])
 
     def currents_to_volts(self, heave_a: float, pitch_a: float) -> tuple[float, float]:

@@ -120,6 +120,8 @@ class ProtocolError(ValueError):
 
 
 class MessageType(enum.IntEnum):
+    """A frame's type byte (the messages table above)."""
+
     HELLO = 0x01
     COMMAND = 0x02
     STATE_REQUEST = 0x03
@@ -128,12 +130,16 @@ class MessageType(enum.IntEnum):
 
 
 class CommandFlags(enum.IntFlag):
+    """COMMAND flag bits (see COMMAND flags above)."""
+
     ENABLE = 0x01
     ENABLE_TOGGLE = 0x02
     CLEAR_WATCHDOG = 0x04
 
 
 class StatusFlags(enum.IntFlag):
+    """STATE status bits (see STATE status flags above)."""
+
     OUTPUTS_ENABLED = 0x0001
     WATCHDOG_TRIPPED = 0x0002
     TOGGLE_STALE = 0x0004
@@ -272,6 +278,7 @@ class FrameDecoder:
 
     @property
     def error_count(self) -> int:
+        """Frames rejected so far, all checks together."""
         return self.cobs_errors + self.short_errors + self.crc_errors + self.length_errors + self.oversize_errors
 
     def reset(self) -> None:
@@ -280,6 +287,7 @@ class FrameDecoder:
         self._discarding = False
 
     def feed(self, data: bytes) -> list[Frame]:
+        """The complete frames in a chunk of received bytes; a partial frame waits for the next chunk."""
         frames: list[Frame] = []
         start = 0
         while True:
@@ -330,8 +338,9 @@ class FrameDecoder:
 
 @dataclasses.dataclass(frozen=True)
 class _Payload:
-    """A message's payload: its fields, in declaration order, are the values of its LAYOUT (a tuple field gives
-    one value per item), as parse_payload reads them back.
+    """A message's payload: its fields, in declaration order, are the values of its LAYOUT.
+
+    A tuple field gives one value per item, as parse_payload reads them back.
     """
 
     LAYOUT: ClassVar[struct.Struct]
@@ -413,6 +422,7 @@ _MESSAGE_TYPES = {cls: message_type for message_type, cls in PAYLOAD_CLASSES.ite
 
 
 def message_type_of(payload: Hello | HelloReply | Command | StateRequest | State) -> MessageType:
+    """The message type of a typed payload."""
     return _MESSAGE_TYPES[type(payload)]
 
 
