@@ -62,8 +62,6 @@ PARAMETERS = (
                   "realtime_priority so that nothing of the node's own delays a period", range=(1, 98),
                   read_only=True),
 ) + realtime_parameters(70, "node's threads while active (executor, middleware; the I/O loop: io_loop_priority)")
-#: how many published states the node remembers, to find the state a command answers (its stamp): 0.5 s at 8 ms
-STATES_REMEMBERED = 64
 
 
 @dataclasses.dataclass(frozen=True)
@@ -82,6 +80,10 @@ class BridgeSettings(RealtimeParameterSettings):
     diagnostics_rate_hz: float
     autostart: bool
     io_loop_priority: int
+
+
+#: how many published states the node remembers, to find the state a command answers (its stamp): 0.5 s at 8 ms
+STATES_REMEMBERED = 64
 
 
 class BridgeNode(LifecycleNode):

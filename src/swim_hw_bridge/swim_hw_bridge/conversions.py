@@ -46,22 +46,20 @@ BRIDGE_UNITS: dict[str, dict[str, float]] = {
 _SUFFIX = {"ratio": "", "torque_constant": "n_m_per_a", "current": "a", "voltage": "v", "transconductance": "a_per_v",
            "angle": "rad", "length": "m", "frequency": "hz"}
 
-_POSITIVE, _ANY = POSITIVE, SIGNED
+#: the (heave, pitch) motors' and amplifiers' entries, "<joint>_<what>": what -> dimension (each positive)
+_PER_MOTOR: dict[str, str] = {
+    "torque_constant": "torque_constant", "current_limit": "current", "amplifier_gain": "transconductance",
+}
+#: the home pose's entries, "<coordinate>_home_position": coordinate -> dimension (each signed)
+_HOME_POSITIONS: dict[str, str] = {"hub": "angle", "rail": "length", "heave": "angle", "pitch": "angle"}
 #: parameter key -> (dimension, sign rule)
 _SCHEMA: dict[str, tuple[str, str]] = {
-    "quadrature_counts_per_line": ("ratio", _POSITIVE),
-    "heave_torque_constant": ("torque_constant", _POSITIVE),
-    "pitch_torque_constant": ("torque_constant", _POSITIVE),
-    "heave_current_limit": ("current", _POSITIVE),
-    "pitch_current_limit": ("current", _POSITIVE),
-    "heave_amplifier_gain": ("transconductance", _POSITIVE),
-    "pitch_amplifier_gain": ("transconductance", _POSITIVE),
-    "dac_range": ("voltage", _POSITIVE),
-    "hub_home_position": ("angle", _ANY),
-    "rail_home_position": ("length", _ANY),
-    "heave_home_position": ("angle", _ANY),
-    "pitch_home_position": ("angle", _ANY),
-    "velocity_cutoff": ("frequency", _POSITIVE),
+    "quadrature_counts_per_line": ("ratio", POSITIVE),
+    **{f"{joint}_{what}": (dimension, POSITIVE)
+       for what, dimension in _PER_MOTOR.items() for joint in ("heave", "pitch")},
+    "dac_range": ("voltage", POSITIVE),
+    **{f"{coordinate}_home_position": (dimension, SIGNED) for coordinate, dimension in _HOME_POSITIONS.items()},
+    "velocity_cutoff": ("frequency", POSITIVE),
 }
 
 

@@ -355,35 +355,53 @@ class _Payload:
 
 @dataclasses.dataclass(frozen=True)
 class Hello(_Payload):
-    protocol_version: int = PROTOCOL_VERSION
+    """HELLO: the protocol version the host speaks."""
+
     LAYOUT = struct.Struct("<B")
+    protocol_version: int = PROTOCOL_VERSION
+
+
+@dataclasses.dataclass(frozen=True)
+class Command(_Payload):
+    """COMMAND: the (heave, pitch) currents, microamperes, and the CommandFlags."""
+
+    LAYOUT = struct.Struct("<iiB")
+    heave_current_ua: int
+    pitch_current_ua: int
+    flags: int
+
+
+@dataclasses.dataclass(frozen=True)
+class StateRequest(_Payload):
+    """STATE_REQUEST: no fields."""
+
+    LAYOUT = struct.Struct("<")
 
 
 @dataclasses.dataclass(frozen=True)
 class HelloReply(_Payload):
+    """HELLO_REPLY: the device's protocol version, counter width (bits) and timeouts, ms.
+
+    request_sequence is the HELLO's sequence; the counters wrap modulo 2**counter_bits.
+    """
+
+    LAYOUT = struct.Struct("<HBBHH")
     request_sequence: int
     protocol_version: int
     counter_bits: int
     command_timeout_ms: int
     toggle_timeout_ms: int
-    LAYOUT = struct.Struct("<HBBHH")
-
-
-@dataclasses.dataclass(frozen=True)
-class Command(_Payload):
-    heave_current_ua: int
-    pitch_current_ua: int
-    flags: int
-    LAYOUT = struct.Struct("<iiB")
-
-
-@dataclasses.dataclass(frozen=True)
-class StateRequest(_Payload):
-    LAYOUT = struct.Struct("<")
 
 
 @dataclasses.dataclass(frozen=True)
 class State(_Payload):
+    """STATE: the latched counters, the applied currents (microamperes), StatusFlags and errors.
+
+    request_sequence is the STATE_REQUEST's sequence, last_command_sequence the last valid COMMAND's; device_time_us
+    is the device's microsecond clock at the latch, and rx_error_count the frames it rejected since power-up.
+    """
+
+    LAYOUT = struct.Struct("<HHI4IiiHH")
     request_sequence: int
     last_command_sequence: int
     device_time_us: int
@@ -392,7 +410,6 @@ class State(_Payload):
     applied_pitch_current_ua: int
     status: int
     rx_error_count: int
-    LAYOUT = struct.Struct("<HHI4IiiHH")
 
 
 PAYLOAD_CLASSES: dict[MessageType, type[Hello | HelloReply | Command | StateRequest | State]] = {
