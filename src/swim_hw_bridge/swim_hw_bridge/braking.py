@@ -1,5 +1,6 @@
-"""What each motor can do to its link and what the rig's own motion does to it, from the rig's model: what the
-braking rule of the safety layer (safety.py, rule 6) counts on.
+"""What each motor can do to its link and what the rig's own motion does to it, from the rig's model.
+
+This is what the braking rule of the safety layer (safety.py, rule 6) counts on.
 
 For a joint j driven by torque tau_j, the link's acceleration from tau_j alone is tau_j (M^-1)_jj, and for a
 symmetric positive definite M, (M^-1)_jj >= 1 / M_jj. So the largest diagonal entry of the free vehicle's
@@ -24,9 +25,10 @@ GRID_POINTS = 13
 
 
 class VelocityTerms:
-    """The (heave, pitch) accelerations of the velocity terms, -(M^-1 Cm(q, qdot) qdot)_j, rad/s^2: the free
-    vehicle's forward dynamics at zero torque, through its native entry point (microseconds a call, so the I/O
-    loop can ask every period; its buffers are its own: one calling thread).
+    """The (heave, pitch) accelerations of the velocity terms, -(M^-1 Cm(q, qdot) qdot)_j, rad/s^2.
+
+    They are the free vehicle's forward dynamics at zero torque, through its native entry point (microseconds a
+    call, so the I/O loop can ask every period; its buffers are its own: one calling thread).
     """
 
     def __init__(self, model: VehicleModel) -> None:
@@ -34,6 +36,7 @@ class VelocityTerms:
 
     def __call__(self, positions: tuple[float, float, float, float],
                  rates: tuple[float, float, float, float]) -> tuple[float, float]:
+        """The (heave, pitch) velocity-term accelerations, rad/s^2, at (q, qdot) of the four coordinates."""
         forward = self._forward
         forward.inputs[0][:], forward.inputs[1][:], forward.inputs[2][:] = positions, rates, 0.0
         forward()
@@ -41,8 +44,10 @@ class VelocityTerms:
 
 
 def joint_dynamics_bounds(rig: RigParameters, fraction: float = BRAKING_TORQUE_FRACTION) -> JointDynamicsBounds:
-    """The (heave, pitch) decelerations the rig's motors (its torque limits) surely give and the accelerations they
-    give at most between its hard stops, rad/s^2, and the velocity terms (see the module docstring).
+    """What the rig's motors surely give and give at most, and the velocity terms (module docstring).
+
+    The (heave, pitch) decelerations the motors (the rig's torque limits) surely give and the accelerations they
+    give at most between the hard stops, rad/s^2.
     """
     model = VehicleModel(rig, constrained=False)
     heave = np.linspace(*rig.hard_limits_rad[0], GRID_POINTS)

@@ -62,8 +62,6 @@ PARAMETERS = (
                   "realtime_priority so that nothing of the node's own delays a period", range=(1, 98),
                   read_only=True),
 ) + realtime_parameters(70, "node's threads while active (executor, middleware; the I/O loop: io_loop_priority)")
-#: how many published states the node remembers, to find the state a command answers (its stamp): 0.5 s at 8 ms
-STATES_REMEMBERED = 64
 
 
 @dataclasses.dataclass(frozen=True)
@@ -84,8 +82,14 @@ class BridgeSettings(RealtimeParameterSettings):
     io_loop_priority: int
 
 
+#: how many published states the node remembers, to find the state a command answers (its stamp): 0.5 s at 8 ms
+STATES_REMEMBERED = 64
+
+
 class BridgeNode(LifecycleNode):
-    """owns_process: the node is its process's (main() makes it so) and applies the real-time means to it; a node
+    """The hardware bridge's lifecycle node (module docstring).
+
+    owns_process: the node is its process's (main() makes it so) and applies the real-time means to it; a node
     made in another's process (a test's, a benchmark's) leaves that process's scheduling and collector alone.
     """
 
@@ -118,6 +122,7 @@ class BridgeNode(LifecycleNode):
 
     # --- lifecycle --------------------------------------------------------------------------------------------
     def on_configure(self, state: State) -> TransitionCallbackReturn:
+        """Load the bridge and rig files, open the device at zero current and build the I/O loop."""
         self.settings = self.parameters.current
         try:
             config = load_bridge_config(self.settings.config_path or None, load_rig(self.settings.rig_path or None))
@@ -152,6 +157,7 @@ class BridgeNode(LifecycleNode):
         return super().on_configure(state)
 
     def on_activate(self, state: State) -> TransitionCallbackReturn:
+        """Enable the amplifiers, take the real-time means and start the I/O loop."""
         assert self.device is not None and self.loop is not None
         try:
             self.device.enable()
@@ -171,8 +177,10 @@ class BridgeNode(LifecycleNode):
         return self.settings.realtime if self.owns_process else NO_REALTIME_MEANS
 
     def _make_realtime(self) -> None:
-        """The process's threads at realtime_priority while active (the I/O loop sets its own thread above them),
-        memory locked; said once at info level, or as one warning with what was refused and why.
+        """The process's threads at realtime_priority while active, memory locked.
+
+        The I/O loop sets its own thread above them. Said once at info level, or as one warning with what was
+        refused and why.
         """
         if not self.owns_process:
             return
@@ -183,8 +191,10 @@ class BridgeNode(LifecycleNode):
         self.realtime_outcome = outcome
 
     def _reset_command_timing(self) -> None:
-        """The command timing of an activation, from its start: the receipt of each command past the state it
-        answers (the latency) and past the command before less the period (the jitter).
+        """The command timing of an activation, from its start.
+
+        The latency is the receipt of each command past the state it answers; the jitter its receipt past the
+        command before, less the period.
         """
         self.command_latency = LatencyHistogram()
         self.command_jitter = LatencyHistogram()
@@ -192,6 +202,7 @@ class BridgeNode(LifecycleNode):
         self._last_command_received_s = float("nan")
 
     def on_deactivate(self, state: State) -> TransitionCallbackReturn:
+        """Zero the outputs and disable the amplifiers; ERROR when the device did not confirm both."""
         if not self._stop_outputs():
             # the outputs are not known to be safe: error processing (on_error) instead of "inactive"
             self.get_logger().error("deactivate failed: the device did not take the zero current or the disable")
@@ -200,16 +211,19 @@ class BridgeNode(LifecycleNode):
         return super().on_deactivate(state)
 
     def on_cleanup(self, state: State) -> TransitionCallbackReturn:
+        """Close the device."""
         self._close_device()
         self._state_label = "unconfigured"
         return super().on_cleanup(state)
 
     def on_shutdown(self, state: State) -> TransitionCallbackReturn:
+        """Release the device (zero, disable, close)."""
         self.release()
         self._state_label = "finalized"
         return super().on_shutdown(state)
 
     def on_error(self, state: State) -> TransitionCallbackReturn:
+        """Release the device and return to unconfigured."""
         self.get_logger().error("error processing: zero current, amplifiers disabled, device closed")
         self.release()
         self._state_label = "unconfigured"
@@ -334,8 +348,10 @@ class BridgeNode(LifecycleNode):
         self._reported_faults = faults
 
     def _timing_values(self, snapshot: Snapshot) -> dict[str, object]:
-        """How the periods went since the activation: overruns by cause and the worst one, the wake-up lateness,
-        the commands' latency and jitter (median and p99, ms), and the real-time means in effect.
+        """How the periods went since the activation.
+
+        Overruns by cause and the worst one, the wake-up lateness, the commands' latency and jitter (median and
+        p99, ms), and the real-time means in effect.
         """
         loop = self.loop
         by_cause = dict(zip(("late_wakeup", "slow_read", "slow_write", "slow_work"), snapshot.overruns_by_cause))
@@ -363,6 +379,7 @@ class BridgeNode(LifecycleNode):
         return self.loop is not None and self.loop.running
 
     def diagnostic_status(self, snapshot: Snapshot | None) -> DiagnosticStatus:
+        """The I/O loop's diagnostics at a snapshot (None: the loop has not run yet)."""
         status = DiagnosticStatus(name=f"{self.get_fully_qualified_name()}: I/O loop",
                                   hardware_id=self.settings.backend)
         values = {"lifecycle_state": self._state_label, "malformed_commands": self.malformed_commands,
@@ -409,6 +426,7 @@ def autostart(node: BridgeNode) -> None:
 
 
 def main(args: list[str] | None = None) -> None:
+    """Run bridge_node until shut down; args are ROS's command-line arguments."""
     # release: zero, then disable, then close, however the node stops: never leave the amplifiers driven
     run_node(functools.partial(BridgeNode, owns_process=True), args, name="bridge_node", start=autostart,
              stop=BridgeNode.release)

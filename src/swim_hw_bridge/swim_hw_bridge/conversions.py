@@ -46,22 +46,20 @@ BRIDGE_UNITS: dict[str, dict[str, float]] = {
 _SUFFIX = {"ratio": "", "torque_constant": "n_m_per_a", "current": "a", "voltage": "v", "transconductance": "a_per_v",
            "angle": "rad", "length": "m", "frequency": "hz"}
 
-_POSITIVE, _ANY = POSITIVE, SIGNED
+#: the (heave, pitch) motors' and amplifiers' entries, "<joint>_<what>": what -> dimension (each positive)
+_PER_MOTOR: dict[str, str] = {
+    "torque_constant": "torque_constant", "current_limit": "current", "amplifier_gain": "transconductance",
+}
+#: the home pose's entries, "<coordinate>_home_position": coordinate -> dimension (each signed)
+_HOME_POSITIONS: dict[str, str] = {"hub": "angle", "rail": "length", "heave": "angle", "pitch": "angle"}
 #: parameter key -> (dimension, sign rule)
 _SCHEMA: dict[str, tuple[str, str]] = {
-    "quadrature_counts_per_line": ("ratio", _POSITIVE),
-    "heave_torque_constant": ("torque_constant", _POSITIVE),
-    "pitch_torque_constant": ("torque_constant", _POSITIVE),
-    "heave_current_limit": ("current", _POSITIVE),
-    "pitch_current_limit": ("current", _POSITIVE),
-    "heave_amplifier_gain": ("transconductance", _POSITIVE),
-    "pitch_amplifier_gain": ("transconductance", _POSITIVE),
-    "dac_range": ("voltage", _POSITIVE),
-    "hub_home_position": ("angle", _ANY),
-    "rail_home_position": ("length", _ANY),
-    "heave_home_position": ("angle", _ANY),
-    "pitch_home_position": ("angle", _ANY),
-    "velocity_cutoff": ("frequency", _POSITIVE),
+    "quadrature_counts_per_line": ("ratio", POSITIVE),
+    **{f"{joint}_{what}": (dimension, POSITIVE)
+       for what, dimension in _PER_MOTOR.items() for joint in ("heave", "pitch")},
+    "dac_range": ("voltage", POSITIVE),
+    **{f"{coordinate}_home_position": (dimension, SIGNED) for coordinate, dimension in _HOME_POSITIONS.items()},
+    "velocity_cutoff": ("frequency", POSITIVE),
 }
 
 
@@ -149,6 +147,7 @@ class BridgeConfig:
 
     @property
     def current_limits_a(self) -> tuple[float, float]:
+        """The (heave, pitch) current limits, A."""
         return (self.heave_current_limit_a, self.pitch_current_limit_a)
 
 
@@ -158,8 +157,10 @@ def default_config_path() -> Path:
 
 
 def load_bridge_config(path: str | Path | None = None, rig: RigParameters | None = None) -> BridgeConfig:
-    """Read and check a bridge file (the shipped one when path is None or empty) for rig (None: swim_model's
-    shipped rig). Raises BridgeConfigError.
+    """Read and check a bridge file for a rig.
+
+    The shipped bridge file when path is None or empty; swim_model's shipped rig when rig is None. Raises
+    BridgeConfigError.
     """
     source = Path(path) if path else default_config_path()
     try:
@@ -230,11 +231,11 @@ class Conversions:
                 h[2] + unwrapped_counts[2] * s[2], h[3] + unwrapped_counts[3] * s[3])
 
     def torques_to_currents(self, heave_n_m: float, pitch_n_m: float) -> tuple[float, float]:
-        """i = tau / (N Kt), amperes, for (heave, pitch) joint torques in N m."""
+        """The currents i = tau / (N Kt), amperes, for (heave, pitch) joint torques in N m."""
         return (heave_n_m / self.torque_gains_n_m_per_a[0], pitch_n_m / self.torque_gains_n_m_per_a[1])
 
     def currents_to_torques(self, heave_a: float, pitch_a: float) -> tuple[float, float]:
-        """tau = N Kt i, N m."""
+        """The joint torques tau = N Kt i, N m, for (heave, pitch) currents in A."""
         return (heave_a * self.torque_gains_n_m_per_a[0], pitch_a * self.torque_gains_n_m_per_a[1])
 
     def currents_to_volts(self, heave_a: float, pitch_a: float) -> tuple[float, float]:

@@ -59,9 +59,11 @@ class Device(abc.ABC):
 
     @abc.abstractmethod
     def toggle_enable(self) -> None:
-        """Flip the amplifier-enable output once. The amplifiers' enable input goes through a charge-pump
-        (watchdog) circuit that holds them enabled only while this line keeps toggling, so a bridge that hangs
-        or dies disables them even though a DAC keeps its last value. Called once per loop period while enabled.
+        """Flip the amplifier-enable output once.
+
+        The amplifiers' enable input goes through a charge-pump (watchdog) circuit that holds them enabled only
+        while this line keeps toggling, so a bridge that hangs or dies disables them even though a DAC keeps its
+        last value. Called once per loop period while enabled.
         """
 
     @abc.abstractmethod

@@ -132,14 +132,17 @@ class IoLoop:
 
     # --- the ROS side's interface (any thread) ------------------------------------------------------------
     def set_command(self, command: Command) -> None:
+        """Hand the loop the latest torque command."""
         with self._lock:
             self._command = command
 
     def snapshot(self) -> Snapshot | None:
+        """The latest period's snapshot (None before the first)."""
         with self._lock:
             return self._snapshot
 
     def emergency_stop(self) -> None:
+        """Latch the emergency stop at the loop's next period."""
         with self._lock:
             self._estop_requested = True
 
@@ -170,6 +173,7 @@ class IoLoop:
 
     @property
     def running(self) -> bool:
+        """Whether the loop's thread is alive."""
         return self._thread is not None and self._thread.is_alive()
 
     # --- the loop's thread ---------------------------------------------------------------------------------

@@ -70,6 +70,8 @@ def fault_names(faults: FaultCode) -> str:
 
 
 class WatchdogState(enum.IntEnum):
+    """The command watchdog's state."""
+
     WAITING = 0   # no command received since the last reset or activation
     OK = 1
     EXPIRED = 2   # the latest command is older than the timeout: torque zero
@@ -90,8 +92,10 @@ class Command:
 
 
 def soft_limit_scale(position: float, torque: float, lower: float, upper: float, margin: float) -> float:
-    """Factor in [0, 1] for torque at position: 1 away from the limits and for torque pointing inward,
-    falling linearly to 0 at the hard limit for torque pointing outward (see the module docstring).
+    """Factor in [0, 1] for torque at position.
+
+    It is 1 away from the limits and for torque pointing inward, falling linearly to 0 at the hard limit for
+    torque pointing outward (see the module docstring).
     """
     if torque > 0.0:
         return min(max((upper - position) / margin, 0.0), 1.0)
@@ -115,8 +119,9 @@ VelocityTerms = Callable[[tuple[float, float, float, float], tuple[float, float,
 
 def braking_speed_limit(distance_rad: float, deceleration_rad_s2: float, latency_s: float,
                         drive_acceleration_rad_s2: float = 0.0) -> float:
-    """The largest speed v toward a limit distance_rad away from which a joint that may still be driven at
-    drive_acceleration_rad_s2 for latency_s, then brakes at deceleration_rad_s2, stops by the limit:
+    """The largest speed v toward a limit distance_rad away from which a joint still stops by the limit.
+
+    The joint may still be driven at drive_acceleration_rad_s2 for latency_s, then brakes at deceleration_rad_s2:
     with u = v + A L the speed when braking starts, d = v L + A L^2 / 2 + u^2 / (2 a), so
     u = a (sqrt(L^2 + (2 d + A L^2) / a) - L) and v = u - A L; 0 at or past the limit, when even v = 0 is too
     fast, or when the joint cannot be braked at all (a <= 0).
@@ -132,8 +137,9 @@ def braking_speed_limit(distance_rad: float, deceleration_rad_s2: float, latency
 
 @dataclasses.dataclass(frozen=True)
 class JointDynamicsBounds:
-    """What the braking rule counts on for each joint (heave, pitch) (braking.py builds it from the model; the
-    defaults: no braking bound).
+    """What the braking rule counts on for each joint (heave, pitch).
+
+    braking.py builds it from the model; the defaults: no braking bound.
 
     decelerations_rad_s2: a, what its own motor surely gives, BRAKING_TORQUE_FRACTION tau_max / max M_jj;
     drive_accelerations_rad_s2: A, the most its own motor gives, max tau_max (M^-1)_jj;
@@ -148,9 +154,10 @@ class JointDynamicsBounds:
 
 @dataclasses.dataclass(frozen=True)
 class Motion:
-    """What the braking rule reads of the rig's motion at a sample: the (alpha rad, R m, phi rad, theta rad)
-    positions, their mean rates over the last sample interval (the difference quotient of the last two samples,
-    rad/s and m/s) and that interval, s (0: none yet, rates zero).
+    """What the braking rule reads of the rig's motion at a sample.
+
+    The (alpha rad, R m, phi rad, theta rad) positions, their mean rates over the last sample interval (the
+    difference quotient of the last two samples, rad/s and m/s) and that interval, s (0: none yet, rates zero).
     """
 
     positions: tuple[float, float, float, float]
@@ -177,6 +184,7 @@ class SafetyLimits:
     def from_config(cls, config: BridgeConfig, sample_period_s: float, watchdog_periods: int,
                     stale_read_limit: int, read_failure_limit: int,
                     dynamics: JointDynamicsBounds = JointDynamicsBounds()) -> "SafetyLimits":
+        """The limits of a bridge configuration, its period and fault counts."""
         return cls(
             torque_limits_n_m=config.torque_limits_n_m, current_limits_a=config.current_limits_a,
             torque_gains_n_m_per_a=config.motor_torque_gains_n_m_per_a,
@@ -205,14 +213,17 @@ class SafetyLayer:
 
     # --- latches ---------------------------------------------------------------------------------------
     def latch(self, fault: FaultCode) -> None:
+        """Latch a fault: zero output until a reset."""
         self.faults |= fault
 
     def emergency_stop(self) -> None:
+        """Latch the emergency stop."""
         self.latch(FaultCode.EMERGENCY_STOP)
 
     def reset(self, now_s: float) -> None:
-        """Clear every latched fault; output resumes only with a command received after now_s. A joint found past
-        its hard limit at the next check_positions is recovering (see the module docstring).
+        """Clear every latched fault; output resumes only with a command received after now_s.
+
+        A joint found past its hard limit at the next check_positions is recovering (see the module docstring).
         """
         self.faults = FaultCode.NONE
         self.recovering = [True, True]
@@ -238,8 +249,9 @@ class SafetyLayer:
             self.latch(FaultCode.STALE_READ)
 
     def check_positions(self, heave_rad: float, pitch_rad: float) -> None:
-        """Latch HARD_LIMIT when a joint is past (or cannot be placed within) its hard limits, unless it is
-        recovering from a reset (a NaN position always latches).
+        """Latch HARD_LIMIT when a joint is past (or cannot be placed within) its hard limits.
+
+        A joint recovering from a reset does not latch; a NaN position always latches.
         """
         for joint, (position, (lower, upper)) in enumerate(zip((heave_rad, pitch_rad), self.limits.hard_limits_rad)):
             inside = lower <= position <= upper   # false for NaN
@@ -251,8 +263,9 @@ class SafetyLayer:
     # --- the output --------------------------------------------------------------------------------------
     def output(self, now_s: float, command: Command | None, heave_rad: float, pitch_rad: float,
                motion: Motion | None = None) -> tuple[float, float, float, float]:
-        """(heave_a, pitch_a, heave_n_m, pitch_n_m): currents to write and the joint torques they make, for the
-        joints' positions (rad) and the rig's motion (None: at rest as far as is known).
+        """The currents to write and the joint torques they make: (heave_a, pitch_a, heave_n_m, pitch_n_m).
+
+        For the joints' positions (rad) and the rig's motion (None: at rest as far as is known).
         """
         requested = self._requested(now_s, command)
         if requested is None:
@@ -275,9 +288,10 @@ class SafetyLayer:
         return heave_a, pitch_a, heave_n_m, pitch_n_m
 
     def _requested(self, now_s: float, command: Command | None) -> tuple[float, float] | None:
-        """The (heave, pitch) torque asked of the joints before the limits: the command's, or zero while waiting
-        for one or with the watchdog expired; None for zero output whatever the braking rule says (a latched
-        fault).
+        """The (heave, pitch) torque asked of the joints before the limits.
+
+        The command's, or zero while waiting for one or with the watchdog expired; None for zero output whatever
+        the braking rule says (a latched fault).
         """
         if command is None or command.received_monotonic_s <= self._resume_after_s:
             self.watchdog = WatchdogState.WAITING
@@ -295,8 +309,9 @@ class SafetyLayer:
 
     def _joint(self, joint: int, torque_n_m: float, position: float, motion: Motion,
                velocity_term_rad_s2: float) -> tuple[float, float, bool]:
-        """(current A, joint torque N m, clipped?) for one motor; a NaN position gives a NaN current, which
-        the caller catches.
+        """The current (A), joint torque (N m) and whether it was clipped, for one motor.
+
+        A NaN position gives a NaN current, which the caller catches.
         """
         limits = self.limits
         torque_limit = limits.torque_limits_n_m[joint]
@@ -322,9 +337,10 @@ class SafetyLayer:
         return current_a, current_a * gain, clipped
 
     def _braking(self, joint: int, position: float, motion: Motion, velocity_term_rad_s2: float) -> int:
-        """Rule 6 for a joint within its limits, whose velocity terms accelerate it by velocity_term_rad_s2: +1
-        braking it short of its upper limit, -1 of its lower one, 0 not (kept in self.braking: once braking, until
-        stopped).
+        """Rule 6 for a joint within its limits, whose velocity terms accelerate it by velocity_term_rad_s2.
+
+        +1 braking it short of its upper limit, -1 of its lower one, 0 not (kept in self.braking: once braking,
+        until stopped).
         """
         limits, dynamics = self.limits, self.limits.dynamics
         lower, upper = limits.hard_limits_rad[joint]

@@ -19,6 +19,8 @@ import numpy as np
 
 
 class OverrunCause(enum.IntEnum):
+    """What made a period late (overrun_cause)."""
+
     NONE = 0
     LATE_WAKEUP = 1
     SLOW_READ = 2
@@ -27,8 +29,9 @@ class OverrunCause(enum.IntEnum):
 
 
 def overrun_cause(wake_lateness_s: float, read_s: float, write_s: float, work_s: float) -> OverrunCause:
-    """The largest part of a late period: its wake-up lateness, its read, its write, or the rest of its work
-    (work_s: the whole period's work, read and write included).
+    """The largest part of a late period: its wake-up lateness, its read, its write, or the rest of its work.
+
+    work_s is the whole period's work, read and write included.
     """
     rest_s = work_s - read_s - write_s
     parts = ((wake_lateness_s, OverrunCause.LATE_WAKEUP), (read_s, OverrunCause.SLOW_READ),
@@ -52,6 +55,7 @@ class LatencyHistogram:
         self.largest_s = 0.0
 
     def add(self, duration_s: float) -> None:
+        """Count a duration, s; a negative or NaN one is ignored."""
         if not duration_s >= 0.0:   # negative or nan: not a duration
             return
         index = int(duration_s / self.bin_s)
@@ -61,11 +65,13 @@ class LatencyHistogram:
 
     @property
     def count(self) -> int:
+        """How many durations were counted."""
         return int(self.counts.sum())
 
     def percentile_s(self, percent: float) -> float:
-        """The upper edge of the bin holding the percent-th percentile, at most the largest duration (nan while
-        empty).
+        """The upper edge of the bin holding the percent-th percentile, at most the largest duration.
+
+        NaN while empty.
         """
         counts = self.counts.copy()   # the loop's thread may add meanwhile
         total = int(counts.sum())

@@ -30,6 +30,7 @@ class SensorNoise:
     quantize: bool = True
 
     def validate(self) -> None:
+        """Raise ValueError for a negative or non-finite setting, or a zero quadrature_factor."""
         for name in ("quadrature_factor", "position_noise_counts", "velocity_noise_fraction"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0) or (name == "quadrature_factor" and value == 0.0):

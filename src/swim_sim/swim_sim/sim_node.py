@@ -89,8 +89,9 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
 
 @dataclasses.dataclass(frozen=True)
 class SimSettings:
-    """PARAMETERS' values (swim_ros.parameters.NodeSettings): the disturbances.* and sensors.* groups as their
-    dataclasses, the wake.* group by name.
+    """PARAMETERS' values (swim_ros.parameters.NodeSettings).
+
+    The disturbances.* and sensors.* groups come as their dataclasses, the wake.* group by name.
     """
 
     rig_path: str
@@ -122,8 +123,9 @@ def sensor_noise_reason(settings: SimSettings) -> Optional[str]:
 
 @dataclasses.dataclass(frozen=True)
 class StateBounds:
-    """What set_state accepts, per coordinate name: (lower, upper) positions and the largest speed, each with
-    where the bound comes from (said in a refusal, with how to change it).
+    """What set_state accepts, per coordinate name: (lower, upper) positions and the largest speed.
+
+    Each bound comes with where it comes from (said in a refusal, with how to change it).
     """
 
     positions: dict[str, tuple[float, float, str]]
@@ -131,9 +133,11 @@ class StateBounds:
 
     @classmethod
     def of(cls, plant: Plant) -> "StateBounds":
-        """alpha within the plans' start-alpha bound (float64 keeps alpha to 1e-10 rad up to there), R inside
-        the tank, heave and pitch within their hard stops; speeds within the rig's physically possible joint
-        speeds (its limits).
+        """The bounds of a plant's rig: positions inside the rig's reach, speeds within its limits.
+
+        The coordinate alpha stays within the plans' start-alpha bound (float64 keeps alpha to 1e-10 rad up to
+        there), R inside the tank, heave and pitch within their hard stops; speeds within the rig's physically
+        possible joint speeds (its limits).
         """
         rig = plant.model.rig
         where = f"the limits of {rig.source_path}; parameter rig_path"
@@ -159,6 +163,8 @@ class StateBounds:
 
 
 class SimNode(Node):
+    """The simulated rig's node (module docstring)."""
+
     def __init__(self) -> None:
         super().__init__("sim_node")
         self.parameters = NodeSettings(self, PARAMETERS, SimSettings, on_change=self._apply_parameters,
@@ -250,8 +256,9 @@ class SimNode(Node):
             self._publish_state(advance=False)
 
     def _republish_held_state(self) -> None:
-        """Holding: the held state again, at most once a period of wall time and only once it was answered (a
-        zero command answered at once would otherwise make an idle loop as fast as the CPU allows).
+        """Holding: the held state again, at most once a period of wall time and only once it was answered.
+
+        A zero command answered at once would otherwise make an idle loop as fast as the CPU allows.
         """
         if self.holding and self._held_state_answered and self.failed is None:
             self._held_state_answered = False
@@ -273,8 +280,9 @@ class SimNode(Node):
         self._prepare_period()
 
     def _prepare_period(self) -> None:
-        """The next period's wake and waves, computed while the controller computes its torque (they do not depend
-        on it: Plant.prepare_period).
+        """The next period's wake and waves, computed while the controller computes its torque.
+
+        They do not depend on the torque (Plant.prepare_period).
         """
         try:
             self.plant.prepare_period()
@@ -375,6 +383,7 @@ class SimNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
+    """Run sim_node until shut down; args are ROS's command-line arguments."""
     run_node(SimNode, args, name="sim_node", fatal_errors=(ValueError, SwimModelError))
 
 

@@ -1,5 +1,6 @@
-"""sim_node's ``wake.*`` parameters for the vortex wake's coupling (swim_model.wake_coupling, which this module
-re-exports for swim_sim's users). No ROS.
+"""sim_node's ``wake.*`` parameters for the vortex wake's coupling. No ROS.
+
+The coupling itself is swim_model.wake_coupling, which this module re-exports for swim_sim's users.
 """
 from __future__ import annotations
 

@@ -144,8 +144,9 @@ def _empty_request(payload: bytes) -> None:
 
 
 class _ClientTopics(ServerListener):
-    """What clients watch (their subscriptions, counted per channel), and the topics they publish on: /emergency_stop
-    (JSON {"data": bool}) to the bridge's topic.
+    """What clients watch (their subscriptions, counted per channel), and the topics they publish on.
+
+    A client's /emergency_stop (JSON {"data": bool}) goes to the bridge's topic.
     """
 
     def __init__(self, node: "FoxgloveNode") -> None:
@@ -182,6 +183,8 @@ class _ClientTopics(ServerListener):
 
 
 class FoxgloveNode(Node):
+    """The Foxglove server's node (module docstring)."""
+
     def __init__(self) -> None:
         super().__init__("foxglove_node")
         self.settings = NodeSettings(self, PARAMETERS, FoxgloveSettings).current   # all read-only
@@ -244,6 +247,7 @@ class FoxgloveNode(Node):
                                f"(no authentication: keep it on a trusted network)")
 
     def close(self) -> None:
+        """Stop the server and destroy the sampling node."""
         self.server.stop()
         self._sampler.destroy_node()
 
@@ -463,6 +467,7 @@ class FoxgloveNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
+    """Run foxglove_node until shut down; args are ROS's command-line arguments."""
     run_node(FoxgloveNode, args, name="foxglove_node", fatal_errors=(ValueError, RuntimeError, OSError),
              stop=FoxgloveNode.close)
 

@@ -41,8 +41,9 @@ FloatArray = npt.NDArray[np.float64]
 
 @dataclasses.dataclass(frozen=True)
 class JointPositions:
-    """The rig's coordinates q = (alpha, R, phi, theta): rad, m, rad, rad; floats, or arrays of samples of one
-    shape.
+    """The rig's coordinates q = (alpha, R, phi, theta): rad, m, rad, rad.
+
+    Each is a float, or all are arrays of samples of one shape.
     """
 
     alpha_rad: float | FloatArray
@@ -53,8 +54,10 @@ class JointPositions:
 
 @dataclasses.dataclass(frozen=True)
 class RigJoint:
-    """One joint of the frame tree: child's pose in parent = origin (translation, then yaw about z), then the
-    joint's motion (CONTINUOUS: a rotation by its value about z; PRISMATIC: a slide by its value along x).
+    """One joint of the frame tree.
+
+    The child's pose in the parent is the origin (translation, then yaw about z), then the joint's motion
+    (CONTINUOUS: a rotation by its value about z; PRISMATIC: a slide by its value along x).
     """
 
     name: str
@@ -125,8 +128,9 @@ def fixed_transforms(rig: RigParameters) -> list[FrameTransform]:
 
 
 def planar_poses(rig: RigParameters, q: JointPositions) -> dict[str, tuple[FloatArray, FloatArray, FloatArray]]:
-    """Every frame's pose in the tank, (x m, y m, yaw rad), each of q's shape: the joints composed from the tank
-    out (every origin of rig_joints is in the plane z = 0).
+    """Every frame's pose in the tank, (x m, y m, yaw rad), each of q's shape.
+
+    The joints are composed from the tank out (every origin of rig_joints is in the plane z = 0).
     """
     values = joint_values(q)
     shape = np.shape(q.alpha_rad)
@@ -141,9 +145,11 @@ def planar_poses(rig: RigParameters, q: JointPositions) -> dict[str, tuple[Float
 
 
 def positions_from_names(names: Sequence[str], values: npt.ArrayLike, lane_radius_m: float) -> JointPositions:
-    """JointPositions from coordinates named by JOINT_NAMES (any order; without R, the rails are locked at
-    lane_radius_m, m). values: one entry per name, or an (N, len(names)) array of N samples.
-    Raises ValueError for unknown, repeated or missing names, a count that does not match, or a non-finite value.
+    """JointPositions from coordinates named by JOINT_NAMES (any order).
+
+    Without R, the rails are locked at lane_radius_m, m. values: one entry per name, or an (N, len(names)) array
+    of N samples. Raises ValueError for unknown, repeated or missing names, a count that does not match, or a
+    non-finite value.
     """
     names = list(names)
     required = [name for name in JOINT_NAMES if name != "R" or "R" in names]

@@ -25,8 +25,9 @@ NO_FAULT = "NONE"
 
 
 class RateGate:
-    """Lets a message through when at least 1/max_rate_hz has passed since the last one let through (times in s on
-    any monotonic clock); max_rate_hz 0 lets every message through.
+    """Lets a message through when at least 1/max_rate_hz has passed since the last one let through.
+
+    Times are in s on any monotonic clock; max_rate_hz 0 lets every message through.
     """
 
     def __init__(self, max_rate_hz: float) -> None:
@@ -38,6 +39,7 @@ class RateGate:
         self.dropped = 0
 
     def due(self, now_s: float) -> bool:
+        """Whether a message at now_s (s) goes through; counts it as passed or dropped."""
         if now_s - self._last_s >= self.interval_s:
             self._last_s = now_s
             self.passed += 1
@@ -86,8 +88,9 @@ def _number(request: Mapping[str, Any], name: str, minimum: Optional[float]) -> 
 
 
 def parse_maneuver_request(payload: bytes) -> dict[str, Any]:
-    """A maneuver call's JSON payload (MANEUVER_REQUEST_SCHEMA) as PerformManeuver goal fields; the planner and
-    the maneuver action check the rest (known primitives, a vehicle at rest) when the goal arrives.
+    """A maneuver call's JSON payload (MANEUVER_REQUEST_SCHEMA) as PerformManeuver goal fields.
+
+    The planner and the maneuver action check the rest (known primitives, a vehicle at rest) when the goal arrives.
     """
     try:
         request = json.loads(payload)
@@ -131,8 +134,9 @@ class LogLine:
 
 
 def fault_changes(previous: str, current: str, source: str = "bridge") -> list[LogLine]:
-    """The faults latched and cleared between two reports of a bridge's faults ('|'-separated names, NO_FAULT for
-    none), as log lines.
+    """The faults latched and cleared between two reports of a bridge's faults, as log lines.
+
+    A report is '|'-separated fault names, NO_FAULT for none.
     """
     def names(faults: str) -> set[str]:
         return {name for name in faults.split("|") if name and name != NO_FAULT}
@@ -170,8 +174,9 @@ WAKE_PLANE_Z_M = 0.0
 
 def wake_entity(entity_id: str, frame_id: str, x_m: npt.ArrayLike, y_m: npt.ArrayLike,
                 circulations_m2_s: npt.ArrayLike, stamp_ns: int) -> SceneEntity:
-    """The wake's free vortices (positions in frame_id, m; circulations, m^2/s, counter-clockwise positive) as a
-    scene entity of spheres.
+    """The wake's free vortices as a scene entity of spheres.
+
+    Positions are in frame_id, m; circulations in m^2/s, counter-clockwise positive.
     """
     x, y, gamma = (np.asarray(v, dtype=float) for v in (x_m, y_m, circulations_m2_s))
     if not (x.shape == y.shape == gamma.shape):

@@ -55,6 +55,8 @@ def line_marker(line: PathLine, marker_id: int, stamp: Any) -> Marker:
 
 
 class MarkerNode(Node):
+    """The path markers' node (module docstring)."""
+
     def __init__(self) -> None:
         super().__init__("marker_node")
         self.settings = NodeSettings(self, NODE_PARAMETERS, MarkerSettings).current   # all read-only
@@ -97,4 +99,5 @@ class MarkerNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
+    """Run marker_node until shut down; args are ROS's command-line arguments."""
     run_node(MarkerNode, args, name="marker_node", fatal_errors=(ValueError, SwimModelError))

@@ -1,5 +1,6 @@
-"""What marker_node draws, without ROS: the planned and the travelled path of the platform's centre and of the
-foil's reference point, as polylines in the tank frame (swim_viz.frames).
+"""What marker_node draws, without ROS: the planned and the travelled paths, as polylines in the tank frame.
+
+The paths are those of the platform's centre and of the foil's reference point (tank frame: swim_viz.frames).
 
 A path is the platform's origin R e_r(alpha) and the foil frame's origin F (eq. 40's geometry) over the samples of a
 plan (swim_interfaces/PlannedTrajectory) or over the joint_states received.
@@ -47,9 +48,11 @@ def traced_points(rig: RigParameters, q: JointPositions) -> dict[str, npt.NDArra
 
 def planned_paths(rig: RigParameters, joint_names: Sequence[str], flat_positions: npt.ArrayLike,
                   lane_radius_m: float) -> list[PathLine]:
-    """The paths of a plan: its positions (N x nq, row-major, as PlannedTrajectory stores them) with its joint
-    names; lane_radius_m for a constrained plan (no R). At most MAX_PLANNED_POINTS points each, the last
-    sample always kept. Raises ValueError for names or sizes that do not fit.
+    """The paths of a plan, from its positions and joint names.
+
+    The positions are N x nq, row-major, as PlannedTrajectory stores them; lane_radius_m serves a constrained plan
+    (no R). At most MAX_PLANNED_POINTS points each, the last sample always kept. Raises ValueError for names or
+    sizes that do not fit.
     """
     names = list(joint_names)
     flat = np.asarray(flat_positions, dtype=float)
@@ -63,8 +66,10 @@ def planned_paths(rig: RigParameters, joint_names: Sequence[str], flat_positions
 
 
 class TravelledPath:
-    """The paths travelled, from joint positions as they come: a point is kept when a traced frame has moved
-    spacing_m from the last kept point, and the most recent max_points are kept.
+    """The paths travelled, from joint positions as they come.
+
+    A point is kept when a traced frame has moved spacing_m from the last kept point, and the most recent
+    max_points are kept.
     """
 
     def __init__(self, rig: RigParameters, spacing_m: float, max_points: int) -> None:
@@ -74,6 +79,7 @@ class TravelledPath:
         self._points: dict[str, list[tuple[float, float, float]]] = {suffix: [] for suffix in TRACED_FRAMES.values()}
 
     def clear(self) -> None:
+        """Forget every kept point."""
         for points in self._points.values():
             points.clear()
 
@@ -92,5 +98,6 @@ class TravelledPath:
         return True
 
     def lines(self) -> list[PathLine]:
+        """The travelled paths as polylines in the tank frame, one per traced frame."""
         return [PathLine(f"travelled_{suffix}", TANK_FRAME, np.array(points, dtype=float).reshape(-1, 3),
                          TRAVELLED_RGBA) for suffix, points in self._points.items()]

@@ -27,14 +27,16 @@ PARAMETERS = (
 
 
 def rate_parameter(default_hz: float) -> ParameterSpec:
+    """The read-only publish_rate_hz parameter (Hz), default_hz by default."""
     return ParameterSpec("publish_rate_hz", default_hz, "most messages published a second, Hz", range=(0.0, 1000.0),
                          read_only=True, check=positive)
 
 
 @dataclasses.dataclass(frozen=True)
 class RigInputSettings:
-    """The values of PARAMETERS and rate_parameter's, for a node's settings type to derive from
-    (swim_ros.parameters.NodeSettings).
+    """The values of PARAMETERS and rate_parameter's, for a node's settings type to derive from.
+
+    The settings type is swim_ros.parameters.NodeSettings'.
     """
 
     rig_path: str
@@ -43,17 +45,19 @@ class RigInputSettings:
 
 
 def load_rig_and_lane(settings: RigInputSettings) -> tuple[RigParameters, float]:
-    """The rig and the lane radius (m) of a node's settings. Raises swim_model.SwimModelError for a rig file that
-    does not load.
+    """The rig and the lane radius (m) of a node's settings.
+
+    Raises swim_model.SwimModelError for a rig file that does not load.
     """
     rig = load_rig(settings.rig_path or None)
     return rig, float(settings.lane_radius_m) or rig.constrained_lane_radius_m
 
 
 class LatestJointState:
-    """A best-effort subscription to joint_states that keeps only the latest message: what a node that publishes
-    at its own rate needs, at the cost of one stored reference per message (a control loop is never held up:
-    best effort, so a slow reader is simply passed by).
+    """A best-effort subscription to joint_states that keeps only the latest message.
+
+    It is what a node that publishes at its own rate needs, at the cost of one stored reference per message (a
+    control loop is never held up: best effort, so a slow reader is simply passed by).
     """
 
     def __init__(self, node: Node, lane_radius_m: float,
@@ -81,8 +85,9 @@ class LatestJointState:
             return None
 
     def take(self) -> Optional[tuple[Any, JointPositions]]:
-        """The latest message and its positions, once (None when none came since the last take, or it was
-        malformed: then counted and logged).
+        """The latest message and its positions, once.
+
+        None when none came since the last take, or it was malformed: then counted and logged.
         """
         message, self.latest = self.latest, None
         positions = None if message is None else self._positions(message)

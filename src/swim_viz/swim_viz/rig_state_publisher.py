@@ -1,5 +1,7 @@
-"""rig_state_publisher: the rig's URDF and its frames from joint_states, what robot_state_publisher does for a
-robot whose joints are its URDF's (ours are not: the pitch joint turns by theta - phi, swim_viz.frames).
+"""rig_state_publisher: the rig's URDF and its frames from joint_states.
+
+It does what robot_state_publisher does for a robot whose joints are its URDF's (ours are not: the pitch joint
+turns by theta - phi, swim_viz.frames).
 
 Topics:
     joint_states (sub, sensor_msgs/JointState, best effort)  alpha, [R,] phi, theta
@@ -74,6 +76,8 @@ def transform_messages(transforms: Sequence[FrameTransform], stamp: Any) -> list
 
 
 class RigStatePublisher(Node):
+    """The URDF and transforms publisher's node (module docstring)."""
+
     def __init__(self) -> None:
         super().__init__("rig_state_publisher")
         self.settings = NodeSettings(self, NODE_PARAMETERS, RigStateSettings).current   # all read-only
@@ -100,4 +104,5 @@ class RigStatePublisher(Node):
 
 
 def main(args: list[str] | None = None) -> None:
+    """Run rig_state_publisher until shut down; args are ROS's command-line arguments."""
     run_node(RigStatePublisher, args, name="rig_state_publisher", fatal_errors=(ValueError, SwimModelError, OSError))

@@ -1,5 +1,6 @@
-"""The rig as a URDF, from the rig file: tank, hub arm (the rails), platform, heave link, pitch shaft and the foil,
-whose Joukowski outline (swim_model.joukowski, paper eq. 1) is extruded over its span into an STL mesh.
+"""The rig as a URDF, from the rig file: tank, hub arm (the rails), platform, heave link, pitch shaft and foil.
+
+The foil's Joukowski outline (swim_model.joukowski, paper eq. 1) is extruded over its span into an STL mesh.
 
 The frames and joints are swim_viz.frames.rig_joints: one link per frame, one joint per frame, so the URDF and the
 transforms published on /tf name the same frames. The pitch joint's angle is theta - phi (frames docstring): a
@@ -43,8 +44,10 @@ COLOURS = {"water": (0.2, 0.45, 0.8, 0.25), "rail": (0.6, 0.6, 0.6, 1.0), "platf
 
 
 def foil_outline_m(rig: RigParameters, points: int = FOIL_OUTLINE_POINTS) -> npt.NDArray[np.float64]:
-    """The foil's section in its frame, (points, 2): x along the chord toward the leading edge, y normal, m;
-    counter-clockwise from the trailing edge (the Joukowski map of eq. 1 for the rig's chord and thickness).
+    """The foil's section in its frame, (points, 2), m.
+
+    x runs along the chord toward the leading edge, y normal to it; counter-clockwise from the trailing edge (the
+    Joukowski map of eq. 1 for the rig's chord and thickness).
     """
     foil = JoukowskiFoil(rig.foil_chord_m, rig.foil_max_thickness_m, rig.foil_span_m)
     profile = foil.profile(points)
@@ -52,9 +55,10 @@ def foil_outline_m(rig: RigParameters, points: int = FOIL_OUTLINE_POINTS) -> npt
 
 
 def extruded_stl(outline_m: npt.NDArray[np.float64], top_z_m: float, bottom_z_m: float) -> bytes:
-    """A binary STL of the closed prism over a counter-clockwise outline (N, 2), star-shaped about the origin,
-    between two heights (m): N side quads as 2 triangles each, and each cap as a fan of N triangles about
-    the origin; outward normals.
+    """A binary STL of the closed prism between two heights (m) over a counter-clockwise outline (N, 2).
+
+    The outline is star-shaped about the origin. N side quads as 2 triangles each, and each cap as a fan of N
+    triangles about the origin; outward normals.
     """
     outline = np.asarray(outline_m, dtype=float)
     if outline.ndim != 2 or outline.shape[1] != 2 or len(outline) < 3:
@@ -86,8 +90,9 @@ def foil_mesh(rig: RigParameters) -> bytes:
 
 
 def write_foil_mesh(rig: RigParameters, directory: Path) -> Path:
-    """Write foil_mesh to directory (made if missing), named for its content so that rigs of other foils never
-    share a file; its path.
+    """Write foil_mesh to directory (made if missing); its path.
+
+    The file is named for its content so that rigs of other foils never share a file.
     """
     mesh = foil_mesh(rig)
     path = Path(directory) / f"foil_{hashlib.sha256(mesh).hexdigest()[:16]}.stl"
@@ -116,8 +121,9 @@ def _visual(link: ET.Element, material: str, geometry: str, size: dict[str, str]
 
 
 def rig_urdf(rig: RigParameters, foil_mesh_uri: str) -> str:
-    """The URDF of the rig (frames: swim_viz.frames), the foil drawn by the mesh at foil_mesh_uri (write_foil_mesh;
-    a file:// or package:// URI).
+    """The URDF of the rig (frames: swim_viz.frames).
+
+    The foil is drawn by the mesh at foil_mesh_uri (write_foil_mesh; a file:// or package:// URI).
     """
     robot = ET.Element("robot", name=ROBOT_NAME)
     for name, rgba in COLOURS.items():

@@ -45,6 +45,8 @@ PLANT_OPTIONS = ("flow", "substeps", "hard_stops", "foil_axial_drag_coefficient"
 
 
 class EmulatedDevice(Device):
+    """The emulated rig behind the Device interface (module docstring)."""
+
     def __init__(self, config: dict[str, Any]) -> None:
         misplaced = [name for name in PLANT_OPTIONS if name in config]
         if misplaced:
@@ -80,6 +82,7 @@ class EmulatedDevice(Device):
 
     # --- the Device interface --------------------------------------------------------------------------
     def open(self) -> None:
+        """Build the plant (once) and load its compiled code; outputs at zero, amplifiers disabled."""
         if self.plant is None:
             # compiles and loads the plant's integrator now, not in the first period of the loop
             self.plant = make_plant(self.plant_settings, self.bridge.rig, self.bridge.hard_limits_rad)
@@ -97,6 +100,7 @@ class EmulatedDevice(Device):
         self._time_s = time.monotonic()
 
     def read_counters(self) -> CounterSample:
+        """The counters after stepping the plant to now; raises DeviceError before open() or as injected."""
         if not self.is_open:
             raise DeviceError("emulated device: read before open()")
         if self.read_delay_s > 0.0:
@@ -112,6 +116,7 @@ class EmulatedDevice(Device):
         return self._last_sample
 
     def write_currents(self, heave_a: float, pitch_a: float) -> None:
+        """Hold (heave, pitch) currents, A, until the next write; logged when a write log is kept."""
         if not self.is_open:
             raise DeviceError("emulated device: write before open()")
         self.commanded_currents_a = (float(heave_a), float(pitch_a))
@@ -120,19 +125,23 @@ class EmulatedDevice(Device):
             self.write_count += 1
 
     def toggle_enable(self) -> None:
+        """Flip the emulated enable line, an edge for the charge pump."""
         self.enable_level = not self.enable_level
         self.toggle_count += 1
         self._last_toggle_s = time.monotonic()
 
     def enable(self) -> None:
+        """Ask for the amplifiers on; they are on while the line keeps toggling."""
         self.enable_requested = True
 
     def disable(self) -> None:
+        """Zero the currents and drop the enable request and the last edge."""
         self.commanded_currents_a = (0.0, 0.0)
         self.enable_requested = False
         self._last_toggle_s = -math.inf
 
     def close(self) -> None:
+        """Disable, then mark the device closed."""
         self.disable()
         self.is_open = False
 

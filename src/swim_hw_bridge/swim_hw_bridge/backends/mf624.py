@@ -130,6 +130,7 @@ class Mf624Device(Device):
             raise
 
     def read_counters(self) -> CounterSample:
+        """The four counters read from the mapped counter registers, with a new sequence number."""
         words = self._words
         if words is None:
             raise DeviceError("mf624 backend: counters are not mapped (open() first)")
@@ -138,16 +139,19 @@ class Mf624Device(Device):
         return CounterSample(counts=(hub, rail, heave, pitch), monotonic_s=time.monotonic(), sequence=self._sequence)
 
     def write_currents(self, heave_a: float, pitch_a: float) -> None:
+        """Write v = i / g to the two analog outputs; a non-finite current writes 0 V and raises DeviceError."""
         if not (math.isfinite(heave_a) and math.isfinite(pitch_a)):
             self._write_volts(0.0, 0.0)
             raise DeviceError(f"mf624 backend: non-finite current command ({heave_a}, {pitch_a}) A; wrote 0 V")
         self._write_volts(heave_a / self.gains_a_per_v[0], pitch_a / self.gains_a_per_v[1])
 
     def toggle_enable(self) -> None:
+        """Flip the enable line's digital output, only while enabled."""
         if self._enabled:
             self._write_enable_level(not self.enable_level)
 
     def enable(self) -> None:
+        """Drive the enable line high and start toggling it; raises DeviceError when not open."""
         self._require_open()
         self._enabled = True
         self._write_enable_level(True)
@@ -165,6 +169,7 @@ class Mf624Device(Device):
                 self.last_error = str(error)
 
     def close(self) -> None:
+        """Disable, then close the Comedi device and release the counter registers' mapping."""
         self.disable()
         handle, self._handle = self._handle, None
         self._outputs_ready = False

@@ -137,6 +137,7 @@ class SerialDevice(Device):
             raise
 
     def read_counters(self) -> CounterSample:
+        """Send STATE_REQUEST and read the STATE reply's counters; raises DeviceError on failure."""
         request_sequence = self._send(protocol.StateRequest())
         frame = self._await_reply(MessageType.STATE, request_sequence, self.read_timeout_s)
         try:
@@ -162,6 +163,7 @@ class SerialDevice(Device):
         return CounterSample(counts=counts, monotonic_s=time.monotonic(), sequence=self._sample_sequence)
 
     def write_currents(self, heave_a: float, pitch_a: float) -> None:
+        """Send the (heave, pitch) currents, A, as microamperes; a non-finite one sends zero and raises."""
         if not (math.isfinite(heave_a) and math.isfinite(pitch_a)):
             self._heave_current_ua = self._pitch_current_ua = 0
             self._send_command(self._flags())
@@ -171,15 +173,18 @@ class SerialDevice(Device):
         self._send_command(self._flags())
 
     def toggle_enable(self) -> None:
+        """Flip the toggle phase and send a COMMAND with it."""
         self._toggle_phase = not self._toggle_phase
         self._send_command(self._flags())
 
     def enable(self) -> None:
+        """Ask for the amplifiers on, with a fresh toggle and the device watchdog's latch cleared."""
         self._enabled = True
         self._toggle_phase = not self._toggle_phase  # a fresh toggle starts the device's charge-pump window
         self._send_command(self._flags() | CommandFlags.CLEAR_WATCHDOG)
 
     def disable(self) -> None:
+        """Zero the currents and clear ENABLE on the device; never raises (its watchdog zeroes anyway)."""
         self._enabled = False
         self._heave_current_ua = self._pitch_current_ua = 0
         if self._port is None:
@@ -191,6 +196,7 @@ class SerialDevice(Device):
             self.last_error = str(error)
 
     def close(self) -> None:
+        """Disable, then close the port."""
         self.disable()
         self._close_port()
 
@@ -198,6 +204,7 @@ class SerialDevice(Device):
 
     @property
     def is_open(self) -> bool:
+        """Whether the port is open."""
         return self._port is not None
 
     def _flags(self) -> int:

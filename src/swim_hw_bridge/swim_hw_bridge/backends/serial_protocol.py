@@ -120,6 +120,8 @@ class ProtocolError(ValueError):
 
 
 class MessageType(enum.IntEnum):
+    """A frame's type byte (the messages table above)."""
+
     HELLO = 0x01
     COMMAND = 0x02
     STATE_REQUEST = 0x03
@@ -128,12 +130,16 @@ class MessageType(enum.IntEnum):
 
 
 class CommandFlags(enum.IntFlag):
+    """COMMAND flag bits (see COMMAND flags above)."""
+
     ENABLE = 0x01
     ENABLE_TOGGLE = 0x02
     CLEAR_WATCHDOG = 0x04
 
 
 class StatusFlags(enum.IntFlag):
+    """STATE status bits (see STATE status flags above)."""
+
     OUTPUTS_ENABLED = 0x0001
     WATCHDOG_TRIPPED = 0x0002
     TOGGLE_STALE = 0x0004
@@ -272,6 +278,7 @@ class FrameDecoder:
 
     @property
     def error_count(self) -> int:
+        """Frames rejected so far, all checks together."""
         return self.cobs_errors + self.short_errors + self.crc_errors + self.length_errors + self.oversize_errors
 
     def reset(self) -> None:
@@ -280,6 +287,7 @@ class FrameDecoder:
         self._discarding = False
 
     def feed(self, data: bytes) -> list[Frame]:
+        """The complete frames in a chunk of received bytes; a partial frame waits for the next chunk."""
         frames: list[Frame] = []
         start = 0
         while True:
@@ -330,8 +338,9 @@ class FrameDecoder:
 
 @dataclasses.dataclass(frozen=True)
 class _Payload:
-    """A message's payload: its fields, in declaration order, are the values of its LAYOUT (a tuple field gives
-    one value per item), as parse_payload reads them back.
+    """A message's payload: its fields, in declaration order, are the values of its LAYOUT.
+
+    A tuple field gives one value per item, as parse_payload reads them back.
     """
 
     LAYOUT: ClassVar[struct.Struct]
@@ -346,35 +355,53 @@ class _Payload:
 
 @dataclasses.dataclass(frozen=True)
 class Hello(_Payload):
-    protocol_version: int = PROTOCOL_VERSION
+    """HELLO: the protocol version the host speaks."""
+
     LAYOUT = struct.Struct("<B")
+    protocol_version: int = PROTOCOL_VERSION
+
+
+@dataclasses.dataclass(frozen=True)
+class Command(_Payload):
+    """COMMAND: the (heave, pitch) currents, microamperes, and the CommandFlags."""
+
+    LAYOUT = struct.Struct("<iiB")
+    heave_current_ua: int
+    pitch_current_ua: int
+    flags: int
+
+
+@dataclasses.dataclass(frozen=True)
+class StateRequest(_Payload):
+    """STATE_REQUEST: no fields."""
+
+    LAYOUT = struct.Struct("<")
 
 
 @dataclasses.dataclass(frozen=True)
 class HelloReply(_Payload):
+    """HELLO_REPLY: the device's protocol version, counter width (bits) and timeouts, ms.
+
+    request_sequence is the HELLO's sequence; the counters wrap modulo 2**counter_bits.
+    """
+
+    LAYOUT = struct.Struct("<HBBHH")
     request_sequence: int
     protocol_version: int
     counter_bits: int
     command_timeout_ms: int
     toggle_timeout_ms: int
-    LAYOUT = struct.Struct("<HBBHH")
-
-
-@dataclasses.dataclass(frozen=True)
-class Command(_Payload):
-    heave_current_ua: int
-    pitch_current_ua: int
-    flags: int
-    LAYOUT = struct.Struct("<iiB")
-
-
-@dataclasses.dataclass(frozen=True)
-class StateRequest(_Payload):
-    LAYOUT = struct.Struct("<")
 
 
 @dataclasses.dataclass(frozen=True)
 class State(_Payload):
+    """STATE: the latched counters, the applied currents (microamperes), StatusFlags and errors.
+
+    request_sequence is the STATE_REQUEST's sequence, last_command_sequence the last valid COMMAND's; device_time_us
+    is the device's microsecond clock at the latch, and rx_error_count the frames it rejected since power-up.
+    """
+
+    LAYOUT = struct.Struct("<HHI4IiiHH")
     request_sequence: int
     last_command_sequence: int
     device_time_us: int
@@ -383,7 +410,6 @@ class State(_Payload):
     applied_pitch_current_ua: int
     status: int
     rx_error_count: int
-    LAYOUT = struct.Struct("<HHI4IiiHH")
 
 
 PAYLOAD_CLASSES: dict[MessageType, type[Hello | HelloReply | Command | StateRequest | State]] = {
@@ -413,6 +439,7 @@ _MESSAGE_TYPES = {cls: message_type for message_type, cls in PAYLOAD_CLASSES.ite
 
 
 def message_type_of(payload: Hello | HelloReply | Command | StateRequest | State) -> MessageType:
+    """The message type of a typed payload."""
     return _MESSAGE_TYPES[type(payload)]
 
 

@@ -1,3 +1,4 @@
-"""Stand-ins for the rig's hardware, for tests only: the serial firmware on a pseudo-terminal and the MF624's
-Comedi and counter registers. Nothing a user runs imports them.
+"""Stand-ins for the rig's hardware, for tests only; nothing a user runs imports them.
+
+The serial firmware on a pseudo-terminal, and the MF624's Comedi and counter registers.
 """

@@ -121,10 +121,12 @@ class FakeSerialFirmware:
     # --- control ------------------------------------------------------------------------------------------------
 
     def start(self) -> FakeSerialFirmware:
+        """Start the firmware's thread; itself."""
         self._thread.start()
         return self
 
     def stop(self) -> None:
+        """Stop the firmware's thread and close the file descriptor."""
         self._stop.set()
         if self._thread.is_alive():
             self._thread.join(timeout=2.0)
@@ -138,14 +140,17 @@ class FakeSerialFirmware:
 
     @property
     def toggle_stale(self) -> bool:
+        """ENABLE is asked for but ENABLE_TOGGLE stopped changing within toggle_timeout_ms."""
         return self.enable_requested and time.monotonic() - self.last_toggle_time > self.toggle_timeout_ms / 1000
 
     @property
     def outputs_enabled(self) -> bool:
+        """Whether the outputs are on: enabled, watchdog not tripped, toggle not stale."""
         return self.enable_requested and not self.watchdog_tripped and not self.toggle_stale
 
     @property
     def applied_currents_ua(self) -> tuple[int, int]:
+        """The (heave, pitch) currents the outputs apply now, microamperes."""
         return self.commanded_currents_ua if self.outputs_enabled else (0, 0)
 
     # --- the firmware loop --------------------------------------------------------------------------------------
@@ -275,9 +280,10 @@ class FakeSerialFirmware:
 
 
 class PtyRig:
-    """A pty pair behind a stable symlink ``link``, a FakeSerialFirmware on the master end: the serial port a
-    SerialDevice (or bridge_node with backend serial) opens by the link's name. ``plug_in()`` again after the
-    firmware disconnected is a board re-enumerating behind the same name.
+    """A pty pair behind a stable symlink ``link``, a FakeSerialFirmware on the master end.
+
+    It is the serial port a SerialDevice (or bridge_node with backend serial) opens by the link's name.
+    ``plug_in()`` again after the firmware disconnected is a board re-enumerating behind the same name.
     """
 
     def __init__(self, link: Path, counts: Sequence[int] = (0, 0, 0, 0), **firmware_options: Any) -> None:
@@ -289,6 +295,7 @@ class PtyRig:
         self.plug_in()
 
     def plug_in(self) -> FakeSerialFirmware:
+        """Open a new pty behind the link and start firmware on it; the firmware."""
         master_fd, slave_fd = os.openpty()
         tty.setraw(slave_fd)  # no echo or line editing before the host opens the port
         self.slave_fds.append(slave_fd)  # held open so the master side never sees a hang-up of its own
@@ -300,6 +307,7 @@ class PtyRig:
         return self.firmware
 
     def close(self) -> None:
+        """Stop the firmware and close the pty ends held open."""
         self.firmware.stop()
         for fd in self.slave_fds:
             os.close(fd)

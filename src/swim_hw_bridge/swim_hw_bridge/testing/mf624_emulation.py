@@ -77,6 +77,7 @@ class EmulatedComedi:
     # --- device -------------------------------------------------------------------------------------------------
 
     def comedi_open(self, path: str) -> int | None:
+        """A handle to the emulated card, or None (errno set) for another path or fail_open."""
         if self.fail_open or path != self.device_path:
             self._errno = errno.ENODEV if self.fail_open else errno.ENOENT
             return None
@@ -86,6 +87,7 @@ class EmulatedComedi:
         return handle
 
     def comedi_close(self, handle: int) -> int:
+        """Close a handle: 0, or -1 with errno EBADF for one not open."""
         if handle not in self.open_handles:
             self._errno = errno.EBADF
             return -1
@@ -93,14 +95,17 @@ class EmulatedComedi:
         return 0
 
     def comedi_errno(self) -> int:
+        """The errno of the last failed call."""
         return self._errno
 
     def comedi_strerror(self, number: int) -> str:
+        """The message of an errno number."""
         return os.strerror(number) if number else "no error"
 
     # --- queries ------------------------------------------------------------------------------------------------
 
     def comedi_find_subdevice_by_type(self, handle: int, kind: int, start: int) -> int:
+        """The first subdevice of a kind from start on, or -1 (errno ENODEV)."""
         for index in range(start, len(self.subdevices)):
             if self.subdevices[index].type == kind:
                 return index
@@ -108,15 +113,19 @@ class EmulatedComedi:
         return -1
 
     def comedi_get_subdevice_type(self, handle: int, subdevice: int) -> int:
+        """A subdevice's kind."""
         return self.subdevices[subdevice].type
 
     def comedi_get_n_channels(self, handle: int, subdevice: int) -> int:
+        """A subdevice's channel count."""
         return self.subdevices[subdevice].n_chan
 
     def comedi_get_maxdata(self, handle: int, subdevice: int, channel: int) -> int:
+        """A subdevice's largest raw value."""
         return self.subdevices[subdevice].maxdata
 
     def comedi_get_range(self, handle: int, subdevice: int, channel: int, range_index: int) -> ComediRange | None:
+        """A subdevice's range by index, or None (errno EINVAL)."""
         ranges = self.subdevices[subdevice].ranges
         if not 0 <= range_index < len(ranges):
             self._errno = errno.EINVAL
@@ -127,6 +136,7 @@ class EmulatedComedi:
 
     @staticmethod
     def comedi_from_phys(data: float, value_range: ComediRange, maxdata: int) -> int:
+        """A physical value as the raw value, rounded and clamped to [0, maxdata]."""
         if value_range is None or not maxdata:
             return 0
         scaled = (data - value_range.min) / (value_range.max - value_range.min) * maxdata
@@ -138,12 +148,14 @@ class EmulatedComedi:
 
     @staticmethod
     def comedi_to_phys(data: int, value_range: ComediRange, maxdata: int) -> float:
+        """A raw value as the physical value of its range."""
         return data / maxdata * (value_range.max - value_range.min) + value_range.min
 
     # --- writes -------------------------------------------------------------------------------------------------
 
     def comedi_data_write(self, handle: int, subdevice: int, channel: int, range_index: int, aref: int,
                           data: int) -> int:
+        """Write a raw value to an analog output: 1, or -1 with errno set."""
         if not self._writable(handle, subdevice, channel, (self.COMEDI_SUBD_AO,)):
             return -1
         if not 0 <= data <= self.subdevices[subdevice].maxdata:
@@ -155,6 +167,7 @@ class EmulatedComedi:
         return 1
 
     def comedi_dio_config(self, handle: int, subdevice: int, channel: int, direction: int) -> int:
+        """Set a DIO channel's direction: 1, or -1 (errno EINVAL) for a subdevice not DIO."""
         if self.subdevices[subdevice].type != self.COMEDI_SUBD_DIO:
             self._errno = errno.EINVAL
             return -1
@@ -162,6 +175,7 @@ class EmulatedComedi:
         return 1
 
     def comedi_dio_write(self, handle: int, subdevice: int, channel: int, bit: int) -> int:
+        """Write a bit to a digital output: 1, or -1 with errno set."""
         if not self._writable(handle, subdevice, channel, (self.COMEDI_SUBD_DO, self.COMEDI_SUBD_DIO)):
             return -1
         self.digital_writes.append((subdevice, channel, int(bool(bit))))
@@ -184,6 +198,7 @@ class EmulatedComedi:
     # --- helpers for tests --------------------------------------------------------------------------------------
 
     def ao_volts(self, channel: int) -> float:
+        """An analog output channel's last raw value in volts."""
         subdevice = self.subdevices[1]
         return self.comedi_to_phys(self.ao_raw[channel], subdevice.ranges[0], subdevice.maxdata)
 
@@ -214,15 +229,18 @@ class EmulatedCounterRegisters:
 
     @property
     def config(self) -> dict[str, object]:
+        """The mf624 backend's options that point it at these registers."""
         return {"irc_device_path": str(self.path), "uio_sysfs_root": str(self.sysfs_root),
                 "irc_uio_map_index": self.map_index}
 
     def write_register(self, offset: int, value: int) -> None:
+        """Write a 32-bit register at offset (bytes) from the counter BAR."""
         with open(self.path, "r+b") as file:
             file.seek(self.base + offset)
             file.write(struct.pack("<I", value & 0xFFFFFFFF))
 
     def read_register(self, offset: int) -> int:
+        """A 32-bit register at offset (bytes) from the counter BAR."""
         with open(self.path, "rb") as file:
             file.seek(self.base + offset)
             return struct.unpack("<I", file.read(4))[0]
