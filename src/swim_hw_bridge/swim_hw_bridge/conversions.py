@@ -29,7 +29,6 @@ from typing import Any
 
 import yaml
 from swim_model import RigParameters, load_rig
-from swim_model.limits import HardLimits
 from swim_model.units import POSITIVE, SIGNED, UNITS, EntryError, entry_to_si
 
 FORMAT_VERSION = 1
@@ -125,25 +124,10 @@ class BridgeConfig:
                 self.pitch_home_position_rad)
 
     @property
-    def max_speeds(self) -> tuple[float, float, float, float]:
-        """Physically possible joint speeds (rad/s, m/s, rad/s, rad/s); faster counter steps are jumps."""
-        return self.rig.limits.max_speeds
-
-    @property
     def motor_torque_gains_n_m_per_a(self) -> tuple[float, float]:
         """N Kt of (heave, pitch): joint torque per ampere, N m/A."""
         return (self.rig.heave_gear_ratio * self.heave_torque_constant_n_m_per_a,
                 self.rig.pitch_gear_ratio * self.pitch_torque_constant_n_m_per_a)
-
-    @property
-    def torque_limits_n_m(self) -> tuple[float, float]:
-        """(heave, pitch) joint torque limits, N m: the rig's."""
-        return self.rig.torque_limits_n_m
-
-    @property
-    def hard_limits_rad(self) -> HardLimits:
-        """((heave lower, upper), (pitch lower, upper)): where the rig's stops hold the joints, rad."""
-        return self.rig.hard_limits_rad
 
     @property
     def current_limits_a(self) -> tuple[float, float]:
@@ -201,7 +185,7 @@ def _entry_to_si(key: str, entry: Any, origin: str) -> float:
 
 def _check_consistency(config: BridgeConfig) -> None:
     where = config.source_path or "bridge config"
-    for joint, (lower, upper), margin in zip(("heave", "pitch"), config.hard_limits_rad,
+    for joint, (lower, upper), margin in zip(("heave", "pitch"), config.rig.hard_limits_rad,
                                              config.rig.limits.soft_margins_rad):
         home = getattr(config, f"{joint}_home_position_rad")
         if not lower + margin <= home <= upper - margin:

@@ -106,7 +106,7 @@ class IoLoop:
         self._overruns_by_cause = [0, 0, 0, 0]
         self._read_s = self._write_s = 0.0   # the last period's read and write, s
         self.unwrapper = CounterUnwrapper(device.counter_bits,
-                                          [v * n for v, n in zip(conversions.config.max_speeds,
+                                          [v * n for v, n in zip(conversions.config.rig.limits.max_speeds,
                                                                  conversions.config.counts_per_unit)])
         self.velocity = VelocityEstimator(conversions.config.velocity_cutoff_hz)
         self._lock = threading.Lock()

@@ -186,9 +186,9 @@ class SafetyLimits:
                     dynamics: JointDynamicsBounds = JointDynamicsBounds()) -> "SafetyLimits":
         """The limits of a bridge configuration, its period and fault counts."""
         return cls(
-            torque_limits_n_m=config.torque_limits_n_m, current_limits_a=config.current_limits_a,
+            torque_limits_n_m=config.rig.torque_limits_n_m, current_limits_a=config.current_limits_a,
             torque_gains_n_m_per_a=config.motor_torque_gains_n_m_per_a,
-            hard_limits_rad=config.hard_limits_rad,
+            hard_limits_rad=config.rig.hard_limits_rad,
             soft_limit_margins_rad=config.rig.limits.soft_margins_rad,
             watchdog_timeout_s=watchdog_periods * sample_period_s, stale_read_limit=stale_read_limit,
             read_failure_limit=read_failure_limit, dynamics=dynamics, latency_s=sample_period_s)

@@ -95,12 +95,12 @@ def test_decelerations_bound_what_full_torque_gives_everywhere_in_the_range(conf
     (so the braking rule need not count that coupling on its own); and the drive bound A = max tau (M^-1)_jj is at
     least tau (M^-1)_jj."""
     decelerations, accelerations = braking.dynamics.decelerations_rad_s2, braking.dynamics.drive_accelerations_rad_s2
-    torques = config.torque_limits_n_m
+    torques = config.rig.torque_limits_n_m
     model = VehicleModel(load_rig(), constrained=False)
     rng = np.random.default_rng(4)
     for _ in range(100):
-        q = [0.0, rng.uniform(0.43, 0.48), rng.uniform(*config.hard_limits_rad[0]),
-             rng.uniform(*config.hard_limits_rad[1])]
+        q = [0.0, rng.uniform(0.43, 0.48), rng.uniform(*config.rig.hard_limits_rad[0]),
+             rng.uniform(*config.rig.hard_limits_rad[1])]
         inverse = np.linalg.inv(model.mass_matrix(q))
         for j in range(2):
             coupling = torques[1 - j] * abs(inverse[2 + j, 3 - j])
@@ -112,7 +112,7 @@ def test_decelerations_bound_what_full_torque_gives_everywhere_in_the_range(conf
 @pytest.mark.parametrize("start_fraction", [-0.9, -0.3, 0.0, 0.5, 0.9])
 @pytest.mark.parametrize("direction", [1.0, -1.0])
 def test_full_torque_held_never_passes_a_hard_limit(config, braking, joint, start_fraction, direction):
-    lower, upper = config.hard_limits_rad[0] if joint == "heave" else config.hard_limits_rad[1]
+    lower, upper = config.rig.hard_limits_rad[0] if joint == "heave" else config.rig.hard_limits_rad[1]
     loop, device = rig_at(config, braking, joint, start_fraction * upper)
     full = [0.0, 0.0]
     full[JOINTS[joint] - 2] = direction * 50.0        # far past the motor's limit: clipped to it
@@ -126,11 +126,11 @@ def test_full_torque_held_never_passes_a_hard_limit(config, braking, joint, star
 def test_without_the_braking_bound_full_torque_passes_the_heave_limit(config, limits):
     loop, device = rig_at(config, limits, "heave", 0.0)   # limits: no braking deceleration given
     positions = hold(loop, device, [50.0, 0.0], HELD_PERIODS)[:, 2]
-    assert positions.max() > config.hard_limits_rad[0][1] and loop.safety.faults & FaultCode.HARD_LIMIT
+    assert positions.max() > config.rig.hard_limits_rad[0][1] and loop.safety.faults & FaultCode.HARD_LIMIT
 
 
 def test_a_link_past_its_limit_is_brought_back_after_a_reset(config, braking):
-    upper = config.hard_limits_rad[0][1]
+    upper = config.rig.hard_limits_rad[0][1]
     loop, device = rig_at(config, braking, "heave", upper + 0.1)
     hold(loop, device, [0.0, 0.0], 2)
     assert loop.safety.faults & FaultCode.HARD_LIMIT                          # latched, torque zero
@@ -173,13 +173,13 @@ FLIPPED_PITCH = [(-0.9, 6, 3, 1.0), (-0.5, 6, 2, -1.0), (-0.5, 6, 4, -1.0), (-0.
 @pytest.mark.parametrize("heave_start, toward, away, pitch_sign", FLIPPED_PITCH)
 def test_pitch_flipped_at_full_torque_while_the_heave_swings_never_passes_its_limit(config, braking, heave_start,
                                                                                     toward, away, pitch_sign):
-    loop, device = rig_at(config, braking, "heave", heave_start * config.hard_limits_rad[0][1])
+    loop, device = rig_at(config, braking, "heave", heave_start * config.rig.hard_limits_rad[0][1])
     positions = []
     for _ in range(40):
         positions.append(hold(loop, device, [50.0, 50.0 * pitch_sign], toward))
         positions.append(hold(loop, device, [50.0, -50.0 * pitch_sign], away))
     pitch = np.concatenate(positions)[:, 3]
-    lower, upper = config.hard_limits_rad[1]
+    lower, upper = config.rig.hard_limits_rad[1]
     assert lower <= pitch.min() and pitch.max() <= upper and not loop.safety.faults
     assert pitch_sign * pitch[np.argmax(np.abs(pitch))] > 0.8 * upper   # it did go to the limit
     assert loop.safety.braking_count > 0
@@ -225,7 +225,7 @@ def test_a_fast_link_whose_commands_stop_is_braked_while_the_watchdog_holds_zero
     """Full heave torque from near the lower limit until the bridge starts braking it, then no more commands: the
     watchdog zeroes the command, but the braking rule still stops the link short of the upper limit (at zero
     torque it would coast through)."""
-    upper = config.hard_limits_rad[0][1]
+    upper = config.rig.hard_limits_rad[0][1]
     loop, device = rig_at(config, braking, "heave", -0.9 * upper)
     while not loop.safety.braking_count:
         hold(loop, device, [50.0, 0.0], 1)
@@ -245,7 +245,7 @@ def test_a_fast_link_whose_commands_stop_is_braked_while_the_watchdog_holds_zero
 def test_without_the_braking_bound_the_stop_holds_the_link_at_its_limit(config, limits):
     """Full heave torque with no braking bound: the emulated stop holds the link at the limit (where the bridge
     alone let it through, above), at rest, and it leaves the stop as soon as the torque pulls it back."""
-    upper = config.hard_limits_rad[0][1]
+    upper = config.rig.hard_limits_rad[0][1]
     loop, device = rig_at(config, limits, "heave", 0.0, stops=True)
     positions = hold(loop, device, [50.0, 0.0], HELD_PERIODS)[:, 2]
     assert device.q[2] == upper and device.plant.qdot[2] == 0.0
@@ -258,7 +258,7 @@ def test_the_stop_is_inelastic_and_runs_inside_the_limits_are_unchanged(config, 
     """Reaching the stop at zero torque (kinetic energy conserved up to it) removes the joint's velocity by the
     plastic impulse, and with it v^2 / (2 (M^-1)_jj) of kinetic energy (the rest of the vehicle moves on); a run
     that stays within the limits is the same bit for bit with the stops on and off."""
-    upper = config.hard_limits_rad[1][1]
+    upper = config.rig.hard_limits_rad[1][1]
     device = VirtualClockDevice({**config.device_config("emulated"), "plant": PlantSettings(hard_stops=True)})
     device.open()
     plant = device.plant

@@ -44,9 +44,9 @@ def test_torque_to_current_through_gear_and_torque_constant(conversions):
 
 
 def test_limits_are_the_papers_torque_limits_and_the_currents_reach_them(config):
-    assert config.torque_limits_n_m == pytest.approx((177 * OZ_IN_N_M, 74.2 * OZ_IN_N_M), rel=1e-9)
+    assert config.rig.torque_limits_n_m == pytest.approx((177 * OZ_IN_N_M, 74.2 * OZ_IN_N_M), rel=1e-9)
     # the current limits leave the paper's torque limits reachable (the torque limit binds first)
-    for torque, gain, current in zip(config.torque_limits_n_m, config.motor_torque_gains_n_m_per_a,
+    for torque, gain, current in zip(config.rig.torque_limits_n_m, config.motor_torque_gains_n_m_per_a,
                                      config.current_limits_a):
         assert torque / gain <= current
 
@@ -105,6 +105,6 @@ def test_encoder_lines_gear_ratios_and_limits_are_the_rigs_the_bridge_is_loaded_
     assert config.counts_per_unit[2] == pytest.approx(2 * shipped.counts_per_unit[2], rel=1e-12)
     assert config.counts_per_unit[3] == pytest.approx(2 * shipped.counts_per_unit[3], rel=1e-12)
     assert config.motor_torque_gains_n_m_per_a[1] == pytest.approx(2 * shipped.motor_torque_gains_n_m_per_a[1])
-    assert config.hard_limits_rad[1] == pytest.approx((-math.pi / 2, math.pi / 2), rel=1e-12)
-    assert config.torque_limits_n_m[0] == 1.0
+    assert config.rig.hard_limits_rad[1] == pytest.approx((-math.pi / 2, math.pi / 2), rel=1e-12)
+    assert config.rig.torque_limits_n_m[0] == 1.0
     assert load_rig().hard_limits_rad[1] == pytest.approx((-math.radians(80), math.radians(80)), rel=1e-12)

@@ -239,7 +239,7 @@ def test_an_impossible_encoder_jump_faults(config, conversions, limits):
 def test_soft_limit_then_hard_limit_through_the_loop(config, conversions, limits):
     # the link is placed past the limit: the emulated rig without its stops
     loop, device = make_loop(config, conversions, limits, plant=PlantSettings(hard_stops=False))
-    upper, margin = config.hard_limits_rad[0][1], config.rig.limits.heave.soft_margin_rad
+    upper, margin = config.rig.hard_limits_rad[0][1], config.rig.limits.heave.soft_margin_rad
     home = np.array(config.home_positions)
     heave_currents = []
     for phi in np.arange(0.0, upper + 0.05, 0.02):   # 0.02 rad per 8 ms: well below the jump bound

@@ -48,7 +48,7 @@ def test_no_command_means_zero(safety):
 
 def test_torque_saturates_at_the_papers_limit_and_is_counted(safety, config):
     heave_a, pitch_a, heave_n_m, pitch_n_m = currents(safety, command(100.0, -100.0))
-    assert (heave_n_m, pitch_n_m) == pytest.approx((config.torque_limits_n_m[0], -config.torque_limits_n_m[1]))
+    assert (heave_n_m, pitch_n_m) == pytest.approx((config.rig.torque_limits_n_m[0], -config.rig.torque_limits_n_m[1]))
     assert safety.saturation_count == 1
     currents(safety, command(0.1, 0.1))
     assert safety.saturation_count == 1
@@ -72,7 +72,7 @@ def test_non_finite_torque_gives_zero_and_a_latched_fault(safety, bad):
 
 
 def test_soft_limit_scales_outward_torque_linearly(config):
-    upper, lower = config.hard_limits_rad[0][1], config.hard_limits_rad[0][0]
+    upper, lower = config.rig.hard_limits_rad[0][1], config.rig.hard_limits_rad[0][0]
     margin = config.rig.limits.heave.soft_margin_rad
     assert soft_limit_scale(upper - 2 * margin, 1.0, lower, upper, margin) == 1.0
     assert soft_limit_scale(upper - 0.25 * margin, 1.0, lower, upper, margin) == pytest.approx(0.25)
@@ -83,8 +83,8 @@ def test_soft_limit_scales_outward_torque_linearly(config):
 
 
 def test_soft_limit_applies_in_the_output(safety, config):
-    phi = config.hard_limits_rad[0][1] - 0.5 * config.rig.limits.heave.soft_margin_rad
-    theta = config.hard_limits_rad[1][0] + 0.1 * config.rig.limits.pitch.soft_margin_rad
+    phi = config.rig.hard_limits_rad[0][1] - 0.5 * config.rig.limits.heave.soft_margin_rad
+    theta = config.rig.hard_limits_rad[1][0] + 0.1 * config.rig.limits.pitch.soft_margin_rad
     _, _, heave_n_m, pitch_n_m = currents(safety, command(0.4, -0.2), phi=phi, theta=theta)
     assert heave_n_m == pytest.approx(0.2)
     assert pitch_n_m == pytest.approx(-0.02)
@@ -127,7 +127,7 @@ def fast_toward_upper(theta_rate, upper, distance=0.1):
 
 
 def test_braking_follows_the_bound_and_holds_while_the_watchdog_zeroes_but_not_with_a_fault(limits, config):
-    upper, pitch_limit = config.hard_limits_rad[1][1], config.torque_limits_n_m[1]
+    upper, pitch_limit = config.rig.hard_limits_rad[1][1], config.rig.torque_limits_n_m[1]
     bound = braking_speed_limit(0.1, 10.0, PERIOD_S, 20.0)
     slow, fast = fast_toward_upper(0.9 * bound, upper), fast_toward_upper(1.1 * bound, upper)
     safety = braking_layer(limits)
@@ -144,7 +144,7 @@ def test_braking_follows_the_bound_and_holds_while_the_watchdog_zeroes_but_not_w
 
 
 def test_velocity_terms_toward_a_limit_tighten_the_bound_and_away_do_not(limits, config):
-    upper = config.hard_limits_rad[1][1]
+    upper = config.rig.hard_limits_rad[1][1]
     rate = 0.9 * braking_speed_limit(0.1, 10.0, PERIOD_S, 20.0)   # within the bound without velocity terms
     for push, braked in ((5.0, True), (-5.0, False)):
         safety = braking_layer(limits, lambda positions, rates, push=push: (0.0, push))

@@ -85,7 +85,7 @@ class EmulatedDevice(Device):
         """Build the plant (once) and load its compiled code; outputs at zero, amplifiers disabled."""
         if self.plant is None:
             # compiles and loads the plant's integrator now, not in the first period of the loop
-            self.plant = make_plant(self.plant_settings, self.bridge.rig, self.bridge.hard_limits_rad)
+            self.plant = make_plant(self.plant_settings, self.bridge.rig, self.bridge.rig.hard_limits_rad)
             self.plant.reset(self.home, np.zeros(self.plant.model.nq))
             if self.plant.wake is not None:
                 # load the wake's compiled kernels now (numba's import and its cache, about 0.3-0.5 s), not in the
