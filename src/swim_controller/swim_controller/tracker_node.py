@@ -125,8 +125,9 @@ class ModelKey:
 
 
 def build_model(rig, key: ModelKey) -> VehicleModel:
-    """The vehicle model of key with the compiled entry points the tracker calls loaded (compiled to C the first
-    time, cached on disk after).
+    """The vehicle model of key, with the compiled entry points the tracker calls loaded.
+
+    Compiled to C the first time, cached on disk after.
     """
     model = VehicleModel(rig, constrained=key.constrained, lane_radius_m=key.lane_radius_m, flow=key.flow_model)
     model_io_linearization(model)
@@ -135,9 +136,10 @@ def build_model(rig, key: ModelKey) -> VehicleModel:
 
 
 class ModelBuilder:
-    """Builds vehicle models one at a time on a daemon thread of its own (a process that stops mid-compilation
-    leaves no library behind: swim_model writes it under another name and renames it). on_built is called on that
-    thread after each build, to wake the thread that waits for it.
+    """Builds vehicle models one at a time on a daemon thread of its own.
+
+    A process that stops mid-compilation leaves no library behind: swim_model writes it under another name and renames
+    it. on_built is called on that thread after each build, to wake the thread that waits for it.
     """
 
     def __init__(self, rig, on_built: Callable[[], None],
@@ -171,8 +173,10 @@ class ModelBuilder:
 
 
 class _Awaited:
-    """A concurrent.futures.Future awaited in an rclpy coroutine: yields (the executor resumes the coroutine on its
-    next wake-up) until the future is done, giving True, or until give_up() holds, giving False.
+    """A concurrent.futures.Future awaited in an rclpy coroutine.
+
+    Yields (the executor resumes the coroutine on its next wake-up) until the future is done, giving True, or until
+    give_up() holds, giving False.
     """
 
     def __init__(self, future: concurrent.futures.Future, give_up: Callable[[], bool]) -> None:
@@ -206,11 +210,12 @@ class ActiveGoal:
 
 
 class TrackerNode(LifecycleNode):
-    """The tracker as a lifecycle node (lifecycle_msgs ChangeState on tracker_node/change_state): configure loads
-    the rig and the range guard's stops and builds the start-up models; activate serves joint_states and
+    """The tracker as a lifecycle node (lifecycle_msgs ChangeState on tracker_node/change_state).
+
+    Configure loads the rig and the range guard's stops and builds the start-up models; activate serves joint_states and
     execute_plan (goals are refused while inactive); deactivate zeroes the torque and ends the goal under way
-    (PREEMPTED); cleanup drops the models. owns_process: the node is its process's (main() makes it so) and
-    applies the real-time means to it while active.
+    (PREEMPTED); cleanup drops the models. owns_process: the node is its process's (main() makes it so) and applies the
+    real-time means to it while active.
     """
 
     def __init__(self, owns_process: bool = False) -> None:
@@ -257,9 +262,10 @@ class TrackerNode(LifecycleNode):
 
     # ----- lifecycle -------------------------------------------------------------------------------
     def on_configure(self, state: State) -> TransitionCallbackReturn:
-        """Load the rig (the range guard's stops are its limits record's) and build the ideal flow's models of the
-        rig's two vehicles on its default lane, ready for a first goal (about half a second, or a few seconds to
-        compile them).
+        """Load the rig and build the ideal flow's models of its two vehicles on its default lane.
+
+        The range guard's stops are the rig's limits record's. The models are ready for a first goal (about half a
+        second, or a few seconds to compile them).
         """
         self.settings = self.parameters.current
         try:
@@ -299,8 +305,9 @@ class TrackerNode(LifecycleNode):
         return super().on_shutdown(state)
 
     def _stop_serving(self) -> None:
-        """Zero torque, the goal under way ended (PREEMPTED), no more states served; the process at the ordinary
-        policy again.
+        """Zero torque, the goal under way ended (PREEMPTED), no more states served.
+
+        The process at the ordinary policy again.
         """
         if self.active:
             self.active = False
@@ -339,15 +346,18 @@ class TrackerNode(LifecycleNode):
             self._velocity = VelocityEstimator(current.velocity_cutoff_hz)
 
     def _model_key(self, constrained: bool, lane_radius_m: float, flow_model: str) -> ModelKey:
-        """One model per flow and lane for the constrained vehicle, one per flow for the free vehicle (its lane
-        is a coordinate, the model the same for every starting lane).
+        """The models to build at start-up: per flow and lane for the constrained vehicle, per flow for the free one.
+
+        The free vehicle's lane is a coordinate, so its model is the same for every starting lane.
         """
         assert self.rig is not None   # goals are accepted while active only
         return ModelKey(constrained, lane_radius_m if constrained else self.rig.constrained_lane_radius_m, flow_model)
 
     async def _model(self, key: ModelKey, give_up: Callable[[], bool]) -> Optional[VehicleModel]:
-        """The vehicle a plan runs on, built once, off this thread (ModelBuilder): awaiting it lets the executor
-        serve everything else meanwhile. None if give_up() holds first (the build goes on for the next goal).
+        """The vehicle a plan runs on, built once, off this thread (ModelBuilder).
+
+        Awaiting it lets the executor serve everything else meanwhile. None if give_up() holds first (the build goes on
+        for the next goal).
         """
         model = self._models.get(key)
         if model is not None:
@@ -381,9 +391,10 @@ class TrackerNode(LifecycleNode):
         return self.settings.realtime if self.owns_process else NO_REALTIME_MEANS
 
     def _make_realtime(self) -> None:
-        """The real-time means of the parameters for this process (on activation, once the start-up's models are
-        built): its threads at realtime_priority, memory locked, the collector between periods. Said once at info
-        level, or as one warning with what was refused and why.
+        """The real-time means of the parameters for this process (on activation, once the start-up's models are built).
+
+        Its threads at realtime_priority, memory locked, the collector between periods. Said once at info level, or as
+        one warning with what was refused and why.
         """
         if not self.owns_process:
             return
@@ -511,8 +522,9 @@ class TrackerNode(LifecycleNode):
         return GoalResponse.ACCEPT if self.active else GoalResponse.REJECT
 
     def _on_cancel(self, handle) -> CancelResponse:
-        """Cancel the active goal: hold the foil where it is now; or a goal still waiting for its vehicle model:
-        it never starts.
+        """Cancel the active goal.
+
+        Hold the foil where it is now; or a goal still waiting for its vehicle model: it never starts.
         """
         if any(waiting is handle for waiting in self._waiting_for_model):
             return CancelResponse.ACCEPT
@@ -524,8 +536,10 @@ class TrackerNode(LifecycleNode):
         return CancelResponse.ACCEPT
 
     async def _execute(self, handle) -> ExecutePlan.Result:
-        """Validate the plan, make it the active one (preempting any other), await its end. A goal that waited for
-        its vehicle model while a newer goal arrived is preempted by that one, never the other way round.
+        """Validate the plan, make it the active one (preempting any other), await its end.
+
+        A goal that waited for its vehicle model while a newer goal arrived is preempted by that one, never the other
+        way round.
         """
         request = handle.request
         self._goals_received += 1
@@ -597,8 +611,10 @@ class TrackerNode(LifecycleNode):
 
 
 def autostart(node: TrackerNode) -> None:
-    """With the autostart parameter: configure, then activate; a configure that fails is a usage error at start
-    (ValueError with its reason: run_node stops the process with it).
+    """Configure, then activate the node, as its autostart parameter asks.
+
+    A configure that fails is a usage error at start (ValueError with its reason: run_node
+    stops the process with it).
     """
     if node.settings.autostart and not configure_and_activate(node) and node.configure_error is not None:
         raise ValueError(node.configure_error)

@@ -47,8 +47,9 @@ class Transcription:
         return ca.vertcat(*(ca.vec(v) for v in (self.x, self.u, self.x_mid, self.u_mid)))
 
     def points(self) -> ca.MX:
-        """(x; u) at the knots, then at the midpoints: the 2N + 1 points where a pointwise function is
-        evaluated (``knots`` and ``midpoints`` split its values).
+        """(x; u) at the knots, then at the midpoints.
+
+        The 2N + 1 points where a pointwise function is evaluated (``knots`` and ``midpoints`` split its values).
         """
         return ca.horzcat(ca.vertcat(self.x, self.u), ca.vertcat(self.x_mid, self.u_mid))
 
@@ -89,8 +90,9 @@ def hermite_simpson(grid: Transcription, state_derivative: ca.MX) -> None:
 
 
 def simpson_integral(grid: Transcription, integrand: ca.MX) -> ca.MX:
-    """Integral over [0, T] by Simpson's rule on each interval, given the integrand over ``grid.points()``
-    (a row; several rows give several integrals).
+    """Integral over [0, T] by Simpson's rule on each interval.
+
+    The integrand is given over ``grid.points()`` (a row; several rows give several integrals).
     """
     at_knots, at_mid = grid.knots(integrand), grid.midpoints(integrand)
     return grid.step_s / 6.0 * (ca.sum2(at_knots[:, :-1]) + 4.0 * ca.sum2(at_mid) + ca.sum2(at_knots[:, 1:]))

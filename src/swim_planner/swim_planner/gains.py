@@ -45,8 +45,9 @@ def gains_job(rig: RigParameters, primitive: Primitive, lqr_weights: LqrWeights)
 
 
 def load_lqr_weights(path: str | Path, base: LqrWeights = LqrWeights()) -> LqrWeights:
-    """LqrWeights from a YAML mapping of its field names, the others those of base (a library's own weights, or
-    the package defaults).
+    """LqrWeights from a YAML mapping of its field names.
+
+    The fields it does not name are those of base (a library's own weights, or the package defaults).
     """
     names = {field.name for field in dataclasses.fields(LqrWeights)}
     try:

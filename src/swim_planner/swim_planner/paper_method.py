@@ -183,8 +183,9 @@ NINE_COEFFICIENTS = np.array([[True] * 3 + [False] * 2] + [[True] * 2 + [False] 
 
 
 def _stroke_start(free: Array, duration_s: float) -> Array:
-    """Amplitudes growing linearly from 0, phases advancing at 2 pi rad/s, pitch 90 deg ahead: a swimming
-    stroke to start the search from, not the answer.
+    """Amplitudes growing linearly from 0, phases advancing at 2 pi rad/s, pitch 90 deg ahead.
+
+    A swimming stroke to start the search from, not the answer.
     """
     start = np.zeros(free.shape)
     start[0, 1], start[2, 1] = 0.3 / duration_s, 0.5 / duration_s

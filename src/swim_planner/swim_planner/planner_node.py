@@ -95,8 +95,9 @@ class PlannerSettings:
 
 
 class AnswerMemory:
-    """Replies by request id, the latest ANSWERS_KEPT. A repeat that arrives while the first is still being
-    planned waits for that reply instead of planning again.
+    """Replies by request id, the latest ANSWERS_KEPT.
+
+    A repeat that arrives while the first is still being planned waits for that reply instead of planning again.
     """
 
     def __init__(self, size: int = ANSWERS_KEPT) -> None:
@@ -158,8 +159,9 @@ class PlannerNode(Node):
         return self.parameters.current.bounds
 
     def _apply_parameters(self, previous: PlannerSettings, current: PlannerSettings) -> None:
-        """Post-set: new bounds (read from the settings by each request) and LQ weights serve the requests that
-        come after.
+        """Post-set callback: accepted values take effect.
+
+        New bounds (read from the settings by each request) and LQ weights serve the requests that come after.
         """
         if current.lqr_weights_path != previous.lqr_weights_path:
             try:

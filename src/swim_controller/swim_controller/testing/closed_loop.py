@@ -1,5 +1,7 @@
-"""A closed loop in one process, for tests and benchmarks: the tracker at its sample period and a plant with the
-torque held over each period (zero-order hold), plus an optional torque disturbance d(t) on the motors.
+"""A closed loop in one process, for tests and benchmarks.
+
+The tracker at its sample period and a plant with the torque held over each period (zero-order hold), plus an optional
+torque disturbance d(t) on the motors.
 
 The plant is swim_model's vehicle integrated by RK4 substeps (with the circulatory flow, its lag states too,
 starting from the plan's, or from still water under an ideal-flow plan), or any ``Stepper`` at the same period
@@ -51,8 +53,9 @@ class Run:
         return self.q - self.q_reference
 
     def two_norm(self, column: int, until_s: Optional[float] = None) -> float:
-        """sqrt(int e^2 dt) of one coordinate's error (the paper's measure, Sec. 7; measures.two_norm), over the
-        run or over its samples before until_s.
+        """The paper's measure sqrt(int e^2 dt) of one coordinate's error (Sec. 7; measures.two_norm).
+
+        Over the run, or over its samples before until_s.
         """
         kept = slice(None) if until_s is None else self.time_s < until_s
         return two_norm(self.time_s[kept], self.error[kept, column])
