@@ -107,6 +107,7 @@ class TrackerSettings(RealtimeParameterSettings):
 
     @property
     def sliding_mode(self) -> SlidingMode:
+        """The sliding mode's settings: disturbance bound (N m), boundary layer and margin."""
         return SlidingMode(self.disturbance_bound_n_m, self.boundary_layer, self.disturbance_bound_margin)
 
     @property
@@ -204,6 +205,7 @@ class ActiveGoal:
         self.last_feedback_monotonic = -math.inf
 
     def finish(self, outcome: Outcome, reason: str) -> None:
+        """End the goal with outcome and reason (the first call wins)."""
         if not self.done.done():
             self.outcome, self.reason = outcome, reason
             self.done.set_result(outcome)
@@ -285,6 +287,7 @@ class TrackerNode(LifecycleNode):
         return super().on_configure(state)
 
     def on_activate(self, state: State) -> TransitionCallbackReturn:
+        """Serve joint_states and goals, the process at its real-time means."""
         self._stale_watch.state_arrived(time.monotonic())   # the first state is due within the limit from now
         self.active = True
         self._make_realtime()
@@ -292,14 +295,17 @@ class TrackerNode(LifecycleNode):
         return super().on_activate(state)
 
     def on_deactivate(self, state: State) -> TransitionCallbackReturn:
+        """Stop serving (zero torque, the goal under way preempted)."""
         self._stop_serving()
         return super().on_deactivate(state)
 
     def on_cleanup(self, state: State) -> TransitionCallbackReturn:
+        """Drop the models."""
         self._release()
         return super().on_cleanup(state)
 
     def on_shutdown(self, state: State) -> TransitionCallbackReturn:
+        """Stop serving and drop the models."""
         self._stop_serving()
         self._release()
         return super().on_shutdown(state)
@@ -407,6 +413,7 @@ class TrackerNode(LifecycleNode):
             self._collector = PeriodicCollector(GC_INTERVAL_STATES)
 
     def destroy_node(self) -> None:
+        """Drop the models, then destroy the node."""
         self._release()
         super().destroy_node()
 
@@ -621,6 +628,7 @@ def autostart(node: TrackerNode) -> None:
 
 
 def main(args: list[str] | None = None) -> None:
+    """Run the tracker node in its own process (ros2 run swim_controller tracker_node)."""
     run_node(functools.partial(TrackerNode, owns_process=True), args, name="tracker_node",
              fatal_errors=(ValueError, SwimModelError), start=autostart)
 

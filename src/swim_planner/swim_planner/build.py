@@ -84,6 +84,7 @@ def solve_from_guess_or_blend(model: VehicleModel, spec: PrimitiveSpec, limits: 
 
 
 def dependencies(spec: PrimitiveSpec) -> list[str]:
+    """The ids of the primitives spec joins at its start and end, which are solved before it."""
     return [d for d in (spec.start_from, spec.end_at) if d is not None]
 
 

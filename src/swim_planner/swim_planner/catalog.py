@@ -97,14 +97,17 @@ CRUISE_CYCLE_S = 1.0                   # assumed: one stroke per second, as the 
 
 
 def energy_tag(energy_j: float) -> str:
+    """The energy level as an id part, "E0.05" for 0.05 J."""
     return f"E{energy_j:.2f}"
 
 
 def lane_tag(radius_m: float) -> str:
+    """The lane radius as an id part, "R0.43" for 0.43 m."""
     return f"R{radius_m:.2f}"
 
 
 def cruise_id(constrained: bool, energy_j: float, lane_m: float | None = None) -> str:
+    """The id of the cruise at energy_j (J); a free cruise's also names its lane (m)."""
     if constrained:
         return f"constrained/cruise/{energy_tag(energy_j)}"
     assert lane_m is not None, "a free cruise's id names its lane"

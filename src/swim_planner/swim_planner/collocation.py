@@ -33,6 +33,7 @@ class Transcription:
 
     @property
     def intervals(self) -> int:
+        """The number of collocation intervals N."""
         return self.x_mid.shape[1]
 
     def all_states(self) -> ca.MX:
@@ -40,6 +41,7 @@ class Transcription:
         return _interleave(self.x, self.x_mid)
 
     def all_inputs(self) -> ca.MX:
+        """Inputs on the fine grid (knots and midpoints interleaved), 2N + 1 columns."""
         return _interleave(self.u, self.u_mid)
 
     def variables(self) -> ca.MX:
@@ -58,6 +60,7 @@ class Transcription:
         return values[:, :self.intervals + 1]
 
     def midpoints(self, values: ca.MX) -> ca.MX:
+        """The columns of values over ``points`` that belong to the midpoints."""
         return values[:, self.intervals + 1:]
 
     def fine(self, values: ca.MX) -> ca.MX:

@@ -37,6 +37,8 @@ PENALTY = 1e5   # weight of the squared constraint violations (assumed: 1 mJ of 
 
 @dataclasses.dataclass(frozen=True)
 class FourierCruise:
+    """A cruise by the paper's method: a Fourier series per shape angle, its index, energy error and cost."""
+
     coefficients: Array        # (2, 2K + 1): rows phi, theta; columns a_0, a_1, b_1, ..., a_K, b_K
     index_j: float             # alpha(T) - effort over one cycle (eq. 10)
     energy_error_j: float      # mean kinetic energy - E
@@ -154,10 +156,12 @@ class PolynomialSineAccelerate:
 
     @property
     def boundary_error(self) -> float:
+        """The largest mismatch at a segment's imposed ends, rad or rad/s."""
         return float(max(s.boundary_error for s in self.segments))
 
     @property
     def evaluations(self) -> int:
+        """The model evaluations of all segments together."""
         return int(sum(s.evaluations for s in self.segments))
 
 

@@ -129,6 +129,7 @@ class Structure:
                    g0=np.asarray(ca.evalf(g0), dtype=float).ravel())
 
     def rows(self, keep: list[int]) -> "Structure":
+        """The same structure with only the constraint rows keep."""
         return dataclasses.replace(self, a=self.a[keep, :], b_g=self.b_g[keep, :], g0=self.g0[keep])
 
 
@@ -184,6 +185,8 @@ def simple_bounds(structure: Structure, lbg: Array, ubg: Array) -> tuple[list[in
 
 @dataclasses.dataclass(frozen=True)
 class PointwiseResult:
+    """What a pointwise solve returns: the solution z, IPOPT's return status and its iteration count."""
+
     z: Array
     status: str          # IPOPT's return status
     iterations: int

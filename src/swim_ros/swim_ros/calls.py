@@ -36,7 +36,8 @@ SPIN_SLICE_S = 0.05
 class Spinner(Protocol):
     """What these functions need of an executor: serve callbacks for at most timeout_sec."""
 
-    def spin_once(self, timeout_sec: Optional[float] = None) -> None: ...
+    def spin_once(self, timeout_sec: Optional[float] = None) -> None:
+        """Serve callbacks for at most timeout_sec (s; None: until one is served)."""
 
 
 class ServedElsewhere:
@@ -52,6 +53,7 @@ class ServedElsewhere:
         self.poll_s = poll_s
 
     def spin_once(self, timeout_sec: Optional[float] = None) -> None:
+        """Sleep poll_s, or timeout_sec if shorter (s): the other threads serve the answers."""
         time.sleep(self.poll_s if timeout_sec is None else min(self.poll_s, max(timeout_sec, 0.0)))
 
 
@@ -78,6 +80,7 @@ class RetryPolicy:
     discovery_timeout_s: float = 30.0  # wait for the service to appear at all, s
 
     def __post_init__(self) -> None:
+        """ValueError unless the try timeout is positive, attempts at least 1 and the discovery timeout not negative."""
         if not (self.attempt_timeout_s > 0.0 and self.attempts >= 1 and self.discovery_timeout_s >= 0.0):
             raise ValueError(f"not a valid retry policy: {self}")
 

@@ -48,6 +48,7 @@ class ParameterSpec:
     check: Optional[Check] = None
 
     def descriptor(self) -> ParameterDescriptor:
+        """The rclpy ParameterDescriptor of this parameter: description, read-only flag and range."""
         descriptor = ParameterDescriptor(name=self.name, description=self.description, read_only=self.read_only)
         if self.range is not None:
             low, high = self.range
@@ -172,6 +173,7 @@ class RealtimeParameterSettings:
 
     @property
     def realtime(self) -> RealtimeSettings:
+        """The real-time means these fields ask for."""
         return RealtimeSettings(self.realtime_policy, self.realtime_priority, self.lock_memory, self.cpu_affinity,
                                 self.collect_garbage_between_periods)
 

@@ -144,6 +144,8 @@ def interrupt_on_sigterm() -> None:
 
 @dataclasses.dataclass(frozen=True)
 class NodeSpec:
+    """A node to start: its package and executable, a parameters file, parameter overrides and other ROS arguments."""
+
     package: str
     executable: str
     params_file: Optional[Path] = None
@@ -151,6 +153,7 @@ class NodeSpec:
     ros_arguments: tuple[str, ...] = ()  # any other --ros-args arguments, as given (e.g. "-r", "__ns:=/test")
 
     def command(self) -> list[str]:
+        """The `ros2 run` command line that starts the node."""
         arguments: list[str] = []
         if self.params_file is not None:
             arguments += ["--params-file", str(self.params_file)]
@@ -170,13 +173,16 @@ class NodeProcess:
                                    start_new_session=True, env=dict(os.environ))
 
     def alive(self) -> bool:
+        """Whether the node's process is still running."""
         return self.process.poll() is None
 
     def interrupt(self) -> None:
+        """Send SIGINT to the node's process group, as a user's Ctrl-C would, if it is still running."""
         if self.alive():
             os.killpg(self.process.pid, signal.SIGINT)
 
     def wait(self, timeout_s: float) -> bool:
+        """Whether the process ended within timeout_s (s)."""
         try:
             self.process.wait(timeout=timeout_s)
             return True
@@ -184,6 +190,7 @@ class NodeProcess:
             return False
 
     def kill(self) -> None:
+        """SIGKILL to the process group, then reap the process and close its log."""
         try:
             os.killpg(self.process.pid, signal.SIGKILL)
         except ProcessLookupError:

@@ -63,6 +63,7 @@ class RealtimeSettings:
 
     @property
     def realtime(self) -> bool:
+        """Whether the policy is a real-time one (not the ordinary "other")."""
         return self.policy != "other"
 
 
@@ -87,7 +88,7 @@ class RealtimeOutcome:
 
 
 def parse_cpu_list(text: str) -> frozenset[int]:
-    """A CPU list in taskset's form ("1", "0,2", "2-3", "0-1,3") as a set; ValueError for anything else or an empty set."""
+    """A CPU list as taskset writes it ("1", "0,2", "2-3", "0-1,3"), as a set; ValueError otherwise or if empty."""
     cpus: set[int] = set()
     for part in text.replace(" ", "").split(","):
         low, dash, high = part.partition("-")
@@ -299,6 +300,7 @@ class PeriodicCollector:
         gc.disable()
 
     def after_period(self) -> None:
+        """Count a period; every interval_periods periods, collect what the last ones left and freeze the survivors."""
         self._count += 1
         if self._count < self.interval_periods:
             return
@@ -310,4 +312,5 @@ class PeriodicCollector:
         self.longest_s = max(self.longest_s, time.monotonic() - start_s)
 
     def stop(self) -> None:
+        """Give the collector back to automatic collection."""
         gc.enable()

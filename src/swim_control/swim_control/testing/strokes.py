@@ -17,11 +17,14 @@ from swim_model import VehicleModel, load_rig
 
 @pytest.fixture(scope="session")
 def rig():
+    """The rig description (swim_model.load_rig's default)."""
     return load_rig()
 
 
 @dataclasses.dataclass(frozen=True)
 class StrokeSpec:
+    """Which stroke to make: the primitive it stands in for, its vehicle, lane radius (m) and intervals per cycle."""
+
     primitive_id: str
     constrained: bool
     lane_radius_m: float

@@ -43,6 +43,7 @@ class CirculatoryRun:
 
     @property
     def period_s(self) -> float:
+        """The control period, s: substeps integration steps of step_s."""
         return self.substeps * self.step_s
 
 

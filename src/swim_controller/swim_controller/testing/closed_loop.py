@@ -27,21 +27,27 @@ class SteppedState(Protocol):
     """The state a Stepper reaches at a period's end (swim_model.plant.PlantState is one)."""
 
     @property
-    def q(self) -> Array: ...
+    def q(self) -> Array:
+        """Positions (nq,), rad or m."""
     @property
-    def qdot(self) -> Array: ...
+    def qdot(self) -> Array:
+        """Velocities (nq,), rad/s or m/s."""
 
 
 class Stepper(Protocol):
     """A plant stepped by control periods (swim_model.plant.Plant is one)."""
 
-    def reset(self, q: Array, qdot: Array) -> None: ...
+    def reset(self, q: Array, qdot: Array) -> None:
+        """Put the plant at (q, qdot)."""
 
-    def step(self, torque: Array) -> SteppedState: ...
+    def step(self, torque: Array) -> SteppedState:
+        """Apply torque (2,), N m, over one control period; the state at its end."""
 
 
 @dataclasses.dataclass
 class Run:
+    """A closed-loop run: per control period its time (s), state, reference, torque (N m) and saturation."""
+
     time_s: Array
     q: Array
     q_reference: Array
@@ -50,6 +56,7 @@ class Run:
 
     @property
     def error(self) -> Array:
+        """The tracking error q - q_reference per sample, rad or m."""
         return self.q - self.q_reference
 
     def two_norm(self, column: int, until_s: Optional[float] = None) -> float:
@@ -65,6 +72,11 @@ def simulate(model: VehicleModel, tracker: CascadeTracker, trajectory: Trajector
              substeps: int = 8, q0: Optional[npt.ArrayLike] = None, qdot0: Optional[npt.ArrayLike] = None,
              disturbance: Callable[[float], Array] = lambda t: np.zeros(2), extra_time_s: float = 0.0,
              plant: Optional[Stepper] = None) -> Run:
+    """Run the tracker on the plan from (q0, qdot0), by default the plan's start, for its duration plus extra_time_s.
+
+    The plant is plant if given, else model integrated by RK4 with substeps steps per period (its lag states from the
+    plan's, or still water's); disturbance(t) (N m) adds to the torque.
+    """
     tracker.start(trajectory)
     q = trajectory.q[0].copy() if q0 is None else np.array(q0, dtype=float)
     qdot = trajectory.qdot[0].copy() if qdot0 is None else np.array(qdot0, dtype=float)

@@ -40,6 +40,8 @@ REPLAY_WINDOW_S = 0.5
 
 @dataclasses.dataclass(frozen=True)
 class ReplayResult:
+    """The largest deviation of an open-loop replay from the primitive, over windows of window_s (s)."""
+
     max_position_error: float     # rad or m, largest over all windows and coordinates
     max_velocity_error: float     # rad/s or m/s
     window_s: float

@@ -199,6 +199,7 @@ class HeadlessChromium:
         self._command_ids = itertools.count(1)
 
     def __enter__(self) -> HeadlessChromium:
+        """Start the browser; on a failure, end what was started and re-raise."""
         try:
             self._start()
         except BaseException:
@@ -207,6 +208,7 @@ class HeadlessChromium:
         return self
 
     def __exit__(self, *exc_info: Any) -> None:
+        """End the browser and remove its profile (close)."""
         self.close()
 
     def _start(self) -> None:
@@ -245,6 +247,7 @@ class HeadlessChromium:
         self._devtools_ready.set()   # ended without one: the start's wait returns now
 
     def stderr_tail(self) -> str:
+        """The last lines the browser wrote to stderr, for a failure's message."""
         return "\n".join(self._stderr_lines)
 
     def command(self, method: str, params: Optional[dict[str, Any]] = None, session_id: Optional[str] = None,
@@ -327,6 +330,7 @@ class LatestMessagePage:
         self.page: Optional[Page] = None
 
     def __enter__(self) -> LatestMessagePage:
+        """Serve page_dir, start the browser and open the page; on a failure, end what was started."""
         try:
             base_url = self._stack.enter_context(serve_folder(self.page_dir))
             browser = self._stack.enter_context(HeadlessChromium())
@@ -337,6 +341,7 @@ class LatestMessagePage:
         return self
 
     def __exit__(self, *exc_info: Any) -> None:
+        """End the browser and the page's server."""
         self._stack.close()
 
     def status(self) -> Optional[str]:

@@ -82,12 +82,15 @@ class FoxgloveClient:
         self.closed = False   # the server closed the connection (it stopped)
 
     def close(self) -> None:
+        """Close the connection."""
         self.connection.close()
 
     def __enter__(self) -> "FoxgloveClient":
+        """The client itself, closed when the block ends."""
         return self
 
     def __exit__(self, *_: object) -> None:
+        """Close the connection."""
         self.close()
 
     def _new_id(self) -> int:
@@ -160,6 +163,7 @@ class FoxgloveClient:
         return channel
 
     def subscribe(self, topic: str, timeout_s: float = 10.0) -> int:
+        """Subscribe to topic once its channel is advertised (within timeout_s, s); the subscription id."""
         channel = self.channel(topic, timeout_s)
         subscription = self._new_id()
         self._subscriptions[subscription] = topic
@@ -206,6 +210,7 @@ class FoxgloveClient:
         return channel_id
 
     def publish(self, channel_id: int, payload: bytes) -> None:
+        """Send payload on channel_id, a channel this client advertised."""
         self.connection.send(struct.pack("<BI", CLIENT_MESSAGE_DATA, channel_id) + payload)
 
 
@@ -297,6 +302,7 @@ class ClientThread(threading.Thread):
         self.client: Optional[FoxgloveClient] = None
 
     def run(self) -> None:
+        """Connect and subscribe, then read until stop is set or the connection closes (never with read False)."""
         self.client = client = connect_when_listening(self.port, self.stop)
         if client is None:
             return

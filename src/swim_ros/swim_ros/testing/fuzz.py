@@ -129,6 +129,7 @@ def joint_states(draw: Any, joints: tuple[str, ...], value: st.SearchStrategy[fl
 
 
 def to_joint_state(fields: JointStateFields, stamp: Any = None) -> Any:
+    """The sensor_msgs/JointState of fields, stamped with stamp if given."""
     from sensor_msgs.msg import JointState
     message = JointState(name=fields.name, position=fields.position, velocity=fields.velocity, effort=fields.effort)
     if stamp is not None:
