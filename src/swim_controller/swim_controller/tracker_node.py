@@ -454,9 +454,15 @@ class TrackerNode(LifecycleNode):
             self._publish_command(np.zeros(2), message.header.stamp)
             return
         self._publish_command(step.torque, message.header.stamp)
+        self._report_step(step, message.header.stamp, q, qdot)
+        if self._collector is not None:
+            self._collector.after_period()   # the command is out: the rest of the period is free
+
+    def _report_step(self, step: Step, stamp: Time, q: np.ndarray, qdot: np.ndarray) -> None:
+        """After the period's command: its tracking state published, and the goal under way ended or told."""
         if step.output is not None:
             try:
-                self._last_tracking = self._tracking_message(step, message.header.stamp, q, qdot)
+                self._last_tracking = self._tracking_message(step, stamp, q, qdot)
                 self.tracking_publisher.publish(self._last_tracking)
             except Exception as err:  # noqa: BLE001
                 self.get_logger().error(f"tracking_state not published: {err!r}", throttle_duration_sec=1.0)
@@ -466,8 +472,6 @@ class TrackerNode(LifecycleNode):
                 goal.finish(step.outcome, step.outcome.value)
             else:
                 self._publish_feedback(goal)
-        if self._collector is not None:
-            self._collector.after_period()   # the command is out: the rest of the period is free
 
     def _publish_feedback(self, goal: ActiveGoal) -> None:
         """At most feedback_rate_hz: the latest tracking state and the fraction of the plan done."""
