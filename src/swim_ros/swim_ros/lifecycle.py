@@ -17,9 +17,6 @@ def guard_change_state_service(node: LifecycleNode) -> None:
     The rclpy 7.1.6 handler raises out of the change_state service for such a transition (activate while unconfigured),
     which ends spin() and the process.
 
-    The rclpy 7.1.6 handler raises out of the change_state service for such a transition (activate while unconfigured),
-    which ends spin() and the process.
-
     Why through a private attribute: there is no public way in this rclpy. The crash is ros2/rclpy#1209; its
     fix (ros2/rclpy#1319: __change_state catches the RCLError and returns ERROR) is in rclpy 8 (rolling), not
     in Jazzy's 7.1.x, the newest on PyPI being 7.1.6. The public alternative, LifecycleNode(...,

@@ -88,7 +88,7 @@ def one_segment_trajectory(time_s, q, qdot, foil_acceleration=None, torque=None,
                            riccati_input_gain=None, time_scale=1.0) -> Trajectory:
     """A Trajectory of the samples given as one segment at time_scale.
 
-    U and tau zero unless given, every gain entry equal to gain unless the gains are given.
+    The inputs u and tau are zero unless given, every gain entry equal to gain unless the gains are given.
     """
     samples, nq = np.shape(q)
     n = error_state_size(nq, nq - 2)

@@ -55,11 +55,6 @@ def gait_run(model: VehicleModel, duration_s: float, gait: SinusoidalGait = DEFA
     torques are chosen period by period to follow the gait from the state reached, then the whole run is integrated
     again from the start by integrate_rk4 with those torques (the run returned: the model's own motion under known
     torques).
-
-    Its unactuated coordinates start at rest (alpha = 0, R on the model's lane) and the water still (lag = 0). The
-    torques are chosen period by period to follow the gait from the state reached, then the whole run is integrated
-    again from the start by integrate_rk4 with those torques (the run returned: the model's own motion under known
-    torques).
     """
     ny = model.n_unactuated
     psi0, psidot0, _ = gait.shape(0.0)

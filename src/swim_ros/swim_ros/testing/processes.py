@@ -37,9 +37,6 @@ def processes_left(variable: str, tag: str, timeout_s: float) -> list[int]:
     """The processes tagged variable=tag still alive timeout_s from now, each then killed (SIGKILL).
 
     An empty list as soon as none is alive. Killing the rest makes sure a failed test leaves nothing behind.
-
-    The list is empty as soon as none is alive; each listed one is then killed (SIGKILL), so that a failed test leaves
-    nothing behind.
     """
     deadline = time.monotonic() + timeout_s
     while tagged_processes(variable, tag) and time.monotonic() < deadline:
