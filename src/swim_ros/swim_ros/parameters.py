@@ -129,7 +129,7 @@ def one_of(*choices: str) -> Check:
 def realtime_parameters(priority: int, thread: str) -> tuple[ParameterSpec, ...]:
     """The real-time means of a periodic node (swim_ros.realtime.RealtimeSettings), fixed at start.
 
-    Priority is the default priority of thread (which of the node's threads it sets: "node's threads", ...).
+    Its field priority is the default priority of thread (which of the node's threads it sets: "node's threads", ...).
     """
 
     def cpu_list(value: Any) -> Optional[str]:
