@@ -51,7 +51,7 @@ def test_round_trip_is_bit_for_bit(trajectory):
     assert_same_trajectory(trajectory_from_message(message), trajectory)
 
 
-def _corrupt(message, bad):  # noqa: C901 - one branch per fault kind
+def _corrupt(message, bad):  # noqa: C901 - one branch per kind of corruption
     if bad == "version":
         message.interface_version = SUPPORTED_INTERFACE_VERSION + 1
     elif bad == "joint names":
