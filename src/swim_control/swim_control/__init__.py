@@ -1,5 +1,7 @@
-"""The trajectory core under the planner and the tracker: the one trajectory type, time scaling (Theorem 1), the
-LQ stage's Riccati gains, the paper's tracking measure and the plan errors. Pure Python on swim_model, no ROS.
+"""The trajectory core under the planner and the tracker.
+
+The one trajectory type, time scaling (Theorem 1), the LQ stage's Riccati gains, the paper's tracking measure and the
+plan errors. Pure Python on swim_model, no ROS.
 
 Public API:
     Trajectory, Segment, TrajectoryPoint, motor_limit_fraction   a plan and its samples (trajectory)

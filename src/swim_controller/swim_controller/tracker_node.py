@@ -107,6 +107,7 @@ class TrackerSettings(RealtimeParameterSettings):
 
     @property
     def sliding_mode(self) -> SlidingMode:
+        """The sliding mode's settings: disturbance bound (N m), boundary layer and margin."""
         return SlidingMode(self.disturbance_bound_n_m, self.boundary_layer, self.disturbance_bound_margin)
 
     @property
@@ -125,8 +126,9 @@ class ModelKey:
 
 
 def build_model(rig, key: ModelKey) -> VehicleModel:
-    """The vehicle model of key with the compiled entry points the tracker calls loaded (compiled to C the first
-    time, cached on disk after).
+    """The vehicle model of key, with the compiled entry points the tracker calls loaded.
+
+    Compiled to C the first time, cached on disk after.
     """
     model = VehicleModel(rig, constrained=key.constrained, lane_radius_m=key.lane_radius_m, flow=key.flow_model)
     model_io_linearization(model)
@@ -135,9 +137,10 @@ def build_model(rig, key: ModelKey) -> VehicleModel:
 
 
 class ModelBuilder:
-    """Builds vehicle models one at a time on a daemon thread of its own (a process that stops mid-compilation
-    leaves no library behind: swim_model writes it under another name and renames it). on_built is called on that
-    thread after each build, to wake the thread that waits for it.
+    """Builds vehicle models one at a time on a daemon thread of its own.
+
+    A process that stops mid-compilation leaves no library behind: swim_model writes it under another name and renames
+    it. on_built is called on that thread after each build, to wake the thread that waits for it.
     """
 
     def __init__(self, rig, on_built: Callable[[], None],
@@ -171,8 +174,10 @@ class ModelBuilder:
 
 
 class _Awaited:
-    """A concurrent.futures.Future awaited in an rclpy coroutine: yields (the executor resumes the coroutine on its
-    next wake-up) until the future is done, giving True, or until give_up() holds, giving False.
+    """A concurrent.futures.Future awaited in an rclpy coroutine.
+
+    Yields (the executor resumes the coroutine on its next wake-up) until the future is done, giving True, or until
+    give_up() holds, giving False.
     """
 
     def __init__(self, future: concurrent.futures.Future, give_up: Callable[[], bool]) -> None:
@@ -200,17 +205,19 @@ class ActiveGoal:
         self.last_feedback_monotonic = -math.inf
 
     def finish(self, outcome: Outcome, reason: str) -> None:
+        """End the goal with outcome and reason (the first call wins)."""
         if not self.done.done():
             self.outcome, self.reason = outcome, reason
             self.done.set_result(outcome)
 
 
 class TrackerNode(LifecycleNode):
-    """The tracker as a lifecycle node (lifecycle_msgs ChangeState on tracker_node/change_state): configure loads
-    the rig and the range guard's stops and builds the start-up models; activate serves joint_states and
+    """The tracker as a lifecycle node (lifecycle_msgs ChangeState on tracker_node/change_state).
+
+    Configure loads the rig and the range guard's stops and builds the start-up models; activate serves joint_states and
     execute_plan (goals are refused while inactive); deactivate zeroes the torque and ends the goal under way
-    (PREEMPTED); cleanup drops the models. owns_process: the node is its process's (main() makes it so) and
-    applies the real-time means to it while active.
+    (PREEMPTED); cleanup drops the models. owns_process: the node is its process's (main() makes it so) and applies the
+    real-time means to it while active.
     """
 
     def __init__(self, owns_process: bool = False) -> None:
@@ -257,9 +264,10 @@ class TrackerNode(LifecycleNode):
 
     # ----- lifecycle -------------------------------------------------------------------------------
     def on_configure(self, state: State) -> TransitionCallbackReturn:
-        """Load the rig (the range guard's stops are its limits record's) and build the ideal flow's models of the
-        rig's two vehicles on its default lane, ready for a first goal (about half a second, or a few seconds to
-        compile them).
+        """Load the rig and build the ideal flow's models of its two vehicles on its default lane.
+
+        The range guard's stops are the rig's limits record's. The models are ready for a first goal (about half a
+        second, or a few seconds to compile them).
         """
         self.settings = self.parameters.current
         try:
@@ -279,6 +287,7 @@ class TrackerNode(LifecycleNode):
         return super().on_configure(state)
 
     def on_activate(self, state: State) -> TransitionCallbackReturn:
+        """Serve joint_states and goals, the process at its real-time means."""
         self._stale_watch.state_arrived(time.monotonic())   # the first state is due within the limit from now
         self.active = True
         self._make_realtime()
@@ -286,21 +295,25 @@ class TrackerNode(LifecycleNode):
         return super().on_activate(state)
 
     def on_deactivate(self, state: State) -> TransitionCallbackReturn:
+        """Stop serving (zero torque, the goal under way preempted)."""
         self._stop_serving()
         return super().on_deactivate(state)
 
     def on_cleanup(self, state: State) -> TransitionCallbackReturn:
+        """Drop the models."""
         self._release()
         return super().on_cleanup(state)
 
     def on_shutdown(self, state: State) -> TransitionCallbackReturn:
+        """Stop serving and drop the models."""
         self._stop_serving()
         self._release()
         return super().on_shutdown(state)
 
     def _stop_serving(self) -> None:
-        """Zero torque, the goal under way ended (PREEMPTED), no more states served; the process at the ordinary
-        policy again.
+        """Zero torque, the goal under way ended (PREEMPTED), no more states served.
+
+        The process at the ordinary policy again.
         """
         if self.active:
             self.active = False
@@ -339,15 +352,18 @@ class TrackerNode(LifecycleNode):
             self._velocity = VelocityEstimator(current.velocity_cutoff_hz)
 
     def _model_key(self, constrained: bool, lane_radius_m: float, flow_model: str) -> ModelKey:
-        """One model per flow and lane for the constrained vehicle, one per flow for the free vehicle (its lane
-        is a coordinate, the model the same for every starting lane).
+        """The models to build at start-up: per flow and lane for the constrained vehicle, per flow for the free one.
+
+        The free vehicle's lane is a coordinate, so its model is the same for every starting lane.
         """
         assert self.rig is not None   # goals are accepted while active only
         return ModelKey(constrained, lane_radius_m if constrained else self.rig.constrained_lane_radius_m, flow_model)
 
     async def _model(self, key: ModelKey, give_up: Callable[[], bool]) -> Optional[VehicleModel]:
-        """The vehicle a plan runs on, built once, off this thread (ModelBuilder): awaiting it lets the executor
-        serve everything else meanwhile. None if give_up() holds first (the build goes on for the next goal).
+        """The vehicle a plan runs on, built once, off this thread (ModelBuilder).
+
+        Awaiting it lets the executor serve everything else meanwhile. None if give_up() holds first (the build goes on
+        for the next goal).
         """
         model = self._models.get(key)
         if model is not None:
@@ -381,9 +397,10 @@ class TrackerNode(LifecycleNode):
         return self.settings.realtime if self.owns_process else NO_REALTIME_MEANS
 
     def _make_realtime(self) -> None:
-        """The real-time means of the parameters for this process (on activation, once the start-up's models are
-        built): its threads at realtime_priority, memory locked, the collector between periods. Said once at info
-        level, or as one warning with what was refused and why.
+        """The real-time means of the parameters for this process (on activation, once the start-up's models are built).
+
+        Its threads at realtime_priority, memory locked, the collector between periods. Said once at info level, or as
+        one warning with what was refused and why.
         """
         if not self.owns_process:
             return
@@ -396,6 +413,7 @@ class TrackerNode(LifecycleNode):
             self._collector = PeriodicCollector(GC_INTERVAL_STATES)
 
     def destroy_node(self) -> None:
+        """Drop the models, then destroy the node."""
         self._release()
         super().destroy_node()
 
@@ -436,9 +454,15 @@ class TrackerNode(LifecycleNode):
             self._publish_command(np.zeros(2), message.header.stamp)
             return
         self._publish_command(step.torque, message.header.stamp)
+        self._report_step(step, message.header.stamp, q, qdot)
+        if self._collector is not None:
+            self._collector.after_period()   # the command is out: the rest of the period is free
+
+    def _report_step(self, step: Step, stamp: Time, q: np.ndarray, qdot: np.ndarray) -> None:
+        """After the period's command: its tracking state published, and the goal under way ended or told."""
         if step.output is not None:
             try:
-                self._last_tracking = self._tracking_message(step, message.header.stamp, q, qdot)
+                self._last_tracking = self._tracking_message(step, stamp, q, qdot)
                 self.tracking_publisher.publish(self._last_tracking)
             except Exception as err:  # noqa: BLE001
                 self.get_logger().error(f"tracking_state not published: {err!r}", throttle_duration_sec=1.0)
@@ -448,8 +472,6 @@ class TrackerNode(LifecycleNode):
                 goal.finish(step.outcome, step.outcome.value)
             else:
                 self._publish_feedback(goal)
-        if self._collector is not None:
-            self._collector.after_period()   # the command is out: the rest of the period is free
 
     def _publish_feedback(self, goal: ActiveGoal) -> None:
         """At most feedback_rate_hz: the latest tracking state and the fraction of the plan done."""
@@ -511,8 +533,9 @@ class TrackerNode(LifecycleNode):
         return GoalResponse.ACCEPT if self.active else GoalResponse.REJECT
 
     def _on_cancel(self, handle) -> CancelResponse:
-        """Cancel the active goal: hold the foil where it is now; or a goal still waiting for its vehicle model:
-        it never starts.
+        """Cancel the active goal.
+
+        Hold the foil where it is now; or a goal still waiting for its vehicle model: it never starts.
         """
         if any(waiting is handle for waiting in self._waiting_for_model):
             return CancelResponse.ACCEPT
@@ -524,8 +547,10 @@ class TrackerNode(LifecycleNode):
         return CancelResponse.ACCEPT
 
     async def _execute(self, handle) -> ExecutePlan.Result:
-        """Validate the plan, make it the active one (preempting any other), await its end. A goal that waited for
-        its vehicle model while a newer goal arrived is preempted by that one, never the other way round.
+        """Validate the plan, make it the active one (preempting any other), await its end.
+
+        A goal that waited for its vehicle model while a newer goal arrived is preempted by that one, never the other
+        way round.
         """
         request = handle.request
         self._goals_received += 1
@@ -597,14 +622,17 @@ class TrackerNode(LifecycleNode):
 
 
 def autostart(node: TrackerNode) -> None:
-    """With the autostart parameter: configure, then activate; a configure that fails is a usage error at start
-    (ValueError with its reason: run_node stops the process with it).
+    """Configure, then activate the node, as its autostart parameter asks.
+
+    A configure that fails is a usage error at start (ValueError with its reason: run_node
+    stops the process with it).
     """
     if node.settings.autostart and not configure_and_activate(node) and node.configure_error is not None:
         raise ValueError(node.configure_error)
 
 
 def main(args: list[str] | None = None) -> None:
+    """Run the tracker node in its own process (ros2 run swim_controller tracker_node)."""
     run_node(functools.partial(TrackerNode, owns_process=True), args, name="tracker_node",
              fatal_errors=(ValueError, SwimModelError), start=autostart)
 

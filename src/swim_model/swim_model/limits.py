@@ -97,6 +97,7 @@ class RigLimits:
     rail_max_speed_m_s: float     # the fastest the platform can slide along the rail
 
     def __post_init__(self) -> None:
+        """Check the joints' limits and that both speeds are positive (RigConfigError)."""
         self.heave.check("heave")
         self.pitch.check("pitch")
         for name in ("hub_max_speed_rad_s", "rail_max_speed_m_s"):

@@ -44,20 +44,7 @@ __all__ = [
 def __getattr__(name: str) -> Any:
     """Load the optimizer's names on first use (module docstring).
 
-    Parameters
-    ----------
-    name : str
-        The attribute asked for.
-
-    Returns
-    -------
-    Any
-        The name from swim_planner.primitive_solver.
-
-    Raises
-    ------
-    AttributeError
-        If the name is none of the optimizer's.
+    The attribute ``name`` from swim_planner.primitive_solver; AttributeError if it is none of the optimizer's.
     """
     if name in _SOLVER_NAMES:
         return getattr(importlib.import_module("swim_planner.primitive_solver"), name)

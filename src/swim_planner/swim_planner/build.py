@@ -32,11 +32,12 @@ Progress = Callable[[str, str], None]
 
 
 def local_executor(workers: int) -> concurrent.futures.ProcessPoolExecutor:
-    """``workers`` local worker processes for a build, each with IPOPT's BLAS on one thread. Left to itself the
-    BLAS that CasADi's IPOPT (MUMPS) loads runs as many threads as cores, and on the larger factorizations they
-    spin: the free R = 0.43 m, E = 0.05 decelerate took 66 s of CPU for 43 s of wall time with them, 43 s for the
-    same wall time on one thread, so workers that share the cores slow each other down. The workers are spawned,
-    not forked, so none inherits a BLAS this process may have started already. They die with this process
+    """``workers`` local worker processes for a build, each with IPOPT's BLAS on one thread.
+
+    Left to itself the BLAS that CasADi's IPOPT (MUMPS) loads runs as many threads as cores, and on the larger
+    factorizations they spin: the free R = 0.43 m, E = 0.05 decelerate took 66 s of CPU for 43 s of wall time with them,
+    43 s for the same wall time on one thread, so workers that share the cores slow each other down. The workers are
+    spawned, not forked, so none inherits a BLAS this process may have started already. They die with this process
     (swim_ros.processes), which a worker waiting for its next job would otherwise outlive for good.
     """
     return concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
@@ -68,10 +69,11 @@ def solve_job(rig: RigParameters, spec: PrimitiveSpec, limits: PlanningLimits, s
 def solve_from_guess_or_blend(model: VehicleModel, spec: PrimitiveSpec, limits: PlanningLimits, start, end,
                               guess: Optional[Primitive] = None,
                               settings: SolverSettings = SolverSettings()) -> Primitive:
-    """solve_primitive from guess, and if IPOPT gives up there, once more from the plain blend of the boundary
-    states (guess None) before the PrimitiveSolveError: IPOPT's infeasibility verdicts depend on where it starts,
-    and where a start leads it depends on the round-off of the machine's linear algebra. What a library build
-    solves each primitive with.
+    """The solve a library build runs for each primitive: solve_primitive from guess, with one retry.
+
+    If IPOPT gives up from guess, it solves once more from the plain blend of the boundary states (guess None) before
+    the PrimitiveSolveError: IPOPT's infeasibility verdicts depend on where it starts, and where a start leads it
+    depends on the round-off of the machine's linear algebra.
     """
     try:
         return solve_primitive(model, spec, limits, start=start, end=end, guess=guess, settings=settings)
@@ -82,12 +84,15 @@ def solve_from_guess_or_blend(model: VehicleModel, spec: PrimitiveSpec, limits: 
 
 
 def dependencies(spec: PrimitiveSpec) -> list[str]:
+    """The ids of the primitives spec joins at its start and end, which are solved before it."""
     return [d for d in (spec.start_from, spec.end_at) if d is not None]
 
 
 def expected_work(spec: PrimitiveSpec) -> int:
-    """A spec's solve cost in collocation intervals times NLP solves: its continuation's steps (a first one without
-    the bound, each looser bound, the last) on its coarser grid if it has one, then one solve on its own grid.
+    """A spec's solve cost in collocation intervals times NLP solves.
+
+    Its continuation's steps (a first one without the bound, each looser bound, the last) on its coarser grid if it has
+    one, then one solve on its own grid.
     """
     continuation = spec.angle_of_attack_continuation_rad
     steps = len(continuation) + 2 if continuation else 1
@@ -97,10 +102,11 @@ def expected_work(spec: PrimitiveSpec) -> int:
 
 
 def critical_work(specs: Sequence[PrimitiveSpec]) -> dict[str, int]:
-    """{id: the spec's expected_work plus the most expected_work of any chain of specs that join it} (its
-    "bottom level"): a build starts the ready spec of most critical work first, so a cruise whose decelerate is long
-    goes before a short transition, and the long solves before the short ones, which fill in at the end
-    (list scheduling, longest path first).
+    """Each spec's bottom level: {id: its expected_work plus the most expected_work of any chain that joins it}.
+
+    A build starts the ready spec of most critical work first, so a cruise whose decelerate is long goes before a short
+    transition, and the long solves before the short ones, which fill in at the end (list scheduling, longest path
+    first).
     """
     joined_by: dict[str, list[PrimitiveSpec]] = {}
     for spec in specs:
@@ -135,8 +141,9 @@ def _stale(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec]) -> set[str
 def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], executor: concurrent.futures.Executor,
                   limits: Optional[PlanningLimits] = None, progress: Progress = lambda i, s: None,
                   workers: Optional[int] = None) -> list[str]:
-    """Solve every spec not yet in the library within limits (None: PlanningLimits.of(library.rig)); returns the
-    ids that failed (with their reasons reported).
+    """Solve every spec not yet in the library within limits (None: PlanningLimits.of(library.rig)).
+
+    Returns the ids that failed (with their reasons reported).
 
     workers: the executor's worker count, if known. The build then keeps that many solves running and, each time
     one ends, submits the ready spec of most ``critical_work``. None (a cluster whose size may change): every spec
@@ -211,8 +218,9 @@ def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], exe
 def measure_disturbance_bounds(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec],
                                executor: concurrent.futures.Executor,
                                progress: Progress = lambda i, s: None) -> list[str]:
-    """Measure and store D(t) of every spec's primitive in the library that has none (disturbance_job, on the
-    executor); returns the ids whose measurement failed (their reasons reported) or whose wake history is missing.
+    """Measure and store D(t) of every spec's primitive in the library that has none (disturbance_job, on the executor).
+
+    Returns the ids whose measurement failed (their reasons reported) or whose wake history is missing.
     """
     jobs: dict[concurrent.futures.Future, str] = {}
     failed: list[str] = []

@@ -1,6 +1,7 @@
-"""The primitive sets: the constrained graph of Fig. 9 and the free two-lane graph of Fig. 12 (``default_specs``,
-the paper's library, ideal flow), and the same graph with a third, faster energy level for the circulatory flow
-(``circulatory_specs``).
+"""The primitive sets.
+
+The constrained graph of Fig. 9 and the free two-lane graph of Fig. 12 (``default_specs``, the paper's library, ideal
+flow), and the same graph with a third, faster energy level for the circulatory flow (``circulatory_specs``).
 
 Ids name what a primitive joins, e.g. ``constrained/cruise/E0.05``, ``constrained/accelerate/E0.05``,
 ``free/lane_change/R0.43-R0.48/E0.05``. Durations are the paper's (Sec. 7; docs/model_and_method.md section 3):
@@ -96,14 +97,17 @@ CRUISE_CYCLE_S = 1.0                   # assumed: one stroke per second, as the 
 
 
 def energy_tag(energy_j: float) -> str:
+    """The energy level as an id part, "E0.05" for 0.05 J."""
     return f"E{energy_j:.2f}"
 
 
 def lane_tag(radius_m: float) -> str:
+    """The lane radius as an id part, "R0.43" for 0.43 m."""
     return f"R{radius_m:.2f}"
 
 
 def cruise_id(constrained: bool, energy_j: float, lane_m: float | None = None) -> str:
+    """The id of the cruise at energy_j (J); a free cruise's also names its lane (m)."""
     if constrained:
         return f"constrained/cruise/{energy_tag(energy_j)}"
     assert lane_m is not None, "a free cruise's id names its lane"
@@ -124,8 +128,10 @@ def _neighbour_pairs(energy_levels_j: tuple[float, ...]) -> list[tuple[float, fl
 
 def constrained_specs(rig: RigParameters,
                       energy_levels_j: tuple[float, ...] = ENERGY_LEVELS_J) -> list[PrimitiveSpec]:
-    """The constrained graph: a cruise, its accelerate and its decelerate at each level (ascending), and the
-    cruise-to-cruise edges between neighbouring levels.
+    """The constrained graph.
+
+    A cruise, its accelerate and its decelerate at each level (ascending), and the cruise-to-cruise edges between
+    neighbouring levels.
     """
     lane = rig.constrained_lane_radius_m
     specs = []
@@ -146,8 +152,9 @@ def constrained_specs(rig: RigParameters,
 
 
 def free_specs(rig: RigParameters, energy_levels_j: tuple[float, ...] = ENERGY_LEVELS_J) -> list[PrimitiveSpec]:
-    """The free two-lane graph: in each lane the constrained graph's primitives, and a lane change each way at
-    every level.
+    """The free two-lane graph.
+
+    In each lane the constrained graph's primitives, and a lane change each way at every level.
     """
     lanes = (rig.lane_1_radius_m, rig.lane_2_radius_m)
     specs = []
@@ -184,15 +191,16 @@ def default_specs(rig: RigParameters) -> list[PrimitiveSpec]:
 
 
 def circulatory_specs(rig: RigParameters) -> list[PrimitiveSpec]:
-    """The circulatory flow's library: the paper's graph at CIRCULATORY_ENERGY_LEVELS_J, ids and durations as in
-    ``default_specs`` except the free accelerate's (CIRCULATORY_FREE_ACCELERATE_S), the free decelerate's
-    (CIRCULATORY_FREE_DECELERATE_S, solved by continuation in the angle-of-attack bound and ending at rest with the
-    lag states its braking leaves: PrimitiveSpec.end_lag_free; CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S, refined
-    from INTERVALS_PER_S: PrimitiveSpec.coarse_intervals) and
-    those of CIRCULATORY_LONGER_S (which take precedence); the cruises stroke at a Strouhal number of at least
-    CIRCULATORY_CONSTRAINED_MIN_STROUHAL (constrained) or CIRCULATORY_FREE_MIN_STROUHAL (free); the constrained
-    decelerates turn the foil back to rest within CIRCULATORY_CONSTRAINED_DECELERATE_REST_WINDOW_S at no more than
-    CIRCULATORY_CONSTRAINED_DECELERATE_FOIL_RATE_RAD_S.
+    """The circulatory flow's library.
+
+    The paper's graph at CIRCULATORY_ENERGY_LEVELS_J, ids and durations as in ``default_specs`` except the free
+    accelerate's (CIRCULATORY_FREE_ACCELERATE_S), the free decelerate's (CIRCULATORY_FREE_DECELERATE_S, solved by
+    continuation in the angle-of-attack bound and ending at rest with the lag states its braking leaves:
+    PrimitiveSpec.end_lag_free; CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S, refined from INTERVALS_PER_S:
+    PrimitiveSpec.coarse_intervals) and those of CIRCULATORY_LONGER_S (which take precedence); the cruises stroke at a
+    Strouhal number of at least CIRCULATORY_CONSTRAINED_MIN_STROUHAL (constrained) or CIRCULATORY_FREE_MIN_STROUHAL
+    (free); the constrained decelerates turn the foil back to rest within
+    CIRCULATORY_CONSTRAINED_DECELERATE_REST_WINDOW_S at no more than CIRCULATORY_CONSTRAINED_DECELERATE_FOIL_RATE_RAD_S.
     """
     specs = constrained_specs(rig, CIRCULATORY_ENERGY_LEVELS_J) + free_specs(rig, CIRCULATORY_ENERGY_LEVELS_J)
     unknown = set(CIRCULATORY_LONGER_S) - {s.primitive_id for s in specs}

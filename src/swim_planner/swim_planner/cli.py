@@ -116,6 +116,7 @@ def _load(args, rig) -> PrimitiveLibrary:
 
 
 def command_build(args, rig) -> int:
+    """``swim-primitives build``: solve the selected specs missing from the library; the exit code."""
     from tqdm import tqdm
     specs_of_flow = catalog.circulatory_specs if args.flow == "circulatory" else catalog.default_specs
     every = specs_of_flow(rig)
@@ -137,6 +138,7 @@ def command_build(args, rig) -> int:
 
 
 def command_list(args, rig) -> int:
+    """``swim-primitives list``: one line per primitive of the library; the exit code."""
     library = _load(args, rig)
     print(f"{'id':48s} {'type':16s} {'T (s)':>6s} {'J':>9s} {'solve (s)':>9s}  status")
     for primitive_id in library.ids():
@@ -147,6 +149,7 @@ def command_list(args, rig) -> int:
 
 
 def command_show(args, rig) -> int:
+    """``swim-primitives show``: a primitive's manifest entry with its end states and peak torques, as JSON."""
     library = _load(args, rig)
     entry = dict(library.entry(args.primitive_id))
     primitive = library.get(args.primitive_id)
@@ -157,6 +160,7 @@ def command_show(args, rig) -> int:
 
 
 def command_plot(args, rig) -> int:
+    """``swim-primitives plot``: a primitive's figure written to a PNG file."""
     from swim_planner.plots import plot_primitive
     library = _load(args, rig)
     output = args.output or Path(args.primitive_id.replace("/", "_") + ".png")
@@ -166,6 +170,7 @@ def command_plot(args, rig) -> int:
 
 
 def command_compare(args, rig) -> int:
+    """``swim-primitives compare``: a constrained cruise or accelerate against the paper's method's, as JSON."""
     from swim_model import VehicleModel
     from swim_planner import paper_method
     from swim_planner.primitives import PrimitiveType
@@ -197,6 +202,7 @@ def command_compare(args, rig) -> int:
 
 
 def command_flows(args, rig) -> int:
+    """``swim-primitives flows``: a primitive of the ideal and of the circulatory library side by side."""
     from swim_model import VehicleModel
     from swim_planner.plots import flow_summary, flow_traces, plot_flows
     sides, summaries = [], {}
@@ -229,6 +235,7 @@ def command_flows(args, rig) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The ``swim-primitives`` command line; its exit code."""
     args = _parser().parse_args(argv)
     commands = {"build": command_build, "list": command_list, "show": command_show, "plot": command_plot,
                 "compare": command_compare, "flows": command_flows}

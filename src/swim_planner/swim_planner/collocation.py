@@ -33,6 +33,7 @@ class Transcription:
 
     @property
     def intervals(self) -> int:
+        """The number of collocation intervals N."""
         return self.x_mid.shape[1]
 
     def all_states(self) -> ca.MX:
@@ -40,6 +41,7 @@ class Transcription:
         return _interleave(self.x, self.x_mid)
 
     def all_inputs(self) -> ca.MX:
+        """Inputs on the fine grid (knots and midpoints interleaved), 2N + 1 columns."""
         return _interleave(self.u, self.u_mid)
 
     def variables(self) -> ca.MX:
@@ -47,8 +49,9 @@ class Transcription:
         return ca.vertcat(*(ca.vec(v) for v in (self.x, self.u, self.x_mid, self.u_mid)))
 
     def points(self) -> ca.MX:
-        """(x; u) at the knots, then at the midpoints: the 2N + 1 points where a pointwise function is
-        evaluated (``knots`` and ``midpoints`` split its values).
+        """(x; u) at the knots, then at the midpoints.
+
+        The 2N + 1 points where a pointwise function is evaluated (``knots`` and ``midpoints`` split its values).
         """
         return ca.horzcat(ca.vertcat(self.x, self.u), ca.vertcat(self.x_mid, self.u_mid))
 
@@ -57,6 +60,7 @@ class Transcription:
         return values[:, :self.intervals + 1]
 
     def midpoints(self, values: ca.MX) -> ca.MX:
+        """The columns of values over ``points`` that belong to the midpoints."""
         return values[:, self.intervals + 1:]
 
     def fine(self, values: ca.MX) -> ca.MX:
@@ -89,8 +93,9 @@ def hermite_simpson(grid: Transcription, state_derivative: ca.MX) -> None:
 
 
 def simpson_integral(grid: Transcription, integrand: ca.MX) -> ca.MX:
-    """Integral over [0, T] by Simpson's rule on each interval, given the integrand over ``grid.points()``
-    (a row; several rows give several integrals).
+    """Integral over [0, T] by Simpson's rule on each interval.
+
+    The integrand is given over ``grid.points()`` (a row; several rows give several integrals).
     """
     at_knots, at_mid = grid.knots(integrand), grid.midpoints(integrand)
     return grid.step_s / 6.0 * (ca.sum2(at_knots[:, :-1]) + 4.0 * ca.sum2(at_mid) + ca.sum2(at_knots[:, 1:]))

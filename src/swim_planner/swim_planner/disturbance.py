@@ -1,6 +1,7 @@
-"""The sliding mode's disturbance bound D(t) along a primitive, measured off-line: how far the reduced flow model's
-force is from the vortex wake's (paper eqs. 24-25; docs/circulatory_primitives.md, "The sliding mode's bound from
-the wake").
+"""The sliding mode's disturbance bound D(t) along a primitive, measured off-line.
+
+How far the reduced flow model's force is from the vortex wake's (paper eqs. 24-25; docs/circulatory_primitives.md, "The
+sliding mode's bound from the wake").
 
 What is compared. Both flow models split the fluid's force on the foil the same way: the added-mass (Kirchhoff)
 force of eq. 46 is in the equations of motion through Mm, and each adds only the rest, in foil axes at the foil
@@ -129,15 +130,19 @@ def _foil_velocity_maps(model: VehicleModel, q: Array) -> Array:
 
 
 def generalized_force(model: VehicleModel, q: npt.ArrayLike, foil_force: npt.ArrayLike) -> Array:
-    """Q = Q2(q)' f at n samples: q (n, nq), f (n, 3) = (fx N, fy N, mz N m) in foil axes at F; Q (n, nq), N m on
-    the angles, N on R (virtual work: Q . qdot = f . (U, V, Omega)).
+    """Q = Q2(q)' f at n samples.
+
+    q (n, nq), f (n, 3) = (fx N, fy N, mz N m) in foil axes at F; Q (n, nq), N m on the angles, N on R (virtual work: Q
+    . qdot = f . (U, V, Omega)).
     """
     return np.einsum("nij,ni->nj", _foil_velocity_maps(model, np.atleast_2d(q)), np.atleast_2d(foil_force))
 
 
 def matched_disturbance(model: VehicleModel, q: npt.ArrayLike, force_q: npt.ArrayLike) -> tuple[Array, Array]:
-    """(d, unmatched): d = dQ_psi - Mm21 Mm11^-1 dQ_y (N m, heave and pitch), the torque on the motors that moves
-    the foil as dQ does; unmatched = Mm11^-1 dQ_y (rad/s^2, m/s^2), the rest of Mm^-1 dQ (module docstring).
+    """(d, unmatched): a generalized force mismatch dQ split into the motors' torque that acts as it does, and the rest.
+
+    d = dQ_psi - Mm21 Mm11^-1 dQ_y (N m, heave and pitch), the torque on the motors that moves the foil as dQ does;
+    unmatched = Mm11^-1 dQ_y (rad/s^2, m/s^2), the rest of Mm^-1 dQ (module docstring).
     """
     mass = model.mass_matrix(q)
     force = np.asarray(force_q, dtype=float).reshape(-1)
@@ -147,8 +152,10 @@ def matched_disturbance(model: VehicleModel, q: npt.ArrayLike, force_q: npt.Arra
 
 
 def _motion(lead_in: Sequence[Primitive], primitive: Primitive) -> tuple[Array, Array, Array, Array]:
-    """(t, q, qdot, lag) of the lead-in primitives run one after another and then ``primitive``, on one time axis
-    where ``primitive`` keeps its own times (the lead-in at negative times) and alpha is continuous (P1).
+    """(t, q, qdot, lag) of the lead-in primitives run one after another, then ``primitive``.
+
+    On one time axis where ``primitive`` keeps its own times (the lead-in at negative times) and alpha is continuous
+    (P1).
     """
     chain = [*lead_in, primitive]
     for previous, following in zip(chain, chain[1:]):
@@ -184,8 +191,9 @@ def measuring_wake(rig: RigParameters) -> WakeParameters:
 
 
 def wake_record(rig: RigParameters) -> dict:
-    """measuring_wake's parameters as the manifest records them (JSON values): a D(t) measured in another wake
-    is measured again (PrimitiveLibrary.needs_disturbance_bound).
+    """measuring_wake's parameters as the manifest records them (JSON values).
+
+    A D(t) measured in another wake is measured again (PrimitiveLibrary.needs_disturbance_bound).
     """
     return dataclasses.asdict(measuring_wake(rig))
 
@@ -253,7 +261,7 @@ def flow_force_mismatch(model: VehicleModel, primitive: Primitive, *, lead_in: S
 
 
 def bound_envelope(time_s: npt.ArrayLike, bound_n_m: npt.ArrayLike, half_width_s: float) -> Array:
-    """max of bound_n_m (N,) over the samples within +-half_width_s (s) of each of the N times time_s: (N,)."""
+    """The maximum of bound_n_m (N,) over the samples within +-half_width_s (s) of each of the N times time_s: (N,)."""
     time = np.asarray(time_s, dtype=float)
     bound = np.asarray(bound_n_m, dtype=float)
     if not (math.isfinite(half_width_s) and half_width_s >= 0.0):
@@ -264,10 +272,11 @@ def bound_envelope(time_s: npt.ArrayLike, bound_n_m: npt.ArrayLike, half_width_s
 
 
 def lead_in_ids(spec: PrimitiveSpec) -> list[str]:
-    """The primitives whose motion before ``spec``'s gives the wake its history: the primitive its start joins
-    (a cruise for a decelerate, cruise-to-cruise or lane change), a cruise itself once (a cruise follows a cruise
-    in every maneuver but the first, and the accelerate before that one ends on the cruise's stroke), none from rest
-    (an accelerate: the water is still).
+    """The primitives whose motion before ``spec``'s gives the wake its history.
+
+    The primitive its start joins (a cruise for a decelerate, cruise-to-cruise or lane change), a cruise itself once (a
+    cruise follows a cruise in every maneuver but the first, and the accelerate before that one ends on the cruise's
+    stroke), none from rest (an accelerate: the water is still).
     """
     if spec.start_from is not None:
         return [spec.start_from]
@@ -276,9 +285,10 @@ def lead_in_ids(spec: PrimitiveSpec) -> list[str]:
 
 def disturbance_job(rig: RigParameters, primitive: Primitive, lead_in: Sequence[Primitive],
                     half_width_s: float = ENVELOPE_HALF_WIDTH_S) -> tuple[str, Array, dict]:
-    """(primitive id, stored bound (N,) N m, measurement record) of a circulatory primitive, in a worker process:
-    ``flow_force_mismatch`` along it after ``lead_in`` (``lead_in_ids``), D's envelope (``bound_envelope``), and
-    what the manifest records of how it was measured (JSON values).
+    """(primitive id, stored bound (N,) N m, measurement record) of a circulatory primitive, in a worker process.
+
+    ``flow_force_mismatch`` along it after ``lead_in`` (``lead_in_ids``), D's envelope (``bound_envelope``), and what
+    the manifest records of how it was measured (JSON values).
     """
     spec = primitive.spec
     model = VehicleModel(rig, constrained=spec.constrained, lane_radius_m=spec.lane_radius_m, flow="circulatory")

@@ -45,8 +45,9 @@ def gains_job(rig: RigParameters, primitive: Primitive, lqr_weights: LqrWeights)
 
 
 def load_lqr_weights(path: str | Path, base: LqrWeights = LqrWeights()) -> LqrWeights:
-    """LqrWeights from a YAML mapping of its field names, the others those of base (a library's own weights, or
-    the package defaults).
+    """LqrWeights from a YAML mapping of its field names.
+
+    The fields it does not name are those of base (a library's own weights, or the package defaults).
     """
     names = {field.name for field in dataclasses.fields(LqrWeights)}
     try:
@@ -78,21 +79,27 @@ class RetunedLibrary:
         self._locks_lock = threading.Lock()
 
     def ids(self) -> list[str]:
+        """The library's primitive ids."""
         return self.library.ids()
 
     def __contains__(self, primitive_id: str) -> bool:
+        """Whether the library holds primitive_id."""
         return primitive_id in self.library
 
     def __len__(self) -> int:
+        """The number of primitives in the library."""
         return len(self.library)
 
     def spec(self, primitive_id: str) -> PrimitiveSpec:
+        """The spec of primitive_id, as the library stores it."""
         return self.library.spec(primitive_id)
 
     def sample_count(self, primitive_id: str) -> int:
+        """The number of samples of primitive_id, as the library stores it."""
         return self.library.sample_count(primitive_id)
 
     def get(self, primitive_id: str) -> Primitive:
+        """The primitive primitive_id with its gains for lqr_weights, computed on first use."""
         with self._locks_lock:
             lock = self._locks.setdefault(primitive_id, threading.Lock())
         with lock:

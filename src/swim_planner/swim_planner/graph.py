@@ -26,6 +26,7 @@ from swim_planner.primitives import PrimitiveSpec, PrimitiveType
 
 
 def rest_node(constrained: bool, lane_radius_m: float) -> str:
+    """The state at rest: one for the constrained vehicle, one per lane (m) for the free one."""
     return "constrained/rest" if constrained else f"free/rest/{lane_tag(lane_radius_m)}"
 
 
@@ -36,6 +37,8 @@ def cruise_node(constrained: bool, energy_j: float, lane_radius_m: float) -> str
 
 @dataclasses.dataclass(frozen=True)
 class Edge:
+    """A primitive as a move from state source to state target, taking duration_s and advancing alpha by advance_rad."""
+
     primitive_id: str
     source: str
     target: str
@@ -45,15 +48,19 @@ class Edge:
 
 @dataclasses.dataclass
 class StateGraph:
+    """The states joined by the library's primitives, with the junctions that did not match and the dead ends pruned."""
+
     edges: list[Edge]
     mismatches: list[str]                 # junctions that did not match, as readable lines
     pruned: list[str]                     # primitives removed as dead ends
 
     @property
     def nodes(self) -> set[str]:
+        """Every state an edge starts or ends at."""
         return {e.source for e in self.edges} | {e.target for e in self.edges}
 
     def outgoing(self, node: str) -> list[Edge]:
+        """The edges that start at node."""
         return [e for e in self.edges if e.source == node]
 
 

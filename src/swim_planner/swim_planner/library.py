@@ -206,20 +206,13 @@ class PrimitiveLibrary:
     def needs_gains(self, primitive_id: str) -> bool:
         """Whether a primitive lacks stored gains for the library's LQ weights.
 
+        True if it has no stored gains, or gains computed with other weights; LibraryError if no primitive of that id
+        is in the library.
+
         Parameters
         ----------
         primitive_id : str
             The primitive whose gains are asked about.
-
-        Returns
-        -------
-        bool
-            True if it has no stored gains, or gains computed with other weights.
-
-        Raises
-        ------
-        LibraryError
-            If no primitive of that id is in the library.
         """
         record = self.entry(primitive_id)
         stored = record.get("gains_lqr_weights")
@@ -274,16 +267,13 @@ class PrimitiveLibrary:
     def needs_disturbance_bound(self, primitive_id: str) -> bool:
         """Whether a primitive needs its sliding-mode bound D(t) measured.
 
+        True for a circulatory-flow primitive without a stored D(t), or with one measured in another wake than
+        swim_planner.disturbance's; False for ideal-flow ones (they have none).
+
         Parameters
         ----------
         primitive_id : str
             The primitive whose bound is asked about.
-
-        Returns
-        -------
-        bool
-            True for a circulatory-flow primitive without a stored D(t), or with one measured in another wake than
-            swim_planner.disturbance's; False for ideal-flow ones (they have none).
 
         Raises
         ------
@@ -558,22 +548,12 @@ class PrimitiveLibrary:
             return self._bounds[primitive_id].copy()
 
     def sample_count(self, primitive_id: str) -> int:
-        """The samples of a primitive's arrays (read once and kept, as ``get``).
+        """The number N of samples in a primitive's arrays (read once and kept, as ``get``; its LibraryError too).
 
         Parameters
         ----------
         primitive_id : str
             The primitive whose samples are counted.
-
-        Returns
-        -------
-        int
-            N.
-
-        Raises
-        ------
-        LibraryError
-            As ``get``.
         """
         return len(self.get(primitive_id).time_s)
 

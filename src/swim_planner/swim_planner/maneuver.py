@@ -124,47 +124,32 @@ class PlanLibrary(Protocol):
         ...
 
     def spec(self, primitive_id: str) -> PrimitiveSpec:
-        """The spec of a primitive.
+        """The spec of a primitive: what it is.
 
         Parameters
         ----------
         primitive_id : str
             The primitive whose spec is asked for.
-
-        Returns
-        -------
-        PrimitiveSpec
-            What the primitive is.
         """
         ...
 
     def get(self, primitive_id: str) -> Primitive:
-        """A primitive, read and verified.
+        """A primitive, read and verified: its samples and gains.
 
         Parameters
         ----------
         primitive_id : str
             The primitive wanted.
-
-        Returns
-        -------
-        Primitive
-            Its samples and gains.
         """
         ...
 
     def sample_count(self, primitive_id: str) -> int:
-        """The samples of a primitive's arrays.
+        """The number N of samples in a primitive's arrays.
 
         Parameters
         ----------
         primitive_id : str
             The primitive asked about.
-
-        Returns
-        -------
-        int
-            N.
         """
         ...
 

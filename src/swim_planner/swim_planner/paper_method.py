@@ -37,6 +37,8 @@ PENALTY = 1e5   # weight of the squared constraint violations (assumed: 1 mJ of 
 
 @dataclasses.dataclass(frozen=True)
 class FourierCruise:
+    """A cruise by the paper's method: a Fourier series per shape angle, its index, energy error and cost."""
+
     coefficients: Array        # (2, 2K + 1): rows phi, theta; columns a_0, a_1, b_1, ..., a_K, b_K
     index_j: float             # alpha(T) - effort over one cycle (eq. 10)
     energy_error_j: float      # mean kinetic energy - E
@@ -154,10 +156,12 @@ class PolynomialSineAccelerate:
 
     @property
     def boundary_error(self) -> float:
+        """The largest mismatch at a segment's imposed ends, rad or rad/s."""
         return float(max(s.boundary_error for s in self.segments))
 
     @property
     def evaluations(self) -> int:
+        """The model evaluations of all segments together."""
         return int(sum(s.evaluations for s in self.segments))
 
 
@@ -183,8 +187,9 @@ NINE_COEFFICIENTS = np.array([[True] * 3 + [False] * 2] + [[True] * 2 + [False] 
 
 
 def _stroke_start(free: Array, duration_s: float) -> Array:
-    """Amplitudes growing linearly from 0, phases advancing at 2 pi rad/s, pitch 90 deg ahead: a swimming
-    stroke to start the search from, not the answer.
+    """Amplitudes growing linearly from 0, phases advancing at 2 pi rad/s, pitch 90 deg ahead.
+
+    A swimming stroke to start the search from, not the answer.
     """
     start = np.zeros(free.shape)
     start[0, 1], start[2, 1] = 0.3 / duration_s, 0.5 / duration_s

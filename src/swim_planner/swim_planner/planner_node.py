@@ -85,6 +85,7 @@ class PlannerSettings:
     max_plan_samples: int
 
     def __post_init__(self) -> None:
+        """Check the plan bounds (ValueError unless each is positive and finite)."""
         self.bounds.validate()
 
     @property
@@ -95,8 +96,9 @@ class PlannerSettings:
 
 
 class AnswerMemory:
-    """Replies by request id, the latest ANSWERS_KEPT. A repeat that arrives while the first is still being
-    planned waits for that reply instead of planning again.
+    """Replies by request id, the latest ANSWERS_KEPT.
+
+    A repeat that arrives while the first is still being planned waits for that reply instead of planning again.
     """
 
     def __init__(self, size: int = ANSWERS_KEPT) -> None:
@@ -118,11 +120,14 @@ class AnswerMemory:
 
     @staticmethod
     def answer(done: threading.Event, box: list, response) -> None:
+        """Store the reply for request id's waiters and wake them."""
         box.append(response)
         done.set()
 
 
 class PlannerNode(Node):
+    """The planner as a node: lists the library's primitives and plans maneuvers on request."""
+
     def __init__(self) -> None:
         super().__init__("planner_node")
         self.parameters = NodeSettings(self, PARAMETERS, PlannerSettings, on_change=self._apply_parameters)
@@ -155,11 +160,13 @@ class PlannerNode(Node):
 
     @property
     def bounds(self) -> PlanBounds:
+        """The bounds of the plans served, from the current parameters."""
         return self.parameters.current.bounds
 
     def _apply_parameters(self, previous: PlannerSettings, current: PlannerSettings) -> None:
-        """Post-set: new bounds (read from the settings by each request) and LQ weights serve the requests that
-        come after.
+        """Post-set callback: accepted values take effect.
+
+        New bounds (read from the settings by each request) and LQ weights serve the requests that come after.
         """
         if current.lqr_weights_path != previous.lqr_weights_path:
             try:
@@ -170,10 +177,12 @@ class PlannerNode(Node):
             self.get_logger().info(f"LQ weights for new plans: {current.lqr_weights_path or 'those stored'}")
 
     def on_list(self, request: ListPrimitives.Request, response: ListPrimitives.Response) -> ListPrimitives.Response:
+        """The list_primitives service: the library's primitives."""
         return self._primitive_list
 
     def on_request(self, request: RequestManeuver.Request,
                    response: RequestManeuver.Response) -> RequestManeuver.Response:
+        """The request_maneuver service: a plan, or the reply already given to the same request id."""
         if not request.request_id:
             return self._answer(request, response)
         first, done, box = self.answers.claim(request.request_id)
@@ -202,6 +211,7 @@ class PlannerNode(Node):
         return response
 
     def plan(self, request: RequestManeuver.Request) -> Trajectory:
+        """The plan a request asks for: its sequence of primitives, or the way to its goal state, concatenated."""
         settings = self.parameters.current
         time_scale = request.time_scale or settings.default_time_scale
         bounds, library = settings.bounds, self._plan_library
@@ -226,6 +236,7 @@ class PlannerNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
+    """Run the planner node in its own process (ros2 run swim_planner planner_node)."""
     run_node(PlannerNode, args, name="planner_node", fatal_errors=(PlannerError, SwimModelError),
              executor=functools.partial(MultiThreadedExecutor, num_threads=SERVICE_THREADS), large_messages=True)
 

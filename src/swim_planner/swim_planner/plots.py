@@ -1,5 +1,6 @@
-"""Figures of a primitive like the paper's Figs. 3-8 and 13-16, and a primitive of the ideal flow model beside
-the circulatory one's (its traces and their summary numbers).
+"""Figures of a primitive like the paper's Figs. 3-8 and 13-16.
+
+Also a primitive of the ideal flow model beside the circulatory one's (its traces and their summary numbers).
 """
 from __future__ import annotations
 
@@ -53,8 +54,10 @@ def plot_primitive(primitive: Primitive, path: Path) -> None:
 
 @dataclasses.dataclass(frozen=True)
 class FlowTraces:
-    """One primitive's motion and the fluid's force on its foil, sample by sample: every array has shape (n,), n the
-    samples shown (a cruise: its first solved cycle; else all), except ``fluid_force`` (n, 3).
+    """One primitive's motion and the fluid's force on its foil, sample by sample.
+
+    Every array has shape (n,), n the samples shown (a cruise: its first solved cycle; else all), except ``fluid_force``
+    (n, 3).
 
     thrust_n: the fluid's force on the foil along the direction of travel, N. The direction of travel is that of the
     foil frame origin F when only the hub turns (the alpha column of eq. 40's Q2, in foil axes: the hub's tangent at
@@ -81,8 +84,9 @@ class FlowTraces:
 
 
 def shown_samples(primitive: Primitive) -> slice:
-    """The samples a side-by-side figure shows: a cruise's first solved cycle (its stored cycles repeat it), or the
-    whole primitive.
+    """The samples a side-by-side figure shows.
+
+    A cruise's first solved cycle (its stored cycles repeat it), or the whole primitive.
     """
     if primitive.spec.primitive_type is PrimitiveType.CRUISE:
         return slice(0, 2 * primitive.spec.intervals + 1)
@@ -90,8 +94,10 @@ def shown_samples(primitive: Primitive) -> slice:
 
 
 def _foil_velocity_rate_bias(model: VehicleModel) -> ca.Function:
-    """(q, qdot) -> Q2dot qdot, 3-vector: the part of the foil frame's acceleration (Udot, Vdot, Omegadot) that
-    does not come from qddot (eq. 40 differentiated, as swim_model.hydrodynamics does).
+    """(q, qdot) -> Q2dot qdot, 3-vector.
+
+    The part of the foil frame's acceleration (Udot, Vdot, Omegadot) that does not come from qddot (eq. 40
+    differentiated, as swim_model.hydrodynamics does).
     """
     s = model.symbolic
     return ca.Function("foil_velocity_rate_bias", [s.q, s.qdot],
@@ -99,9 +105,10 @@ def _foil_velocity_rate_bias(model: VehicleModel) -> ca.Function:
 
 
 def flow_traces(primitive: Primitive, model: VehicleModel) -> FlowTraces:
-    """The traces of ``primitive`` on ``model`` (its flow model, constrained or free, lane radius). qddot comes from
-    the model with the planned foil accelerations u (VehicleModel.shape_dynamics), the lag states from the
-    primitive (circulatory flow).
+    """The traces of ``primitive`` on ``model`` (its flow model, constrained or free, lane radius).
+
+    The qddot come from the model with the planned foil accelerations u (VehicleModel.shape_dynamics), the lag states
+    from the primitive (circulatory flow).
     """
     rows = shown_samples(primitive)
     q, qdot, u = primitive.q[rows], primitive.qdot[rows], primitive.foil_acceleration[rows]
@@ -136,18 +143,21 @@ def flow_traces(primitive: Primitive, model: VehicleModel) -> FlowTraces:
 
 
 def _time_mean(values: Array, time_s: Array) -> float:
-    """Time average over the samples (knots and midpoints) by Simpson's rule on each collocation interval, the
-    collocation's own quadrature.
+    """Time average over the samples (knots and midpoints) by Simpson's rule on each interval.
+
+    The collocation's own quadrature.
     """
     from scipy.integrate import simpson
     return float(simpson(values, x=time_s) / (time_s[-1] - time_s[0]))
 
 
 def flow_summary(primitive: Primitive, traces: FlowTraces) -> dict:
-    """The numbers of one side of the figure: mean speed along the lane (``cruise_mean_speed_m_s``: alpha's advance
-    over the duration x lane radius), heave and pitch ranges over the samples shown (rad), the 95th percentile of
-    |angle of attack| over them (deg), and the time averages of the motors' power (W) and of the thrust and its
-    circulatory part (N) and of the fluid's torque about the hub (N m), as ``FlowTraces``.
+    """The numbers of one side of the figure.
+
+    Mean speed along the lane (``cruise_mean_speed_m_s``: alpha's advance over the duration x lane radius), heave and
+    pitch ranges over the samples shown (rad), the 95th percentile of |angle of attack| over them (deg), and the time
+    averages of the motors' power (W) and of the thrust and its circulatory part (N) and of the fluid's torque about the
+    hub (N m), as ``FlowTraces``.
     """
     return {
         "flow_model": traces.flow_model,
@@ -164,8 +174,10 @@ def flow_summary(primitive: Primitive, traces: FlowTraces) -> dict:
 
 
 def plot_flows(sides: list[FlowTraces], title: str, path: Path) -> None:
-    """The primitive of each flow model on the same axes, time on x: speed along the lane, heave, pitch, angle of
-    attack, thrust (``FlowTraces``; the circulatory part dashed) and the motors' power.
+    """The primitive of each flow model on the same axes, time on x.
+
+    Speed along the lane, heave, pitch, angle of attack, thrust (``FlowTraces``; the circulatory part dashed) and the
+    motors' power.
     """
     import matplotlib
     matplotlib.use("Agg")

@@ -42,8 +42,10 @@ class PointwiseFunction:
 
     @classmethod
     def compiled(cls, phi: ca.SX, y: ca.SX, theta: ca.SX, tag: str) -> "PointwiseFunction":
-        """The three functions of the SX expression phi(y, theta), compiled to C (once per machine: the library
-        is cached under the hash of its source) or, without a C compiler, in CasADi's virtual machine.
+        """The three functions of the SX expression phi(y, theta), compiled to C where it can be.
+
+        Compiled once per machine (the library is cached under the hash of its source) or, without a C compiler, run in
+        CasADi's virtual machine.
         """
         weights = ca.SX.sym("w", phi.numel())
         functions = [ca.Function(f"{tag}_phi", [y, theta], [phi]),
@@ -58,8 +60,10 @@ class PointwiseFunction:
 
 @dataclasses.dataclass(frozen=True)
 class PointwiseNlp:
-    """The NLP above. ``phi_placeholder`` is the m x P symbol standing for Phi in f and g; ``points`` the ny x P
-    expression of the y_p in z; ``theta`` the value of phi's parameters.
+    """The NLP above.
+
+    ``phi_placeholder`` is the m x P symbol standing for Phi in f and g; ``points`` the ny x P expression of the y_p in
+    z; ``theta`` the value of phi's parameters.
     """
 
     z: ca.MX
@@ -90,8 +94,10 @@ def _constant(expression: ca.MX, symbols: list[ca.MX], what: str) -> ca.DM:
 
 
 def _block_diagonal(block: ca.Sparsity, count: int) -> ca.Sparsity:
-    """The sparsity of blockdiag(block, ..., block): its nonzeros are ordered as those of a horizontal
-    concatenation of the blocks (column-major, blocks in turn), which is what a mapped function returns.
+    """The sparsity of blockdiag(block, ..., block).
+
+    Its nonzeros are ordered as those of a horizontal concatenation of the blocks (column-major, blocks in turn), which
+    is what a mapped function returns.
     """
     return ca.kron(ca.DM.eye(count), ca.DM(block, 1.0)).sparsity()
 
@@ -123,6 +129,7 @@ class Structure:
                    g0=np.asarray(ca.evalf(g0), dtype=float).ravel())
 
     def rows(self, keep: list[int]) -> "Structure":
+        """The same structure with only the constraint rows keep."""
         return dataclasses.replace(self, a=self.a[keep, :], b_g=self.b_g[keep, :], g0=self.g0[keep])
 
 
@@ -150,9 +157,10 @@ def derivative_functions(nlp: PointwiseNlp, structure: Structure) -> dict[str, c
 
 
 def simple_bounds(structure: Structure, lbg: Array, ubg: Array) -> tuple[list[int], Array, Array]:
-    """The rows of g that bound a single variable, g_i = a z_j + c, as bounds on z_j (intersected when several
-    bound one variable): IPOPT keeps a bound in its barrier term, with no row in its linear system. Returns
-    the rows to keep as constraints, lbx and ubx.
+    """The rows of g that bound a single variable, g_i = a z_j + c, as bounds on z_j.
+
+    Several rows that bound one variable are intersected. IPOPT keeps a bound in its barrier term, with no row in its
+    linear system. Returns the rows to keep as constraints, lbx and ubx.
     """
     a = structure.a.sparse().tocsr()
     coupled = np.diff(structure.b_g.sparse().tocsr().indptr) > 0
@@ -177,6 +185,8 @@ def simple_bounds(structure: Structure, lbg: Array, ubg: Array) -> tuple[list[in
 
 @dataclasses.dataclass(frozen=True)
 class PointwiseResult:
+    """What a pointwise solve returns: the solution z, IPOPT's return status and its iteration count."""
+
     z: Array
     status: str          # IPOPT's return status
     iterations: int

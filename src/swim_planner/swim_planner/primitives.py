@@ -87,8 +87,9 @@ class PlanningLimits:
 
     @classmethod
     def of(cls, rig: RigParameters, **others: float) -> "PlanningLimits":
-        """The limits for rig: its joints' planning ranges (its limits record), the other fields as others give
-        them or their defaults.
+        """The limits for rig.
+
+        Its joints' planning ranges (its limits record), the other fields as others give them or their defaults.
         """
         return cls(heave_range_rad=rig.limits.heave.planning_range_rad,
                    pitch_range_rad=rig.limits.pitch.planning_range_rad, **others)

@@ -36,12 +36,15 @@ SPIN_SLICE_S = 0.05
 class Spinner(Protocol):
     """What these functions need of an executor: serve callbacks for at most timeout_sec."""
 
-    def spin_once(self, timeout_sec: Optional[float] = None) -> None: ...
+    def spin_once(self, timeout_sec: Optional[float] = None) -> None:
+        """Serve callbacks for at most timeout_sec (s; None: until one is served)."""
 
 
 class ServedElsewhere:
-    """A Spinner for a caller inside a callback of a multi-threaded executor: the executor's other threads serve
-    the answers, so waiting is sleeping, poll_s at a time (the answer is seen at most poll_s late).
+    """A Spinner for a caller inside a callback of a multi-threaded executor.
+
+    The executor's other threads serve the answers, so waiting is sleeping, poll_s at a time (the answer is seen at most
+    poll_s late).
     """
 
     def __init__(self, poll_s: float = 0.001) -> None:
@@ -50,6 +53,7 @@ class ServedElsewhere:
         self.poll_s = poll_s
 
     def spin_once(self, timeout_sec: Optional[float] = None) -> None:
+        """Sleep poll_s, or timeout_sec if shorter (s): the other threads serve the answers."""
         time.sleep(self.poll_s if timeout_sec is None else min(self.poll_s, max(timeout_sec, 0.0)))
 
 
@@ -76,6 +80,7 @@ class RetryPolicy:
     discovery_timeout_s: float = 30.0  # wait for the service to appear at all, s
 
     def __post_init__(self) -> None:
+        """ValueError unless the try timeout is positive, attempts at least 1 and the discovery timeout not negative."""
         if not (self.attempt_timeout_s > 0.0 and self.attempts >= 1 and self.discovery_timeout_s >= 0.0):
             raise ValueError(f"not a valid retry policy: {self}")
 
@@ -148,7 +153,7 @@ class ParameterCalls:
         self._describe = node.create_client(DescribeParameters, f"{prefix}/describe_parameters")
 
     def set(self, parameters: Sequence[Any]) -> list[Any]:
-        """rclpy Parameters -> one rcl_interfaces/SetParametersResult per parameter, in order."""
+        """Set the rclpy Parameters given: one rcl_interfaces/SetParametersResult per parameter, in order."""
         from rcl_interfaces.srv import SetParameters
         request = SetParameters.Request(parameters=[p.to_parameter_msg() for p in parameters])
         return list(call_service(self.executor, self._set, request, self.policy).results)
@@ -185,8 +190,9 @@ def transition_goal_state(transition_id: int) -> int:
 
 def change_lifecycle_state(node: Node, executor: Spinner, target_node: str, transition_id: int,
                            policy: RetryPolicy = DEFAULT_POLICY) -> bool:
-    """Ask target_node for a lifecycle transition; True when it succeeded, False if the node refused it or it
-    failed.
+    """Ask target_node for a lifecycle transition.
+
+    True when it succeeded, False if the node refused it or it failed.
 
     A transition is not idempotent (configure twice fails the second time), so it is sent again only after
     get_state shows it did not happen: a node found in the transition's goal state has made it.
@@ -267,8 +273,9 @@ def send_goal(executor: Spinner, action_client: Any, goal: Any, status: GoalStat
 
 
 def goal_result(executor: Spinner, handle: Any, timeout_s: float, resend_after_s: float = 10.0) -> Any:
-    """The goal's result (the action's GetResult response), asking again every resend_after_s while none
-    came (a result request is idempotent); CallFailed after timeout_s.
+    """The goal's result (the action's GetResult response); CallFailed after timeout_s.
+
+    While none came, it asks again every resend_after_s (a result request is idempotent).
     """
     tries = max(1, int(timeout_s // resend_after_s))
     policy = RetryPolicy(attempt_timeout_s=timeout_s / tries, attempts=tries, discovery_timeout_s=0.0)

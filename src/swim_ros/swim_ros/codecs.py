@@ -22,8 +22,10 @@ class MessageError(ValueError):
 
 
 def float_array(values: npt.ArrayLike) -> array.array:
-    """values, flattened, as array('d'): a message's float64[] field takes it without checking each element
-    (a list of 200,000 floats costs rosidl's setter about 40 ms).
+    """values, flattened, as array('d').
+
+    A message's float64[] field takes it without checking each element (a list of 200,000 floats costs rosidl's setter
+    about 40 ms).
     """
     converted = array.array("d")
     converted.frombytes(np.ascontiguousarray(values, dtype=np.float64).tobytes())
@@ -43,7 +45,8 @@ def seconds_of(stamp: Time) -> float:
 
 def joint_state_arrays(names: Sequence[str], positions: Sequence[float], velocities: Sequence[float],
                        joint_names: Sequence[str]) -> tuple[np.ndarray, Optional[np.ndarray]]:
-    """(q, qdot) in joint_names' order from a sensor_msgs/JointState's name, position and velocity (any order);
+    """(q, qdot) in joint_names' order from a sensor_msgs/JointState's name, position and velocity (any order).
+
     qdot None when the message has no velocities. Raises MessageError.
     """
     names, joint_names = list(names), list(joint_names)
@@ -66,8 +69,9 @@ def joint_state_arrays(names: Sequence[str], positions: Sequence[float], velocit
 
 
 def torque_from_command(names: Sequence[str], efforts: Sequence[float]) -> tuple[float, float]:
-    """(heave, pitch) joint torques, N m, from a joint_commands message's names and efforts: names exactly
-    ACTUATED_JOINTS once each (any order), one finite effort per name. Raises MessageError.
+    """(heave, pitch) joint torques, N m, from a joint_commands message's names and efforts.
+
+    Names exactly ACTUATED_JOINTS once each (any order), one finite effort per name. Raises MessageError.
     """
     names = list(names)
     if sorted(names) != sorted(ACTUATED_JOINTS):

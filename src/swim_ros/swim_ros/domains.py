@@ -21,8 +21,9 @@ _held: dict[int, IO[str]] = {}
 
 
 def claim_ros_domain(domains: range = TEST_DOMAINS, lock_dir: Path | None = None) -> int:
-    """A domain in ``domains`` no other live process has claimed, exported as ROS_DOMAIN_ID with discovery on
-    localhost. The same domain for every call in one process. Raises RuntimeError if all are taken.
+    """A domain in ``domains`` no other live process has claimed, exported as ROS_DOMAIN_ID with discovery on localhost.
+
+    The same domain for every call in one process. Raises RuntimeError if all are taken.
     """
     if _held:
         return next(iter(_held))
@@ -47,8 +48,10 @@ def claim_ros_domain(domains: range = TEST_DOMAINS, lock_dir: Path | None = None
 
 
 def run_domain() -> int:
-    """The ROS domain of a run (swim-demo, swim-experiments, a benchmark): the user's ROS_DOMAIN_ID if set, else
-    one claimed in RUN_DOMAINS; discovery on localhost unless the user chose otherwise.
+    """The ROS domain of a run (swim-demo, swim-experiments, a benchmark).
+
+    The user's ROS_DOMAIN_ID if set, else one claimed in RUN_DOMAINS; discovery on localhost unless the user chose
+    otherwise.
     """
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     if os.environ.get("ROS_DOMAIN_ID"):

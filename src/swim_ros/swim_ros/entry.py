@@ -81,9 +81,11 @@ def run_node(make_node: Callable[[], NodeT], args: Optional[list[str]] = None, *
 
 
 def _raise_unless_shut_down() -> None:
-    """Re-raise the RCLError being handled unless the context is shut down. rclpy's SIGINT/SIGTERM handler shuts
-    the context down from its own thread: landing between the executor's check and its new wait set, or between
-    try_shutdown's check and its shutdown, it makes those raise where a normal stop was meant.
+    """Re-raise the RCLError being handled unless the context is shut down.
+
+    rclpy's SIGINT/SIGTERM handler shuts the context down from its own thread: landing between the executor's check and
+    its new wait set, or between try_shutdown's check and its shutdown, it makes those raise where a normal stop was
+    meant.
     """
     if rclpy.ok():
         raise

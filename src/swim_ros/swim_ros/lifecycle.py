@@ -1,5 +1,7 @@
-"""What swim's lifecycle nodes share: a change_state service that answers a transition the state does not have,
-and the one-command start (configure, then activate) behind their autostart parameter.
+"""What swim's lifecycle nodes share.
+
+A change_state service that answers a transition the state does not have, and the one-command start (configure, then
+activate) behind their autostart parameter.
 """
 from __future__ import annotations
 
@@ -10,8 +12,10 @@ from rclpy.lifecycle import TransitionCallbackReturn
 
 
 def guard_change_state_service(node: LifecycleNode) -> None:
-    """rclpy 7.1.6 raises out of the change_state service for a transition the current state does not have
-    (activate while unconfigured), which ends spin() and the process; answer success=False instead.
+    """Make node's change_state service answer success=False for a transition the state does not have.
+
+    The rclpy 7.1.6 handler raises out of the change_state service for such a transition (activate while unconfigured),
+    which ends spin() and the process.
 
     Why through a private attribute: there is no public way in this rclpy. The crash is ros2/rclpy#1209; its
     fix (ros2/rclpy#1319: __change_state catches the RCLError and returns ERROR) is in rclpy 8 (rolling), not

@@ -34,8 +34,10 @@ Check = Callable[[Any], Optional[str]]
 
 @dataclasses.dataclass(frozen=True)
 class ParameterSpec:
-    """One parameter of a node: name, default (its type is the parameter's type), what it is (with its unit),
-    an inclusive range for numbers, read_only if it is fixed once the node has started, and an extra check.
+    """One parameter of a node.
+
+    name, default (its type is the parameter's type), what it is (with its unit), an inclusive range for numbers,
+    read_only if it is fixed once the node has started, and an extra check.
     """
 
     name: str
@@ -46,6 +48,7 @@ class ParameterSpec:
     check: Optional[Check] = None
 
     def descriptor(self) -> ParameterDescriptor:
+        """The rclpy ParameterDescriptor of this parameter: description, read-only flag and range."""
         descriptor = ParameterDescriptor(name=self.name, description=self.description, read_only=self.read_only)
         if self.range is not None:
             low, high = self.range
@@ -59,8 +62,9 @@ class ParameterSpec:
         return descriptor
 
     def reason_invalid(self, value: Any) -> Optional[str]:
-        """Why value is not valid for this parameter (range and check), or None. rclpy checks the range too;
-        this also serves the values a node is started with.
+        """Why value is not valid for this parameter (range and check), or None.
+
+        rclpy checks the range too; this also serves the values a node is started with.
         """
         if self.range is not None:
             low, high = self.range
@@ -74,8 +78,10 @@ class ParameterSpec:
 
 
 def declare_parameters(node: Node, table: Sequence[ParameterSpec]) -> None:
-    """Declare every parameter of table on node; ValueError naming the first start-up value that is not valid
-    (rclpy's own range refusal included), so run_node reports it as a fatal start-up error.
+    """Declare every parameter of table on node.
+
+    ValueError naming the first start-up value that is not valid (rclpy's own range refusal included), so run_node
+    reports it as a fatal start-up error.
     """
     from rclpy.exceptions import InvalidParameterValueException
     for spec in table:
@@ -89,8 +95,10 @@ def declare_parameters(node: Node, table: Sequence[ParameterSpec]) -> None:
 
 
 def check_parameters(table: Sequence[ParameterSpec], parameters: Sequence[Any]) -> SetParametersResult:
-    """The on-set callback: refuses the whole set, with the first reason, if any value is not valid. Parameters
-    not in table (rclpy's own, such as use_sim_time) pass.
+    """The on-set callback.
+
+    Refuses the whole set, with the first reason, if any value is not valid. Parameters not in table (rclpy's own, such
+    as use_sim_time) pass.
     """
     specs = {spec.name: spec for spec in table}
     for parameter in parameters:
@@ -119,8 +127,9 @@ def one_of(*choices: str) -> Check:
 
 
 def realtime_parameters(priority: int, thread: str) -> tuple[ParameterSpec, ...]:
-    """The real-time means of a periodic node (swim_ros.realtime.RealtimeSettings), fixed at start; priority is
-    the default priority of thread (which of the node's threads it sets: "node's threads", ...).
+    """The real-time means of a periodic node (swim_ros.realtime.RealtimeSettings), fixed at start.
+
+    Its field priority is the default priority of thread (which of the node's threads it sets: "node's threads", ...).
     """
 
     def cpu_list(value: Any) -> Optional[str]:
@@ -151,8 +160,9 @@ def realtime_parameters(priority: int, thread: str) -> tuple[ParameterSpec, ...]
 
 @dataclasses.dataclass(frozen=True)
 class RealtimeParameterSettings:
-    """The fields of realtime_parameters' table, for the settings type of a node that declares it to derive from
-    (NodeSettings).
+    """The fields of realtime_parameters' table, for a node's settings type to derive from.
+
+    The settings type is that of a node that declares the table (NodeSettings).
     """
 
     realtime_policy: str
@@ -163,6 +173,7 @@ class RealtimeParameterSettings:
 
     @property
     def realtime(self) -> RealtimeSettings:
+        """The real-time means these fields ask for."""
         return RealtimeSettings(self.realtime_policy, self.realtime_priority, self.lock_memory, self.cpu_affinity,
                                 self.collect_garbage_between_periods)
 
@@ -176,8 +187,9 @@ def _field_types(settings_type: type) -> dict[str, Any]:
 
 
 def _group_kind(field_type: Any) -> Optional[str]:
-    """How a settings field holds the parameters named "<field>.<name>": "dataclass" (a field per name), "dict"
-    (every such parameter, by name), or None (the field is one parameter).
+    """How a settings field holds the parameters named "<field>.<name>".
+
+    "dataclass" (a field per name), "dict" (every such parameter, by name), or None (the field is one parameter).
     """
     if isinstance(field_type, type) and dataclasses.is_dataclass(field_type):
         return "dataclass"
@@ -185,9 +197,10 @@ def _group_kind(field_type: Any) -> Optional[str]:
 
 
 def check_settings_type(settings_type: type, table: Sequence[ParameterSpec]) -> None:
-    """TypeError unless settings_type is a frozen dataclass holding table's parameters, each once: a field named
-    as the parameter, typed as its default; or, for the parameters named "<group>.<name>", a field <group> that is
-    a dataclass with a field per name, or a dict of them all.
+    """TypeError unless settings_type is a frozen dataclass holding table's parameters, each once.
+
+    A field named as the parameter, typed as its default; or, for the parameters named "<group>.<name>", a field <group>
+    that is a dataclass with a field per name, or a dict of them all.
     """
     names = [spec.name for spec in table]
     defaults = {spec.name: spec.default for spec in table}
@@ -211,8 +224,9 @@ def check_settings_type(settings_type: type, table: Sequence[ParameterSpec]) -> 
 
 
 def settings_from_values(settings_type: type[SettingsT], values: Mapping[str, Any]) -> SettingsT:
-    """settings_type (check_settings_type) made from values, parameter name -> value; the groups' dataclasses
-    check themselves (ValueError, TypeError).
+    """settings_type (check_settings_type) made from values, parameter name -> value.
+
+    The groups' dataclasses check themselves (ValueError, TypeError).
     """
     arguments: dict[str, Any] = {}
     for name, field_type in _field_types(settings_type).items():
@@ -225,8 +239,9 @@ def settings_from_values(settings_type: type[SettingsT], values: Mapping[str, An
 
 
 def read_settings(node: Node, table: Sequence[ParameterSpec], settings_type: type[SettingsT]) -> SettingsT:
-    """The node's parameters of table now, as settings_type; ValueError with the first reason a value is not
-    valid.
+    """The node's parameters of table now, as settings_type.
+
+    ValueError with the first reason a value is not valid.
     """
     values = {spec.name: node.get_parameter(spec.name).value for spec in table}
     for spec in table:
@@ -237,11 +252,12 @@ def read_settings(node: Node, table: Sequence[ParameterSpec], settings_type: typ
 
 
 class NodeSettings(Generic[SettingsT]):
-    """A node's parameters as one frozen snapshot, the shape of ros2_controllers' generate_parameter_library:
-    the table is declared on node (a start-up value that is not valid: ValueError naming it), a set is refused
-    with the first reason (the table's ranges and checks, the snapshot it would make, then check on that
-    snapshot) and changes nothing; once accepted, ``current`` is the new snapshot and on_change(previous,
-    current) runs (the post-set callback). Hot paths read ``current``'s fields, never get_parameter.
+    """A node's parameters as one frozen snapshot, the shape of ros2_controllers' generate_parameter_library.
+
+    The table is declared on node (a start-up value that is not valid: ValueError naming it), a set is refused with the
+    first reason (the table's ranges and checks, the snapshot it would make, then check on that snapshot) and changes
+    nothing; once accepted, ``current`` is the new snapshot and on_change(previous, current) runs (the post-set
+    callback). Hot paths read ``current``'s fields, never get_parameter.
     """
 
     def __init__(self, node: Node, table: Sequence[ParameterSpec], settings_type: type[SettingsT], *,
@@ -285,7 +301,7 @@ class NodeSettings(Generic[SettingsT]):
 
 
 def markdown_table(table: Sequence[ParameterSpec]) -> str:
-    """table as a README's markdown table: name, default, range, when it can change, what it is."""
+    """The parameter table as a README's markdown table: name, default, range, when it can change, what it is."""
     rows = ["| parameter | default | range | set at run time | what |", "|---|---|---|---|---|"]
     for spec in table:
         default = "true" if spec.default is True else "false" if spec.default is False else \

@@ -54,10 +54,11 @@ _PARENT_CHECK = f'[ "$PPID" = "$1" ] || exit {ORPHAN_EXIT_STATUS}; shift; exec "
 
 
 def with_parent_death_signal(command: Sequence[str], starter_pid: Optional[int] = None) -> list[str]:
-    """command run with PARENT_DEATH_SIGNAL set, started by the process starter_pid (default: this one): setpriv
-    sets the signal, a shell checks the parent is still the starter and executes command, so command keeps the
-    pid the starter was given. command as it is where setpriv is missing (the starter's own stop is then the only
-    one).
+    """The command run with PARENT_DEATH_SIGNAL set, started by the process starter_pid (default: this one).
+
+    The setpriv tool sets the signal, a shell checks the parent is still the starter and executes command, so command
+    keeps the pid the starter was given. command as it is where setpriv is missing (the starter's own stop is then the
+    only one).
     """
     setpriv = shutil.which("setpriv")
     if setpriv is None:
@@ -68,11 +69,12 @@ def with_parent_death_signal(command: Sequence[str], starter_pid: Optional[int] 
 
 
 def executable_command(command: Sequence[str], environment: Optional[Mapping[str, str]] = None) -> list[str]:
-    """command with `ros2 run <package> <executable>` replaced by the executable's path, found where `ros2 run`
-    looks (lib/<package>/<executable> under AMENT_PREFIX_PATH of environment, default this process's), so the
-    executable is the starter's child itself, as ros2 launch runs a node: ros2cli's `ros2 run` runs it as a child
-    of its own, out of reach of the parent-death signal. command as it is otherwise, or when nothing is found
-    (`ros2 run` then says so).
+    """The command with `ros2 run <package> <executable>` replaced by the executable's path.
+
+    The path is found where `ros2 run` looks (lib/<package>/<executable> under AMENT_PREFIX_PATH of environment, default
+    this process's), so the executable is the starter's child itself, as ros2 launch runs a node: ros2cli's `ros2 run`
+    runs it as a child of its own, out of reach of the parent-death signal. command as it is otherwise, or when nothing
+    is found (`ros2 run` then says so).
     """
     if len(command) < 4 or list(command[:2]) != ["ros2", "run"]:
         return list(command)
@@ -86,9 +88,10 @@ def executable_command(command: Sequence[str], environment: Optional[Mapping[str
 
 
 def start_child(command: Sequence[str], **popen_arguments: Any) -> subprocess.Popen[Any]:
-    """subprocess.Popen(command, **popen_arguments) as a child that dies with this process: the one way every
-    process of the workspace starts another (the rule in this module's docstring). Call it from a thread that
-    outlives the child (the main thread, or one that waits for it).
+    """subprocess.Popen(command, **popen_arguments) as a child that dies with this process.
+
+    The one way every process of the workspace starts another (the rule in this module's docstring). Call it from a
+    thread that outlives the child (the main thread, or one that waits for it).
     """
     environment = popen_arguments.get("env")
     return subprocess.Popen(with_parent_death_signal(executable_command(command, environment)), **popen_arguments)
@@ -96,9 +99,10 @@ def start_child(command: Sequence[str], **popen_arguments: Any) -> subprocess.Po
 
 def run_child(command: Sequence[str], *, timeout_s: Optional[float] = None, input: Union[str, bytes, None] = None,
               capture_output: bool = False, **popen_arguments: Any) -> subprocess.CompletedProcess[Any]:
-    """subprocess.run for a child that dies with this process (start_child): command run to its end, its output
-    captured if capture_output. Killed if it runs longer than timeout_s (subprocess.TimeoutExpired) or if this
-    process stops waiting for it (Ctrl-C).
+    """subprocess.run for a child that dies with this process (start_child).
+
+    command run to its end, its output captured if capture_output. Killed if it runs longer than timeout_s
+    (subprocess.TimeoutExpired) or if this process stops waiting for it (Ctrl-C).
     """
     if capture_output:
         popen_arguments["stdout"] = popen_arguments["stderr"] = subprocess.PIPE
@@ -115,9 +119,10 @@ def run_child(command: Sequence[str], *, timeout_s: Optional[float] = None, inpu
 
 
 def end_with_starter(starter_pid: int) -> None:
-    """From inside a Python child that was not started by start_child (a multiprocessing worker), what start_child
-    gives its children: SIGTERM when the starter (process starter_pid, its parent) dies, and an exit now if it has
-    died already. Nothing where prctl(2) is missing (not Linux).
+    """What start_child gives its children, from inside a Python child that start_child did not start.
+
+    For a multiprocessing worker: SIGTERM when the starter (process starter_pid, its parent) dies, and an exit now if it
+    has died already. Nothing where prctl(2) is missing (not Linux).
     """
     if not sys.platform.startswith("linux"):
         return
@@ -129,15 +134,18 @@ def end_with_starter(starter_pid: int) -> None:
 
 
 def interrupt_on_sigterm() -> None:
-    """From now on SIGTERM is Ctrl-C (KeyboardInterrupt in the main thread), so that a CLI's `with` blocks and
-    `finally` clauses stop what it started the graceful way; Python's default SIGTERM ends the process at once and
-    leaves its children to their parent-death signal. Call it from the main thread.
+    """From now on SIGTERM is Ctrl-C (KeyboardInterrupt in the main thread).
+
+    So a CLI's `with` blocks and `finally` clauses stop what it started the graceful way; Python's default SIGTERM ends
+    the process at once and leaves its children to their parent-death signal. Call it from the main thread.
     """
     signal.signal(signal.SIGTERM, signal.default_int_handler)
 
 
 @dataclasses.dataclass(frozen=True)
 class NodeSpec:
+    """A node to start: its package and executable, a parameters file, parameter overrides and other ROS arguments."""
+
     package: str
     executable: str
     params_file: Optional[Path] = None
@@ -145,6 +153,7 @@ class NodeSpec:
     ros_arguments: tuple[str, ...] = ()  # any other --ros-args arguments, as given (e.g. "-r", "__ns:=/test")
 
     def command(self) -> list[str]:
+        """The `ros2 run` command line that starts the node."""
         arguments: list[str] = []
         if self.params_file is not None:
             arguments += ["--params-file", str(self.params_file)]
@@ -164,13 +173,16 @@ class NodeProcess:
                                    start_new_session=True, env=dict(os.environ))
 
     def alive(self) -> bool:
+        """Whether the node's process is still running."""
         return self.process.poll() is None
 
     def interrupt(self) -> None:
+        """Send SIGINT to the node's process group, as a user's Ctrl-C would, if it is still running."""
         if self.alive():
             os.killpg(self.process.pid, signal.SIGINT)
 
     def wait(self, timeout_s: float) -> bool:
+        """Whether the process ended within timeout_s (s)."""
         try:
             self.process.wait(timeout=timeout_s)
             return True
@@ -178,6 +190,7 @@ class NodeProcess:
             return False
 
     def kill(self) -> None:
+        """SIGKILL to the process group, then reap the process and close its log."""
         try:
             os.killpg(self.process.pid, signal.SIGKILL)
         except ProcessLookupError:
@@ -187,9 +200,10 @@ class NodeProcess:
 
 
 def main(argv: Sequence[str]) -> None:
-    """`python -m swim_ros.processes STARTER_PID COMMAND [ARGUMENTS...]`: start_child for a shell script. The
-    script passes its own pid ($$) and runs this in the foreground or background; this process becomes COMMAND
-    (same pid), which ends when the script ends.
+    """`python -m swim_ros.processes STARTER_PID COMMAND [ARGUMENTS...]`.
+
+    start_child for a shell script. The script passes its own pid ($$) and runs this in the foreground or background;
+    this process becomes COMMAND (same pid), which ends when the script ends.
     """
     if len(argv) < 2 or not argv[0].isdigit():
         sys.exit("usage: python -m swim_ros.processes STARTER_PID COMMAND [ARGUMENTS...]")

@@ -33,8 +33,9 @@ def per_period_publisher(node: Node, message_type: Any, topic: str,
 
 def per_period_subscription(node: Node, message_type: Any, topic: str, callback: Callable[[Any], None],
                             qos: QoSProfile | int = 10, raw: bool = False) -> Subscription:
-    """A subscription to a topic written every control period, without event handlers; with raw, the callback
-    gets the serialized message (bytes, CDR) as DDS carried it.
+    """A subscription to a topic written every control period, without event handlers.
+
+    With raw, the callback gets the serialized message (bytes, CDR) as DDS carried it.
     """
     return node.create_subscription(message_type, topic, callback, qos, raw=raw,
                                     event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))

@@ -1,5 +1,6 @@
-"""The real-time means of a periodic process: scheduling policy and priority, locked memory, CPU affinity, and the
-garbage collector kept out of the period.
+"""The real-time means of a periodic process.
+
+Scheduling policy and priority, locked memory, CPU affinity, and the garbage collector kept out of the period.
 
 The means are those of the ROS 2 real-time guides (the pendulum_control demo, realtime_tools) and of
 ros2_control's controller manager: a real-time policy (SCHED_FIFO) so that ordinary processes cannot delay the
@@ -47,10 +48,11 @@ _MCL_CURRENT, _MCL_FUTURE, _MCL_ONFAULT = 1, 2, 4
 
 @dataclasses.dataclass(frozen=True)
 class RealtimeSettings:
-    """What a node asks for. policy: a key of SCHEDULING_POLICIES; priority: 1-98 for fifo and rr (ignored for
-    other); lock_memory: mlockall of the current and future pages; cpu_affinity: taskset's list form ("1",
-    "0,2", "2-3"), empty for every CPU; collect_garbage_between_periods: PeriodicCollector instead of automatic
-    collection.
+    """What a node asks for.
+
+    policy: a key of SCHEDULING_POLICIES; priority: 1-98 for fifo and rr (ignored for other); lock_memory: mlockall of
+    the current and future pages; cpu_affinity: taskset's list form ("1", "0,2", "2-3"), empty for every CPU;
+    collect_garbage_between_periods: PeriodicCollector instead of automatic collection.
     """
 
     policy: str = "fifo"
@@ -61,6 +63,7 @@ class RealtimeSettings:
 
     @property
     def realtime(self) -> bool:
+        """Whether the policy is a real-time one (not the ordinary "other")."""
         return self.policy != "other"
 
 
@@ -85,7 +88,7 @@ class RealtimeOutcome:
 
 
 def parse_cpu_list(text: str) -> frozenset[int]:
-    """taskset's CPU list ("1", "0,2", "2-3", "0-1,3") as a set; ValueError for anything else or an empty set."""
+    """A CPU list as taskset writes it ("1", "0,2", "2-3", "0-1,3"), as a set; ValueError otherwise or if empty."""
     cpus: set[int] = set()
     for part in text.replace(" ", "").split(","):
         low, dash, high = part.partition("-")
@@ -154,12 +157,12 @@ def _has_capability(bit: int) -> bool:
 
 
 def _lock_memory() -> Optional[str]:
-    """mlockall of the current and future pages, each locked as it is first touched (MCL_ONFAULT); the refusal's
-    reason, or None. On fault, not at once: populating and locking every mapping at once (1.4 GB of libraries,
-    stacks and middleware segments for a node here) held this host's kernel long enough to delay a real-time
-    task on the same CPU by 6 ms; a page the loop touches is still never paged out once touched. Future pages are
-    locked only without a limit: under a finite memlock limit an allocation past it would fail later, in a
-    period.
+    """Lock the current and future pages (mlockall), each as it is first touched (MCL_ONFAULT).
+
+    The refusal's reason, or None. On fault, not at once: populating and locking every mapping at once (1.4 GB of
+    libraries, stacks and middleware segments for a node here) held this host's kernel long enough to delay a real-time
+    task on the same CPU by 6 ms; a page the loop touches is still never paged out once touched. Future pages are locked
+    only without a limit: under a finite memlock limit an allocation past it would fail later, in a period.
     """
     import resource
     soft, _ = resource.getrlimit(resource.RLIMIT_MEMLOCK)
@@ -173,8 +176,10 @@ def _lock_memory() -> Optional[str]:
 
 
 def make_process_realtime(settings: RealtimeSettings) -> RealtimeOutcome:
-    """Apply settings to the whole process: the policy to every thread it has (threads made later inherit it from
-    their creator), the CPU set to every thread, and mlockall. Never raises for a refusal: see RealtimeOutcome.
+    """Apply settings to the whole process.
+
+    The policy to every thread it has (threads made later inherit it from their creator), the CPU set to every thread,
+    and mlockall. Never raises for a refusal: see RealtimeOutcome.
     """
     reason = settings_reason_invalid(settings)
     if reason is not None:
@@ -215,18 +220,20 @@ def make_process_ordinary() -> None:
 
 
 def make_thread_realtime(settings: RealtimeSettings, priority: int) -> Optional[str]:
-    """The calling thread at settings' policy and this priority (nothing for "other"); the refusal's reason, or
-    None.
+    """The calling thread at settings' policy and this priority (nothing for "other").
+
+    The refusal's reason, or None.
     """
     return _set_policy(0, settings, priority) if settings.realtime else None
 
 
 def make_thread_background(settings: RealtimeSettings) -> None:
-    """The calling thread as a real-time process's background thread (a model build): at the lowest real-time
-    priority, below every periodic thread, with SCHED_RESET_ON_FORK so that what it starts (a C compiler) runs as
-    an ordinary process. Why not the ordinary policy: a thread that busy ordinary processes preempt while it holds
-    the interpreter lock would hold up the periodic threads that wait for it. The ordinary policy where settings
-    are not real-time or the host refuses.
+    """The calling thread as a real-time process's background thread (a model build).
+
+    At the lowest real-time priority, below every periodic thread, with SCHED_RESET_ON_FORK so that what it starts (a C
+    compiler) runs as an ordinary process. Why not the ordinary policy: a thread that busy ordinary processes preempt
+    while it holds the interpreter lock would hold up the periodic threads that wait for it. The ordinary policy where
+    settings are not real-time or the host refuses.
     """
     if settings.realtime:
         try:
@@ -239,8 +246,9 @@ def make_thread_background(settings: RealtimeSettings) -> None:
 
 
 def make_thread_ordinary() -> None:
-    """The calling thread back to the ordinary policy (a compilation thread in a real-time process: what it starts,
-    a C compiler, inherits the policy).
+    """The calling thread back to the ordinary policy.
+
+    For a compilation thread in a real-time process: what it starts, a C compiler, inherits the policy.
     """
     try:
         os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
@@ -267,8 +275,10 @@ def memory_locked_kib() -> int:
 
 
 class PeriodicCollector:
-    """The garbage collector out of the periodic path: freeze what exists, no automatic collection, and a full
-    collection of what the periods left every interval_periods periods, where the loop calls after_period().
+    """The garbage collector out of the periodic path.
+
+    Freeze what exists, no automatic collection, and a full collection of what the periods left every interval_periods
+    periods, where the loop calls after_period().
 
     Each collection walks only the objects made since the last one, and freezes what survives it: a long-lived
     object is walked once, not once a second (a wake's first steps import numba's tens of thousands of objects,
@@ -290,6 +300,7 @@ class PeriodicCollector:
         gc.disable()
 
     def after_period(self) -> None:
+        """Count a period; every interval_periods periods, collect what the last ones left and freeze the survivors."""
         self._count += 1
         if self._count < self.interval_periods:
             return
@@ -301,4 +312,5 @@ class PeriodicCollector:
         self.longest_s = max(self.longest_s, time.monotonic() - start_s)
 
     def stop(self) -> None:
+        """Give the collector back to automatic collection."""
         gc.enable()

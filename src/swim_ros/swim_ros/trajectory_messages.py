@@ -63,11 +63,13 @@ def trajectory_to_message(trajectory: Trajectory, stamp) -> PlannedTrajectory:
 
 
 def trajectory_from_message(plan: PlannedTrajectory) -> Trajectory:
-    """A swim_interfaces/PlannedTrajectory as a Trajectory; raises PlanError naming what is wrong: another
-    interface version, more than MAX_TRACKED_SAMPLES samples, joints that are not the vehicle's, a flow model
-    that is not swim_model's, arrays of the wrong length (the lag states: N x n_lag, none for the ideal flow; the
-    disturbance bounds: N or none), non-finite or (the disturbance bounds) negative values, times out of order or
-    not from 0, values or their rates past MAX_PLAN_MAGNITUDE, segments that do not tile the samples.
+    """A swim_interfaces/PlannedTrajectory as a Trajectory.
+
+    Raises PlanError naming what is wrong: another interface version, more than MAX_TRACKED_SAMPLES samples, joints that
+    are not the vehicle's, a flow model that is not swim_model's, arrays of the wrong length (the lag states: N x n_lag,
+    none for the ideal flow; the disturbance bounds: N or none), non-finite or (the disturbance bounds) negative values,
+    times out of order or not from 0, values or their rates past MAX_PLAN_MAGNITUDE, segments that do not tile the
+    samples.
     """
     if plan.interface_version not in READABLE_INTERFACE_VERSIONS:
         missing = OLDER_PLAN_VERSIONS.get(plan.interface_version)
@@ -114,9 +116,11 @@ def trajectory_from_message(plan: PlannedTrajectory) -> Trajectory:
 
 
 def check_plan_range(trajectory: Trajectory) -> None:
-    """PlanError unless the sample times run from 0 to at most MAX_PLAN_MAGNITUDE s and every value of the plan and
-    its change per second between two samples is within MAX_PLAN_MAGNITUDE: then the tracker's references, its
-    errors and its law's products are finite (a Trajectory checks only that the values are).
+    """PlanError unless the plan's times and values, and their rates, are within MAX_PLAN_MAGNITUDE.
+
+    The sample times run from 0 to at most MAX_PLAN_MAGNITUDE s and every value of the plan and its change per second
+    between two samples is within MAX_PLAN_MAGNITUDE: then the tracker's references, its errors and its law's products
+    are finite (a Trajectory checks only that the values are).
     """
     time_s = trajectory.time_s
     if not (time_s[0] == 0.0 and time_s[-1] <= MAX_PLAN_MAGNITUDE):

@@ -33,8 +33,10 @@ _NAMESPACE = {"p": "http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles"}
 
 @dataclass(frozen=True)
 class TransportChoice:
-    """What use_large_message_transport decided: the profile set (None: Fast DDS's defaults or the user's), why
-    (a sentence for the process's log), and whether that is worth a warning (the profile did not fit).
+    """What use_large_message_transport decided.
+
+    The profile set (None: Fast DDS's defaults or the user's), why (a sentence for the process's log), and whether that
+    is worth a warning (the profile did not fit).
     """
 
     profile: Optional[Path]
@@ -66,8 +68,10 @@ def free_shm_bytes(shm_dir: Path = SHM_DIR) -> Optional[int]:
 
 
 def choose_transport(segment_size_bytes: int, free_bytes: Optional[int]) -> bool:
-    """Whether a segment of segment_size_bytes fits a /dev/shm with free_bytes free (None: no /dev/shm, as on
-    other systems than Linux, where Fast DDS keeps its segments elsewhere: fits).
+    """Whether a segment of segment_size_bytes fits a /dev/shm with free_bytes free.
+
+    free_bytes None means no /dev/shm, as on other systems than Linux, where Fast DDS keeps its segments elsewhere: it
+    fits.
     """
     return free_bytes is None or free_bytes >= FREE_SHM_FACTOR * segment_size_bytes
 

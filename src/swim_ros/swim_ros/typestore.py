@@ -1,6 +1,7 @@
-"""The message types every swim tool reads and writes by name (bags, the Foxglove server): ROS 2 Jazzy's, plus
-swim_interfaces' from the installed .msg files, in rosbags' typestore; and a type's full definition in the form
-rosbag2 puts into an MCAP file and Foxglove reads (``ros2msg``).
+"""The message types every swim tool reads and writes by name (bags, the Foxglove server).
+
+ROS 2 Jazzy's, plus swim_interfaces' from the installed .msg files, in rosbags' typestore; and a type's full definition
+in the form rosbag2 puts into an MCAP file and Foxglove reads (``ros2msg``).
 """
 from __future__ import annotations
 
@@ -23,8 +24,9 @@ def swim_typestore() -> Typestore:
 
 @functools.lru_cache(maxsize=None)
 def message_definition(msgtype: str) -> str:
-    """msgtype's definition (e.g. ``sensor_msgs/msg/JointState``) with every type it uses, as rosbag2 writes it into
-    an MCAP schema of encoding ``ros2msg``: the type's fields, then per dependency a line of 80 ``=``, ``MSG:
+    """The definition of msgtype (e.g. ``sensor_msgs/msg/JointState``) with every type it uses, as rosbag2 writes it.
+
+    In an MCAP schema of encoding ``ros2msg``: the type's fields, then per dependency a line of 80 ``=``, ``MSG:
     <package>/<type>`` and its fields. KeyError for a type the typestore does not know.
     """
     store = swim_typestore()

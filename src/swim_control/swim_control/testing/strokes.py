@@ -1,6 +1,8 @@
-"""Pytest fixtures of smooth strokes to linearize about (made here, not planned: the LQ stage and Theorem 1 hold
-about any trajectory, so these tests need no planner): the rig, its vehicle models, the strokes with P and G'P, and
-one-segment trajectories. A package's conftest imports the fixtures it uses by name.
+"""Pytest fixtures of smooth strokes to linearize about, made here rather than planned.
+
+The LQ stage and Theorem 1 hold about any trajectory, so these tests need no planner. The fixtures: the rig, its vehicle
+models, the strokes with P and G'P, and one-segment trajectories. A package's conftest imports the fixtures it uses by
+name.
 """
 import dataclasses
 import math
@@ -15,11 +17,14 @@ from swim_model import VehicleModel, load_rig
 
 @pytest.fixture(scope="session")
 def rig():
+    """The rig description (swim_model.load_rig's default)."""
     return load_rig()
 
 
 @dataclasses.dataclass(frozen=True)
 class StrokeSpec:
+    """Which stroke to make: the primitive it stands in for, its vehicle, lane radius (m) and intervals per cycle."""
+
     primitive_id: str
     constrained: bool
     lane_radius_m: float
@@ -40,8 +45,9 @@ class Stroke:
 
 def make_stroke(model: VehicleModel, spec: StrokeSpec, period_s: float = 1.0, cycles: int = 2,
                 cycle_samples: bool = False) -> Stroke:
-    """Heave 0.1 + 0.3 sin(w t), pitch 0.4 cos(w t) (rad), alpha advancing 0.05 rad/s, R 1 cm about the lane:
-    a smooth periodic stroke of the rig's size, with exact derivatives.
+    """Heave 0.1 + 0.3 sin(w t), pitch 0.4 cos(w t) (rad), alpha advancing 0.05 rad/s, R 1 cm about the lane.
+
+    A smooth periodic stroke of the rig's size, with exact derivatives.
     """
     samples_per_cycle = 2 * spec.intervals
     time_s = np.linspace(0.0, cycles * period_s, cycles * samples_per_cycle + 1)
@@ -80,8 +86,9 @@ def strokes(model_for):
 
 def one_segment_trajectory(time_s, q, qdot, foil_acceleration=None, torque=None, gain=0.0, lqr_gain=None,
                            riccati_input_gain=None, time_scale=1.0) -> Trajectory:
-    """A Trajectory of the samples given as one segment at time_scale: u and tau zero unless given, every gain
-    entry equal to gain unless the gains are given.
+    """A Trajectory of the samples given as one segment at time_scale.
+
+    The inputs u and tau are zero unless given, every gain entry equal to gain unless the gains are given.
     """
     samples, nq = np.shape(q)
     n = error_state_size(nq, nq - 2)

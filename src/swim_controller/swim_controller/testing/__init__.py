@@ -1,3 +1,4 @@
-"""The closed loop in one process (the tracker driving a model or a plant, no ROS), for tests and benchmarks only:
-nothing a user runs imports it.
+"""The closed loop in one process (the tracker driving a model or a plant, no ROS), for tests and benchmarks only.
+
+Nothing a user runs imports it.
 """

@@ -1,7 +1,8 @@
-"""Runs and plans of the circulatory vehicle made without a planner, for tests and benchmarks: swim_model's vehicle with
-the circulatory flow (n_lag = 2 lag states) integrated by RK4 under torques that make the foil follow a sinusoidal
-gait, and a plan (a circulatory Trajectory) sampled from such a run, whose q, qdot, lag states, foil accelerations
-and torques are the model's own.
+"""Runs and plans of the circulatory vehicle made without a planner, for tests and benchmarks.
+
+swim_model's vehicle with the circulatory flow (n_lag = 2 lag states) integrated by RK4 under torques that make the foil
+follow a sinusoidal gait, and a plan (a circulatory Trajectory) sampled from such a run, whose q, qdot, lag states, foil
+accelerations and torques are the model's own.
 """
 from __future__ import annotations
 
@@ -26,8 +27,9 @@ DEFAULT_GAIT = SinusoidalGait(heave_amplitude_rad=0.3, pitch_amplitude_rad=0.4, 
 
 @dataclasses.dataclass(frozen=True)
 class CirculatoryRun:
-    """The circulatory vehicle every step_s: q (n + 1, nq), qdot, lag (n + 1, 2) m/s, and the torque (N m) held over
-    each period of period_s = substeps * step_s.
+    """The circulatory vehicle every step_s.
+
+    q (n + 1, nq), qdot, lag (n + 1, 2) m/s, and the torque (N m) held over each period of period_s = substeps * step_s.
     """
 
     model: VehicleModel
@@ -41,15 +43,18 @@ class CirculatoryRun:
 
     @property
     def period_s(self) -> float:
+        """The control period, s: substeps integration steps of step_s."""
         return self.substeps * self.step_s
 
 
 def gait_run(model: VehicleModel, duration_s: float, gait: SinusoidalGait = DEFAULT_GAIT, step_s: float = 0.001,
              substeps: int = 8) -> CirculatoryRun:
-    """The model (circulatory) from the gait's shape at t = 0, its unactuated coordinates at rest (alpha = 0, R on
-    the model's lane) and the water still (lag = 0): the torques are chosen period by period to follow the gait from
-    the state reached, then the whole run is integrated again from the start by integrate_rk4 with those torques
-    (the run returned: the model's own motion under known torques).
+    """The circulatory model driven along the gait from the gait's shape at t = 0, in still water.
+
+    Its unactuated coordinates start at rest (alpha = 0, R on the model's lane) and the water still (lag = 0). The
+    torques are chosen period by period to follow the gait from the state reached, then the whole run is integrated
+    again from the start by integrate_rk4 with those torques (the run returned: the model's own motion under known
+    torques).
     """
     ny = model.n_unactuated
     psi0, psidot0, _ = gait.shape(0.0)
@@ -74,9 +79,11 @@ def gait_run(model: VehicleModel, duration_s: float, gait: SinusoidalGait = DEFA
 
 def plan_from_run(run: CirculatoryRun, duration_s: float, sample_stride: int = 4,
                   gains: Optional[tuple[Array, Array]] = None, seed: int = 4) -> Trajectory:
-    """A circulatory plan of the run's first duration_s: a sample every sample_stride steps, u = psiddot of the
-    model under the torque held there, tau that torque, the run's lag states. gains: (K, G'P), each
-    (N, 2, ny + 2 nq + n_lag); default arbitrary (normal, seeded): the plan's shape, not tuned gains.
+    """A circulatory plan of the run's first duration_s.
+
+    A sample every sample_stride steps, u = psiddot of the model under the torque held there, tau that torque, the run's
+    lag states. gains: (K, G'P), each (N, 2, ny + 2 nq + n_lag); default arbitrary (normal, seeded): the plan's shape,
+    not tuned gains.
     """
     model = run.model
     index = np.arange(0, round(duration_s / run.step_s) + 1, sample_stride)

@@ -1,5 +1,7 @@
-"""A closed loop in one process, for tests and benchmarks: the tracker at its sample period and a plant with the
-torque held over each period (zero-order hold), plus an optional torque disturbance d(t) on the motors.
+"""A closed loop in one process, for tests and benchmarks.
+
+The tracker at its sample period and a plant with the torque held over each period (zero-order hold), plus an optional
+torque disturbance d(t) on the motors.
 
 The plant is swim_model's vehicle integrated by RK4 substeps (with the circulatory flow, its lag states too,
 starting from the plan's, or from still water under an ideal-flow plan), or any ``Stepper`` at the same period
@@ -25,21 +27,27 @@ class SteppedState(Protocol):
     """The state a Stepper reaches at a period's end (swim_model.plant.PlantState is one)."""
 
     @property
-    def q(self) -> Array: ...
+    def q(self) -> Array:
+        """Positions (nq,), rad or m."""
     @property
-    def qdot(self) -> Array: ...
+    def qdot(self) -> Array:
+        """Velocities (nq,), rad/s or m/s."""
 
 
 class Stepper(Protocol):
     """A plant stepped by control periods (swim_model.plant.Plant is one)."""
 
-    def reset(self, q: Array, qdot: Array) -> None: ...
+    def reset(self, q: Array, qdot: Array) -> None:
+        """Put the plant at (q, qdot)."""
 
-    def step(self, torque: Array) -> SteppedState: ...
+    def step(self, torque: Array) -> SteppedState:
+        """Apply torque (2,), N m, over one control period; the state at its end."""
 
 
 @dataclasses.dataclass
 class Run:
+    """A closed-loop run: per control period its time (s), state, reference, torque (N m) and saturation."""
+
     time_s: Array
     q: Array
     q_reference: Array
@@ -48,11 +56,13 @@ class Run:
 
     @property
     def error(self) -> Array:
+        """The tracking error q - q_reference per sample, rad or m."""
         return self.q - self.q_reference
 
     def two_norm(self, column: int, until_s: Optional[float] = None) -> float:
-        """sqrt(int e^2 dt) of one coordinate's error (the paper's measure, Sec. 7; measures.two_norm), over the
-        run or over its samples before until_s.
+        """The paper's measure sqrt(int e^2 dt) of one coordinate's error (Sec. 7; measures.two_norm).
+
+        Over the run, or over its samples before until_s.
         """
         kept = slice(None) if until_s is None else self.time_s < until_s
         return two_norm(self.time_s[kept], self.error[kept, column])
@@ -62,6 +72,11 @@ def simulate(model: VehicleModel, tracker: CascadeTracker, trajectory: Trajector
              substeps: int = 8, q0: Optional[npt.ArrayLike] = None, qdot0: Optional[npt.ArrayLike] = None,
              disturbance: Callable[[float], Array] = lambda t: np.zeros(2), extra_time_s: float = 0.0,
              plant: Optional[Stepper] = None) -> Run:
+    """Run the tracker on the plan from (q0, qdot0), by default the plan's start, for its duration plus extra_time_s.
+
+    The plant is plant if given, else model integrated by RK4 with substeps steps per period (its lag states from the
+    plan's, or still water's); disturbance(t) (N m) adds to the torque.
+    """
     tracker.start(trajectory)
     q = trajectory.q[0].copy() if q0 is None else np.array(q0, dtype=float)
     qdot = trajectory.qdot[0].copy() if qdot0 is None else np.array(qdot0, dtype=float)

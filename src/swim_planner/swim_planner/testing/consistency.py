@@ -1,4 +1,4 @@
-"""Open-loop replay: do a primitive's torques, integrated through swim_model, reproduce its states?
+"""Open-loop replay: whether a primitive's torques, integrated through swim_model, reproduce its states.
 
 The torque signal a primitive stands for is tau(t) = Mio(q) u + Cio(q, qdot) qdot (eqs. 15, 22-23)
 along its continuous trajectory: q(t), qdot(t) cubic Hermite through the samples (with qdot and qddot as
@@ -40,6 +40,8 @@ REPLAY_WINDOW_S = 0.5
 
 @dataclasses.dataclass(frozen=True)
 class ReplayResult:
+    """The largest deviation of an open-loop replay from the primitive, over windows of window_s (s)."""
+
     max_position_error: float     # rad or m, largest over all windows and coordinates
     max_velocity_error: float     # rad/s or m/s
     window_s: float
@@ -82,8 +84,9 @@ def replay_open_loop(model: VehicleModel, time_s: Array, q: Array, qdot: Array, 
 
 def _windows(rhs: Callable[[float, Array], Array], state_at: Callable[[float], Array], time_s: Array, q: Array,
              qdot: Array, window_s: float) -> ReplayResult:
-    """Integrate x' = rhs(t, x) from state_at(start) over each window; the largest deviation of (q, qdot), the
-    first 2 nq entries of x.
+    """Integrate x' = rhs(t, x) from state_at(start) over each window.
+
+    The largest deviation of (q, qdot), the first 2 nq entries of x.
     """
     nq = q.shape[1]
     worst_position = worst_velocity = 0.0

@@ -1,5 +1,7 @@
-"""A real browser in a test: a folder served over HTTP on loopback, headless Chromium opening a page of it, and the
-text of the page's elements read through the Chrome DevTools Protocol (CDP).
+"""A real browser in a test.
+
+A folder served over HTTP on loopback, headless Chromium opening a page of it, and the text of the page's elements read
+through the Chrome DevTools Protocol (CDP).
 
 - ``serve_folder(folder)``: an HTTP server of one folder on 127.0.0.1 at a free port, in a thread; its base URL.
 - ``HeadlessChromium()``: Debian's chromium, headless, started through ``swim_ros.processes.start_child`` (it dies
@@ -65,8 +67,9 @@ LATEST_VALUE_TIMEOUT_S = 30.0
 
 
 class BrowserError(RuntimeError):
-    """The browser did not start, a CDP command failed, or a page did not show what was waited for (the message
-    says what the page's status element said).
+    """The browser did not start, a CDP command failed, or a page did not show what was waited for.
+
+    The message says what the page's status element said.
     """
 
 
@@ -80,8 +83,9 @@ def find_chromium() -> Optional[str]:
 
 
 def browser_unavailable(page_dir: Optional[Path] = None) -> Optional[str]:
-    """Why a browser test cannot run on this machine (for pytest.skip), or None: no Chromium on PATH, the
-    websockets library missing, or page_dir's bundled script not built.
+    """Why a browser test cannot run on this machine (for pytest.skip), or None.
+
+    No Chromium on PATH, the websockets library missing, or page_dir's bundled script not built.
     """
     if find_chromium() is None:
         return ("no chromium on PATH: scripts/setup.sh installs Debian's chromium when run as root with apt "
@@ -109,8 +113,9 @@ class _QuietHandler(http.server.SimpleHTTPRequestHandler):
 
 @contextlib.contextmanager
 def serve_folder(folder: Path) -> Iterator[str]:
-    """folder served over HTTP on 127.0.0.1 at a free port by a thread of this process, while the block runs; its
-    base URL (http://127.0.0.1:PORT/). The server is shut down and its socket closed when the block ends.
+    """The folder served over HTTP on 127.0.0.1 at a free port by a thread of this process, while the block runs.
+
+    Its base URL (http://127.0.0.1:PORT/). The server is shut down and its socket closed when the block ends.
     """
     handler = functools.partial(_QuietHandler, directory=str(folder))
     server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
@@ -135,6 +140,7 @@ class Page:
 
     def evaluate(self, expression: str) -> Any:
         """The value of a JavaScript expression in the page (JSON-able values; None for undefined and null).
+
         BrowserError if it throws.
         """
         reply = self._browser.command("Runtime.evaluate", {"expression": expression, "returnByValue": True},
@@ -151,6 +157,7 @@ class Page:
     def wait_for_element_json(self, element_id: str, accept: Callable[[Any], bool], timeout_s: float,
                               status_element_id: Optional[str] = None) -> Any:
         """The JSON value of the element's text as soon as accept(value) is true, looking every PAGE_POLL_PERIOD_S.
+
         BrowserError after timeout_s, with the last text seen and the status element's text if one is named.
         """
         deadline = time.monotonic() + timeout_s
@@ -172,9 +179,10 @@ class Page:
 
 
 class HeadlessChromium:
-    """Headless Chromium with a profile of its own in a temporary folder, driven over its DevTools WebSocket
-    (the browser endpoint; pages through Target.attachToTarget's flat sessions). Use as a context manager:
-    everything it started, and the profile, is gone when the block ends, however it ends.
+    """Headless Chromium with a profile of its own in a temporary folder, driven over its DevTools WebSocket.
+
+    It talks to the browser endpoint, and to pages through Target.attachToTarget's flat sessions. Use as a context
+    manager: everything it started, and the profile, is gone when the block ends, however it ends.
     """
 
     def __init__(self, executable: Optional[str] = None) -> None:
@@ -191,6 +199,7 @@ class HeadlessChromium:
         self._command_ids = itertools.count(1)
 
     def __enter__(self) -> HeadlessChromium:
+        """Start the browser; on a failure, end what was started and re-raise."""
         try:
             self._start()
         except BaseException:
@@ -199,6 +208,7 @@ class HeadlessChromium:
         return self
 
     def __exit__(self, *exc_info: Any) -> None:
+        """End the browser and remove its profile (close)."""
         self.close()
 
     def _start(self) -> None:
@@ -222,8 +232,9 @@ class HeadlessChromium:
                                    close_timeout=BROWSER_STOP_GRACE_S)
 
     def _read_stderr(self) -> None:
-        """Reads the browser's stderr to its end (so the pipe never fills): the DevTools endpoint, and the last
-        lines for a failure's message.
+        """Reads the browser's stderr to its end (so the pipe never fills).
+
+        The DevTools endpoint, and the last lines for a failure's message.
         """
         assert self._process is not None and self._process.stderr is not None
         for raw in self._process.stderr:
@@ -236,12 +247,14 @@ class HeadlessChromium:
         self._devtools_ready.set()   # ended without one: the start's wait returns now
 
     def stderr_tail(self) -> str:
+        """The last lines the browser wrote to stderr, for a failure's message."""
         return "\n".join(self._stderr_lines)
 
     def command(self, method: str, params: Optional[dict[str, Any]] = None, session_id: Optional[str] = None,
                 timeout_s: float = CDP_REPLY_TIMEOUT_S) -> dict[str, Any]:
-        """A CDP command's result (to the browser, or to a page's session), skipping the events that come
-        between. BrowserError for an error reply or none within timeout_s.
+        """A CDP command's result (to the browser, or to a page's session), skipping the events that come between.
+
+        BrowserError for an error reply or none within timeout_s.
         """
         if self._connection is None:
             raise BrowserError("the browser is not running")
@@ -272,8 +285,10 @@ class HeadlessChromium:
         return Page(self, target_id, session_id)
 
     def close(self) -> None:
-        """Ends the DevTools connection, the browser (SIGTERM, then SIGKILL to its whole process group after
-        BROWSER_STOP_GRACE_S) and removes its profile. Safe to call more than once.
+        """Ends the DevTools connection and the browser, and removes its profile.
+
+        The browser gets SIGTERM, then SIGKILL to its whole process group after BROWSER_STOP_GRACE_S. Safe to call more
+        than once.
         """
         if self._connection is not None:
             with contextlib.suppress(Exception):
@@ -301,10 +316,11 @@ class HeadlessChromium:
 
 
 class LatestMessagePage:
-    """The swim_viz test page of page_dir (index.html and its bundle) in headless Chromium, connected to the
-    foxglove.websocket.v1 server at ws_url and subscribed to topic; field picks the value it shows (a dotted path;
-    by default the message's first float64 scalar). Use as a context manager; ``latest(...)`` reads what it shows
-    as often as wanted.
+    """The swim_viz test page of page_dir (index.html and its bundle) in headless Chromium.
+
+    Connected to the foxglove.websocket.v1 server at ws_url and subscribed to topic; field picks the value it shows (a
+    dotted path; by default the message's first float64 scalar). Use as a context manager; ``latest(...)`` reads what it
+    shows as often as wanted.
     """
 
     def __init__(self, page_dir: Path, ws_url: str, topic: str, field: Optional[str] = None) -> None:
@@ -314,6 +330,7 @@ class LatestMessagePage:
         self.page: Optional[Page] = None
 
     def __enter__(self) -> LatestMessagePage:
+        """Serve page_dir, start the browser and open the page; on a failure, end what was started."""
         try:
             base_url = self._stack.enter_context(serve_folder(self.page_dir))
             browser = self._stack.enter_context(HeadlessChromium())
@@ -324,6 +341,7 @@ class LatestMessagePage:
         return self
 
     def __exit__(self, *exc_info: Any) -> None:
+        """End the browser and the page's server."""
         self._stack.close()
 
     def status(self) -> Optional[str]:
@@ -333,9 +351,10 @@ class LatestMessagePage:
 
     def latest(self, timeout_s: float = LATEST_VALUE_TIMEOUT_S,
                accept: Callable[[dict[str, Any]], bool] = lambda shown: True) -> dict[str, Any]:
-        """The latest message the page shows, {"topic", "field", "sec", "nanosec", "value", "count"} (sec and
-        nanosec: its header.stamp, None without a header), once it has shown one that accept takes. BrowserError
-        after timeout_s, with the page's status.
+        """The latest message the page shows, once it has shown one that accept takes.
+
+        A dict {"topic", "field", "sec", "nanosec", "value", "count"} (sec and nanosec: its header.stamp, None without a
+        header). BrowserError after timeout_s, with the page's status.
         """
         assert self.page is not None, "LatestMessagePage used outside its with block"
         return self.page.wait_for_element_json(
@@ -345,8 +364,9 @@ class LatestMessagePage:
 
 def latest_page_value(page_dir: Path, ws_url: str, topic: str, timeout_s: float = LATEST_VALUE_TIMEOUT_S,
                       field: Optional[str] = None) -> dict[str, Any]:
-    """The first message of topic that the test page of page_dir shows in a real browser connected to ws_url (see
-    LatestMessagePage.latest); the browser and the page's server are gone when it returns.
+    """The first message of topic that the test page of page_dir shows in a real browser connected to ws_url.
+
+    See LatestMessagePage.latest. The browser and the page's server are gone when it returns.
     """
     with LatestMessagePage(page_dir, ws_url, topic, field) as page:
         return page.latest(timeout_s)

@@ -31,8 +31,10 @@ def ros_domain() -> int:
 
 @contextlib.contextmanager
 def new_rclpy_context() -> Iterator[Any]:
-    """An rclpy context of its own, initialised, shut down on leaving: for a fixture that outlives one test (a
-    module's client node). Enter it inside a fixture holding ros_domain, so the context joins that domain.
+    """An rclpy context of its own, initialised, shut down on leaving.
+
+    For a fixture that outlives one test (a module's client node). Enter it inside a fixture holding ros_domain, so the
+    context joins that domain.
     """
     import rclpy
     context = rclpy.Context()
@@ -52,9 +54,10 @@ def rclpy_context(ros_domain: int) -> Iterator[Any]:
 
 @contextlib.contextmanager
 def running_node(package: str, executable: str, log_path: Path, *ros_args: str) -> Iterator[subprocess.Popen[Any]]:
-    """`ros2 run package executable --ros-args ros_args` in its own process group, output to log_path; stopped with
-    SIGINT as a user's Ctrl-C would (SIGKILL after the grace period). Run it inside a test holding ros_domain, so
-    the node starts in that domain.
+    """`ros2 run package executable --ros-args ros_args` in its own process group, output to log_path.
+
+    Stopped with SIGINT as a user's Ctrl-C would (SIGKILL after the grace period). Run it inside a test holding
+    ros_domain, so the node starts in that domain.
     """
     node = NodeProcess(NodeSpec(package, executable, ros_arguments=ros_args), log_path)
     try:

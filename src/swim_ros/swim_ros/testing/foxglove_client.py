@@ -1,5 +1,6 @@
-"""A client of the Foxglove WebSocket protocol (``foxglove.websocket.v1``), written from its specification, for
-tests that talk to a server as the Foxglove app does: it reads the server's info and advertisements, subscribes to
+"""A client of the Foxglove WebSocket protocol (``foxglove.websocket.v1``), written from its specification.
+
+For tests that talk to a server as the Foxglove app does: it reads the server's info and advertisements, subscribes to
 channels and decodes their message frames, calls services, and advertises a channel of its own to publish on.
 
 Frames (the protocol's spec, foxglove/ws-protocol docs/spec.md): text frames are JSON objects with an ``op``; binary
@@ -37,8 +38,9 @@ CLIENT_SERVICE_CALL_REQUEST = 0x02
 
 @dataclasses.dataclass(frozen=True)
 class MessageFrame:
-    """One message of a subscribed channel: its topic, the server's log time (ns), the payload as sent, and when
-    this client read it (time.monotonic, s).
+    """One message of a subscribed channel.
+
+    Its topic, the server's log time (ns), the payload as sent, and when this client read it (time.monotonic, s).
     """
 
     topic: str
@@ -57,8 +59,10 @@ class ServiceReply:
 
 
 class FoxgloveClient:
-    """A connection to url (``ws://host:port``); text messages other than the awaited ones are kept in ``info``,
-    ``channels``, ``services`` and ``statuses`` as they come.
+    """A connection to url (``ws://host:port``).
+
+    Text messages other than the awaited ones are kept in ``info``, ``channels``, ``services`` and ``statuses`` as they
+    come.
     """
 
     def __init__(self, url: str, open_timeout_s: float = 10.0) -> None:
@@ -78,12 +82,15 @@ class FoxgloveClient:
         self.closed = False   # the server closed the connection (it stopped)
 
     def close(self) -> None:
+        """Close the connection."""
         self.connection.close()
 
     def __enter__(self) -> "FoxgloveClient":
+        """The client itself, closed when the block ends."""
         return self
 
     def __exit__(self, *_: object) -> None:
+        """Close the connection."""
         self.close()
 
     def _new_id(self) -> int:
@@ -156,6 +163,7 @@ class FoxgloveClient:
         return channel
 
     def subscribe(self, topic: str, timeout_s: float = 10.0) -> int:
+        """Subscribe to topic once its channel is advertised (within timeout_s, s); the subscription id."""
         channel = self.channel(topic, timeout_s)
         subscription = self._new_id()
         self._subscriptions[subscription] = topic
@@ -184,8 +192,9 @@ class FoxgloveClient:
         return self._replies.pop(call_id)
 
     def fetch_asset(self, uri: str, timeout_s: float = 10.0) -> tuple[Optional[bytes], str]:
-        """The asset at uri as the server gives it (the 3D panel asks for a URDF's meshes so): (its bytes, "") or
-        (None, the server's error).
+        """The asset at uri as the server gives it (the 3D panel asks for a URDF's meshes so).
+
+        (its bytes, "") or (None, the server's error).
         """
         request_id = self._new_id()
         self.connection.send(json.dumps({"op": "fetchAsset", "uri": uri, "requestId": request_id}))
@@ -201,12 +210,14 @@ class FoxgloveClient:
         return channel_id
 
     def publish(self, channel_id: int, payload: bytes) -> None:
+        """Send payload on channel_id, a channel this client advertised."""
         self.connection.send(struct.pack("<BI", CLIENT_MESSAGE_DATA, channel_id) + payload)
 
 
 def decode_protobuf(schema_name: str, file_descriptor_set: bytes, payload: bytes) -> Any:
-    """A protobuf message (a foxglove schema's, e.g. foxglove.FrameTransforms) decoded by the schema it came with: its
-    name and a serialized FileDescriptorSet (what a channel advertises, base64-decoded: ``channel_schema``).
+    """A protobuf message (a foxglove schema's, e.g. foxglove.FrameTransforms) decoded by the schema it came with.
+
+    Its name and a serialized FileDescriptorSet (what a channel advertises, base64-decoded: ``channel_schema``).
     """
     from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
     files = descriptor_pb2.FileDescriptorSet.FromString(file_descriptor_set)
@@ -217,8 +228,9 @@ def decode_protobuf(schema_name: str, file_descriptor_set: bytes, payload: bytes
 
 
 def channel_schema(channel: dict[str, Any]) -> bytes:
-    """An advertised channel's schema as bytes: binary schemas (protobuf's) come base64-encoded, text ones as they
-    are.
+    """An advertised channel's schema as bytes.
+
+    Binary schemas (protobuf's) come base64-encoded, text ones as they are.
     """
     if channel.get("schemaEncoding") == "protobuf":
         return base64.b64decode(channel["schema"])
@@ -233,8 +245,9 @@ def free_port() -> int:
 
 
 def connect_when_listening(port: int, stop: threading.Event) -> Optional[FoxgloveClient]:
-    """A client of the server on 127.0.0.1:port, connected as soon as it listens (a node that is still starting),
-    or None if stop is set first.
+    """A client of the server on 127.0.0.1:port, or None if stop is set first.
+
+    It connects as soon as the server listens (a node that is still starting).
     """
     while not stop.is_set():
         try:
@@ -245,8 +258,9 @@ def connect_when_listening(port: int, stop: threading.Event) -> Optional[Foxglov
 
 
 def transform_key(sec: int, nanosec: int, parent: str, child: str, translation: Any, rotation: Any) -> tuple:
-    """A transform (tf2's or Foxglove's: translation x, y, z and rotation x, y, z, w) as a comparable tuple, its
-    numbers to 1e-12.
+    """A transform as a comparable tuple, its numbers to 1e-12.
+
+    Either tf2's or Foxglove's: translation x, y, z and rotation x, y, z, w.
     """
     return (int(sec), int(nanosec), parent, child, *(round(v, 12) for v in (
         translation.x, translation.y, translation.z, rotation.x, rotation.y, rotation.z, rotation.w)))
@@ -259,8 +273,9 @@ def tf_message_keys(message: Any) -> set[tuple]:
 
 
 def frame_transforms_keys(client: FoxgloveClient, topic: str = "/tf") -> list[tuple]:
-    """The transform_keys of every foxglove.FrameTransforms message client received on topic, decoded by the
-    channel's advertised schema.
+    """The transform_keys of every foxglove.FrameTransforms message client received on topic.
+
+    Each message is decoded by the channel's advertised schema.
     """
     channel = client.channel(topic)
     keys = []
@@ -272,10 +287,11 @@ def frame_transforms_keys(client: FoxgloveClient, topic: str = "/tf") -> list[tu
 
 
 class ClientThread(threading.Thread):
-    """A client on a thread of its own, as a Foxglove app beside a run: it connects as soon as the server on
-    127.0.0.1:port listens, subscribes to topics (None: every channel, once at least min_channels are advertised),
-    and then reads until stopped, or never reads (read False: a stalled app). ``subscribed`` is set once it has
-    subscribed; ``client`` holds what it received.
+    """A client on a thread of its own, as a Foxglove app beside a run.
+
+    It connects as soon as the server on 127.0.0.1:port listens, subscribes to topics (None: every channel, once at
+    least min_channels are advertised), and then reads until stopped, or never reads (read False: a stalled app).
+    ``subscribed`` is set once it has subscribed; ``client`` holds what it received.
     """
 
     def __init__(self, port: int, topics: Optional[Sequence[str]] = None, read: bool = True,
@@ -286,6 +302,7 @@ class ClientThread(threading.Thread):
         self.client: Optional[FoxgloveClient] = None
 
     def run(self) -> None:
+        """Connect and subscribe, then read until stop is set or the connection closes (never with read False)."""
         self.client = client = connect_when_listening(self.port, self.stop)
         if client is None:
             return

@@ -1,5 +1,7 @@
-"""Hypothesis strategies and settings for the DDS fuzz tests (each node's test/test_fuzz_*.py): messages built field
-by field, valid, borderline and malformed, each example labelled with what the node must do with it.
+"""Hypothesis strategies and settings for the DDS fuzz tests (each node's test/test_fuzz_*.py).
+
+Messages built field by field, valid, borderline and malformed, each example labelled with what the node must do with
+it.
 
 Sizes: seeded (derandomize) and sized for CI by default; SWIM_FUZZ_PROFILE=long multiplies every surface's count
 by LONG_RUN_FACTOR (the CI total, 675 examples, becomes 10,800; the explicit examples run once in either):
@@ -26,9 +28,11 @@ if PROFILE not in ("ci", "long"):
 
 
 def fuzz_settings(ci_examples: int) -> settings:
-    """Settings for one surface: ci_examples examples (times LONG_RUN_FACTOR in the long run), derandomized so a CI
-    run repeats, no per-example deadline (each test asserts its own, over DDS), and the module's node and client
-    shared by every example (module-scoped fixtures).
+    """Settings for one surface.
+
+    ci_examples examples (times LONG_RUN_FACTOR in the long run), derandomized so a CI run repeats, no per-example
+    deadline (each test asserts its own, over DDS), and the module's node and client shared by every example
+    (module-scoped fixtures).
     """
     return settings(max_examples=ci_examples * (LONG_RUN_FACTOR if PROFILE == "long" else 1), derandomize=True,
                     deadline=None, database=None, print_blob=True,
@@ -49,8 +53,10 @@ def any_float() -> st.SearchStrategy[float]:
 
 
 def unicode_name() -> st.SearchStrategy[str]:
-    """A name no node knows: random unicode, empty included; no surrogates (rosidl strings are UTF-8) and no NUL (a
-    C string ends there, so "alpha\\0" would arrive as a known name).
+    r"""A name no node knows.
+
+    Random unicode, empty included; no surrogates (rosidl strings are UTF-8) and no NUL (a C string ends there, so
+    "alpha\0" would arrive as a known name).
     """
     return st.text(st.characters(exclude_categories=["Cs"], exclude_characters="\x00"), max_size=12)
 
@@ -58,8 +64,10 @@ def unicode_name() -> st.SearchStrategy[str]:
 # ----- joint states ------------------------------------------------------------------------------------------
 @dataclasses.dataclass(frozen=True)
 class JointStateFields:
-    """A sensor_msgs/JointState's name, position, velocity and effort, and why it is malformed (None: it is not;
-    a well-formed message may still be out of a node's bounds, which the test decides).
+    """A sensor_msgs/JointState's name, position, velocity and effort, and why it is malformed.
+
+    The reason is None when it is not; a well-formed message may still be out of a node's bounds, which the test
+    decides.
     """
 
     name: list[str]
@@ -73,9 +81,11 @@ class JointStateFields:
 def joint_states(draw: Any, joints: tuple[str, ...], value: st.SearchStrategy[float],
                  velocity_value: Optional[st.SearchStrategy[float]] = None, with_velocity: bool = True,
                  field: str = "position") -> JointStateFields:
-    """A JointState for joints: well formed (the joints once each, any order, one finite value each in `field`,
-    velocities empty or one each) with values from value, or malformed in one way (unknown, missing or repeated
-    names, random unicode, a length that does not match, a non-finite value).
+    """A JointState for joints.
+
+    Well formed (the joints once each, any order, one finite value each in `field`, velocities empty or one each) with
+    values from value, or malformed in one way (unknown, missing or repeated names, random unicode, a length that does
+    not match, a non-finite value).
     """
     velocity_value = value if velocity_value is None else velocity_value
     names = list(draw(st.permutations(joints)))
@@ -119,6 +129,7 @@ def joint_states(draw: Any, joints: tuple[str, ...], value: st.SearchStrategy[fl
 
 
 def to_joint_state(fields: JointStateFields, stamp: Any = None) -> Any:
+    """The sensor_msgs/JointState of fields, stamped with stamp if given."""
     from sensor_msgs.msg import JointState
     message = JointState(name=fields.name, position=fields.position, velocity=fields.velocity, effort=fields.effort)
     if stamp is not None:
@@ -158,10 +169,11 @@ def is_non_finite_number(value: Any) -> bool:
 
 def set_and_check_parameter(parameters: Any, name: str, value: Any, read_only: Any, deadline_s: float,
                             counts: dict[str, int]) -> None:
-    """Set one fuzzed value on a node (swim_ros.calls.ParameterCalls) and check the reply: answered within
-    deadline_s; a read-only or unknown ("fuzz." prefixed) name or a non-finite number refused; an accepted value
-    read back; a refusal with a reason. counts["accepted"] or counts["refused"] goes up by one. A value rclpy
-    itself cannot carry (a list of mixed types) never reaches the node and is skipped.
+    """Set one fuzzed value on a node (swim_ros.calls.ParameterCalls) and check the reply.
+
+    Answered within deadline_s; a read-only or unknown ("fuzz." prefixed) name or a non-finite number refused; an
+    accepted value read back; a refusal with a reason. counts["accepted"] or counts["refused"] goes up by one. A value
+    rclpy itself cannot carry (a list of mixed types) never reaches the node and is skipped.
     """
     from rclpy.parameter import Parameter
     try:
@@ -182,11 +194,13 @@ def set_and_check_parameter(parameters: Any, name: str, value: Any, read_only: A
 
 def fuzz_parameter_sets(parameters: Any, specs: Sequence[Any], ci_examples: int, deadline_s: float,
                         alive: Callable[[], bool], launched: Optional[dict[str, Any]] = None) -> dict[str, int]:
-    """ci_examples fuzzed sets (parameter_sets over the names of specs, a node's swim_ros.parameters.ParameterSpec
-    table) on one node through parameters (swim_ros.calls.ParameterCalls), each checked by set_and_check_parameter
-    and the node alive() after it; then every changeable parameter set back to its launch value (launched: name ->
-    value, else its default), which must be accepted. Returns the counts of accepted and refused sets; a run with
-    no refusal fails (the unknown and non-finite ones must be refused).
+    """Fuzz one node's parameters with ci_examples sets, then set every changeable one back.
+
+    The sets are parameter_sets over the names of specs (a node's swim_ros.parameters.ParameterSpec table), made through
+    parameters (swim_ros.calls.ParameterCalls), each checked by set_and_check_parameter and the node alive() after it;
+    then every changeable parameter is set back to its launch value (launched: name -> value, else its default), which
+    must be accepted. Returns the counts of accepted and refused sets; a run with no refusal fails (the unknown and
+    non-finite ones must be refused).
     """
     from rclpy.parameter import Parameter
     launched = launched or {}

@@ -1,5 +1,7 @@
-"""A message's fields from a YAML string, as ros2cli fills them for `ros2 topic pub`, `ros2 service call` and
-`ros2 action send_goal` (rosidl_runtime_py.set_message_fields, which is on no registry here).
+"""A message's fields from a YAML string, as ros2cli fills them.
+
+As for `ros2 topic pub`, `ros2 service call` and `ros2 action send_goal` (rosidl_runtime_py.set_message_fields, which is
+on no registry here).
 
 Each key names a field; its value is converted to the type the field holds (an int to a float64 field's float, a
 list to an array.array of the field's type code), a mapping fills a nested message, and a list of mappings fills a

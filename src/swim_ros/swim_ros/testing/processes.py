@@ -1,6 +1,7 @@
-"""Finding the processes a test started, whatever became of their parents: the test starts its starter with an
-environment variable of its own (``{variable: uuid}``), which every process below it inherits, and looks for that
-entry in /proc/<pid>/environ.
+"""Finding the processes a test started, whatever became of their parents.
+
+The test starts its starter with an environment variable of its own (``{variable: uuid}``), which every process below it
+inherits, and looks for that entry in /proc/<pid>/environ.
 """
 from __future__ import annotations
 
@@ -14,8 +15,9 @@ POLL_PERIOD_S = 0.05
 
 
 def tagged_processes(variable: str, tag: str) -> dict[int, str]:
-    """The live processes whose environment holds variable=tag, by pid, with their command lines (a zombie's
-    environment is empty: it is not found).
+    """The live processes whose environment holds variable=tag, by pid, with their command lines.
+
+    A zombie's environment is empty: it is not found.
     """
     marker = f"{variable}={tag}".encode()
     found = {}
@@ -32,8 +34,9 @@ def tagged_processes(variable: str, tag: str) -> dict[int, str]:
 
 
 def processes_left(variable: str, tag: str, timeout_s: float) -> list[int]:
-    """The processes tagged variable=tag that are still alive timeout_s from now (an empty list as soon as none
-    is), each then killed (SIGKILL), so that a failed test leaves nothing behind.
+    """The processes tagged variable=tag still alive timeout_s from now, each then killed (SIGKILL).
+
+    An empty list as soon as none is alive. Killing the rest makes sure a failed test leaves nothing behind.
     """
     deadline = time.monotonic() + timeout_s
     while tagged_processes(variable, tag) and time.monotonic() < deadline:
