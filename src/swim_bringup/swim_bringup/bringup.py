@@ -1,4 +1,6 @@
-"""swim-bringup: the closed loop's nodes kept up for an operator, the same nodes with the same parameters as
+"""The swim-bringup command: the closed loop's nodes kept up for an operator.
+
+swim-bringup: the closed loop's nodes kept up for an operator, the same nodes with the same parameters as
 `ros2 launch swim_bringup sim.launch.yaml` (or bridge.launch.xml), where `launch` is not installed.
 
 `swim-bringup sim` starts sim_node (lock-step, or real time with --realtime), `swim-bringup bridge` bridge_node
@@ -55,7 +57,9 @@ FOXGLOVE_DEFAULT_PORT = 8765
 def bringup_specs(plant: str, backend: Optional[str] = None, pipeline: str = "realistic", realtime: bool = False,
                   sliding_mode: bool = True, config: Optional[Path] = None,
                   foxglove_port: Optional[int] = None, rig_path: str = "") -> list[NodeSpec]:
-    """The nodes swim-bringup starts for a plant ("sim" or "bridge"), as the launch files start them: the pipeline's
+    """The nodes swim-bringup starts for a plant.
+
+    The nodes swim-bringup starts for a plant ("sim" or "bridge"), as the launch files start them: the pipeline's
     parameter files (config_dir(pipeline)) or config's, sim_node in real time if realtime (else as its file says:
     lock-step, with the tracker's stale limit raised, system.LOCKSTEP_STALE_OVERRIDE), bridge_node with backend
     (default emulated), the tracker's sliding mode on or off, the maneuver server, and foxglove_node on
@@ -117,7 +121,9 @@ def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
 
 
 class StopRequest:
-    """The stop signals, recorded instead of acted on: the loop that watches the nodes stops them at its next look.
+    """The stop signals, recorded instead of acted on.
+
+    The stop signals, recorded instead of acted on: the loop that watches the nodes stops them at its next look.
     A handler that raised could interrupt a node's start between its fork and its record, orphaning it.
     """
 
@@ -166,7 +172,9 @@ def report_death(node: NodeProcess) -> None:
 
 
 def watch(system: System, stop: StopRequest, keep_going: bool) -> int:
-    """Look at the nodes every POLL_S until a stop signal (0), a node's death without keep_going (1), or, with
+    """Watch the nodes until a stop signal or a node's death; the exit status.
+
+    Look at the nodes every POLL_S until a stop signal (0), a node's death without keep_going (1), or, with
     keep_going, every node dead (1). Each death is reported once.
     """
     reported: set[int] = set()

@@ -1,4 +1,6 @@
-"""swim-experiments: the paper's experiments in closed loop over DDS, in simulation, over seeds
+"""The swim-experiments command: the paper's experiments in closed loop over seeds.
+
+swim-experiments: the paper's experiments in closed loop over DDS, in simulation, over seeds
 (Sec. 7; docs/model_and_method.md section 6).
 
 Every experiment (experiments.paper_experiments) runs with and without the sliding-mode term for each seed 1..N,
@@ -58,7 +60,9 @@ class RunTask:
 
 
 def run_one(task: RunTask) -> RunReport:
-    """One closed-loop run in a fresh bring-up on the current ROS domain; its report (analysis measures, the
+    """One closed-loop run in a fresh bring-up; its report.
+
+    One closed-loop run in a fresh bring-up on the current ROS domain; its report (analysis measures, the
     action's result, wall time).
     """
     task.run_dir.mkdir(parents=True, exist_ok=True)

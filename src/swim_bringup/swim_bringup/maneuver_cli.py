@@ -219,7 +219,9 @@ def maneuver_goal(args: argparse.Namespace) -> ManeuverGoal:
 
 # ----- a session on the ROS domain ------------------------------------------------------------------------------
 class Session:
-    """An rclpy context, node and executor of the command's own, on the environment's ROS domain. RunClient has the
+    """An rclpy context, node and executor of the command's own.
+
+    An rclpy context, node and executor of the command's own, on the environment's ROS domain. RunClient has the
     same context, node, executor and close(), and stands in for it when a run is recorded.
     """
 
@@ -240,7 +242,9 @@ class Session:
 
 
 def spin_until_settled(session: Any, done: Callable[[], bool], timeout_s: float) -> None:
-    """Spin until done() holds or the ROS graph's nodes and topics have not changed for GRAPH_STABLE_S, at most
+    """Spin until done() holds or the ROS graph has settled.
+
+    Spin until done() holds or the ROS graph's nodes and topics have not changed for GRAPH_STABLE_S, at most
     timeout_s.
     """
     from swim_ros.calls import spin_until
@@ -308,7 +312,9 @@ def list_command(args: argparse.Namespace) -> int:
 # ----- plan ------------------------------------------------------------------------------------------------------
 @dataclasses.dataclass(frozen=True)
 class PlanArrays:
-    """A PlannedTrajectory's arrays, shaped: times (N,), s; q and qdot (N, nq) in joint_names' order (rad, m);
+    """A PlannedTrajectory's arrays, shaped.
+
+    A PlannedTrajectory's arrays, shaped: times (N,), s; q and qdot (N, nq) in joint_names' order (rad, m);
     feed-forward torques (N, 2) heave and pitch, N m; radius (N,), m: R, or the constrained plan's lane.
     """
 
@@ -352,7 +358,9 @@ def repeats_of(primitive_ids: Sequence[str]) -> list[tuple[str, int]]:
 
 @dataclasses.dataclass(frozen=True)
 class PlanSummary:
-    """What a plan asks of the vehicle and its motors. Per motor (heave, pitch): the peak |feed-forward torque|, N m,
+    """What a plan asks of the vehicle and its motors.
+
+    What a plan asks of the vehicle and its motors. Per motor (heave, pitch): the peak |feed-forward torque|, N m,
     its fraction of the motor's limit, and the primitive it falls in (a junction sample is the earlier one's).
     """
 
@@ -412,7 +420,9 @@ class PlanSummary:
 
 
 def write_plan_figure(plan: Any, torque_limits_n_m: Sequence[float], path: Path) -> Path:
-    """The plan drawn: alpha and alphadot, heave and pitch, the feed-forward torques against the motors' limits,
+    """Draw the plan against plan time into path.
+
+    The plan drawn: alpha and alphadot, heave and pitch, the feed-forward torques against the motors' limits,
     against plan time, the primitives' junctions marked.
     """
     from swim_bringup.figures import pyplot, save_figure
@@ -443,7 +453,9 @@ def write_plan_figure(plan: Any, torque_limits_n_m: Sequence[float], path: Path)
 
 
 def latest_vehicle(session: Any, timeout_s: float) -> Optional[VehicleState]:
-    """The vehicle as the latest joint_states gives it, or None when, once the graph has settled, no node publishes
+    """The vehicle as the latest joint_states gives it, or None without a plant.
+
+    The vehicle as the latest joint_states gives it, or None when, once the graph has settled, no node publishes
     joint_states and no plant node (PLANT_NODES) is up; CommandError if one is and no joint_states arrives within
     timeout_s (a plant's publisher may be discovered after the plant).
     """
@@ -477,7 +489,9 @@ def latest_vehicle(session: Any, timeout_s: float) -> Optional[VehicleState]:
 
 
 def plan_request(goal: ManeuverGoal, vehicle: Optional[VehicleState], states: Sequence[str]) -> Any:
-    """The RequestManeuver a goal makes from where the vehicle is: its alpha (0 without one) and, for a goal state,
+    """The RequestManeuver a goal makes from where the vehicle is.
+
+    The RequestManeuver a goal makes from where the vehicle is: its alpha (0 without one) and, for a goal state,
     the rest state of its vehicle on the lane nearest its R (without one: the planner's default start).
     """
     from swim_interfaces.srv import RequestManeuver
@@ -530,7 +544,9 @@ def plan_command(args: argparse.Namespace) -> int:
 
 # ----- run -------------------------------------------------------------------------------------------------------
 class InterruptWatch:
-    """Ctrl-C as a request, never as an exception in the middle of a callback (a bag write): the signal handler sets
+    """Ctrl-C as a request, never as an exception in the middle of a callback.
+
+    Ctrl-C as a request, never as an exception in the middle of a callback (a bag write): the signal handler sets
     requested and triggers a guard condition of the session's node; the executor runs its callback between other
     callbacks, and it raises Interrupted there while armed, which ends the wait under way (goal_result) at once.
     """
@@ -626,7 +642,9 @@ class ManeuverRun:
         wait_for(self.session, self.action.server_is_ready, "maneuver_node (perform_maneuver)", wait_s)
 
     def fly(self, goal: ManeuverGoal, timeout_s: float, on_feedback: Callable[[Any], None]) -> Any:
-        """Send the goal and return its result (PerformManeuver.Result): at its end, or after a cancel on Ctrl-C
+        """Send the goal and return its result.
+
+        Send the goal and return its result (PerformManeuver.Result): at its end, or after a cancel on Ctrl-C
         (self.interrupt.requested then holds). CommandError if it was not accepted or gave no result.
         """
         from swim_ros.calls import CallFailed, cancel_goal, goal_result, send_goal
@@ -718,7 +736,9 @@ def run_command(args: argparse.Namespace) -> int:
 
 
 def report_recorded_run(run_dir: Path, result: Any, started_s: float) -> int:
-    """report.json and figures of a recorded run, a summary printed; EXIT_FAILED when the bridge latched a fault
+    """Write the report and figures of a recorded run; the exit status.
+
+    report.json and figures of a recorded run, a summary printed; EXIT_FAILED when the bridge latched a fault
     during it (the motors were then off), else EXIT_DONE.
     """
     from swim_bringup.reports import TrackerResult
@@ -819,7 +839,9 @@ def status_command(args: argparse.Namespace) -> int:
 
 
 def trigger(service: str, wait_s: float) -> int:
-    """Call the bridge's std_srvs/Trigger service (the e-stop and its reset: asking twice does what asking once
+    """Call a std_srvs/Trigger service of the bridge and print its answer; the exit status.
+
+    Call the bridge's std_srvs/Trigger service (the e-stop and its reset: asking twice does what asking once
     does, so a lost answer is asked again); print its answer.
     """
     from std_srvs.srv import Trigger
@@ -844,7 +866,9 @@ def reset_command(args: argparse.Namespace) -> int:
 
 
 def bridge_command(args: argparse.Namespace) -> int:
-    """A lifecycle transition of bridge_node (swim_ros.calls.change_lifecycle_state: asked again only after its
+    """Make a lifecycle transition of bridge_node.
+
+    A lifecycle transition of bridge_node (swim_ros.calls.change_lifecycle_state: asked again only after its
     state shows it was not made).
     """
     from swim_ros.calls import CallFailed, change_lifecycle_state

@@ -1,4 +1,6 @@
-"""swim-record: record topics of a running system to a rosbag2 MCAP bag, like `ros2 bag record` (not installable
+"""The swim-record command: record topics of a running system to a rosbag2 MCAP bag.
+
+swim-record: record topics of a running system to a rosbag2 MCAP bag, like `ros2 bag record` (not installable
 here).
 
     swim-record -a                         every topic (hidden ones, e.g. actions' _action/..., with --include-hidden)
@@ -115,7 +117,9 @@ def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
 
 
 class StopRequest:
-    """Set by SIGINT or SIGTERM; the recording loop ends at its next turn (within POLL_PERIOD_S), never in the
+    """A stop request set by SIGINT or SIGTERM.
+
+    Set by SIGINT or SIGTERM; the recording loop ends at its next turn (within POLL_PERIOD_S), never in the
     middle of writing a message.
     """
 

@@ -1,4 +1,6 @@
-"""The reports of runs as typed values, and their JSON forms: report.json (swim-demo, swim-analyze --output) and
+"""The reports of runs as typed values, and their JSON forms.
+
+The reports of runs as typed values, and their JSON forms: report.json (swim-demo, swim-analyze --output) and
 experiments.json (swim-experiments).
 
 A field's name is its JSON key and carries its unit (SI; the error two-norms sqrt(int e^2 dt) in m s^0.5).
@@ -59,7 +61,9 @@ class RunMeasures:
 
 @dataclasses.dataclass(frozen=True)
 class BridgeMeasures:
-    """What a bridge_node's /diagnostics tell of a run (analysis.bridge_measures). The loop's timing, from its
+    """What a bridge_node's /diagnostics tell of a run.
+
+    What a bridge_node's /diagnostics tell of a run (analysis.bridge_measures). The loop's timing, from its
     last report: None where the bridge did not report it.
     """
 
@@ -76,7 +80,9 @@ class BridgeMeasures:
 
 @dataclasses.dataclass(frozen=True)
 class RunAnalysis:
-    """The measures of a recorded run (analysis.analyze): the bridge's only for a run on the bridge. Its JSON form
+    """The measures of a recorded run.
+
+    The measures of a recorded run (analysis.analyze): the bridge's only for a run on the bridge. Its JSON form
     is one flat object, the bridge's keys after the measures'.
     """
 
@@ -126,7 +132,9 @@ class TrackerResult:
 
 @dataclasses.dataclass(frozen=True)
 class RunReport(RunAnalysis):
-    """One closed-loop run (report.json): the analysis of its bag, the tracker's result and the wall time of the
+    """One closed-loop run's report (report.json).
+
+    One closed-loop run (report.json): the analysis of its bag, the tracker's result and the wall time of the
     whole run (bring-up, maneuver, shutdown, analysis).
     """
 
@@ -159,7 +167,9 @@ class SlidingModePair(Generic[T]):
 
 @dataclasses.dataclass(frozen=True)
 class NormComparison:
-    """A two-norm with and without sliding mode, m s^0.5 (over seeds: the seed's of largest magnitude), and the
+    """A two-norm with and without sliding mode, and the change sliding mode brought.
+
+    A two-norm with and without sliding mode, m s^0.5 (over seeds: the seed's of largest magnitude), and the
     relative change sliding mode brought, here (over seeds: the mean of each seed's change) and in the paper (None:
     not computable, or not reported there).
     """
@@ -209,7 +219,9 @@ def _norm_statistics(data: Mapping[str, Any]) -> NormStatistics:
 
 @dataclasses.dataclass(frozen=True)
 class ExperimentRow:
-    """One experiment's runs over seeds set beside the paper's (experiments.compare). Each of the quantities of a
+    """One experiment's runs over seeds set beside the paper's.
+
+    One experiment's runs over seeds set beside the paper's (experiments.compare). Each of the quantities of a
     pair of runs is the seed's value of largest magnitude (sign kept; outcome "ok" only when every seed's is);
     per_seed holds them all, statistics the two-norms' over the paired_seeds (those with both runs reported).
     """
@@ -254,7 +266,9 @@ class FailedRun:
 
 @dataclasses.dataclass(frozen=True)
 class ExperimentsSummary:
-    """swim-experiments' results (experiments.json): the pipeline (config/ folder) and seeds run, the experiments
+    """The results of swim-experiments (experiments.json).
+
+    swim-experiments' results (experiments.json): the pipeline (config/ folder) and seeds run, the experiments
     with at least one seed run with and without sliding mode, the wall time, and the runs that gave no report.
     """
 

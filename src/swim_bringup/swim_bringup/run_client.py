@@ -38,7 +38,9 @@ class RunError(RuntimeError):
 
 
 class RunClient:
-    """Planner and tracker clients plus a recorder of topics (fully qualified name -> type name) into the bag at
+    """Planner and tracker clients plus a recorder of topics into a bag.
+
+    Planner and tracker clients plus a recorder of topics (fully qualified name -> type name) into the bag at
     bag_path. ValueError for a relative name: the client's waits look the loop's topics up by LOOP_TOPICS' names.
     """
 
@@ -97,7 +99,9 @@ class RunClient:
         self.close()
 
     def close(self) -> None:
-        """Finish the bag and leave DDS; safe to call twice. The node and its subscriptions are destroyed here,
+        """Finish the bag and leave DDS; safe to call twice.
+
+        Finish the bag and leave DDS; safe to call twice. The node and its subscriptions are destroyed here,
         not left to the garbage collector: a closed client's readers would stay matched, and every publisher of
         the next run on the domain would keep sending them each period (docs/benchmarks.md, bench_record).
         """
@@ -166,7 +170,9 @@ class RunClient:
 
     def execute(self, plan, progress: Optional[Callable[[float], None]] = None,
                 tolerances: Optional[Tolerances] = None):
-        """Send the plan to the tracker with tolerances (default: none checked); returns the accepted goal's
+        """Send the plan to the tracker; the accepted goal's handle.
+
+        Send the plan to the tracker with tolerances (default: none checked); returns the accepted goal's
         handle (RunError if refused).
         """
         from swim_interfaces.action import ExecutePlan
@@ -194,7 +200,9 @@ class RunClient:
             raise RunError(f"no end of the maneuver within {timeout_s:.0f} s") from err
 
     def drain(self, duration_s: float) -> None:
-        """Record until the plan's last period (plan time duration_s) is in the bag on every loop topic, and the
+        """Record until the plan's last period and the plan are in the bag.
+
+        Record until the plan's last period (plan time duration_s) is in the bag on every loop topic, and the
         plan itself, then a few more periods. The recorder may lag a faster-than-real-time loop, and by more on
         joint_states and joint_commands, which flowed (and queued) before the plan while tracking_state did not.
         RunError if that does not happen within DRAIN_TIMEOUT_S.
@@ -216,7 +224,9 @@ class RunClient:
             self.executor.spin_once(timeout_sec=0.01)
 
     def _recorded_up_to(self, stamp_ns: Optional[int]) -> bool:
-        """Every loop topic recorded up to stamp_ns, and the plan recorded: a plan of thousands of samples goes out
+        """Whether every loop topic is recorded up to stamp_ns and the plan is recorded.
+
+        Every loop topic recorded up to stamp_ns, and the plan recorded: a plan of thousands of samples goes out
         in fragments, and one lost beside a fast loop is repaired only at the writer's next heartbeat.
         """
         return stamp_ns is not None and ("/plan" not in self.recordings or "/plan" in self.latest_cdr) and all(
@@ -231,7 +241,9 @@ class RunClient:
 
 
 def header_stamp_ns(cdr: bytes) -> int:
-    """The header stamp of a serialized message that starts with a std_msgs/Header (CDR: a 4-byte encapsulation
+    """The header stamp of a serialized message that starts with a std_msgs/Header.
+
+    The header stamp of a serialized message that starts with a std_msgs/Header (CDR: a 4-byte encapsulation
     header, its second byte 1 for little-endian, then the stamp's int32 sec and uint32 nanosec).
     """
     sec, nanosec = struct.unpack_from("<iI" if cdr[1] == 1 else ">iI", cdr, 4)
