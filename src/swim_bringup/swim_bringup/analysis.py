@@ -168,7 +168,7 @@ def joint_states_summary(joint_states: JointStates) -> JointStatesSummary:
 class BagAnalysis:
     """What swim-analyze makes of one bag.
 
-    What swim-analyze makes of one bag: its topics, the joint motion when it has joint_states, the run's measures
+    It holds the bag's topics, the joint motion when it has joint_states, the run's measures
     when it has what they need, and what it lacks, each with why.
     """
 
@@ -199,8 +199,7 @@ class BagAnalysis:
 def bag_analysis(record: RecordedBag, hard_limits_rad: Optional[HardLimits] = None) -> BagAnalysis:
     """All that swim-analyze can tell of the bag read.
 
-    All that swim-analyze can tell of the bag read (hard_limits_rad: as measures'): what it lacks or holds
-    unreadably is named in `missing`.
+    The hard_limits_rad argument is as measures'. What the bag lacks or holds unreadably is named in `missing`.
     """
     known_types = swim_typestore().fielddefs
     missing = []

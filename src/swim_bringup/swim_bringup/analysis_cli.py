@@ -61,6 +61,7 @@ def write_outputs(record: RecordedBag, analysis: BagAnalysis, output_dir: Path) 
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The swim-analyze command; its exit status."""
     parser = argparse.ArgumentParser(
         prog="swim-analyze", description=__doc__.splitlines()[0],
         epilog=f"exit status: {EXIT_FULL_REPORT} every bag analysed in full; {EXIT_PARTIAL_REPORT} some bag lacked "

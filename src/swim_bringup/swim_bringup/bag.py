@@ -86,6 +86,7 @@ class BagWriter:
         self.counts[topic] = 0
 
     def write(self, topic: str, timestamp_ns: int, cdr: bytes) -> None:
+        """Write one message's CDR bytes on topic, stamped timestamp_ns (ns)."""
         assert self._writer is not None, "BagWriter.write after close()"
         self._writer.write(self._connections[topic], timestamp_ns, cdr)
         self.counts[topic] += 1
@@ -133,6 +134,7 @@ class BagInfo:
 
     @property
     def message_count(self) -> int:
+        """The number of messages over all topics."""
         return sum(topic.message_count for topic in self.topics)
 
 
@@ -195,8 +197,8 @@ def _mcap_summary(file: Path) -> Any:
 def _mcap_file(path: Path, why: str) -> Path:
     """The one MCAP file of the bag at path.
 
-    The one MCAP file of the bag at path (path itself, or the one its folder holds), for the mcap library to read
-    where rosbags cannot (why); BagError if there is not exactly one.
+    The file is path itself, or the one its folder holds, for the mcap library to read where rosbags cannot (why);
+    BagError if there is not exactly one.
     """
     files = [path] if path.is_file() else sorted(path.glob("*.mcap"))
     if len(files) != 1 or files[0].suffix != ".mcap":
@@ -277,8 +279,8 @@ def bag_info(path: Path) -> BagInfo:
 def undecodable_topics(path: Path) -> dict[str, str]:
     """The topics of the bag at path whose messages cannot be decoded, each with why.
 
-    The topics of the bag at path whose messages cannot be decoded, each with why: of a type that neither the bag
-    defines (in a definition that parses) nor this environment knows. BagError if there is no readable bag there.
+    Each is of a type that neither the bag defines (in a definition that parses) nor this environment knows. BagError if
+    there is no readable bag there.
     """
     return bag_contents(path)[1]
 
@@ -305,8 +307,8 @@ IDL_SEPARATOR = "=" * 80 + "\n"
 def definition_types(msgtype: str, definition: MessageDefinition) -> dict[str, Any]:
     """The types of a bag's own definition of msgtype.
 
-    The types of a bag's own definition of msgtype (msgtype and every type it uses, as the bag's recorder knew
-    them), parsed by rosbags; empty when the bag has no definition or one rosbags cannot parse.
+    The types are msgtype and every type it uses, as the bag's recorder knew them, parsed by rosbags; empty when the bag
+    has no definition or one rosbags cannot parse.
     """
     try:
         if definition.format == MessageDefinitionFormat.MSG:
@@ -376,6 +378,7 @@ class BagDecoder:
         return ""
 
     def decode(self, topic: str, timestamp: int, msgtype: str, definition: MessageDefinition, raw: bytes) -> Any:
+        """The message on topic at timestamp (ns), decoded as msgtype; BagError if it does not decode."""
         store = self.store(topic, msgtype, definition)
         try:
             return store.deserialize_cdr(raw, msgtype)
@@ -441,9 +444,8 @@ def read_topics(path: Path, topics: tuple[str, ...]) -> dict[str, TopicMessages]
 def _raw_messages(path: Path, topics: tuple[str, ...], check: TopicCheck) -> Iterator[RawMessage]:
     """The stored messages of the topics asked, in log-time order.
 
-    The stored messages of the topics asked, in log-time order (of a cut bag: in the order written); check is
-    called for each topic asked that the bag's index lists, before any message is read (a cut bag has no index).
-    BagError if the bag cannot be read.
+    Of a cut bag they come in the order written. The check function is called for each topic asked that the bag's index
+    lists, before any message is read (a cut bag has no index). BagError if the bag cannot be read.
     """
     if _is_cut_bag(path):
         for topic, msgtype, timestamp, raw, definition in _cut_bag_records(path):

@@ -31,6 +31,8 @@ NORMS = ("longitudinal_error_two_norm_m_s05", "lateral_error_two_norm_m_s05", "c
 
 @dataclasses.dataclass(frozen=True)
 class Experiment:
+    """One of the paper's experiments: a maneuver at a time scale, and the paper's results for it."""
+
     name: str
     primitive_ids: tuple[str, ...]
     repeat_counts: tuple[int, ...]

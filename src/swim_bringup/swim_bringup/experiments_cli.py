@@ -75,6 +75,7 @@ def run_one(task: RunTask) -> RunReport:
 
 
 def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
+    """The command line of swim-experiments, parsed."""
     names = [e.name for e in paper_experiments()]
     parser = argparse.ArgumentParser(prog="swim-experiments", description=__doc__.splitlines()[0])
     parser.add_argument("--only", nargs="+", choices=names, default=None, help="these experiments (default: all)")
@@ -106,6 +107,7 @@ def executor_for(args: argparse.Namespace) -> concurrent.futures.Executor:
 
 
 def main(argv: Optional[list[str]] = None) -> int:
+    """The swim-experiments command; its exit status."""
     interrupt_on_sigterm()   # SIGTERM stops the runs as Ctrl-C does
     args = parse_arguments(argv)
     run_dir = (args.run_dir or Path("runs") / datetime.datetime.now().strftime("experiments-%Y%m%d-%H%M%S")).resolve()

@@ -1,9 +1,8 @@
 """The figures of runs and experiments (matplotlib, Agg).
 
-The figures of runs and experiments (matplotlib, Agg): a run's desired and actual motion, a bag's joint motion,
-the experiments' two-norms over seeds. Each function takes what the pure layer gives (run_record, analysis,
-experiments) and writes PNGs; save_figure is the one way a figure is written (swim-maneuver's and wake_figure's
-too).
+A run's desired and actual motion, a bag's joint motion, the experiments' two-norms over seeds. Each function takes what
+the pure layer gives (run_record, analysis, experiments) and writes PNGs; save_figure is the one way a figure is written
+(swim-maneuver's and wake_figure's too).
 """
 from __future__ import annotations
 

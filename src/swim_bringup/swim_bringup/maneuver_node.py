@@ -88,6 +88,8 @@ class ManeuverSettings:
 
 
 class ManeuverNode(Node):
+    """The operator's maneuver server: the perform_maneuver action, planned and tracked from where the vehicle is."""
+
     def __init__(self) -> None:
         super().__init__("maneuver_node")
         self.parameters = NodeSettings(self, PARAMETERS, ManeuverSettings)
@@ -178,8 +180,7 @@ class ManeuverNode(Node):
     def _start(self, goal: ManeuverGoal, catalog) -> tuple[VehicleState, str]:
         """The vehicle and the graph state the maneuver starts in.
 
-        The vehicle and the graph state the maneuver starts in (maneuver.start_state), waiting up to rest_wait_s
-        for a vehicle that is coming to rest.
+        They are as maneuver.start_state gives them, waiting up to rest_wait_s for a vehicle that is coming to rest.
         """
         settings = self.parameters.current
         deadline_s = time.monotonic() + settings.rest_wait_s
@@ -328,9 +329,8 @@ class ManeuverNode(Node):
 def vehicle_of(message) -> VehicleState:
     """The vehicle a sensor_msgs/JointState gives.
 
-    The vehicle a sensor_msgs/JointState gives, by swim_ros.trajectory_messages.state_from_message's checks (the
-    vehicle's joints in any order, finite values, lengths that agree); its speeds zero when the message carries none.
-    StateMessageError otherwise.
+    It passes swim_ros.trajectory_messages.state_from_message's checks (the vehicle's joints in any order, finite
+    values, lengths that agree); its speeds are zero when the message carries none. StateMessageError otherwise.
     """
     _, q, qdot = state_from_message(message, None, VelocityEstimator(), 0.0)
     return VehicleState(JOINT_NAMES_UNCONSTRAINED if len(q) == len(JOINT_NAMES_UNCONSTRAINED)
@@ -347,6 +347,7 @@ def goal_of(request) -> ManeuverGoal:
 
 
 def main(args: list[str] | None = None) -> None:
+    """Run maneuver_node."""
     run_node(ManeuverNode, args, name="maneuver_node",
              executor=functools.partial(MultiThreadedExecutor, num_threads=EXECUTOR_THREADS), large_messages=True)
 

@@ -52,6 +52,7 @@ class RunFailed(RuntimeError):
         self.run, self.reason = run, reason
 
     def __reduce__(self) -> tuple[type, tuple[str, str]]:   # back from a Dask worker with both fields
+        """Pickle the failure with both fields (back from a Dask worker)."""
         return (RunFailed, (self.run, self.reason))
 
 
@@ -174,11 +175,10 @@ def run_all(function: Callable[[T], R], tasks: Mapping[str, T], executor: concur
 def _run_in_this_process(call: Path, answer: Path) -> None:
     """The new process's side of run_isolated.
 
-    The new process's side of run_isolated: claim a domain, call the function, write its result or error.
-    SIGINT, how run_isolated stops a run, is Ctrl-C here even where the caller was started with SIGINT ignored (a
-    command put in the background by a shell without job control: Python then leaves it ignored, and the process
-    inherits that), and so is SIGTERM (the parent-death signal among others): the run stops its nodes before the
-    process ends.
+    Claim a domain, call the function, write its result or error. SIGINT, how run_isolated stops a run, is Ctrl-C here
+    even where the caller was started with SIGINT ignored (a command put in the background by a shell without job
+    control: Python then leaves it ignored, and the process inherits that), and so is SIGTERM (the parent-death signal
+    among others): the run stops its nodes before the process ends.
     """
     signal.signal(signal.SIGINT, signal.default_int_handler)
     interrupt_on_sigterm()

@@ -87,6 +87,7 @@ class Recording:
         print(f"\nswim-record: not recording {topic}: {reason}", file=self.status)
 
     def status_line(self) -> str:
+        """The topics recorded and their message counts, one line."""
         assert self.bag is not None
         counts = ", ".join(f"{topic} {count}" for topic, count in sorted(self.bag.counts.items()))
         return f"recording {len(self.bag.counts)} topics: {counts or 'none yet'}"
@@ -101,6 +102,7 @@ class Recording:
 
 
 def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
+    """The command line of swim-record, parsed."""
     parser = argparse.ArgumentParser(prog="swim-record", description=__doc__.splitlines()[0])
     parser.add_argument("topics", nargs="*", help="topics to record (with or without the leading /)")
     parser.add_argument("-a", "--all", action="store_true", help="record every topic, as it appears")
@@ -133,6 +135,7 @@ class StopRequest:
 
 
 def main(argv: Optional[list[str]] = None) -> int:
+    """The swim-record command; its exit status."""
     args = parse_arguments(argv)
     bag_path = args.output or Path(datetime.datetime.now().strftime("rosbag2_%Y_%m_%d-%H_%M_%S"))
     if bag_path.exists():

@@ -1,7 +1,7 @@
 """Topics into a bag, from inside a node.
 
-Topics into a bag, from inside a node: one raw subscription per topic, each message written as the CDR bytes
-received, stamped with the wall time of receipt. RunClient (swim-demo, the tests) and swim-record share it.
+One raw subscription per topic, each message written as the CDR bytes received, stamped with the wall time of receipt.
+RunClient (swim-demo, the tests) and swim-record share it.
 
 The QoS a recording subscription needs is the publishers': a latched topic (transient local) is recorded with a
 transient-local subscription, which gets the last message even when it subscribes late; offered_qos_for picks it
@@ -101,8 +101,8 @@ def _qos_time(duration: Any) -> QosTime:
 def offered_qos(publishers: Sequence[Any]) -> list[Qos]:
     """The publishers' QoS profiles as rosbag2's metadata.yaml lists them.
 
-    The publishers' QoS profiles as rosbag2's metadata.yaml lists them (rosbags' Qos). A history the graph does
-    not report (a remote publisher's) is written as system_default: rosbag2's readers accept no 'unknown'.
+    They are rosbags' Qos values. A history the graph does not report (a remote publisher's) is written as
+    system_default: rosbag2's readers accept no 'unknown'.
     """
     profiles = []
     for publisher in publishers:

@@ -93,17 +93,19 @@ class RunClient:
         return -1.0 if cdr is None else deserialize_message(cdr, TrackingState).plan_time_s
 
     def __enter__(self) -> "RunClient":
+        """The client, closed on leaving the block."""
         return self
 
     def __exit__(self, *exc) -> None:
+        """Close the client."""
         self.close()
 
     def close(self) -> None:
         """Finish the bag and leave DDS; safe to call twice.
 
-        Finish the bag and leave DDS; safe to call twice. The node and its subscriptions are destroyed here,
-        not left to the garbage collector: a closed client's readers would stay matched, and every publisher of
-        the next run on the domain would keep sending them each period (docs/benchmarks.md, bench_record).
+        The node and its subscriptions are destroyed here, not left to the garbage collector: a closed client's readers
+        would stay matched, and every publisher of the next run on the domain would keep sending them each period
+        (docs/benchmarks.md, bench_record).
         """
         import rclpy
         if self.bag is not None:
@@ -137,6 +139,7 @@ class RunClient:
 
     # --- the run -------------------------------------------------------------------------------------------
     def wait_for_nodes(self, timeout_s: float = STARTUP_TIMEOUT_S) -> None:
+        """Wait for the planner, the tracker and the loop's topics to be matched; RunError after timeout_s."""
         try:
             wait_for_server(self.executor, self.planner.service_is_ready, "planner_node", timeout_s)
             wait_for_server(self.executor, self.tracker.server_is_ready, "tracker_node", timeout_s)
@@ -241,10 +244,10 @@ class RunClient:
 
 
 def header_stamp_ns(cdr: bytes) -> int:
-    """The header stamp of a serialized message that starts with a std_msgs/Header.
+    """The header stamp, ns, of a serialized message that starts with a std_msgs/Header.
 
-    The header stamp of a serialized message that starts with a std_msgs/Header (CDR: a 4-byte encapsulation
-    header, its second byte 1 for little-endian, then the stamp's int32 sec and uint32 nanosec).
+    In CDR: a 4-byte encapsulation header, its second byte 1 for little-endian, then the stamp's int32 sec and uint32
+    nanosec.
     """
     sec, nanosec = struct.unpack_from("<iI" if cdr[1] == 1 else ">iI", cdr, 4)
     return sec * 1_000_000_000 + nanosec

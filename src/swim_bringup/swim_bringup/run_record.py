@@ -1,7 +1,6 @@
 """A bag read once into a typed record of the run (no ROS, no files written).
 
-A bag read once into a typed record of the run (no ROS, no files written): what swim-analyze, swim-demo and
-swim-maneuver measure and draw.
+What swim-analyze, swim-demo and swim-maneuver measure and draw.
 
 read_bag reads the bag's index and then, in one pass, every message the analysis uses: joint_states (the joint
 motion), tracking_state and plan (the last plan tracked: Run), diagnostics (a bridge_node's faults and timing) and
@@ -150,9 +149,9 @@ def bridge_measures_of(diagnostic_arrays: Iterable[Any]) -> Optional[BridgeMeasu
 class JointSeries:
     """One joint's samples in a bag's joint_states.
 
-    One joint's samples in a bag's joint_states: log time (when the recorder received the message) in s from
-    the topic's first message, position and velocity in the joint's unit (rad for a revolute joint, m for a
-    prismatic one such as R; per s for the velocity), each (n,); velocity is empty when the messages carry none.
+    Log time (when the recorder received the message) in s from the topic's first message, position and velocity in the
+    joint's unit (rad for a revolute joint, m for a prismatic one such as R; per s for the velocity), each (n,);
+    velocity is empty when the messages carry none.
     """
 
     time_s: np.ndarray

@@ -1,7 +1,7 @@
 """Statistics over seeds of swim-experiments' runs (no ROS).
 
-Statistics over seeds of swim-experiments' runs (no ROS): the value of largest magnitude, the mean and standard
-deviation of a measure, and sliding mode's relative change of a two-norm with a paired 95 % interval.
+The value of largest magnitude, the mean and standard deviation of a measure, and sliding mode's relative change of a
+two-norm with a paired 95 % interval.
 
 Each seed seeds the simulator's disturbances and sensor noise; the runs with and without sliding mode of one seed
 meet the same disturbance sequence, so they are a pair. Sliding mode's relative change of seed k is

@@ -1,8 +1,7 @@
 """Bring the closed loop up as separate processes talking over DDS, and down again cleanly.
 
-Bring the closed loop up as separate processes talking over DDS, and down again cleanly: each node a
-swim_ros.processes.NodeProcess (`ros2 run` in its own process group, stopped by SIGINT, then SIGKILL after the
-grace period: no orphans).
+Each node a swim_ros.processes.NodeProcess (`ros2 run` in its own process group, stopped by SIGINT, then SIGKILL after
+the grace period: no orphans).
 """
 from __future__ import annotations
 
@@ -25,8 +24,8 @@ PIPELINES = ("realistic", "paper")
 def config_dir(pipeline: str = "realistic") -> Path:
     """The installed folder of a pipeline's parameter files.
 
-    The installed folder of a pipeline's parameter files (sim, planner, tracker, bridge YAML): swim_bringup's
-    config/ for "realistic", config/paper/ for "paper". ValueError for another pipeline.
+    The files are the sim, planner, tracker and bridge YAML: swim_bringup's config/ for "realistic", config/paper/ for
+    "paper". ValueError for another pipeline.
     """
     if pipeline not in PIPELINES:
         raise ValueError(f"pipeline must be one of {', '.join(PIPELINES)}, got {pipeline!r}")
@@ -49,9 +48,11 @@ class System:
             raise
 
     def __enter__(self) -> "System":
+        """The system, stopped on leaving the block."""
         return self
 
     def __exit__(self, *exc) -> None:
+        """Stop the system."""
         self.stop()
 
     def dead(self) -> list[str]:
@@ -59,6 +60,7 @@ class System:
         return [n.spec.executable for n in self.nodes if not n.alive()]
 
     def stop(self) -> None:
+        """Interrupt every node, wait out the grace period, then kill what is left."""
         for node in self.nodes:
             node.interrupt()
         deadline = time.monotonic() + STOP_GRACE_S
@@ -106,8 +108,8 @@ VISUALIZATION_SPECS = (NodeSpec("swim_viz", "rig_state_publisher", parameters=("
 def maneuver_spec(config: Path) -> NodeSpec:
     """The operator's maneuver server with config's maneuver.yaml.
 
-    The operator's maneuver server with config's maneuver.yaml: the perform_maneuver action, which plans through
-    the planner and tracks through the tracker from where the vehicle is.
+    The perform_maneuver action, which plans through the planner and tracks through the tracker from where the vehicle
+    is.
     """
     return NodeSpec("swim_bringup", "maneuver_node", config / "maneuver.yaml")
 
