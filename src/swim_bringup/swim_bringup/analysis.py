@@ -1,4 +1,6 @@
-"""The paper's measures of a recorded run (Sec. 7), what a bag holds, and the tables swim-analyze, swim-demo and
+"""The paper's measures of a recorded run, what a bag holds, and the tables the commands print.
+
+The paper's measures of a recorded run (Sec. 7), what a bag holds, and the tables swim-analyze, swim-demo and
 swim-maneuver print (no ROS, no files written, no figures: analysis_cli is swim-analyze, figures draws).
 
 From the tracking_state topic (reference and measured q each control period) and the plan:
@@ -37,7 +39,9 @@ HARD_STOP_TOLERANCE_RAD = 1.0e-4
 
 
 def rig_hard_limits(rig_path: Optional[Path] = None) -> HardLimits:
-    """The rig's hard stops ((heave lower, upper), (pitch lower, upper), rad) that hard_stop_periods counts: the
+    """The rig's hard stops that hard_stop_periods counts, rad.
+
+    The rig's hard stops ((heave lower, upper), (pitch lower, upper), rad) that hard_stop_periods counts: the
     limits record of the rig file at rig_path, by default the shipped one (every node's when its rig_path is
     empty). RigConfigError if the file does not read.
     """
@@ -49,7 +53,9 @@ def _radius(run: Run, q: np.ndarray) -> np.ndarray:
 
 
 def platform_xy_m(run: Run, q: np.ndarray) -> np.ndarray:
-    """The platform's position p = R (cos alpha, sin alpha) in the tank's plane, m, (n, 2), at the run's joint
+    """The platform's position in the tank's plane, m, shape (n, 2).
+
+    The platform's position p = R (cos alpha, sin alpha) in the tank's plane, m, (n, 2), at the run's joint
     positions q (n, nq): run.q or run.q_reference.
     """
     alpha = q[:, run.joint_names.index("alpha")]
@@ -57,7 +63,9 @@ def platform_xy_m(run: Run, q: np.ndarray) -> np.ndarray:
 
 
 def hard_stop_periods(run: Run, hard_limits_rad: HardLimits) -> int:
-    """The periods in which the heave or the pitch (the run's last two joints) is at or past one of its hard limits
+    """The periods in which the heave or the pitch is at or past a hard limit.
+
+    The periods in which the heave or the pitch (the run's last two joints) is at or past one of its hard limits
     ((heave lower, upper), (pitch lower, upper), rad), to within HARD_STOP_TOLERANCE_RAD.
     """
     (heave_lower, heave_upper), (pitch_lower, pitch_upper) = hard_limits_rad
@@ -94,7 +102,9 @@ def measures(run: Run, hard_limits_rad: Optional[HardLimits] = None) -> RunMeasu
 
 
 def run_analysis(record: RecordedBag, hard_limits_rad: Optional[HardLimits] = None) -> RunAnalysis:
-    """The measures of the last plan tracked in the bag read (hard_limits_rad: as measures'), and the bridge's if a
+    """The measures of the last plan tracked in the bag read, and the bridge's.
+
+    The measures of the last plan tracked in the bag read (hard_limits_rad: as measures'), and the bridge's if a
     bridge ran. The record's run_error (MissingTopic, BagError, ValueError) if it holds no run, its bridge_error if
     the bridge's reports could not be read.
     """
@@ -108,7 +118,9 @@ def run_analysis(record: RecordedBag, hard_limits_rad: Optional[HardLimits] = No
 
 
 def analyze(bag_path: Path, hard_limits_rad: Optional[HardLimits] = None) -> RunAnalysis:
-    """run_analysis of the bag at bag_path. BagError if the bag cannot be read; MissingTopic if it lacks what the
+    """The run analysis of the bag at bag_path.
+
+    run_analysis of the bag at bag_path. BagError if the bag cannot be read; MissingTopic if it lacks what the
     measures need.
     """
     return run_analysis(read_bag(bag_path), hard_limits_rad)
@@ -154,7 +166,9 @@ def joint_states_summary(joint_states: JointStates) -> JointStatesSummary:
 
 @dataclasses.dataclass(frozen=True)
 class BagAnalysis:
-    """What swim-analyze makes of one bag: its topics, the joint motion when it has joint_states, the run's measures
+    """What swim-analyze makes of one bag.
+
+    It holds the bag's topics, the joint motion when it has joint_states, the run's measures
     when it has what they need, and what it lacks, each with why.
     """
 
@@ -167,7 +181,9 @@ class BagAnalysis:
     undecodable: tuple[tuple[str, str], ...] = ()   # (topic, why) for each topic whose messages cannot be decoded
 
     def to_json(self) -> dict[str, Any]:
-        """bag_summary.json: the bag, its topics (each with whether its type is known here and, when its messages
+        """The JSON form of the analysis, bag_summary.json's.
+
+        bag_summary.json: the bag, its topics (each with whether its type is known here and, when its messages
         cannot be decoded, why), the joint motion, the run's measures (report.json's keys), what is missing.
         """
         undecodable = dict(self.undecodable)
@@ -181,8 +197,9 @@ class BagAnalysis:
 
 
 def bag_analysis(record: RecordedBag, hard_limits_rad: Optional[HardLimits] = None) -> BagAnalysis:
-    """All that swim-analyze can tell of the bag read (hard_limits_rad: as measures'): what it lacks or holds
-    unreadably is named in `missing`.
+    """All that swim-analyze can tell of the bag read.
+
+    The hard_limits_rad argument is as measures'. What the bag lacks or holds unreadably is named in `missing`.
     """
     known_types = swim_typestore().fielddefs
     missing = []
@@ -207,7 +224,9 @@ def bag_analysis(record: RecordedBag, hard_limits_rad: Optional[HardLimits] = No
 
 
 def analyze_bag(bag_path: Path, hard_limits_rad: Optional[HardLimits] = None) -> BagAnalysis:
-    """bag_analysis of the bag at bag_path (a bag folder, or one .mcap or .db3 file). BagError if there is no
+    """The bag analysis of the bag at bag_path.
+
+    bag_analysis of the bag at bag_path (a bag folder, or one .mcap or .db3 file). BagError if there is no
     readable bag there.
     """
     return bag_analysis(read_bag(bag_path), hard_limits_rad)
@@ -248,7 +267,9 @@ def bag_section(label: str, analysis: BagAnalysis) -> str:
 
 
 def summary_table(reports: Mapping[str, RunAnalysis]) -> str:
-    """The measures of several runs (a RunReport is one) side by side, one column per run; a measure that only
+    """The measures of several runs side by side, a plain-text table.
+
+    The measures of several runs (a RunReport is one) side by side, one column per run; a measure that only
     some runs have (the bridge's) is blank for the others.
     """
     columns = [report.measure_values() for report in reports.values()]

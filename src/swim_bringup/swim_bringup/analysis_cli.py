@@ -43,7 +43,9 @@ def _label(bag: Path) -> str:
 
 
 def write_outputs(record: RecordedBag, analysis: BagAnalysis, output_dir: Path) -> list[Path]:
-    """bag_summary.json always; joint_states.png with joint_states; with the run's measures, report.json and the
+    """Write the analysis's files into output_dir; their paths.
+
+    bag_summary.json always; joint_states.png with joint_states; with the run's measures, report.json and the
     run's figures (figures.write_run_figures).
     """
     output_dir.mkdir(parents=True, exist_ok=True)
@@ -59,6 +61,7 @@ def write_outputs(record: RecordedBag, analysis: BagAnalysis, output_dir: Path) 
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The swim-analyze command; its exit status."""
     parser = argparse.ArgumentParser(
         prog="swim-analyze", description=__doc__.splitlines()[0],
         epilog=f"exit status: {EXIT_FULL_REPORT} every bag analysed in full; {EXIT_PARTIAL_REPORT} some bag lacked "

@@ -73,7 +73,9 @@ class BagWriter:
             self.add_topic(topic, msgtype)
 
     def add_topic(self, topic: str, msgtype: str, offered_qos: Sequence[Qos] = ()) -> None:
-        """A connection for topic, of type msgtype (e.g. 'sensor_msgs/msg/JointState'), with the QoS profiles its
+        """A connection for a topic of a message type.
+
+        A connection for topic, of type msgtype (e.g. 'sensor_msgs/msg/JointState'), with the QoS profiles its
         publishers offer (for metadata.yaml and a player). BagError for a type the type store does not know.
         """
         assert self._writer is not None, "BagWriter.add_topic after close()"
@@ -84,12 +86,15 @@ class BagWriter:
         self.counts[topic] = 0
 
     def write(self, topic: str, timestamp_ns: int, cdr: bytes) -> None:
+        """Write one message's CDR bytes on topic, stamped timestamp_ns (ns)."""
         assert self._writer is not None, "BagWriter.write after close()"
         self._writer.write(self._connections[topic], timestamp_ns, cdr)
         self.counts[topic] += 1
 
     def flush(self) -> None:
-        """End the chunk under way, if any, and put everything written on disk: a recorder killed after this
+        """End the chunk under way and put everything written on disk.
+
+        End the chunk under way, if any, and put everything written on disk: a recorder killed after this
         leaves a bag that reads up to here.
         """
         assert self._writer is not None, "BagWriter.flush after close()"
@@ -107,7 +112,9 @@ class BagWriter:
 
 @dataclasses.dataclass(frozen=True)
 class TopicInfo:
-    """A topic of a bag: its name as recorded, its type (e.g. 'sensor_msgs/msg/JointState') and how many messages
+    """A topic of a bag with its type and message count.
+
+    A topic of a bag: its name as recorded, its type (e.g. 'sensor_msgs/msg/JointState') and how many messages
     the bag holds on it.
     """
 
@@ -127,6 +134,7 @@ class BagInfo:
 
     @property
     def message_count(self) -> int:
+        """The number of messages over all topics."""
         return sum(topic.message_count for topic in self.topics)
 
 
@@ -139,7 +147,9 @@ MCAP_MAGIC = b"\x89MCAP0\r\n"
 
 
 def _open_reader(path: Path) -> Reader | None:
-    """An open rosbags Reader of the bag folder or storage file at path; None for an MCAP bag that rosbags cannot
+    """An open rosbags Reader of the bag at path, or None for an MCAP bag rosbags cannot open.
+
+    An open rosbags Reader of the bag folder or storage file at path; None for an MCAP bag that rosbags cannot
     open, which the mcap library reads instead (_mcap_file gives its file): one with a schema encoding rosbags has no
     format for (rosbag2's 'unknown'), or one MCAP file cut short (no summary, no closing magic: its recorder was
     killed). BagError if it is not a readable bag.
@@ -168,7 +178,9 @@ def _cut_short(file: Path) -> bool:
 
 
 def _mcap_summary(file: Path) -> Any:
-    """The summary of the MCAP file (the mcap library's Summary); None for a file without one (cut short, or
+    """The summary of the MCAP file, or None for a file without one.
+
+    The summary of the MCAP file (the mcap library's Summary); None for a file without one (cut short, or
     closed without it). BagError if it does not read.
     """
     from mcap.exceptions import McapError
@@ -183,8 +195,10 @@ def _mcap_summary(file: Path) -> Any:
 
 
 def _mcap_file(path: Path, why: str) -> Path:
-    """The one MCAP file of the bag at path (path itself, or the one its folder holds), for the mcap library to read
-    where rosbags cannot (why); BagError if there is not exactly one.
+    """The one MCAP file of the bag at path.
+
+    The file is path itself, or the one its folder holds, for the mcap library to read where rosbags cannot (why);
+    BagError if there is not exactly one.
     """
     files = [path] if path.is_file() else sorted(path.glob("*.mcap"))
     if len(files) != 1 or files[0].suffix != ".mcap":
@@ -223,7 +237,9 @@ def _linear_topics(path: Path, records: Iterator[tuple[str, str, int, bytes | No
 
 
 def _mcap_topics(path: Path) -> tuple[BagInfo, dict[str, tuple[str, MessageDefinition]]]:
-    """_bag_topics of an MCAP bag rosbags cannot open, with the mcap library: every channel of its summary, its
+    """The topics of an MCAP bag rosbags cannot open, read with the mcap library.
+
+    _bag_topics of an MCAP bag rosbags cannot open, with the mcap library: every channel of its summary, its
     schema's name as type; without summary or statistics, from a linear read.
     """
     file = _mcap_file(path, "rosbags cannot open it")
@@ -240,7 +256,9 @@ def _mcap_topics(path: Path) -> tuple[BagInfo, dict[str, tuple[str, MessageDefin
 
 
 def _schema_definition(schema: Any) -> tuple[str, MessageDefinition]:
-    """The type name and the definition an MCAP schema (the mcap library's record; None: a channel without schema)
+    """The type name and definition an MCAP schema carries.
+
+    The type name and the definition an MCAP schema (the mcap library's record; None: a channel without schema)
     carries; a definition of an encoding rosbags has no format for (rosbag2's 'unknown') is no definition.
     """
     if schema is None:
@@ -250,21 +268,27 @@ def _schema_definition(schema: Any) -> tuple[str, MessageDefinition]:
 
 
 def bag_info(path: Path) -> BagInfo:
-    """The topics of the bag at path (a folder, or one .mcap or .db3 file) with their types and message counts.
+    """The topics of the bag at path with their types and message counts.
+
+    The topics of the bag at path (a folder, or one .mcap or .db3 file) with their types and message counts.
     BagError if there is no readable bag there.
     """
     return _bag_topics(path)[0]
 
 
 def undecodable_topics(path: Path) -> dict[str, str]:
-    """The topics of the bag at path whose messages cannot be decoded, each with why: of a type that neither the bag
-    defines (in a definition that parses) nor this environment knows. BagError if there is no readable bag there.
+    """The topics of the bag at path whose messages cannot be decoded, each with why.
+
+    Each is of a type that neither the bag defines (in a definition that parses) nor this environment knows. BagError if
+    there is no readable bag there.
     """
     return bag_contents(path)[1]
 
 
 def bag_contents(path: Path) -> tuple[BagInfo, dict[str, str]]:
-    """bag_info and undecodable_topics of the bag at path, from one read of its index. BagError if there is no
+    """The topics and the undecodable topics of the bag at path, from one read.
+
+    bag_info and undecodable_topics of the bag at path, from one read of its index. BagError if there is no
     readable bag there.
     """
     info, definitions = _bag_topics(path)
@@ -281,8 +305,10 @@ IDL_SEPARATOR = "=" * 80 + "\n"
 
 
 def definition_types(msgtype: str, definition: MessageDefinition) -> dict[str, Any]:
-    """The types of a bag's own definition of msgtype (msgtype and every type it uses, as the bag's recorder knew
-    them), parsed by rosbags; empty when the bag has no definition or one rosbags cannot parse.
+    """The types of a bag's own definition of msgtype.
+
+    The types are msgtype and every type it uses, as the bag's recorder knew them, parsed by rosbags; empty when the bag
+    has no definition or one rosbags cannot parse.
     """
     try:
         if definition.format == MessageDefinitionFormat.MSG:
@@ -310,7 +336,9 @@ def _no_definition(msgtype: str, definition: MessageDefinition) -> str:
 
 
 class BagDecoder:
-    """Decodes the messages of one bag: each by its own type's definition in the bag (the one it was recorded with),
+    """A decoder of the messages of one bag.
+
+    Decodes the messages of one bag: each by its own type's definition in the bag (the one it was recorded with),
     or by the installed one (swim_typestore) where the bag has none.
     """
 
@@ -350,6 +378,7 @@ class BagDecoder:
         return ""
 
     def decode(self, topic: str, timestamp: int, msgtype: str, definition: MessageDefinition, raw: bytes) -> Any:
+        """The message on topic at timestamp (ns), decoded as msgtype; BagError if it does not decode."""
         store = self.store(topic, msgtype, definition)
         try:
             return store.deserialize_cdr(raw, msgtype)
@@ -365,7 +394,9 @@ TopicCheck = Callable[[str, str, MessageDefinition], object]
 
 
 def read_messages(path: Path, topics: tuple[str, ...]) -> Iterator[tuple[str, int, Any]]:
-    """(topic, log time ns, decoded message: the typestore's class of its type) for the topics asked (names exactly
+    """The decoded messages of the topics asked, in log-time order.
+
+    (topic, log time ns, decoded message: the typestore's class of its type) for the topics asked (names exactly
     as recorded; a topic not in the bag gives nothing), in log-time order; of a bag cut before close() (no
     metadata.yaml), the messages of its complete chunks in the order written. BagError if the bag cannot be read
     or a message asked for cannot be decoded (its type neither defined in the bag nor known here, its bytes not of
@@ -381,7 +412,9 @@ TopicMessages = Union[list[tuple[int, Any]], BagError]
 
 
 def read_topics(path: Path, topics: tuple[str, ...]) -> dict[str, TopicMessages]:
-    """Each topic asked (names exactly as recorded) with its messages, (log time ns, decoded message) in
+    """Each topic asked with its decoded messages, or the error that says why it has none.
+
+    Each topic asked (names exactly as recorded) with its messages, (log time ns, decoded message) in
     read_messages' order, from one read of the bag; a topic not in the bag has none. A topic whose messages cannot
     be decoded gets the BagError that says why, and the others their messages; a bag whose messages cannot be read
     gives that BagError to every topic not already failed.
@@ -409,9 +442,10 @@ def read_topics(path: Path, topics: tuple[str, ...]) -> dict[str, TopicMessages]
 
 
 def _raw_messages(path: Path, topics: tuple[str, ...], check: TopicCheck) -> Iterator[RawMessage]:
-    """The stored messages of the topics asked, in log-time order (of a cut bag: in the order written); check is
-    called for each topic asked that the bag's index lists, before any message is read (a cut bag has no index).
-    BagError if the bag cannot be read.
+    """The stored messages of the topics asked, in log-time order.
+
+    Of a cut bag they come in the order written. The check function is called for each topic asked that the bag's index
+    lists, before any message is read (a cut bag has no index). BagError if the bag cannot be read.
     """
     if _is_cut_bag(path):
         for topic, msgtype, timestamp, raw, definition in _cut_bag_records(path):
@@ -438,7 +472,9 @@ def _raw_messages(path: Path, topics: tuple[str, ...], check: TopicCheck) -> Ite
 
 
 def _mcap_messages(path: Path, topics: tuple[str, ...], check: TopicCheck) -> Iterator[RawMessage]:
-    """_raw_messages of an MCAP bag rosbags cannot open, with the mcap library: by its index in log-time order;
+    """The stored messages of an MCAP bag rosbags cannot open, read with the mcap library.
+
+    _raw_messages of an MCAP bag rosbags cannot open, with the mcap library: by its index in log-time order;
     without summary, linearly in the order written.
     """
     from mcap.exceptions import McapError
@@ -463,7 +499,9 @@ def _mcap_messages(path: Path, topics: tuple[str, ...], check: TopicCheck) -> It
 
 
 def read_cut_bag(path: Path) -> Iterator[tuple[str, str, int, bytes | None]]:
-    """(topic, type name, log time ns, CDR bytes) of every message in the complete chunks of a bag folder's MCAP
+    """The messages in the complete chunks of a bag folder's MCAP file without summary.
+
+    (topic, type name, log time ns, CDR bytes) of every message in the complete chunks of a bag folder's MCAP
     file that has no summary (its recorder was killed), in the order written, read linearly with the mcap library
     (Foxglove's reader) up to the first incomplete record; and (topic, type name, 0, None) for each channel as it
     is declared (a topic recorded without messages). BagError if the folder has no single MCAP file.
@@ -486,7 +524,9 @@ def _cut_bag_records(path: Path) -> Iterator[tuple[str, str, int, bytes | None, 
 
 
 def _mcap_records(file: Path) -> Iterator[tuple[str, str, int, bytes | None, MessageDefinition]]:
-    """(topic, type name, log time ns, CDR bytes, the definition of its type the file carries) of every message of
+    """The messages of an MCAP file read linearly, up to the first incomplete record.
+
+    (topic, type name, log time ns, CDR bytes, the definition of its type the file carries) of every message of
     the MCAP file, read linearly in the order written up to the first incomplete record (a file cut short); and
     (topic, type name, 0, None, definition) for each channel as it is declared. BagError if it is not MCAP.
     """

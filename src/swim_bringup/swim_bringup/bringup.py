@@ -1,4 +1,6 @@
-"""swim-bringup: the closed loop's nodes kept up for an operator, the same nodes with the same parameters as
+"""The swim-bringup command: the closed loop's nodes kept up for an operator.
+
+swim-bringup: the closed loop's nodes kept up for an operator, the same nodes with the same parameters as
 `ros2 launch swim_bringup sim.launch.yaml` (or bridge.launch.xml), where `launch` is not installed.
 
 `swim-bringup sim` starts sim_node (lock-step, or real time with --realtime), `swim-bringup bridge` bridge_node
@@ -55,13 +57,14 @@ FOXGLOVE_DEFAULT_PORT = 8765
 def bringup_specs(plant: str, backend: Optional[str] = None, pipeline: str = "realistic", realtime: bool = False,
                   sliding_mode: bool = True, config: Optional[Path] = None,
                   foxglove_port: Optional[int] = None, rig_path: str = "") -> list[NodeSpec]:
-    """The nodes swim-bringup starts for a plant ("sim" or "bridge"), as the launch files start them: the pipeline's
+    """The nodes swim-bringup starts for a plant.
+
+    The plant is "sim" or "bridge"; the nodes are as the launch files start them: the pipeline's
     parameter files (config_dir(pipeline)) or config's, sim_node in real time if realtime (else as its file says:
     lock-step, with the tracker's stale limit raised, system.LOCKSTEP_STALE_OVERRIDE), bridge_node with backend
     (default emulated), the tracker's sliding mode on or off, the maneuver server, and foxglove_node on
     foxglove_port (loopback) unless it is None, every node that loads the rig with rig_path (empty: the shipped rig).
-    BringupError for a backend
-    with the simulator, real time with the bridge (always real time) or an unknown backend.
+    BringupError for a backend with the simulator, real time with the bridge (always real time) or an unknown backend.
     """
     if plant not in PLANTS:
         raise BringupError(f"the set is one of {', '.join(PLANTS)}, not {plant!r}")
@@ -91,6 +94,7 @@ def missing_files(specs: list[NodeSpec]) -> list[str]:
 
 
 def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
+    """The command line of swim-bringup, parsed."""
     parser = argparse.ArgumentParser(prog="swim-bringup", description=__doc__.splitlines()[0])
     parser.add_argument("plant", choices=tuple(PLANTS),
                         help="sim: sim_node (lock-step unless --realtime); bridge: bridge_node (real time)")
@@ -117,18 +121,22 @@ def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
 
 
 class StopRequest:
-    """The stop signals, recorded instead of acted on: the loop that watches the nodes stops them at its next look.
-    A handler that raised could interrupt a node's start between its fork and its record, orphaning it.
+    """The stop signals, recorded instead of acted on.
+
+    The loop that watches the nodes stops them at its next look. A handler that raised could interrupt a node's start
+    between its fork and its record, orphaning it.
     """
 
     def __init__(self) -> None:
         self.signal: Optional[int] = None
 
     def __call__(self, signum: int, frame: Optional[FrameType]) -> None:
+        """Record the stop signal signum."""
         self.signal = signum
 
     @contextlib.contextmanager
     def installed(self) -> Iterator["StopRequest"]:
+        """Record the stop signals while in the block, their previous handlers restored after it."""
         previous = {signum: signal.signal(signum, self) for signum in STOP_SIGNALS}
         try:
             yield self
@@ -148,6 +156,7 @@ def exit_status(returncode: int) -> str:
 
 
 def log_tail(path: Path, lines: int = LOG_TAIL_LINES) -> list[str]:
+    """The last lines of the log at path, or why it cannot be read."""
     try:
         return path.read_text(errors="replace").splitlines()[-lines:]
     except OSError as err:
@@ -155,6 +164,7 @@ def log_tail(path: Path, lines: int = LOG_TAIL_LINES) -> list[str]:
 
 
 def report_death(node: NodeProcess) -> None:
+    """Print on stderr that a node ended, with its exit status and the end of its log."""
     returncode = node.process.poll()
     status = exit_status(returncode) if returncode is not None else "ended"
     tail = log_tail(node.log_path)
@@ -166,7 +176,9 @@ def report_death(node: NodeProcess) -> None:
 
 
 def watch(system: System, stop: StopRequest, keep_going: bool) -> int:
-    """Look at the nodes every POLL_S until a stop signal (0), a node's death without keep_going (1), or, with
+    """Watch the nodes until a stop signal or a node's death; the exit status.
+
+    Look at the nodes every POLL_S until a stop signal (0), a node's death without keep_going (1), or, with
     keep_going, every node dead (1). Each death is reported once.
     """
     reported: set[int] = set()
@@ -189,6 +201,7 @@ def watch(system: System, stop: StopRequest, keep_going: bool) -> int:
 
 
 def main(argv: Optional[list[str]] = None) -> int:
+    """The swim-bringup command; its exit status."""
     args = parse_arguments(argv)
     log_dir = args.log_dir or Path("runs") / datetime.datetime.now().strftime("bringup-%Y%m%d-%H%M%S") / "logs"
     try:

@@ -27,6 +27,7 @@ from swim_ros.processes import interrupt_on_sigterm
 
 
 def parse_arguments(argv: list[str] | None) -> argparse.Namespace:
+    """The command line of swim-demo, parsed."""
     parser = argparse.ArgumentParser(prog="swim-demo", description=__doc__.splitlines()[0])
     parser.add_argument("--run-dir", type=Path, default=None, help="output folder (default runs/demo-<time>)")
     parser.add_argument("--plant", choices=tuple(PLANTS), default="sim",
@@ -61,6 +62,7 @@ def parameter_folder(args: argparse.Namespace) -> Path:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The swim-demo command: one closed-loop run recorded and analysed; its exit status."""
     interrupt_on_sigterm()   # SIGTERM stops the nodes as Ctrl-C does
     args = parse_arguments(argv)
     run_dir = args.run_dir or Path("runs") / datetime.datetime.now().strftime("demo-%Y%m%d-%H%M%S")

@@ -1,4 +1,6 @@
-"""The paper's experiments (Sec. 7; docs/model_and_method.md section 6) and the comparison of their runs over seeds
+"""The paper's experiments and the comparison of their runs over seeds with the paper's.
+
+The paper's experiments (Sec. 7; docs/model_and_method.md section 6) and the comparison of their runs over seeds
 with the paper's (no ROS, no files written, no figures: experiments_cli is swim-experiments, figures draws).
 
 Every experiment runs with and without the sliding-mode term for each seed 1..N (sim_node's ``seed``: its
@@ -22,23 +24,15 @@ from typing import Any, Mapping, Optional, Sequence, Union
 from swim_bringup.reports import (ExperimentRow, FailedRun, NormComparison, RunReport, SeedRuns, SlidingModePair,
                                   run_failures)
 from swim_bringup.statistics import NormStatistics, PairedChange, largest_magnitude
+from swim_planner.catalog import PAPER_CONSTRAINED, PAPER_LANE_CHANGE, PAPER_LANE_KEEPING
 
 NORMS = ("longitudinal_error_two_norm_m_s05", "lateral_error_two_norm_m_s05", "cartesian_error_two_norm_m_s05")
-#: the paper's constrained maneuver (Sec. 7.1): accelerate to E1, cruise x2, cruise-to-cruise, cruise x2, stop
-PAPER_CONSTRAINED = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05",
-                      "constrained/cruise_to_cruise/E0.05-E0.10", "constrained/cruise/E0.10",
-                      "constrained/decelerate/E0.10"], [1, 2, 1, 2, 1])
-#: the paper's free lane keeping (Sec. 7.2) at R = 0.43 m: accelerate, 14 cruises, decelerate (20 s); the default
-#: on the bridge, whose emulated rig is the free vehicle
-PAPER_LANE_KEEPING = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/decelerate/R0.43/E0.05"],
-                      [1, 14, 1])
-#: the paper's lane change (Sec. 7.3) at E = 0.05: accelerate, 5 cruises in lane 1, the change, 10 in lane 2, stop
-PAPER_LANE_CHANGE = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/lane_change/R0.43-R0.48/E0.05",
-                      "free/cruise/R0.48/E0.05", "free/decelerate/R0.48/E0.05"], [1, 5, 1, 10, 1])
 
 
 @dataclasses.dataclass(frozen=True)
 class Experiment:
+    """One of the paper's experiments: a maneuver at a time scale, and the paper's results for it."""
+
     name: str
     primitive_ids: tuple[str, ...]
     repeat_counts: tuple[int, ...]
@@ -88,7 +82,9 @@ def run_outcome(run: SeedRun) -> str:
 
 
 def compare(experiment: Experiment, runs: Mapping[int, SlidingModePair[SeedRun]]) -> Optional[ExperimentRow]:
-    """One experiment's row from its runs by seed, with (on) and without (off) sliding mode, beside the paper's;
+    """One experiment's row from its runs by seed, beside the paper's.
+
+    One experiment's row from its runs by seed, with (on) and without (off) sliding mode, beside the paper's;
     None if no seed has both runs reported. Each quantity of today's row is the seed value of largest magnitude
     over the seeds reported, the outcome "ok" only if every run's is; the statistics are over the paired seeds.
     """
@@ -167,7 +163,9 @@ def _spread(statistics: NormStatistics, sliding_mode: bool) -> str:
 
 
 def results_table(rows: Sequence[ExperimentRow], pipeline: str) -> str:
-    """Markdown: the pipeline's runs (outcome, duration, the largest final offsets over seeds), then each two-norm's
+    """The results of the pipeline's runs as Markdown (results.md).
+
+    Markdown: the pipeline's runs (outcome, duration, the largest final offsets over seeds), then each two-norm's
     statistics over seeds beside the paper's change (results.md).
     """
     seeds = sorted({seed for row in rows for seed in row.per_seed.seeds})

@@ -1,4 +1,6 @@
-"""swim-experiments: the paper's experiments in closed loop over DDS, in simulation, over seeds
+"""The swim-experiments command: the paper's experiments in closed loop over seeds.
+
+swim-experiments: the paper's experiments in closed loop over DDS, in simulation, over seeds
 (Sec. 7; docs/model_and_method.md section 6).
 
 Every experiment (experiments.paper_experiments) runs with and without the sliding-mode term for each seed 1..N,
@@ -58,7 +60,9 @@ class RunTask:
 
 
 def run_one(task: RunTask) -> RunReport:
-    """One closed-loop run in a fresh bring-up on the current ROS domain; its report (analysis measures, the
+    """One closed-loop run in a fresh bring-up; its report.
+
+    One closed-loop run in a fresh bring-up on the current ROS domain; its report (analysis measures, the
     action's result, wall time).
     """
     task.run_dir.mkdir(parents=True, exist_ok=True)
@@ -71,6 +75,7 @@ def run_one(task: RunTask) -> RunReport:
 
 
 def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
+    """The command line of swim-experiments, parsed."""
     names = [e.name for e in paper_experiments()]
     parser = argparse.ArgumentParser(prog="swim-experiments", description=__doc__.splitlines()[0])
     parser.add_argument("--only", nargs="+", choices=names, default=None, help="these experiments (default: all)")
@@ -102,6 +107,7 @@ def executor_for(args: argparse.Namespace) -> concurrent.futures.Executor:
 
 
 def main(argv: Optional[list[str]] = None) -> int:
+    """The swim-experiments command; its exit status."""
     interrupt_on_sigterm()   # SIGTERM stops the runs as Ctrl-C does
     args = parse_arguments(argv)
     run_dir = (args.run_dir or Path("runs") / datetime.datetime.now().strftime("experiments-%Y%m%d-%H%M%S")).resolve()

@@ -1,7 +1,8 @@
-"""The figures of runs and experiments (matplotlib, Agg): a run's desired and actual motion, a bag's joint motion,
-the experiments' two-norms over seeds. Each function takes what the pure layer gives (run_record, analysis,
-experiments) and writes PNGs; save_figure is the one way a figure is written (swim-maneuver's and wake_figure's
-too).
+"""The figures of runs and experiments (matplotlib, Agg).
+
+A run's desired and actual motion, a bag's joint motion, the experiments' two-norms over seeds. Each function takes what
+the pure layer gives (run_record, analysis, experiments) and writes PNGs; save_figure is the one way a figure is written
+(swim-maneuver's and wake_figure's too).
 """
 from __future__ import annotations
 
@@ -44,7 +45,9 @@ def write_joint_figure(joints: Mapping[str, JointSeries], path: Path) -> Path:
 
 
 def write_run_figures(record: RecordedBag, output_dir: Path) -> list[Path]:
-    """Desired vs actual alpha and alphadot (Figs. 19-20 style), heave and pitch, the Cartesian path; with the vortex
+    """Write a run's figures into output_dir; their paths.
+
+    Desired vs actual alpha and alphadot (Figs. 19-20 style), heave and pitch, the Cartesian path; with the vortex
     wake recorded, its last vortices over the path (wake.png). The record's run_error if it holds no run, its
     wake_error if the wake could not be read.
     """
@@ -96,7 +99,9 @@ def write_run_figures(record: RecordedBag, output_dir: Path) -> list[Path]:
 
 
 def write_errors_figure(rows: Sequence[ExperimentRow], path: Path) -> Path:
-    """The two-norms of every seed with and without sliding mode: one row of panels per experiment, one column per
+    """Draw the two-norms of every seed with and without sliding mode into path.
+
+    The two-norms of every seed with and without sliding mode: one row of panels per experiment, one column per
     two-norm, each seed's pair joined by a line; the panel's title gives the mean change and its interval.
     """
     figure, axes = pyplot().subplots(max(len(rows), 1), len(NORMS),

@@ -35,14 +35,16 @@ class NotAtRest(ManeuverGoalError):
 
 @dataclasses.dataclass(frozen=True)
 class RestBounds:
-    """The joint speeds under which the vehicle counts as at rest: every angular joint (alpha, phi, theta) under
-    angular_speed_rad_s, the platform's R under linear_speed_m_s.
+    """The joint speeds under which the vehicle counts as at rest.
+
+    Every angular joint (alpha, phi, theta) under angular_speed_rad_s, the platform's R under linear_speed_m_s.
     """
 
     angular_speed_rad_s: float
     linear_speed_m_s: float
 
     def validate(self) -> None:
+        """ValueError unless every bound is finite and positive."""
         for name, value in dataclasses.asdict(self).items():
             if not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"rest bound {name} must be finite and > 0, got {value!r}")
@@ -58,10 +60,12 @@ class VehicleState:
 
     @property
     def constrained(self) -> bool:
+        """Whether the vehicle is the constrained one (its joints have no R)."""
         return "R" not in self.joint_names
 
     @property
     def alpha_rad(self) -> float:
+        """The hub angle alpha, rad."""
         return float(self.q[self.joint_names.index("alpha")])
 
     @property
@@ -81,7 +85,9 @@ class VehicleState:
 
 @dataclasses.dataclass(frozen=True)
 class ManeuverGoal:
-    """An operator's request: a sequence (primitive_ids with repeat_counts) or a goal state at least goal_alpha_rad
+    """An operator's maneuver request.
+
+    An operator's request: a sequence (primitive_ids with repeat_counts) or a goal state at least goal_alpha_rad
     from the start; the time scale (0: the planner's default) and the tracker's tolerances.
     """
 
@@ -94,7 +100,9 @@ class ManeuverGoal:
     tolerances: Tolerances = Tolerances()
 
     def validate(self) -> None:
-        """ManeuverGoalError unless the goal names a sequence or a goal state, with its fields consistent. The time
+        """Check the goal's fields.
+
+        ManeuverGoalError unless the goal names a sequence or a goal state, with its fields consistent. The time
         scale and the ids are the planner's to judge (it names what it refuses).
         """
         if self.mode == MODE_SEQUENCE:
@@ -124,8 +132,10 @@ class ManeuverGoal:
 
 
 def rest_state_of(vehicle: VehicleState, states: Sequence[str], lane_tolerance_m: float) -> str:
-    """The graph's rest state the vehicle is in: the constrained vehicle's, or the free vehicle's on the lane nearest
-    its R; ManeuverGoalError when the graph has none or R is farther than lane_tolerance_m from every lane.
+    """The graph's rest state the vehicle is in.
+
+    The constrained vehicle's, or the free vehicle's on the lane nearest its R; ManeuverGoalError when the graph has
+    none or R is farther than lane_tolerance_m from every lane.
     """
     if vehicle.constrained:
         if CONSTRAINED_REST_STATE not in states:
@@ -147,10 +157,11 @@ def rest_state_of(vehicle: VehicleState, states: Sequence[str], lane_tolerance_m
 
 def start_state(goal: ManeuverGoal, vehicle: VehicleState, states: Sequence[str],
                 start_states: dict[str, str], bounds: RestBounds, lane_tolerance_m: float) -> str:
-    """The graph state a from-rest maneuver starts in, after the checks: the goal is valid, the vehicle at rest
-    (every joint speed under bounds: NotAtRest otherwise), and a sequence's first primitive (start_states: id -> its
-    start state) starts in the vehicle's rest state. ManeuverGoalError with the reason otherwise; ids the planner
-    does not know are left for it to refuse.
+    """The graph state a from-rest maneuver starts in, after the checks.
+
+    The checks: the goal is valid, the vehicle at rest (every joint speed under bounds: NotAtRest otherwise), and a
+    sequence's first primitive (start_states: id -> its start state) starts in the vehicle's rest state.
+    ManeuverGoalError with the reason otherwise; ids the planner does not know are left for it to refuse.
     """
     goal.validate()
     rest = rest_state_of(vehicle, states, lane_tolerance_m)

@@ -138,11 +138,13 @@ class ServerLost(Exception):
 
 
 def ros_domain() -> str:
+    """The ROS domain the command runs on (ROS_DOMAIN_ID, default 0)."""
     return os.environ.get("ROS_DOMAIN_ID") or "0"
 
 
 # ----- the command line ------------------------------------------------------------------------------------------
 def positive_int(text: str) -> int:
+    """An argparse type: an integer of 1 or more."""
     value = int(text)
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be 1 or more, got {value}")
@@ -150,6 +152,7 @@ def positive_int(text: str) -> int:
 
 
 def non_negative_seconds(text: str) -> float:
+    """An argparse type: a finite number of seconds, 0 or more."""
     value = float(text)
     if not (math.isfinite(value) and value >= 0.0):
         raise argparse.ArgumentTypeError(f"must be a finite number of seconds >= 0, got {text}")
@@ -219,8 +222,10 @@ def maneuver_goal(args: argparse.Namespace) -> ManeuverGoal:
 
 # ----- a session on the ROS domain ------------------------------------------------------------------------------
 class Session:
-    """An rclpy context, node and executor of the command's own, on the environment's ROS domain. RunClient has the
-    same context, node, executor and close(), and stands in for it when a run is recorded.
+    """An rclpy context, node and executor of the command's own.
+
+    They run on the environment's ROS domain. RunClient has the same context, node, executor and close(), and stands in
+    for it when a run is recorded.
     """
 
     def __init__(self) -> None:
@@ -233,6 +238,7 @@ class Session:
         self.executor.add_node(self.node)
 
     def close(self) -> None:
+        """Shut the executor down, destroy the node and shut the context down."""
         import rclpy
         self.executor.shutdown()
         self.node.destroy_node()
@@ -240,7 +246,9 @@ class Session:
 
 
 def spin_until_settled(session: Any, done: Callable[[], bool], timeout_s: float) -> None:
-    """Spin until done() holds or the ROS graph's nodes and topics have not changed for GRAPH_STABLE_S, at most
+    """Spin until done() holds or the ROS graph has settled.
+
+    Spin until done() holds or the ROS graph's nodes and topics have not changed for GRAPH_STABLE_S, at most
     timeout_s.
     """
     from swim_ros.calls import spin_until
@@ -274,6 +282,7 @@ def call(session: Any, client: Any, request: Any, what: str, wait_s: float) -> A
 
 
 def list_primitives(session: Any, wait_s: float) -> Any:
+    """The planner's primitive list (ListPrimitives response), waiting up to wait_s for the planner."""
     from swim_interfaces.srv import ListPrimitives
     client = session.node.create_client(ListPrimitives, "list_primitives")
     return call(session, client, ListPrimitives.Request(), "planner_node (list_primitives)", wait_s)
@@ -296,6 +305,7 @@ def primitive_table(listing: Any) -> str:
 
 
 def list_command(args: argparse.Namespace) -> int:
+    """The list command: print the planner's primitives; the exit status."""
     session = Session()
     try:
         listing = list_primitives(session, args.wait)
@@ -308,8 +318,10 @@ def list_command(args: argparse.Namespace) -> int:
 # ----- plan ------------------------------------------------------------------------------------------------------
 @dataclasses.dataclass(frozen=True)
 class PlanArrays:
-    """A PlannedTrajectory's arrays, shaped: times (N,), s; q and qdot (N, nq) in joint_names' order (rad, m);
-    feed-forward torques (N, 2) heave and pitch, N m; radius (N,), m: R, or the constrained plan's lane.
+    """A PlannedTrajectory's arrays, shaped.
+
+    Times (N,), s; q and qdot (N, nq) in joint_names' order (rad, m); feed-forward torques (N, 2) heave and pitch, N m;
+    radius (N,), m: R, or the constrained plan's lane.
     """
 
     joint_names: tuple[str, ...]
@@ -321,6 +333,7 @@ class PlanArrays:
 
     @classmethod
     def of(cls, plan: Any) -> "PlanArrays":
+        """The arrays of a PlannedTrajectory message."""
         names = tuple(plan.joint_names)
         time_s = np.asarray(plan.time_from_start_s, dtype=float)
         q = np.asarray(plan.positions, dtype=float).reshape(len(time_s), len(names))
@@ -329,6 +342,7 @@ class PlanArrays:
                    np.asarray(plan.feedforward_torques, dtype=float).reshape(len(time_s), 2), radius_m)
 
     def column(self, name: str) -> np.ndarray:
+        """The positions of the joint name over the plan, (N,), rad or m."""
         return self.q[:, self.joint_names.index(name)]
 
 
@@ -352,8 +366,10 @@ def repeats_of(primitive_ids: Sequence[str]) -> list[tuple[str, int]]:
 
 @dataclasses.dataclass(frozen=True)
 class PlanSummary:
-    """What a plan asks of the vehicle and its motors. Per motor (heave, pitch): the peak |feed-forward torque|, N m,
-    its fraction of the motor's limit, and the primitive it falls in (a junction sample is the earlier one's).
+    """What a plan asks of the vehicle and its motors.
+
+    Per motor (heave, pitch): the peak |feed-forward torque|, N m, its fraction of the motor's limit, and the primitive
+    it falls in (a junction sample is the earlier one's).
     """
 
     sequence: tuple[tuple[str, int], ...]   # the primitives in order, consecutive repeats counted
@@ -370,6 +386,7 @@ class PlanSummary:
 
     @classmethod
     def of(cls, plan: Any, torque_limits_n_m: Sequence[float]) -> "PlanSummary":
+        """The summary of a PlannedTrajectory message against the motors' torque limits, N m."""
         arrays = PlanArrays.of(plan)
         alpha = arrays.column("alpha")
         segment_of_sample = np.zeros(len(arrays.time_s), dtype=int)
@@ -390,9 +407,11 @@ class PlanSummary:
 
     @property
     def risk(self) -> str:
+        """The plan's saturation risk by its larger peak fraction: 'low', 'moderate' or 'high'."""
         return saturation_risk(max(self.peak_fraction))
 
     def lines(self, torque_limits_n_m: Sequence[float]) -> list[str]:
+        """The summary as lines of text, the torques beside torque_limits_n_m (N m)."""
         sequence = ", ".join(f"{pid} x{count}" if count > 1 else pid for pid, count in self.sequence)
         motor = int(np.argmax(self.peak_fraction))
         torques = [f"{name} {peak:.3f} N m ({100 * fraction:.0f} % of {limit:.3g} N m, in {primitive})"
@@ -412,7 +431,9 @@ class PlanSummary:
 
 
 def write_plan_figure(plan: Any, torque_limits_n_m: Sequence[float], path: Path) -> Path:
-    """The plan drawn: alpha and alphadot, heave and pitch, the feed-forward torques against the motors' limits,
+    """Draw the plan against plan time into path.
+
+    The plan drawn: alpha and alphadot, heave and pitch, the feed-forward torques against the motors' limits,
     against plan time, the primitives' junctions marked.
     """
     from swim_bringup.figures import pyplot, save_figure
@@ -443,7 +464,9 @@ def write_plan_figure(plan: Any, torque_limits_n_m: Sequence[float], path: Path)
 
 
 def latest_vehicle(session: Any, timeout_s: float) -> Optional[VehicleState]:
-    """The vehicle as the latest joint_states gives it, or None when, once the graph has settled, no node publishes
+    """The vehicle as the latest joint_states gives it, or None without a plant.
+
+    The vehicle as the latest joint_states gives it, or None when, once the graph has settled, no node publishes
     joint_states and no plant node (PLANT_NODES) is up; CommandError if one is and no joint_states arrives within
     timeout_s (a plant's publisher may be discovered after the plant).
     """
@@ -477,8 +500,10 @@ def latest_vehicle(session: Any, timeout_s: float) -> Optional[VehicleState]:
 
 
 def plan_request(goal: ManeuverGoal, vehicle: Optional[VehicleState], states: Sequence[str]) -> Any:
-    """The RequestManeuver a goal makes from where the vehicle is: its alpha (0 without one) and, for a goal state,
-    the rest state of its vehicle on the lane nearest its R (without one: the planner's default start).
+    """The RequestManeuver a goal makes from where the vehicle is.
+
+    It carries the vehicle's alpha (0 without one) and, for a goal state, the rest state of its vehicle on the lane
+    nearest its R (without one: the planner's default start).
     """
     from swim_interfaces.srv import RequestManeuver
     from swim_ros.calls import new_request_id
@@ -496,6 +521,7 @@ def plan_request(goal: ManeuverGoal, vehicle: Optional[VehicleState], states: Se
 
 
 def vehicle_line(vehicle: Optional[VehicleState], request: Any) -> str:
+    """The line that says where the maneuver starts."""
     if vehicle is None:
         return "start: no joint_states on the domain: alpha 0" + (
             ", the planner's default start state" if request.mode == MODE_GOAL else "")
@@ -505,6 +531,7 @@ def vehicle_line(vehicle: Optional[VehicleState], request: Any) -> str:
 
 
 def plan_command(args: argparse.Namespace) -> int:
+    """The plan command: plan the maneuver from where the vehicle is and print it; the exit status."""
     from swim_interfaces.srv import RequestManeuver
     from swim_model import load_rig
     goal = maneuver_goal(args)
@@ -530,7 +557,9 @@ def plan_command(args: argparse.Namespace) -> int:
 
 # ----- run -------------------------------------------------------------------------------------------------------
 class InterruptWatch:
-    """Ctrl-C as a request, never as an exception in the middle of a callback (a bag write): the signal handler sets
+    """Ctrl-C as a request, never as an exception in the middle of a callback.
+
+    Ctrl-C never raises in the middle of a callback (a bag write): the signal handler sets
     requested and triggers a guard condition of the session's node; the executor runs its callback between other
     callbacks, and it raises Interrupted there while armed, which ends the wait under way (goal_result) at once.
     """
@@ -560,6 +589,7 @@ class InterruptWatch:
         self.armed = True
 
     def restore(self) -> None:
+        """Give SIGINT back to the handler it had before."""
         signal.signal(signal.SIGINT, self._previous)
 
 
@@ -576,6 +606,7 @@ def goal_message(goal: ManeuverGoal) -> Any:
 
 
 def result_name(code: int) -> str:
+    """The name of a PerformManeuver result code."""
     from swim_interfaces.action import PerformManeuver
     names = {getattr(PerformManeuver.Result, name): name for name in RESULT_NAMES}
     return names.get(code, f"code {code}")
@@ -623,11 +654,14 @@ class ManeuverRun:
             raise ServerLost()
 
     def wait_for_server(self, wait_s: float) -> None:
+        """Wait up to wait_s for the maneuver server; CommandError if it does not come."""
         wait_for(self.session, self.action.server_is_ready, "maneuver_node (perform_maneuver)", wait_s)
 
     def fly(self, goal: ManeuverGoal, timeout_s: float, on_feedback: Callable[[Any], None]) -> Any:
-        """Send the goal and return its result (PerformManeuver.Result): at its end, or after a cancel on Ctrl-C
-        (self.interrupt.requested then holds). CommandError if it was not accepted or gave no result.
+        """Send the goal and return its result.
+
+        The result is a PerformManeuver.Result, at its end or after a cancel on Ctrl-C (self.interrupt.requested then
+        holds). CommandError if it was not accepted or gave no result.
         """
         from swim_ros.calls import CallFailed, cancel_goal, goal_result, send_goal
         executor = self.session.executor
@@ -668,6 +702,7 @@ class ManeuverRun:
 
 
 def run_command(args: argparse.Namespace) -> int:
+    """The run command: the maneuver flown by the maneuver server, recorded with --record; the exit status."""
     from tqdm import tqdm
 
     from swim_bringup.run_client import RunClient
@@ -718,7 +753,9 @@ def run_command(args: argparse.Namespace) -> int:
 
 
 def report_recorded_run(run_dir: Path, result: Any, started_s: float) -> int:
-    """report.json and figures of a recorded run, a summary printed; EXIT_FAILED when the bridge latched a fault
+    """Write the report and figures of a recorded run; the exit status.
+
+    report.json and figures of a recorded run, a summary printed; EXIT_FAILED when the bridge latched a fault
     during it (the motors were then off), else EXIT_DONE.
     """
     from swim_bringup.reports import TrackerResult
@@ -781,6 +818,7 @@ def bridge_lines(session: Any, diagnostics: list[Any]) -> list[str]:
 
 
 def status_command(args: argparse.Namespace) -> int:
+    """The status command: print the system's nodes, their goals and the bridge's state; the exit status."""
     from diagnostic_msgs.msg import DiagnosticArray
     from swim_ros.calls import GoalStatusWatch, spin_until
     session = Session()
@@ -819,7 +857,9 @@ def status_command(args: argparse.Namespace) -> int:
 
 
 def trigger(service: str, wait_s: float) -> int:
-    """Call the bridge's std_srvs/Trigger service (the e-stop and its reset: asking twice does what asking once
+    """Call a std_srvs/Trigger service of the bridge and print its answer; the exit status.
+
+    Call the bridge's std_srvs/Trigger service (the e-stop and its reset: asking twice does what asking once
     does, so a lost answer is asked again); print its answer.
     """
     from std_srvs.srv import Trigger
@@ -836,15 +876,19 @@ def trigger(service: str, wait_s: float) -> int:
 
 
 def estop_command(args: argparse.Namespace) -> int:
+    """The estop command: the bridge's emergency stop; the exit status."""
     return trigger("/emergency_stop", args.wait)
 
 
 def reset_command(args: argparse.Namespace) -> int:
+    """The reset command: reset the bridge's emergency stop; the exit status."""
     return trigger("/reset_emergency_stop", args.wait)
 
 
 def bridge_command(args: argparse.Namespace) -> int:
-    """A lifecycle transition of bridge_node (swim_ros.calls.change_lifecycle_state: asked again only after its
+    """Make a lifecycle transition of bridge_node.
+
+    A lifecycle transition of bridge_node (swim_ros.calls.change_lifecycle_state: asked again only after its
     state shows it was not made).
     """
     from swim_ros.calls import CallFailed, change_lifecycle_state
@@ -869,6 +913,7 @@ COMMANDS = {"list": list_command, "plan": plan_command, "run": run_command, "sta
 
 
 def main(argv: Optional[list[str]] = None) -> int:
+    """The swim-maneuver command; its exit status."""
     args = parse_arguments(argv)
     try:
         return COMMANDS[args.command](args)

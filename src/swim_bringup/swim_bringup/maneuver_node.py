@@ -88,6 +88,8 @@ class ManeuverSettings:
 
 
 class ManeuverNode(Node):
+    """The operator's maneuver server: the perform_maneuver action, planned and tracked from where the vehicle is."""
+
     def __init__(self) -> None:
         super().__init__("maneuver_node")
         self.parameters = NodeSettings(self, PARAMETERS, ManeuverSettings)
@@ -147,7 +149,9 @@ class ManeuverNode(Node):
         return self._catalog
 
     def _flight_plan(self, goal: ManeuverGoal):
-        """(the planner's reply, its request id) for the goal from where the vehicle is. The primitive list kept
+        """The planner's reply and its request id for the goal from where the vehicle is.
+
+        (the planner's reply, its request id) for the goal from where the vehicle is. The primitive list kept
         from an earlier goal serves only while it passes the checks and names the library the plan came from;
         otherwise the planner is asked for its list again (it may serve another library now) and the goal checked
         and planned on that. ManeuverGoalError, NotAtRest or CallFailed when it cannot be.
@@ -174,8 +178,9 @@ class ManeuverNode(Node):
         raise AssertionError("the last try is made with a fresh list and returns")
 
     def _start(self, goal: ManeuverGoal, catalog) -> tuple[VehicleState, str]:
-        """The vehicle and the graph state the maneuver starts in (maneuver.start_state), waiting up to rest_wait_s
-        for a vehicle that is coming to rest.
+        """The vehicle and the graph state the maneuver starts in.
+
+        They are as maneuver.start_state gives them, waiting up to rest_wait_s for a vehicle that is coming to rest.
         """
         settings = self.parameters.current
         deadline_s = time.monotonic() + settings.rest_wait_s
@@ -203,7 +208,9 @@ class ManeuverNode(Node):
         return call_service(ServedElsewhere(), self._planner, request, self._policy())
 
     def _execute(self, handle) -> PerformManeuver.Result:
-        """The goal's whole flight; an unexpected error ends it with the error, never with rclpy's default result
+        """The goal's whole flight, ended with an error on an unexpected one.
+
+        The goal's whole flight; an unexpected error ends it with the error, never with rclpy's default result
         (whose error code would read as SUCCESSFUL).
         """
         try:
@@ -276,7 +283,9 @@ class ManeuverNode(Node):
         return ours
 
     def _tracker_result(self, handle, tracked, policy: RetryPolicy):
-        """The tracker's result for the goal tracked, passing a cancel of ours on once; None if the tracker left
+        """The tracker's result for the goal tracked, or None.
+
+        The tracker's result for the goal tracked, passing a cancel of ours on once; None if the tracker left
         the graph for longer than the policy's attempt timeout without answering.
         """
         event = threading.Event()
@@ -318,9 +327,10 @@ class ManeuverNode(Node):
 
 
 def vehicle_of(message) -> VehicleState:
-    """The vehicle a sensor_msgs/JointState gives, by swim_ros.trajectory_messages.state_from_message's checks (the
-    vehicle's joints in any order, finite values, lengths that agree); its speeds zero when the message carries none.
-    StateMessageError otherwise.
+    """The vehicle a sensor_msgs/JointState gives.
+
+    It passes swim_ros.trajectory_messages.state_from_message's checks (the vehicle's joints in any order, finite
+    values, lengths that agree); its speeds are zero when the message carries none. StateMessageError otherwise.
     """
     _, q, qdot = state_from_message(message, None, VelocityEstimator(), 0.0)
     return VehicleState(JOINT_NAMES_UNCONSTRAINED if len(q) == len(JOINT_NAMES_UNCONSTRAINED)
@@ -337,6 +347,7 @@ def goal_of(request) -> ManeuverGoal:
 
 
 def main(args: list[str] | None = None) -> None:
+    """Run maneuver_node."""
     run_node(ManeuverNode, args, name="maneuver_node",
              executor=functools.partial(MultiThreadedExecutor, num_threads=EXECUTOR_THREADS), large_messages=True)
 

@@ -52,6 +52,7 @@ class RunFailed(RuntimeError):
         self.run, self.reason = run, reason
 
     def __reduce__(self) -> tuple[type, tuple[str, str]]:   # back from a Dask worker with both fields
+        """Pickle the failure with both fields (back from a Dask worker)."""
         return (RunFailed, (self.run, self.reason))
 
 
@@ -68,7 +69,9 @@ def _tail(text: str) -> str:
 
 
 def run_isolated(function: Callable[[T], R], task: T, run: str, timeout_s: float) -> R:
-    """function(task) in a new Python process with a ROS domain of its own; its result. RunFailed(run, reason) if
+    """Call function(task) in a new Python process with a ROS domain of its own; its result.
+
+    function(task) in a new Python process with a ROS domain of its own; its result. RunFailed(run, reason) if
     the function raised (reason: the exception's type and message), its process died (its exit code and the end
     of its output) or it ran longer than timeout_s (then it is interrupted like Ctrl-C, and killed after
     INTERRUPT_GRACE_S).
@@ -123,7 +126,9 @@ def _untrack(process: subprocess.Popen[str]) -> None:
 
 
 def _interrupt_runs(stopping: bool) -> None:
-    """With stopping, SIGINT to every run process under way, and to any that starts from now on; without, runs
+    """Interrupt the run processes under way and any that start, or start runs normally again.
+
+    With stopping, SIGINT to every run process under way, and to any that starts from now on; without, runs
     start normally again.
     """
     global _stopping
@@ -137,7 +142,9 @@ def _interrupt_runs(stopping: bool) -> None:
 def run_all(function: Callable[[T], R], tasks: Mapping[str, T], executor: concurrent.futures.Executor,
             timeout_s: float, done: Callable[[str, Outcome[R]], None] = lambda run, outcome: None
             ) -> dict[str, Outcome[R]]:
-    """Every task's run (run_isolated, submitted to executor), by its label (the keys of tasks); done is called
+    """Every task's run in its own process, by its label.
+
+    Every task's run (run_isolated, submitted to executor), by its label (the keys of tasks); done is called
     with each as it ends. A run that failed has its RunFailed; the executor's own failures (a lost Dask worker)
     are named the same way. If the caller stops while waiting (Ctrl-C, SIGTERM as Ctrl-C), the runs not started
     are cancelled and those under way on this host interrupted (they stop their nodes), then the exception goes
@@ -166,11 +173,12 @@ def run_all(function: Callable[[T], R], tasks: Mapping[str, T], executor: concur
 
 
 def _run_in_this_process(call: Path, answer: Path) -> None:
-    """The new process's side of run_isolated: claim a domain, call the function, write its result or error.
-    SIGINT, how run_isolated stops a run, is Ctrl-C here even where the caller was started with SIGINT ignored (a
-    command put in the background by a shell without job control: Python then leaves it ignored, and the process
-    inherits that), and so is SIGTERM (the parent-death signal among others): the run stops its nodes before the
-    process ends.
+    """The new process's side of run_isolated.
+
+    Claim a domain, call the function, write its result or error. SIGINT, how run_isolated stops a run, is Ctrl-C here
+    even where the caller was started with SIGINT ignored (a command put in the background by a shell without job
+    control: Python then leaves it ignored, and the process inherits that), and so is SIGTERM (the parent-death signal
+    among others): the run stops its nodes before the process ends.
     """
     signal.signal(signal.SIGINT, signal.default_int_handler)
     interrupt_on_sigterm()

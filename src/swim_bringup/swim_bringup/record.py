@@ -1,4 +1,6 @@
-"""swim-record: record topics of a running system to a rosbag2 MCAP bag, like `ros2 bag record` (not installable
+"""The swim-record command: record topics of a running system to a rosbag2 MCAP bag.
+
+swim-record: record topics of a running system to a rosbag2 MCAP bag, like `ros2 bag record` (not installable
 here).
 
     swim-record -a                         every topic (hidden ones, e.g. actions' _action/..., with --include-hidden)
@@ -85,6 +87,7 @@ class Recording:
         print(f"\nswim-record: not recording {topic}: {reason}", file=self.status)
 
     def status_line(self) -> str:
+        """The topics recorded and their message counts, one line."""
         assert self.bag is not None
         counts = ", ".join(f"{topic} {count}" for topic, count in sorted(self.bag.counts.items()))
         return f"recording {len(self.bag.counts)} topics: {counts or 'none yet'}"
@@ -99,6 +102,7 @@ class Recording:
 
 
 def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
+    """The command line of swim-record, parsed."""
     parser = argparse.ArgumentParser(prog="swim-record", description=__doc__.splitlines()[0])
     parser.add_argument("topics", nargs="*", help="topics to record (with or without the leading /)")
     parser.add_argument("-a", "--all", action="store_true", help="record every topic, as it appears")
@@ -115,7 +119,9 @@ def parse_arguments(argv: Optional[list[str]]) -> argparse.Namespace:
 
 
 class StopRequest:
-    """Set by SIGINT or SIGTERM; the recording loop ends at its next turn (within POLL_PERIOD_S), never in the
+    """A stop request set by SIGINT or SIGTERM.
+
+    Set by SIGINT or SIGTERM; the recording loop ends at its next turn (within POLL_PERIOD_S), never in the
     middle of writing a message.
     """
 
@@ -129,6 +135,7 @@ class StopRequest:
 
 
 def main(argv: Optional[list[str]] = None) -> int:
+    """The swim-record command; its exit status."""
     args = parse_arguments(argv)
     bag_path = args.output or Path(datetime.datetime.now().strftime("rosbag2_%Y_%m_%d-%H_%M_%S"))
     if bag_path.exists():

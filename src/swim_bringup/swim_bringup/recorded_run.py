@@ -37,7 +37,9 @@ Progress = Callable[[float], None]   # called with the fraction of the plan done
 def run_maneuver(bag_path: Path, primitive_ids: list[str], repeat_counts: list[int], time_scale: float,
                  timeout_s: float, progress: Optional[Progress] = None,
                  tolerances: Tolerances = RUN_TOLERANCES) -> TrackerResult:
-    """Request the maneuver, execute it, record the run into the bag at bag_path; the tracker's result. RunError
+    """Request the maneuver, execute it and record the run; the tracker's result.
+
+    Request the maneuver, execute it, record the run into the bag at bag_path; the tracker's result. RunError
     if the run could not be done.
     """
     with RunClient(bag_path) as client:
@@ -56,7 +58,9 @@ def run_maneuver(bag_path: Path, primitive_ids: list[str], repeat_counts: list[i
 def run_recorded(specs: list[NodeSpec], run_dir: Path, primitive_ids: list[str], repeat_counts: list[int],
                  time_scale: float, timeout_s: float, tolerances: Tolerances = RUN_TOLERANCES,
                  progress: Optional[Progress] = None, rig_path: str = "") -> RunReport:
-    """One closed-loop run: bring up the nodes of specs (logs in run_dir/logs), run the maneuver recorded into
+    """One closed-loop run, recorded and analysed; its report.
+
+    One closed-loop run: bring up the nodes of specs (logs in run_dir/logs), run the maneuver recorded into
     run_dir/bag, stop the nodes; then analyse the bag (the hard stops of the rig file at rig_path, empty: the
     shipped rig, as the nodes' rig_path) and write report.json and the figures into run_dir.
     Returns the report: the analysis measures, the tracker's result and the wall time. RunError if a node died
@@ -75,7 +79,9 @@ def run_recorded(specs: list[NodeSpec], run_dir: Path, primitive_ids: list[str],
 
 
 def write_run_report(run_dir: Path, result: TrackerResult, started_s: float, rig_path: str = "") -> RunReport:
-    """Read the run's bag (run_dir/bag) once, analyse it (the hard stops of the rig file at rig_path, empty: the
+    """Read and analyse the run's bag, write report.json and the figures; the report.
+
+    Read the run's bag (run_dir/bag) once, analyse it (the hard stops of the rig file at rig_path, empty: the
     shipped rig) and write report.json and the figures into run_dir; the report, with the tracker's result and the
     wall time from started_s (time.monotonic) to now. MissingTopic (run_record) if the bag holds no tracked period.
     """
@@ -98,7 +104,9 @@ def add_tolerance_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def parse_with_tolerances(parser: argparse.ArgumentParser, argv: Optional[list[str]]) -> argparse.Namespace:
-    """parser's arguments plus the tolerance options; args.tolerances is the Tolerances they name (a negative or
+    """Parse the arguments with the tolerance options.
+
+    parser's arguments plus the tolerance options; args.tolerances is the Tolerances they name (a negative or
     non-finite one is a usage error).
     """
     add_tolerance_arguments(parser)
@@ -111,7 +119,9 @@ def parse_with_tolerances(parser: argparse.ArgumentParser, argv: Optional[list[s
 
 
 def tolerances_of(args: argparse.Namespace) -> Tolerances:
-    """The Tolerances that the options of add_tolerance_arguments name; ValueError if one is negative or not
+    """The Tolerances that the tolerance options name.
+
+    The Tolerances that the options of add_tolerance_arguments name; ValueError if one is negative or not
     finite.
     """
     tolerances = Tolerances(**{field.name: getattr(args, field.name) for field in dataclasses.fields(Tolerances)})

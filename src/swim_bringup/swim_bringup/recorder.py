@@ -1,5 +1,7 @@
-"""Topics into a bag, from inside a node: one raw subscription per topic, each message written as the CDR bytes
-received, stamped with the wall time of receipt. RunClient (swim-demo, the tests) and swim-record share it.
+"""Topics into a bag, from inside a node.
+
+One raw subscription per topic, each message written as the CDR bytes received, stamped with the wall time of receipt.
+RunClient (swim-demo, the tests) and swim-record share it.
 
 The QoS a recording subscription needs is the publishers': a latched topic (transient local) is recorded with a
 transient-local subscription, which gets the last message even when it subscribes late; offered_qos_for picks it
@@ -50,7 +52,9 @@ class TopicRecorder:
                                                                   raw=True)
 
     def take_queued(self) -> int:
-        """Write the messages queued now on every subscription into the bag (at most RECORD_DEPTH a topic), each
+        """Write the messages queued on every subscription into the bag; how many.
+
+        Write the messages queued now on every subscription into the bag (at most RECORD_DEPTH a topic), each
         stamped with the wall time it is taken; returns how many. Polled by a process that only records, in place
         of an executor, which wakes and builds its wait set for each arriving message: several times the cost of
         writing it.
@@ -74,7 +78,9 @@ class TopicRecorder:
 
 
 def recording_qos(publishers: Sequence[Any]) -> "QoSProfile":
-    """The subscription that receives what every publisher (rclpy TopicEndpointInfo) sends: reliable if all of
+    """The subscription QoS profile that receives what every publisher sends.
+
+    The subscription that receives what every publisher (rclpy TopicEndpointInfo) sends: reliable if all of
     them are, else best effort; transient local if all of them are (a latched topic), else volatile; a queue of
     RECORD_DEPTH (depth 1 for a transient-local topic: its publishers keep their last message for late readers).
     """
@@ -93,8 +99,10 @@ def _qos_time(duration: Any) -> QosTime:
 
 
 def offered_qos(publishers: Sequence[Any]) -> list[Qos]:
-    """The publishers' QoS profiles as rosbag2's metadata.yaml lists them (rosbags' Qos). A history the graph does
-    not report (a remote publisher's) is written as system_default: rosbag2's readers accept no 'unknown'.
+    """The publishers' QoS profiles as rosbag2's metadata.yaml lists them.
+
+    They are rosbags' Qos values. A history the graph does not report (a remote publisher's) is written as
+    system_default: rosbag2's readers accept no 'unknown'.
     """
     profiles = []
     for publisher in publishers:

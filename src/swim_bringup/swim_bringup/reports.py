@@ -1,5 +1,6 @@
-"""The reports of runs as typed values, and their JSON forms: report.json (swim-demo, swim-analyze --output) and
-experiments.json (swim-experiments).
+"""The reports of runs as typed values, and their JSON forms.
+
+report.json (swim-demo, swim-analyze --output) and experiments.json (swim-experiments).
 
 A field's name is its JSON key and carries its unit (SI; the error two-norms sqrt(int e^2 dt) in m s^0.5).
 ``to_json`` gives the JSON form (dicts, lists, numbers, strings, None); ``from_json`` reads one back and refuses an
@@ -59,8 +60,10 @@ class RunMeasures:
 
 @dataclasses.dataclass(frozen=True)
 class BridgeMeasures:
-    """What a bridge_node's /diagnostics tell of a run (analysis.bridge_measures). The loop's timing, from its
-    last report: None where the bridge did not report it.
+    """What a bridge_node's /diagnostics tell of a run.
+
+    They are made by analysis.bridge_measures. The loop's timing, from its last report: None where the bridge did not
+    report it.
     """
 
     bridge_faults: str          # the faults latched during the run, joined by "|"; "NONE" if none
@@ -76,7 +79,9 @@ class BridgeMeasures:
 
 @dataclasses.dataclass(frozen=True)
 class RunAnalysis:
-    """The measures of a recorded run (analysis.analyze): the bridge's only for a run on the bridge. Its JSON form
+    """The measures of a recorded run.
+
+    They are made by analysis.analyze, the bridge's only for a run on the bridge. Its JSON form
     is one flat object, the bridge's keys after the measures'.
     """
 
@@ -91,10 +96,12 @@ class RunAnalysis:
         return values
 
     def to_json(self) -> JsonObject:
+        """The JSON form: every measure by its name."""
         return self.measure_values()
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> RunAnalysis:
+        """The analysis of its JSON form."""
         return RunAnalysis(*_analysis_from_json(data, []))
 
 
@@ -121,12 +128,15 @@ class TrackerResult:
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> TrackerResult:
+        """The tracker result of its JSON form."""
         return _record(cls, data, "a tracker result")
 
 
 @dataclasses.dataclass(frozen=True)
 class RunReport(RunAnalysis):
-    """One closed-loop run (report.json): the analysis of its bag, the tracker's result and the wall time of the
+    """One closed-loop run's report (report.json).
+
+    One closed-loop run (report.json): the analysis of its bag, the tracker's result and the wall time of the
     whole run (bring-up, maneuver, shutdown, analysis).
     """
 
@@ -134,18 +144,22 @@ class RunReport(RunAnalysis):
     wall_time_s: float
 
     def to_json(self) -> JsonObject:
+        """The JSON form: the measures, the tracker's result and the wall time."""
         return {**self.measure_values(), "result": dataclasses.asdict(self.result), "wall_time_s": self.wall_time_s}
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> RunReport:
+        """The report of its JSON form."""
         measures, bridge = _analysis_from_json(data, ["result", "wall_time_s"])
         return RunReport(measures, bridge, TrackerResult.from_json(data["result"]), data["wall_time_s"])
 
     def write(self, path: Path) -> None:
+        """Write the JSON form to path."""
         path.write_text(json.dumps(self.to_json(), indent=2))
 
     @classmethod
     def load(cls, path: Path) -> RunReport:
+        """The report of the JSON file at path."""
         return cls.from_json(json.loads(path.read_text()))
 
 
@@ -159,7 +173,9 @@ class SlidingModePair(Generic[T]):
 
 @dataclasses.dataclass(frozen=True)
 class NormComparison:
-    """A two-norm with and without sliding mode, m s^0.5 (over seeds: the seed's of largest magnitude), and the
+    """A two-norm with and without sliding mode, and the change sliding mode brought.
+
+    A two-norm with and without sliding mode, m s^0.5 (over seeds: the seed's of largest magnitude), and the
     relative change sliding mode brought, here (over seeds: the mean of each seed's change) and in the paper (None:
     not computable, or not reported there).
     """
@@ -185,6 +201,7 @@ class SeedRuns:
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> SeedRuns:
+        """The runs by seed of their JSON form."""
         _checked_keys(data, _field_names(cls), "an experiment's runs by seed")
         return cls(data["seeds"], _pair(data["outcome"]), _pair(data["duration_s"]),
                    _pair(data["final_lateral_offset_m"]), _pair(data["final_alpha_error_rad"]),
@@ -209,9 +226,11 @@ def _norm_statistics(data: Mapping[str, Any]) -> NormStatistics:
 
 @dataclasses.dataclass(frozen=True)
 class ExperimentRow:
-    """One experiment's runs over seeds set beside the paper's (experiments.compare). Each of the quantities of a
-    pair of runs is the seed's value of largest magnitude (sign kept; outcome "ok" only when every seed's is);
-    per_seed holds them all, statistics the two-norms' over the paired_seeds (those with both runs reported).
+    """One experiment's runs over seeds set beside the paper's.
+
+    It is made by experiments.compare. Each of the quantities of a pair of runs is the seed's value of largest magnitude
+    (sign kept; outcome "ok" only when every seed's is); per_seed holds them all, statistics the two-norms' over the
+    paired_seeds (those with both runs reported).
     """
 
     experiment: str
@@ -230,10 +249,12 @@ class ExperimentRow:
     statistics: dict[str, NormStatistics]   # by two-norm measure
 
     def to_json(self) -> JsonObject:
+        """The JSON form: every field."""
         return dataclasses.asdict(self)
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> ExperimentRow:
+        """The row of its JSON form."""
         _checked_keys(data, _field_names(cls), "an experiment's row")
         return cls(data["experiment"], data["time_scale"], data["duration_s"], data["paper_duration_s"],
                    _pair(data["final_lateral_offset_m"]), _pair(data["final_alpha_error_rad"]),
@@ -254,7 +275,9 @@ class FailedRun:
 
 @dataclasses.dataclass(frozen=True)
 class ExperimentsSummary:
-    """swim-experiments' results (experiments.json): the pipeline (config/ folder) and seeds run, the experiments
+    """The results of swim-experiments (experiments.json).
+
+    swim-experiments' results (experiments.json): the pipeline (config/ folder) and seeds run, the experiments
     with at least one seed run with and without sliding mode, the wall time, and the runs that gave no report.
     """
 
@@ -265,21 +288,25 @@ class ExperimentsSummary:
     failed_runs: list[FailedRun]
 
     def to_json(self) -> JsonObject:
+        """The JSON form: every field, the rows and failed runs as theirs."""
         return {"pipeline": self.pipeline, "seeds": self.seeds,
                 "experiments": [row.to_json() for row in self.experiments], "wall_time_s": self.wall_time_s,
                 "failed_runs": [dataclasses.asdict(failed) for failed in self.failed_runs]}
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> ExperimentsSummary:
+        """The results of their JSON form."""
         _checked_keys(data, _field_names(cls), "experiments' results")
         return cls(data["pipeline"], data["seeds"], [ExperimentRow.from_json(row) for row in data["experiments"]],
                    data["wall_time_s"], [_record(FailedRun, value, "a failed run") for value in data["failed_runs"]])
 
     def write(self, path: Path) -> None:
+        """Write the JSON form to path (experiments.json)."""
         path.write_text(json.dumps(self.to_json(), indent=2))
 
     @classmethod
     def load(cls, path: Path) -> ExperimentsSummary:
+        """The results of the JSON file at path."""
         return cls.from_json(json.loads(path.read_text()))
 
 

@@ -38,7 +38,9 @@ class RunError(RuntimeError):
 
 
 class RunClient:
-    """Planner and tracker clients plus a recorder of topics (fully qualified name -> type name) into the bag at
+    """Planner and tracker clients plus a recorder of topics into a bag.
+
+    Planner and tracker clients plus a recorder of topics (fully qualified name -> type name) into the bag at
     bag_path. ValueError for a relative name: the client's waits look the loop's topics up by LOOP_TOPICS' names.
     """
 
@@ -91,15 +93,19 @@ class RunClient:
         return -1.0 if cdr is None else deserialize_message(cdr, TrackingState).plan_time_s
 
     def __enter__(self) -> "RunClient":
+        """The client, closed on leaving the block."""
         return self
 
     def __exit__(self, *exc) -> None:
+        """Close the client."""
         self.close()
 
     def close(self) -> None:
-        """Finish the bag and leave DDS; safe to call twice. The node and its subscriptions are destroyed here,
-        not left to the garbage collector: a closed client's readers would stay matched, and every publisher of
-        the next run on the domain would keep sending them each period (docs/benchmarks.md, bench_record).
+        """Finish the bag and leave DDS; safe to call twice.
+
+        The node and its subscriptions are destroyed here, not left to the garbage collector: a closed client's readers
+        would stay matched, and every publisher of the next run on the domain would keep sending them each period
+        (docs/benchmarks.md, bench_record).
         """
         import rclpy
         if self.bag is not None:
@@ -133,6 +139,7 @@ class RunClient:
 
     # --- the run -------------------------------------------------------------------------------------------
     def wait_for_nodes(self, timeout_s: float = STARTUP_TIMEOUT_S) -> None:
+        """Wait for the planner, the tracker and the loop's topics to be matched; RunError after timeout_s."""
         try:
             wait_for_server(self.executor, self.planner.service_is_ready, "planner_node", timeout_s)
             wait_for_server(self.executor, self.tracker.server_is_ready, "tracker_node", timeout_s)
@@ -166,7 +173,9 @@ class RunClient:
 
     def execute(self, plan, progress: Optional[Callable[[float], None]] = None,
                 tolerances: Optional[Tolerances] = None):
-        """Send the plan to the tracker with tolerances (default: none checked); returns the accepted goal's
+        """Send the plan to the tracker; the accepted goal's handle.
+
+        Send the plan to the tracker with tolerances (default: none checked); returns the accepted goal's
         handle (RunError if refused).
         """
         from swim_interfaces.action import ExecutePlan
@@ -194,7 +203,9 @@ class RunClient:
             raise RunError(f"no end of the maneuver within {timeout_s:.0f} s") from err
 
     def drain(self, duration_s: float) -> None:
-        """Record until the plan's last period (plan time duration_s) is in the bag on every loop topic, and the
+        """Record until the plan's last period and the plan are in the bag.
+
+        Record until the plan's last period (plan time duration_s) is in the bag on every loop topic, and the
         plan itself, then a few more periods. The recorder may lag a faster-than-real-time loop, and by more on
         joint_states and joint_commands, which flowed (and queued) before the plan while tracking_state did not.
         RunError if that does not happen within DRAIN_TIMEOUT_S.
@@ -216,7 +227,9 @@ class RunClient:
             self.executor.spin_once(timeout_sec=0.01)
 
     def _recorded_up_to(self, stamp_ns: Optional[int]) -> bool:
-        """Every loop topic recorded up to stamp_ns, and the plan recorded: a plan of thousands of samples goes out
+        """Whether every loop topic is recorded up to stamp_ns and the plan is recorded.
+
+        Every loop topic recorded up to stamp_ns, and the plan recorded: a plan of thousands of samples goes out
         in fragments, and one lost beside a fast loop is repaired only at the writer's next heartbeat.
         """
         return stamp_ns is not None and ("/plan" not in self.recordings or "/plan" in self.latest_cdr) and all(
@@ -231,8 +244,10 @@ class RunClient:
 
 
 def header_stamp_ns(cdr: bytes) -> int:
-    """The header stamp of a serialized message that starts with a std_msgs/Header (CDR: a 4-byte encapsulation
-    header, its second byte 1 for little-endian, then the stamp's int32 sec and uint32 nanosec).
+    """The header stamp, ns, of a serialized message that starts with a std_msgs/Header.
+
+    In CDR: a 4-byte encapsulation header, its second byte 1 for little-endian, then the stamp's int32 sec and uint32
+    nanosec.
     """
     sec, nanosec = struct.unpack_from("<iI" if cdr[1] == 1 else ">iI", cdr, 4)
     return sec * 1_000_000_000 + nanosec

@@ -1,5 +1,6 @@
-"""A bag read once into a typed record of the run (no ROS, no files written): what swim-analyze, swim-demo and
-swim-maneuver measure and draw.
+"""A bag read once into a typed record of the run (no ROS, no files written).
+
+What swim-analyze, swim-demo and swim-maneuver measure and draw.
 
 read_bag reads the bag's index and then, in one pass, every message the analysis uses: joint_states (the joint
 motion), tracking_state and plan (the last plan tracked: Run), diagnostics (a bridge_node's faults and timing) and
@@ -34,7 +35,9 @@ class MissingTopic(ValueError):
 
 
 def find_topic(info: BagInfo, name: str) -> str:
-    """The bag's name for the run topic `name` (a key of bag.RUN_TOPICS, /joint_states): the topic recorded under
+    """The bag's name for a run topic.
+
+    The bag's name for the run topic `name` (a key of bag.RUN_TOPICS, /joint_states): the topic recorded under
     that full name (swim-demo's, swim-record's and rosbag2's) or its relative one (joint_states) or, failing both,
     under one namespace (/test/joint_states). MissingTopic if there is none, several, one of another type than
     RUN_TOPICS gives, or one without messages.
@@ -71,7 +74,9 @@ class Run:
 
 def run_of(bag_path: Path, tracking_topic: str, tracking_states: Iterable[Any], plans: Sequence[Any],
            no_plan: str = "") -> Run:
-    """The tracked periods of the last plan in tracking_states (swim_interfaces/TrackingState messages in log-time
+    """The tracked periods of the last plan, and its lane radius.
+
+    The tracked periods of the last plan in tracking_states (swim_interfaces/TrackingState messages in log-time
     order, recorded on tracking_topic of the bag at bag_path); the lane radius from the last of plans
     (PlannedTrajectory messages; no_plan: why there are none). MissingTopic if no period is tracked, the joints have
     no alpha, or the constrained vehicle has no plan; ValueError if the messages do not make a run.
@@ -101,7 +106,9 @@ def run_of(bag_path: Path, tracking_topic: str, tracking_states: Iterable[Any], 
 
 
 def bridge_measures_of(diagnostic_arrays: Iterable[Any]) -> Optional[BridgeMeasures]:
-    """From a bridge_node's diagnostic_msgs/DiagnosticArray messages, in order (None without any of its I/O loop's
+    """The bridge's measures of a run from its diagnostics.
+
+    From a bridge_node's diagnostic_msgs/DiagnosticArray messages, in order (None without any of its I/O loop's
     reports): the faults it latched during the run (a latched fault holds the motors at zero until reset: the
     vehicle did not swim as commanded from then on), its count of overrun periods, and its loop's timing from its
     last report that gives it.
@@ -140,9 +147,11 @@ def bridge_measures_of(diagnostic_arrays: Iterable[Any]) -> Optional[BridgeMeasu
 
 @dataclasses.dataclass(frozen=True)
 class JointSeries:
-    """One joint's samples in a bag's joint_states: log time (when the recorder received the message) in s from
-    the topic's first message, position and velocity in the joint's unit (rad for a revolute joint, m for a
-    prismatic one such as R; per s for the velocity), each (n,); velocity is empty when the messages carry none.
+    """One joint's samples in a bag's joint_states.
+
+    Log time (when the recorder received the message) in s from the topic's first message, position and velocity in the
+    joint's unit (rad for a revolute joint, m for a prismatic one such as R; per s for the velocity), each (n,);
+    velocity is empty when the messages carry none.
     """
 
     time_s: np.ndarray
@@ -152,7 +161,9 @@ class JointSeries:
 
 @dataclasses.dataclass(frozen=True)
 class JointStates:
-    """A bag's joint_states: the topic, its messages' log times (s from the first message, (messages,)) and each
+    """A bag's joint_states, by joint.
+
+    A bag's joint_states: the topic, its messages' log times (s from the first message, (messages,)) and each
     joint's samples by name, in the order the joints first appear.
     """
 
@@ -162,7 +173,9 @@ class JointStates:
 
 
 def joint_series(topic: str, messages: Iterable[tuple[int, Any]]) -> JointStates:
-    """The joint states of sensor_msgs/JointState messages recorded on topic, (log time ns, message) each. A
+    """The joint states of sensor_msgs/JointState messages recorded on a topic.
+
+    The joint states of sensor_msgs/JointState messages recorded on topic, (log time ns, message) each. A
     message whose position (velocity) list is shorter than its names gives no position (velocity) for the joints
     past its end.
     """
@@ -189,7 +202,9 @@ def joint_series(topic: str, messages: Iterable[tuple[int, Any]]) -> JointStates
 
 @dataclasses.dataclass(frozen=True)
 class WakeSnapshot:
-    """The last vortex wake recorded (swim_interfaces/WakeVortices, tank frame): the vortices' x and y, m, and
+    """The last vortex wake recorded, in the tank frame.
+
+    The last vortex wake recorded (swim_interfaces/WakeVortices, tank frame): the vortices' x and y, m, and
     their circulations, m^2/s, counter-clockwise positive, each (k,).
     """
 
@@ -200,7 +215,9 @@ class WakeSnapshot:
 
 @dataclasses.dataclass(frozen=True)
 class RecordedBag:
-    """A bag read once: its index, the topics whose messages cannot be decoded (topic, why), and each part of the
+    """A bag read once: its index and each part of the run, or why it is missing.
+
+    A bag read once: its index, the topics whose messages cannot be decoded (topic, why), and each part of the
     run the bag holds, or the error that says why it is not there (MissingTopic for what the bag lacks, BagError
     for what cannot be read, ValueError for messages that do not make a run).
     """
@@ -233,7 +250,9 @@ def _messages(read: dict[str, TopicMessages], topic: str) -> list[tuple[int, Any
 
 
 def read_bag(bag_path: Path) -> RecordedBag:
-    """The bag at bag_path (a bag folder, or one .mcap or .db3 file), read once. BagError if there is no readable
+    """The bag at bag_path, read once.
+
+    The bag at bag_path (a bag folder, or one .mcap or .db3 file), read once. BagError if there is no readable
     bag there; anything else the bag lacks or holds unreadably is the record's error for that part.
     """
     info, undecodable = bag_contents(bag_path)

@@ -1,5 +1,7 @@
-"""Statistics over seeds of swim-experiments' runs (no ROS): the value of largest magnitude, the mean and standard
-deviation of a measure, and sliding mode's relative change of a two-norm with a paired 95 % interval.
+"""Statistics over seeds of swim-experiments' runs (no ROS).
+
+The value of largest magnitude, the mean and standard deviation of a measure, and sliding mode's relative change of a
+two-norm with a paired 95 % interval.
 
 Each seed seeds the simulator's disturbances and sensor noise; the runs with and without sliding mode of one seed
 meet the same disturbance sequence, so they are a pair. Sliding mode's relative change of seed k is
@@ -57,7 +59,9 @@ def t_quantile(probability: float, degrees_of_freedom: int) -> float:
 
 @dataclasses.dataclass(frozen=True)
 class PairedChange:
-    """Sliding mode's relative change of a two-norm over seeds: the change per seed, their mean, and the paired
+    """Sliding mode's relative change of a two-norm over seeds, with its paired interval.
+
+    Sliding mode's relative change of a two-norm over seeds: the change per seed, their mean, and the paired
     t interval of the mean at CONFIDENCE (None with one seed), and whether it excludes zero (False without one).
     """
 
@@ -79,7 +83,9 @@ class PairedChange:
 
 @dataclasses.dataclass(frozen=True)
 class NormStatistics:
-    """A two-norm over seeds, m s^0.5, with (on) and without (off) sliding mode; sliding mode's change (None where
+    """A two-norm over seeds with and without sliding mode, and the changes.
+
+    A two-norm over seeds, m s^0.5, with (on) and without (off) sliding mode; sliding mode's change (None where
     a run without it has a zero two-norm: the constrained vehicle's lateral error) and the paper's change (None:
     not reported there).
     """

@@ -1,6 +1,7 @@
-"""Bring the closed loop up as separate processes talking over DDS, and down again cleanly: each node a
-swim_ros.processes.NodeProcess (`ros2 run` in its own process group, stopped by SIGINT, then SIGKILL after the
-grace period: no orphans).
+"""Bring the closed loop up as separate processes talking over DDS, and down again cleanly.
+
+Each node a swim_ros.processes.NodeProcess (`ros2 run` in its own process group, stopped by SIGINT, then SIGKILL after
+the grace period: no orphans).
 """
 from __future__ import annotations
 
@@ -21,8 +22,10 @@ PIPELINES = ("realistic", "paper")
 
 
 def config_dir(pipeline: str = "realistic") -> Path:
-    """The installed folder of a pipeline's parameter files (sim, planner, tracker, bridge YAML): swim_bringup's
-    config/ for "realistic", config/paper/ for "paper". ValueError for another pipeline.
+    """The installed folder of a pipeline's parameter files.
+
+    The files are the sim, planner, tracker and bridge YAML: swim_bringup's config/ for "realistic", config/paper/ for
+    "paper". ValueError for another pipeline.
     """
     if pipeline not in PIPELINES:
         raise ValueError(f"pipeline must be one of {', '.join(PIPELINES)}, got {pipeline!r}")
@@ -45,9 +48,11 @@ class System:
             raise
 
     def __enter__(self) -> "System":
+        """The system, stopped on leaving the block."""
         return self
 
     def __exit__(self, *exc) -> None:
+        """Stop the system."""
         self.stop()
 
     def dead(self) -> list[str]:
@@ -55,6 +60,7 @@ class System:
         return [n.spec.executable for n in self.nodes if not n.alive()]
 
     def stop(self) -> None:
+        """Interrupt every node, wait out the grace period, then kill what is left."""
         for node in self.nodes:
             node.interrupt()
         deadline = time.monotonic() + STOP_GRACE_S
@@ -77,7 +83,9 @@ LOCKSTEP_STALE_OVERRIDE = "stale_after_periods:=250"
 
 
 def sim_mode(params_file: Path, overrides: tuple[str, ...]) -> str:
-    """sim_node's mode as a run would start it: the last mode:= override, else its parameter file's, else
+    """The sim_node mode a run would start it in.
+
+    sim_node's mode as a run would start it: the last mode:= override, else its parameter file's, else
     sim_node's default (lockstep).
     """
     for override in reversed(overrides):
@@ -98,8 +106,10 @@ VISUALIZATION_SPECS = (NodeSpec("swim_viz", "rig_state_publisher", parameters=("
 
 
 def maneuver_spec(config: Path) -> NodeSpec:
-    """The operator's maneuver server with config's maneuver.yaml: the perform_maneuver action, which plans through
-    the planner and tracks through the tracker from where the vehicle is.
+    """The operator's maneuver server with config's maneuver.yaml.
+
+    The perform_maneuver action, which plans through the planner and tracks through the tracker from where the vehicle
+    is.
     """
     return NodeSpec("swim_bringup", "maneuver_node", config / "maneuver.yaml")
 
@@ -111,7 +121,9 @@ RIG_NODES = ("sim_node", "bridge_node", "planner_node", "tracker_node", "rig_sta
 def closed_loop_specs(config: Path, sim_overrides: tuple[str, ...] = (),
                       tracker_overrides: tuple[str, ...] = (), plant: str = "sim",
                       visualization: bool = True, maneuver: bool = False, rig_path: str = "") -> list[NodeSpec]:
-    """The plant (sim_node or bridge_node, see PLANTS), planner and tracker with the parameter files in config,
+    """The nodes of the closed loop, as process specs.
+
+    The plant (sim_node or bridge_node, see PLANTS), planner and tracker with the parameter files in config,
     then the maneuver server (maneuver_spec) if maneuver, then VISUALIZATION_SPECS if visualization; sim_overrides go
     to the plant node, whichever it is. With the simulator in lock-step (unless overridden to real time) the
     tracker's stale limit is LOCKSTEP_STALE_OVERRIDE unless tracker_overrides set one. A run that drives the

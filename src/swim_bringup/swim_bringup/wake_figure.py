@@ -1,5 +1,7 @@
-"""The vortex wake drawn over the vehicle's path: where the foil's shed vortices are, which way they turn and how
-strong they are, in the tank's plane (a run with sim_node's flow = wake records them on wake_vortices).
+"""The vortex wake drawn over the vehicle's path.
+
+Where the foil's shed vortices are, which way they turn and how strong they are, in the tank's plane (a run with
+sim_node's flow = wake records them on wake_vortices).
 
 Tank frame throughout: origin on the hub axis, the plane of the rails, x and y in m; circulations counter-clockwise
 positive (swim_interfaces/WakeVortices). No ROS: arrays in, a PNG out.
@@ -25,8 +27,9 @@ TANK_VIEW_MARGIN = 1.05
 
 
 def marker_areas_pt2(circulations_m2_s: npt.ArrayLike) -> np.ndarray:
-    """Marker area of each vortex, pt^2, shape (k,): LARGEST_MARKER_AREA_PT2 |Gamma| / max |Gamma| (zeros when
-    every circulation is zero).
+    """Marker area of each vortex, pt^2, shape (k,).
+
+    LARGEST_MARKER_AREA_PT2 |Gamma| / max |Gamma| (zeros when every circulation is zero).
     """
     strength = np.abs(np.asarray(circulations_m2_s, dtype=float))
     largest = strength.max(initial=0.0)

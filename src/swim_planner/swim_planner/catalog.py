@@ -237,3 +237,16 @@ def _lasting(spec: PrimitiveSpec, duration_s: float) -> PrimitiveSpec:
 def lqr_weights(flow_model: str) -> LqrWeights:
     """The LQ weights a library of this flow model ("ideal" or "circulatory") stores its gains for."""
     return CIRCULATORY_LQR_WEIGHTS if flow_model == "circulatory" else LqrWeights()
+
+
+# The paper's maneuvers as (primitive ids, repeat counts) over the paper's library (Sec. 7), at lambda = 1.
+#: the constrained maneuver (Sec. 7.1): accelerate to E1, cruise x2, cruise-to-cruise, cruise x2, stop
+PAPER_CONSTRAINED = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05",
+                      "constrained/cruise_to_cruise/E0.05-E0.10", "constrained/cruise/E0.10",
+                      "constrained/decelerate/E0.10"], [1, 2, 1, 2, 1])
+#: the free lane keeping (Sec. 7.2) at R = 0.43 m: accelerate, 14 cruises, decelerate (20 s)
+PAPER_LANE_KEEPING = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/decelerate/R0.43/E0.05"],
+                      [1, 14, 1])
+#: the lane change (Sec. 7.3) at E = 0.05: accelerate, 5 cruises in lane 1, the change, 10 in lane 2, stop
+PAPER_LANE_CHANGE = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/lane_change/R0.43-R0.48/E0.05",
+                      "free/cruise/R0.48/E0.05", "free/decelerate/R0.48/E0.05"], [1, 5, 1, 10, 1])

@@ -13,7 +13,8 @@ from swim_controller.tracker import CascadeTracker, model_io_linearization, mode
 from swim_model import load_rig
 from swim_planner.catalog import (CIRCULATORY_CONSTRAINED_DECELERATE_FOIL_RATE_RAD_S,
                                   CIRCULATORY_CONSTRAINED_DECELERATE_REST_WINDOW_S, CIRCULATORY_FREE_DECELERATE_S,
-                                  CIRCULATORY_LONGER_S, circulatory_specs, cruise_id)
+                                  CIRCULATORY_LONGER_S, PAPER_CONSTRAINED, PAPER_LANE_KEEPING, circulatory_specs,
+                                  cruise_id)
 from swim_planner.errors import ManeuverError
 from swim_planner.graph import build_graph, plan_to_goal, rest_node
 from swim_planner.maneuver import JUNCTION_TOLERANCE, concatenate, expand_sequence
@@ -31,12 +32,6 @@ CONSTRAINED_DECELERATES = [s.primitive_id for s in ALL_SPECS if s.constrained
                            and s.primitive_type is PrimitiveType.DECELERATE]
 ANGLE_OF_ATTACK_P95_LIMIT_RAD = math.radians(30.0)   # the 95th percentile of |angle of attack| over the samples
 STROUHAL_BAND = (0.1, 0.8)                           # efficient swimmers and foils: 0.2-0.4; the band asked for
-#: the paper's maneuvers (swim_bringup.experiments: PAPER_CONSTRAINED, PAPER_LANE_KEEPING), at lambda = 1
-PAPER_CONSTRAINED = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05",
-                      "constrained/cruise_to_cruise/E0.05-E0.10", "constrained/cruise/E0.10",
-                      "constrained/decelerate/E0.10"], [1, 2, 1, 2, 1])
-PAPER_LANE_KEEPING = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/decelerate/R0.43/E0.05"],
-                      [1, 14, 1])
 #: a lane change between two lane keepings at E = 0.05 (paper Sec. 7.3: outward)
 LANE_CHANGE = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/lane_change/R0.43-R0.48/E0.05",
                 "free/cruise/R0.48/E0.05", "free/decelerate/R0.48/E0.05"], [1, 2, 1, 2, 1])
