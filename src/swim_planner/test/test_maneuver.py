@@ -2,12 +2,10 @@
 import numpy as np
 import pytest
 
+from swim_planner.catalog import PAPER_CONSTRAINED
 from swim_planner.errors import ManeuverError
 from swim_planner.maneuver import concatenate, expand_sequence, vary_time_scale
 
-PAPER_CONSTRAINED = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05",
-                      "constrained/cruise_to_cruise/E0.05-E0.10", "constrained/cruise/E0.10",
-                      "constrained/decelerate/E0.10"], [1, 2, 1, 2, 1])
 TRAJECTORY_ARRAYS = ("time_s", "q", "qdot", "foil_acceleration", "torque", "lqr_gain", "riccati_input_gain")
 
 

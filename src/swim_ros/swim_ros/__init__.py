@@ -14,3 +14,21 @@
 - ``testing``: for tests only (never imported by a node): the DDS fixtures and fuzz strategies every package's
   tests share.
 """
+from swim_ros.exports import lazy_exports
+
+#: the public names by module, each imported on first use
+__all__, __getattr__ = lazy_exports(__name__, {
+    "calls": ("CallFailed", "RetryPolicy", "call_service", "send_goal", "goal_result", "cancel_goal",
+              "change_lifecycle_state"),
+    "codecs": ("MessageError", "float_array", "stamp_of", "joint_state_arrays", "torque_from_command"),
+    "domains": ("claim_ros_domain",),
+    "entry": ("run_node",),
+    "exports": ("lazy_exports",),
+    "lifecycle": ("configure_and_activate", "guard_change_state_service"),
+    "parameters": ("ParameterSpec", "NodeSettings", "markdown_table"),
+    "processes": ("NodeSpec", "NodeProcess"),
+    "qos": ("per_period_publisher", "per_period_subscription"),
+    "realtime": ("RealtimeSettings", "make_process_realtime", "make_process_ordinary", "PeriodicCollector"),
+    "trajectory_messages": ("trajectory_to_message", "trajectory_from_message", "state_from_message"),
+    "typestore": ("swim_typestore", "message_definition"),
+})
