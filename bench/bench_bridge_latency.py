@@ -63,10 +63,9 @@ def main() -> None:
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from sensor_msgs.msg import JointState
-    from swim_hw_bridge.bridge_node import BridgeNode
-    from swim_hw_bridge.conversions import Conversions, load_bridge_config
 
-    from swim_hw_bridge.conversions import default_config_path
+    from swim_hw_bridge.bridge_node import BridgeNode
+    from swim_hw_bridge.conversions import Conversions, default_config_path, load_bridge_config
     document = yaml.safe_load(default_config_path().read_text())
     document["backend_options"]["emulated"]["write_log_size"] = 4 * COMMANDS + 1000   # every write of the run
     config_path = Path(tempfile.mkdtemp()) / "bridge.yaml"

@@ -8,6 +8,7 @@ speed.
 import json
 
 from bench_cruise_primitive import timed_solve
+
 from swim_model import VehicleModel, load_rig
 from swim_planner.catalog import circulatory_specs
 from swim_planner.primitives import cruise_mean_speed_m_s

@@ -7,6 +7,7 @@ the ids that failed (docs/circulatory_primitives.md says which do and why).
 import json
 
 from bench_library_build import timed_build
+
 from swim_model import load_rig
 from swim_planner.catalog import circulatory_specs
 

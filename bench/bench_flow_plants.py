@@ -19,12 +19,12 @@ from swim_controller.sliding_mode import SlidingMode
 from swim_controller.testing.closed_loop import simulate
 from swim_controller.tracker import CascadeTracker, model_io_linearization
 from swim_model import VehicleModel, load_rig
-from swim_planner.library import PrimitiveLibrary
-from swim_planner.maneuver import concatenate, expand_sequence
-from swim_planner.paths import default_library_path
 from swim_model.disturbances import Disturbances
 from swim_model.flow import FLOWS
 from swim_model.plant import Plant, vehicle_model
+from swim_planner.library import PrimitiveLibrary
+from swim_planner.maneuver import concatenate, expand_sequence
+from swim_planner.paths import default_library_path
 from swim_sim.sim_node import DEFAULT_VORTICES_PERIOD_S
 
 #: the issue's target for the wake plant in closed loop

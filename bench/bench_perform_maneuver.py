@@ -56,11 +56,19 @@ def measure() -> tuple[list[float], int]:
     from rclpy.action import ActionClient
     from rclpy.executors import SingleThreadedExecutor
     from sensor_msgs.msg import JointState
+    from std_srvs.srv import Trigger
     from swim_interfaces.action import PerformManeuver
     from swim_interfaces.msg import TrackingState
-    from std_srvs.srv import Trigger
-    from swim_ros.calls import (GoalStatusWatch, RetryPolicy, call_service, cancel_goal, goal_result, send_goal,
-                                spin_until)
+
+    from swim_ros.calls import (
+        GoalStatusWatch,
+        RetryPolicy,
+        call_service,
+        cancel_goal,
+        goal_result,
+        send_goal,
+        spin_until,
+    )
     policy = RetryPolicy(attempt_timeout_s=10.0, attempts=3, discovery_timeout_s=STARTUP_TIMEOUT_S)
     rclpy.init()
     node = rclpy.create_node("perform_maneuver_bench")

@@ -27,6 +27,7 @@ def main() -> None:
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from swim_interfaces.srv import RequestManeuver
+
     from swim_ros.calls import call_service, new_request_id, wait_for_server
     node_process = start_child(["bash", "-c", "source scripts/env.sh && exec ros2 run swim_planner planner_node"],
                                cwd=WORKSPACE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,

@@ -65,6 +65,7 @@ class LoopClient:
         from std_srvs.srv import Trigger
         from swim_interfaces.action import ExecutePlan
         from swim_interfaces.srv import RequestManeuver
+
         from swim_ros.calls import GoalStatusWatch
         self.context = rclpy.Context()
         rclpy.init(context=self.context)
@@ -82,6 +83,7 @@ class LoopClient:
 
     def plan(self):
         from swim_interfaces.srv import RequestManeuver
+
         from swim_ros.calls import RetryPolicy, call_service, new_request_id
         reply = call_service(self.executor, self.planner, RequestManeuver.Request(
             primitive_ids=MANEUVER[0], repeat_counts=MANEUVER[1], time_scale=1.0, request_id=new_request_id()),
@@ -94,6 +96,7 @@ class LoopClient:
         """(steady-state, whole-goal) simulated over wall seconds of one execution of plan from the start."""
         from std_srvs.srv import Trigger
         from swim_interfaces.action import ExecutePlan
+
         from swim_ros.calls import RetryPolicy, call_service, goal_result, send_goal
         if not call_service(self.executor, self.reset, Trigger.Request()).success:
             raise RuntimeError("sim_node refused the reset")

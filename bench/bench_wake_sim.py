@@ -14,16 +14,16 @@ import time
 import numpy as np
 
 from swim_bringup.experiments import PAPER_CONSTRAINED
-from swim_controller.testing.closed_loop import simulate
 from swim_controller.sliding_mode import SlidingMode
+from swim_controller.testing.closed_loop import simulate
 from swim_controller.tracker import CascadeTracker, model_io_linearization
 from swim_model import VehicleModel, load_rig
+from swim_model.disturbances import Disturbances
+from swim_model.plant import Plant
 from swim_model.wake import compile_kernels
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.maneuver import concatenate, expand_sequence
 from swim_planner.paths import default_library_path
-from swim_model.disturbances import Disturbances
-from swim_model.plant import Plant
 from swim_sim.wake_coupling import WakeCoupling
 
 TARGET_REALTIME_FACTOR = 1.0

@@ -1,5 +1,7 @@
-"""The report of scripts/repeat_tests.sh: each test that failed in at least one of the runs, in how many, and the
-first failure's reason; the last line `repeat: N runs, F failures`. Exit status 0 when no run failed, else 1.
+"""The report of scripts/repeat_tests.sh.
+
+Each test that failed in at least one of the runs, in how many, and the first failure's reason; the last line
+`repeat: N runs, F failures`. Exit status 0 when no run failed, else 1.
 
 usage: repeat_tests_report.py RUN_DIR RUNS
 
@@ -20,8 +22,11 @@ PYTEST_STATUS = {1: "tests failed", 2: "interrupted", 3: "internal error", 4: "u
 
 
 def test_id(case: ET.Element) -> str:
-    """The pytest node id (path::Class::name) of a junit testcase, from its file attribute and dotted classname;
-    `classname::name` when there is no file attribute to split the classname with."""
+    """The pytest node id (path::Class::name) of a junit testcase.
+
+    Made from its file attribute and dotted classname; `classname::name` when there is no file attribute to split
+    the classname with.
+    """
     classname, name, path = case.get("classname", ""), case.get("name", ""), case.get("file")
     if path:
         module = path.removesuffix(".py").replace("/", ".")
@@ -39,8 +44,11 @@ def one_line(message: str) -> str:
 
 
 def reason(problem: ET.Element) -> str:
-    """A failure's or error's message; for a collection error, whose message says only that, with the exception
-    (the last `E ` line of the traceback) appended."""
+    """A failure's or error's message.
+
+    For a collection error, whose message says only that, the exception (the last `E ` line of the traceback) is
+    appended.
+    """
     message, text = problem.get("message") or "", problem.text or ""
     if message == "collection failure":
         exceptions = [line[1:].strip() for line in text.splitlines() if line.startswith("E ")]
@@ -49,6 +57,7 @@ def reason(problem: ET.Element) -> str:
 
 
 def signal_name(number: int) -> str:
+    """The name of signal number (e.g. SIGKILL), or "unknown" when no signal has it."""
     try:
         return signal.Signals(number).name
     except ValueError:
@@ -87,8 +96,9 @@ def run_failures(run_dir: Path, run: int) -> tuple[dict[str, str], int]:
 
 
 def main(argv: list[str]) -> int:
+    """Print the report of the runs in argv[1] (argv[2] of them); the exit status."""
     if len(argv) != 3 or not argv[2].isdigit():
-        print(__doc__.split("\n\n")[1], file=sys.stderr)
+        print(next(part for part in __doc__.split("\n\n") if part.startswith("usage:")), file=sys.stderr)
         return 2
     run_dir, runs = Path(argv[1]), int(argv[2])
     counts: dict[str, int] = {}

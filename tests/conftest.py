@@ -17,8 +17,7 @@ from typing import Optional
 import pytest
 
 from swim_ros.processes import run_child
-from swim_ros.testing.fixtures import (MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, rclpy_context,  # noqa: F401
-                                       ros_domain, running_node)
+from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, rclpy_context, ros_domain, running_node  # noqa: F401
 
 WORKSPACE = Path(__file__).resolve().parents[1]
 PACKAGES = ("swim_model", "swim_control", "swim_ros", "swim_planner", "swim_controller", "swim_sim", "swim_hw_bridge",
@@ -83,8 +82,8 @@ def track_plan(library, sequence: tuple[list[str], list[int]], time_scale: float
     from swim_controller.testing.closed_loop import simulate
     from swim_controller.tracker import CascadeTracker, model_io_linearization, model_lag_rate
     from swim_model import load_rig
-    from swim_planner.maneuver import concatenate, expand_sequence
     from swim_model.plant import vehicle_model
+    from swim_planner.maneuver import concatenate, expand_sequence
     rig = load_rig()
     plan = concatenate(library, rig, expand_sequence(*sequence), time_scale)
     model = vehicle_model("circulatory", rig, constrained, rig.lane_1_radius_m)

@@ -8,7 +8,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-
 from conftest import run_demo
 
 PERIOD_S = 0.008

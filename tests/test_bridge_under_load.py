@@ -7,7 +7,6 @@ import os
 import sys
 
 import pytest
-
 from conftest import run_demo
 
 pytestmark = pytest.mark.skipif(os.geteuid() != 0, reason="the real-time means need root here (CI runs as root)")

@@ -4,7 +4,6 @@ records and analyses it. The report is checked against bounds and against the ba
 default, realistic pipeline's whole maneuver: test_realistic_demo.py."""
 import numpy as np
 import pytest
-
 from conftest import CONTAINER_SHM_MIB, run_demo
 
 SHORT = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05"]   # 4 s + 5 s (the library's)
@@ -43,6 +42,7 @@ def test_report_is_within_bounds(demo_run):
 
 def test_bag_reads_back_and_agrees_with_the_report(demo_run):
     from rosbags.rosbag2 import Reader
+
     from swim_bringup.bag import RUN_TOPICS, read_messages
     from swim_bringup.reports import RunReport
     run_dir, _ = demo_run

@@ -54,12 +54,12 @@ class RecordingTracker(CascadeTracker):
 def runs(tmp_path_factory):
     """{"constant" | "plan": (run, eps (periods, 2))}, and the plan's D(t) at each period."""
     from swim_model import load_rig
+    from swim_model.disturbances import Disturbances
+    from swim_model.plant import Plant, vehicle_model
     from swim_planner.build import build_library
     from swim_planner.library import PrimitiveLibrary
     from swim_planner.maneuver import concatenate, expand_sequence
     from swim_planner.paths import default_library_path
-    from swim_model.disturbances import Disturbances
-    from swim_model.plant import Plant, vehicle_model
     from swim_sim.wake_coupling import WakeCoupling
     rig = load_rig()
     shipped = PrimitiveLibrary.load(default_library_path("circulatory"), rig, "circulatory")

@@ -11,12 +11,12 @@ import pytest
 from conftest import track_plan
 
 from swim_model import load_rig
+from swim_model.disturbances import Disturbances
+from swim_model.plant import Plant, vehicle_model
 from swim_model.wake import WakeParameters
 from swim_model.wake_coupling import WakeCouplingParameters
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.paths import default_library_path
-from swim_model.disturbances import Disturbances
-from swim_model.plant import Plant, vehicle_model
 from swim_sim.wake_coupling import WakeCoupling
 
 LANE_CHANGE = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/lane_change/R0.43-R0.48/E0.05",

@@ -20,10 +20,10 @@ from conftest import track_plan
 from swim_bringup.experiments import PAPER_CONSTRAINED
 from swim_controller.tracker import FoilRangeGuard
 from swim_model import load_rig
-from swim_planner.library import PrimitiveLibrary
-from swim_planner.paths import default_library_path
 from swim_model.disturbances import Disturbances
 from swim_model.plant import Plant, vehicle_model
+from swim_planner.library import PrimitiveLibrary
+from swim_planner.paths import default_library_path
 from swim_sim.wake_coupling import WakeCoupling
 
 SEED = 43

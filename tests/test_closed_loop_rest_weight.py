@@ -19,12 +19,12 @@ from conftest import track_plan
 
 from swim_bringup.experiments import PAPER_CONSTRAINED
 from swim_model import load_rig
+from swim_model.disturbances import Disturbances
+from swim_model.plant import Plant, vehicle_model
 from swim_planner.catalog import CIRCULATORY_LQR_WEIGHTS
 from swim_planner.gains import RetunedLibrary
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.paths import default_library_path
-from swim_model.disturbances import Disturbances
-from swim_model.plant import Plant, vehicle_model
 from swim_sim.wake_coupling import WakeCoupling
 
 LANE_KEEPING = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05", "free/decelerate/R0.43/E0.05"],

@@ -26,10 +26,9 @@ the term rejects bounded torques on the motors (sliding_mode.py).
 import numpy as np
 import pytest
 
-from swim_controller.testing.closed_loop import simulate
 from swim_controller.sliding_mode import SlidingMode
+from swim_controller.testing.closed_loop import simulate
 from swim_controller.tracker import CascadeTracker, model_io_linearization
-
 
 ACCELERATE = "constrained/accelerate/E0.05"
 EARLY_S = 2.0                    # s: before the plan is lost (runs repeatable to round-off; see the docstring)
@@ -58,11 +57,11 @@ class WakeRecorder:
 def runs():
     """{(wake on, sliding mode on): (run, recorder)} and the planned hub travel."""
     from swim_model import VehicleModel, load_rig
+    from swim_model.disturbances import Disturbances
+    from swim_model.plant import Plant
     from swim_planner.library import PrimitiveLibrary
     from swim_planner.maneuver import concatenate, expand_sequence
     from swim_planner.paths import default_library_path
-    from swim_model.disturbances import Disturbances
-    from swim_model.plant import Plant
     from swim_sim.wake_coupling import WakeCoupling
     rig = load_rig()
     library = PrimitiveLibrary.load(default_library_path(), rig)

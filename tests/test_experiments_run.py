@@ -3,8 +3,8 @@ seeds, two runs at once (each in its own process and ROS domain): the runs the f
 (scripts/repeat_tests.sh N tests/test_experiments_run.py). Every run succeeds, experiments.json reads back with
 every key, each seed reached its simulator, and the row agrees with the analyses of the four recorded runs."""
 import pytest
-
 from conftest import DEMO_TIMEOUT_S, WORKSPACE
+
 from swim_ros.processes import run_child
 
 #: the shortest of the paper's experiments: the constrained maneuver at lambda = 1.67 (30 s / 1.67 = 18 s)

@@ -17,15 +17,21 @@ import time
 from pathlib import Path
 
 import pytest
-
 from conftest import WORKSPACE
+from test_viz_demo_bag import layout_reads
+
 from swim_ros.processes import start_child
 from swim_ros.testing.browser import LatestMessagePage, browser_unavailable
 from swim_ros.testing.fixtures import new_rclpy_context
-from swim_ros.testing.foxglove_client import (FoxgloveClient, channel_schema, decode_protobuf, frame_transforms_keys,
-                                              free_port, tf_message_keys)
+from swim_ros.testing.foxglove_client import (
+    FoxgloveClient,
+    channel_schema,
+    decode_protobuf,
+    frame_transforms_keys,
+    free_port,
+    tf_message_keys,
+)
 from swim_ros.typestore import message_definition
-from test_viz_demo_bag import layout_reads
 
 FOXGLOVE_LAYOUT = WORKSPACE / "docs" / "foxglove_layout.json"
 #: the test page of swim_viz's browser test (its bundle made by scripts/setup.sh)

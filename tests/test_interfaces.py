@@ -3,7 +3,6 @@ import re
 
 import numpy as np
 import pytest
-
 from conftest import MESSAGE_TIMEOUT_S, WORKSPACE
 
 INTERFACE_DIR = WORKSPACE / "src" / "swim_interfaces"
@@ -56,6 +55,7 @@ def test_plan_travels_over_dds(rclpy_context):
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import QoSDurabilityPolicy, QoSProfile
     from swim_interfaces.msg import PlannedTrajectory
+
     from swim_ros.calls import spin_until
 
     qos = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
@@ -97,6 +97,7 @@ def test_rosbags_reads_what_the_nodes_publish(rclpy_context, flow_model):
     from rclpy.executors import SingleThreadedExecutor
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
     from swim_interfaces.msg import PlannedTrajectory, TrackingState
+
     from swim_ros.calls import spin_until
 
     store = get_typestore(Stores.ROS2_JAZZY)

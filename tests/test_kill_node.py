@@ -18,14 +18,13 @@ import time
 
 import numpy as np
 import pytest
+from conftest import MESSAGE_TIMEOUT_S
 from diagnostic_msgs.msg import DiagnosticArray
 from rosbags.rosbag2 import Reader
 
 from swim_bringup.bag import RUN_TOPICS, read_messages
 from swim_bringup.run_client import RunClient, header_stamp_ns
 from swim_bringup.system import System, closed_loop_specs, config_dir
-
-from conftest import MESSAGE_TIMEOUT_S
 
 PERIOD_S = 0.008
 KILL_AT_PLAN_TIME_S = 1.0

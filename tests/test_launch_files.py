@@ -25,9 +25,9 @@ from typing import Callable, Optional
 
 import pytest
 import yaml
-from swim_ros.calls import RetryPolicy
-
 from conftest import PACKAGES, WORKSPACE
+
+from swim_ros.calls import RetryPolicy
 
 INSTALL = WORKSPACE / "install"
 SOURCE_LAUNCH_DIR = WORKSPACE / "src" / "swim_bringup" / "launch"
@@ -318,6 +318,7 @@ def node_parameters(context, node_name: str) -> dict[str, object]:
     import rclpy
     from rcl_interfaces.srv import ListParameters
     from rclpy.executors import SingleThreadedExecutor
+
     from swim_ros.calls import ParameterCalls, call_service
     client_node = rclpy.create_node("launch_file_check", context=context)
     executor = SingleThreadedExecutor(context=context)
@@ -350,6 +351,7 @@ def live_parameters(ros_domain, tmp_path_factory):
     differs from one started only in an inline parameter's value (sliding_mode:=false, backend:=mf624) is not
     started again: its names are checked, and ROS types a value the same for every node."""
     import rclpy
+
     from swim_bringup.system import System
     from swim_ros.processes import NodeSpec
     logs = tmp_path_factory.mktemp("launch_nodes")

@@ -31,8 +31,8 @@ from pathlib import Path
 from typing import Callable, Optional
 
 import pytest
-
 from conftest import WORKSPACE
+
 from swim_bringup.parallel import INTERRUPT_GRACE_S
 from swim_ros.processes import STOP_GRACE_S, start_child
 from swim_ros.testing.processes import tagged_processes

@@ -5,7 +5,6 @@ import os
 import xml.etree.ElementTree as ET
 
 import pytest
-
 from conftest import PACKAGES, WORKSPACE
 
 PYTHON_PACKAGES = [p for p in PACKAGES if p != "swim_interfaces"]

@@ -5,7 +5,6 @@ sim_node flies it in the vortex wake with the physical disturbances, publishing 
 recorded and analysed, the wake drawn over the path."""
 import numpy as np
 import pytest
-
 from conftest import run_demo
 
 #: the demo's --timeout: 30 s simulated in the wake plant at 3-5x real time over DDS, 1x on a loaded host

@@ -10,8 +10,8 @@ import time
 from pathlib import Path
 
 import pytest
-
 from conftest import WORKSPACE
+
 from swim_ros.processes import run_child, start_child
 
 SCRIPT = WORKSPACE / "scripts" / "repeat_tests.sh"

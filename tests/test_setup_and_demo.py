@@ -4,8 +4,8 @@ import os
 import sys
 
 import pytest
-
 from conftest import WORKSPACE
+
 from swim_ros.processes import run_child
 
 SETUP = WORKSPACE / "scripts" / "setup.sh"

@@ -2,6 +2,7 @@
 import sys
 
 from conftest import WORKSPACE
+
 from swim_ros.processes import run_child
 
 #: ruff checks the whole tree in about a second; 120 s only stops a hung process

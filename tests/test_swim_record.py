@@ -10,8 +10,8 @@ import time
 
 import pytest
 import yaml
-
 from conftest import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, WORKSPACE, running_node
+
 from swim_ros.processes import start_child
 
 STATES = 200
@@ -51,6 +51,7 @@ def publisher(rclpy_context, tmp_path):
     """rig_state_publisher running, and a node of this test that publishes joint_states (reliable, as sim_node)."""
     import rclpy
     from sensor_msgs.msg import JointState
+
     from swim_ros.qos import RECORDABLE_QOS
     with running_node("swim_viz", "rig_state_publisher", tmp_path / "rig_state_publisher.log",
                       "-p", f"mesh_dir:={tmp_path / 'meshes'}"):

@@ -3,6 +3,7 @@
 import sys
 
 from conftest import WORKSPACE
+
 from swim_ros.processes import run_child
 
 #: mypy takes about 50 s with an empty cache (.mypy_cache) and a second or two with a warm one; 300 s only stops

@@ -9,7 +9,6 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-
 from conftest import WORKSPACE, run_demo
 
 SHORT = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05"]
@@ -115,6 +114,7 @@ def test_the_foxglove_layout_reads_run_topics_and_numeric_fields_of_their_types(
     """Without a run: every topic the layout names is one a run records (bag.RUN_TOPICS, by its full name), and each
     plotted path reaches a number in that topic's type (our installed messages')."""
     from rosbags.interfaces import Nodetype
+
     from swim_bringup.bag import RUN_TOPICS
     from swim_ros.typestore import swim_typestore
     topics, paths = layout_reads(json.loads(FOXGLOVE_LAYOUT.read_text()))

@@ -21,8 +21,15 @@ from __future__ import annotations
 import dataclasses
 from typing import Any, Mapping, Optional, Sequence, Union
 
-from swim_bringup.reports import (ExperimentRow, FailedRun, NormComparison, RunReport, SeedRuns, SlidingModePair,
-                                  run_failures)
+from swim_bringup.reports import (
+    ExperimentRow,
+    FailedRun,
+    NormComparison,
+    RunReport,
+    SeedRuns,
+    SlidingModePair,
+    run_failures,
+)
 from swim_bringup.statistics import NormStatistics, PairedChange, largest_magnitude
 from swim_planner.catalog import PAPER_CONSTRAINED, PAPER_LANE_CHANGE, PAPER_LANE_KEEPING
 

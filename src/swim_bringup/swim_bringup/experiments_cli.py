@@ -32,7 +32,6 @@ from swim_bringup.system import PIPELINES, closed_loop_specs, config_dir
 from swim_controller.supervisor import Tolerances
 from swim_ros.processes import STOP_GRACE_S, interrupt_on_sigterm
 
-
 #: cores one run keeps busy (assumed): the lock-step loop's sim_node and tracker_node take turns on about one, the
 #: run's client (recording, then analysis and figures) and the visualization nodes about another
 CORES_PER_RUN = 2.0

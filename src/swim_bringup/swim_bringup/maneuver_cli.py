@@ -43,12 +43,11 @@ from typing import Any, Callable, Optional, Sequence
 import numpy as np
 
 from swim_bringup.analysis import summary_table
-from swim_bringup.maneuver import (MODE_GOAL, MODE_SEQUENCE, ManeuverGoal, ManeuverGoalError, VehicleState,
-                                   rest_state_of)
+from swim_bringup.maneuver import MODE_GOAL, MODE_SEQUENCE, ManeuverGoal, ManeuverGoalError, VehicleState, rest_state_of
 from swim_bringup.recorded_run import add_tolerance_arguments, tolerances_of, write_run_report
 from swim_bringup.reports import run_failures
-from swim_bringup.run_record import MissingTopic
 from swim_bringup.run_client import PLANNER_POLICY, STARTUP_TIMEOUT_S, RunError
+from swim_bringup.run_record import MissingTopic
 from swim_controller.supervisor import Tolerances
 
 PROG = "swim-maneuver"
@@ -472,6 +471,7 @@ def latest_vehicle(session: Any, timeout_s: float) -> Optional[VehicleState]:
     """
     from rclpy.qos import QoSProfile, QoSReliabilityPolicy
     from sensor_msgs.msg import JointState
+
     from swim_ros.calls import spin_until
     latest: list[Any] = []
     # best effort: matches a reliable publisher and a best-effort one alike
@@ -506,6 +506,7 @@ def plan_request(goal: ManeuverGoal, vehicle: Optional[VehicleState], states: Se
     nearest its R (without one: the planner's default start).
     """
     from swim_interfaces.srv import RequestManeuver
+
     from swim_ros.calls import new_request_id
     request = RequestManeuver.Request(mode=goal.mode, primitive_ids=list(goal.primitive_ids),
                                       repeat_counts=list(goal.repeats), goal_state=goal.goal_state,
@@ -533,6 +534,7 @@ def vehicle_line(vehicle: Optional[VehicleState], request: Any) -> str:
 def plan_command(args: argparse.Namespace) -> int:
     """The plan command: plan the maneuver from where the vehicle is and print it; the exit status."""
     from swim_interfaces.srv import RequestManeuver
+
     from swim_model import load_rig
     goal = maneuver_goal(args)
     session = Session()
@@ -637,6 +639,7 @@ class ManeuverRun:
     def __init__(self, session: Any, interrupt: InterruptWatch) -> None:
         from rclpy.action import ActionClient
         from swim_interfaces.action import PerformManeuver
+
         from swim_ros.calls import GoalStatusWatch
         self.session, self.interrupt = session, interrupt
         self.action = ActionClient(session.node, PerformManeuver, "perform_maneuver")
@@ -795,6 +798,7 @@ def goal_summary(statuses: dict[bytes, int]) -> str:
 def bridge_lines(session: Any, diagnostics: list[Any]) -> list[str]:
     """The bridge's lifecycle state (get_state) and the latest /diagnostics of its I/O loop."""
     from lifecycle_msgs.srv import GetState
+
     from swim_ros.calls import CallFailed, RetryPolicy, call_service, spin_until
     lines = []
     client = session.node.create_client(GetState, "/bridge_node/get_state")
@@ -820,6 +824,7 @@ def bridge_lines(session: Any, diagnostics: list[Any]) -> list[str]:
 def status_command(args: argparse.Namespace) -> int:
     """The status command: print the system's nodes, their goals and the bridge's state; the exit status."""
     from diagnostic_msgs.msg import DiagnosticArray
+
     from swim_ros.calls import GoalStatusWatch, spin_until
     session = Session()
     try:

@@ -24,8 +24,16 @@ from swim_control.errors import StateMessageError
 from swim_controller.supervisor import Tolerances
 from swim_model.vehicle import JOINT_NAMES_CONSTRAINED, JOINT_NAMES_UNCONSTRAINED
 from swim_model.velocity_filter import VelocityEstimator
-from swim_ros.calls import (CallFailed, GoalStatusWatch, RetryPolicy, ServedElsewhere, call_service, cancel_goal,
-                            new_request_id, send_goal)
+from swim_ros.calls import (
+    CallFailed,
+    GoalStatusWatch,
+    RetryPolicy,
+    ServedElsewhere,
+    call_service,
+    cancel_goal,
+    new_request_id,
+    send_goal,
+)
 from swim_ros.entry import run_node
 from swim_ros.parameters import NodeSettings, ParameterSpec, positive
 from swim_ros.qos import per_period_subscription

@@ -16,8 +16,17 @@ from typing import TYPE_CHECKING, Callable, Optional
 from swim_bringup.bag import LATCHED_TOPICS, RUN_TOPICS, BagWriter
 from swim_bringup.recorder import RECORD_DEPTH, TopicRecorder
 from swim_controller.supervisor import Tolerances
-from swim_ros.calls import (CallFailed, GoalStatusWatch, RetryPolicy, call_service, goal_result, new_request_id,
-                            send_goal, spin_until, wait_for_server)
+from swim_ros.calls import (
+    CallFailed,
+    GoalStatusWatch,
+    RetryPolicy,
+    call_service,
+    goal_result,
+    new_request_id,
+    send_goal,
+    spin_until,
+    wait_for_server,
+)
 
 if TYPE_CHECKING:
     from rclpy.subscription import Subscription

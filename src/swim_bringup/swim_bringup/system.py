@@ -14,7 +14,6 @@ import yaml
 
 from swim_ros.processes import STOP_GRACE_S, NodeProcess, NodeSpec
 
-
 #: the pipelines a run can use, each a folder of parameter files (config_dir): "realistic", the default, flies the
 #: circulatory flow model's plans in the vortex wake under the physical disturbances; "paper" flies the ideal-flow
 #: plans in ideal flow under the small disturbances they survive (the paper's reproduction)

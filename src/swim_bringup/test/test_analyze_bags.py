@@ -16,9 +16,9 @@ from rosbags.typesys import get_types_from_msg
 from swim_bringup.analysis import analyze, analyze_bag
 from swim_bringup.analysis_cli import EXIT_FULL_REPORT, EXIT_PARTIAL_REPORT, EXIT_UNREADABLE, main
 from swim_bringup.bag import RUN_TOPICS, BagWriter, bag_info, read_messages
-from swim_ros.typestore import swim_typestore
 from swim_model.rig import default_rig_path
 from swim_ros.processes import run_child
+from swim_ros.typestore import swim_typestore
 
 PERIOD_S, PERIODS = 0.008, 251                  # 2 s of tracking at the controller's period
 LANE_M, ALPHA_OFFSET_RAD = 0.43, 0.02

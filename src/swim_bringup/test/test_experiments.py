@@ -2,14 +2,21 @@
 value of largest magnitude, the outcome over every seed, the statistics), and the whole command with stand-in
 runs in real processes (no DDS): every run's seed and sliding mode reach it, a failed run is named and the others
 kept."""
-import pytest
-
 import json
+
+import pytest
 
 from swim_bringup.experiments import NORMS, compare, paper_experiments, results_table, run_label
 from swim_bringup.experiments_cli import RunTask
-from swim_bringup.reports import (BridgeMeasures, ExperimentsSummary, FailedRun, RunMeasures, RunReport,
-                                  SlidingModePair, TrackerResult)
+from swim_bringup.reports import (
+    BridgeMeasures,
+    ExperimentsSummary,
+    FailedRun,
+    RunMeasures,
+    RunReport,
+    SlidingModePair,
+    TrackerResult,
+)
 from swim_model import load_rig
 from swim_planner.library import PrimitiveLibrary
 from swim_planner.paths import default_library_path

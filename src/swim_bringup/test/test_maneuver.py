@@ -5,8 +5,17 @@ import re
 import numpy as np
 import pytest
 
-from swim_bringup.maneuver import (MODE_GOAL, MODE_SEQUENCE, ManeuverGoal, ManeuverGoalError, NotAtRest, RestBounds,
-                                   VehicleState, rest_state_of, start_state)
+from swim_bringup.maneuver import (
+    MODE_GOAL,
+    MODE_SEQUENCE,
+    ManeuverGoal,
+    ManeuverGoalError,
+    NotAtRest,
+    RestBounds,
+    VehicleState,
+    rest_state_of,
+    start_state,
+)
 from swim_controller.supervisor import Tolerances
 
 BOUNDS = RestBounds(angular_speed_rad_s=0.1, linear_speed_m_s=0.02)

@@ -77,8 +77,8 @@ def test_bad_input_is_a_usage_error(argv, capsys):
 
 
 def test_the_forms_an_operator_types():
-    from swim_bringup.maneuver_cli import maneuver_goal, parse_arguments
     from swim_bringup.maneuver import MODE_GOAL, MODE_SEQUENCE
+    from swim_bringup.maneuver_cli import maneuver_goal, parse_arguments
     from swim_bringup.recorded_run import RUN_TOLERANCES
     from swim_bringup.run_client import STARTUP_TIMEOUT_S
     args = parse_arguments(["run", "--primitives", *LANE_KEEPING[0], "--repeats", "1", "14", "1",
@@ -96,8 +96,9 @@ def test_the_forms_an_operator_types():
 
 
 def test_each_result_code_has_its_exit_status():
-    from swim_bringup.maneuver_cli import exit_status_of
     from swim_interfaces.action import PerformManeuver
+
+    from swim_bringup.maneuver_cli import exit_status_of
     result = PerformManeuver.Result
     assert exit_status_of(result.SUCCESSFUL, False) == 0
     for code in (result.PATH_TOLERANCE_VIOLATED, result.GOAL_TOLERANCE_VIOLATED, result.STATE_LOST,
@@ -127,6 +128,7 @@ def library():
 def plan_message(library, ids, counts, time_scale=1.0, start_alpha_rad=0.0):
     """The planner's plan of the sequence as planner_node sends it, and the Trajectory it came from."""
     from builtin_interfaces.msg import Time
+
     from swim_model import load_rig
     from swim_planner.maneuver import concatenate, expand_sequence
     from swim_ros.trajectory_messages import trajectory_to_message
@@ -213,6 +215,7 @@ def test_the_start_of_the_constrained_vehicle_and_of_none():
 
 def test_the_goal_statuses_read_as_a_line():
     from action_msgs.msg import GoalStatus
+
     from swim_bringup.maneuver_cli import goal_summary
     assert goal_summary({}) == "no goal under way (none seen)"
     statuses = {b"\x01" * 16: GoalStatus.STATUS_SUCCEEDED, b"\x02" * 16: GoalStatus.STATUS_EXECUTING}
@@ -225,6 +228,7 @@ def joint_states_published(names, positions):
     """A node of this test publishing joint_states (reliable, as a plant) every 20 ms until the block ends."""
     import rclpy
     from sensor_msgs.msg import JointState
+
     from swim_ros.qos import RECORDABLE_QOS
     with new_rclpy_context() as context:
         node = rclpy.create_node("joint_state_source", context=context)
@@ -351,6 +355,7 @@ def joint_commands_received(timeout_s: float):
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from sensor_msgs.msg import JointState
+
     from swim_ros.qos import RECORDABLE_QOS
     with new_rclpy_context() as context:
         node = rclpy.create_node("joint_command_probe", context=context)
@@ -456,6 +461,7 @@ def test_a_refused_request_exits_2_and_moves_nothing(bridge_set):
 
 def test_the_paper_lane_keeping_ends_within_the_default_tolerances(bridge_set):
     import re
+
     from swim_bringup.recorded_run import RUN_TOLERANCES
     results, _ = bridge_set
     assert_clean_exit(results["lane keeping"], 0)
@@ -548,10 +554,11 @@ def test_a_goal_state_is_flown_from_where_the_last_maneuver_ended(sim_set):
 
 
 def test_ctrl_c_cancels_the_maneuver_and_leaves_a_whole_bag(sim_set):
+    from swim_interfaces.action import PerformManeuver
+
     from swim_bringup.analysis import analyze
     from swim_bringup.bag import read_messages
     from swim_bringup.reports import RunReport
-    from swim_interfaces.action import PerformManeuver
     results, work, output = sim_set
     run_dir = work / "canceled"
     assert results["canceled"] == 130, output[-3000:]
@@ -592,6 +599,7 @@ def test_a_plan_starts_from_the_simulators_rest(sim_set):
 
 def test_the_bridge_transitions_are_lifecycle_msgs_ids():
     from lifecycle_msgs.msg import Transition
+
     from swim_bringup.maneuver_cli import BRIDGE_TRANSITIONS
     expected = {name: getattr(Transition, f"TRANSITION_{name.upper()}") for name in BRIDGE_TRANSITIONS}
     assert BRIDGE_TRANSITIONS == expected

@@ -39,6 +39,7 @@ class Operator:
         from rclpy.executors import SingleThreadedExecutor
         from sensor_msgs.msg import JointState
         from swim_interfaces.action import PerformManeuver
+
         from swim_ros.calls import GoalStatusWatch
         self.node = rclpy.create_node("maneuver_test_operator", context=context)
         self.executor = SingleThreadedExecutor(context=context)
@@ -60,6 +61,7 @@ class Operator:
         """sim_node back at its start (its reset service), and at rest again: the tracker's hold brings the foil
         back to where the reset put it."""
         from std_srvs.srv import Trigger
+
         from swim_ros.calls import RetryPolicy, call_service
         policy = RetryPolicy(attempt_timeout_s=10.0, attempts=3, discovery_timeout_s=POLICY_S)
         assert call_service(self.executor, self.node.create_client(Trigger, "reset"), Trigger.Request(),
@@ -69,6 +71,7 @@ class Operator:
 
     def send(self, goal_yaml: str, feedback: list):
         from swim_interfaces.action import PerformManeuver
+
         from swim_ros.calls import RetryPolicy, send_goal
         from swim_ros.testing.message_fields import message_from_yaml
         goal = message_from_yaml(PerformManeuver.Goal, goal_yaml)
@@ -129,6 +132,7 @@ def operator(ros_domain, tmp_path_factory):  # noqa: F811 - the fixture imported
 ])
 def test_a_goal_that_cannot_be_flown_ends_with_the_reason_and_nothing_moves(operator, goal_yaml, code, reason):
     import re
+
     from swim_interfaces.action import PerformManeuver
     feedback: list = []
     operator.efforts.clear()
@@ -142,9 +146,10 @@ def test_a_goal_that_cannot_be_flown_ends_with_the_reason_and_nothing_moves(oper
 
 
 def test_the_papers_maneuver_typed_as_yaml_flies_from_where_the_vehicle_is(operator):
+    from swim_interfaces.action import PerformManeuver
+
     from swim_bringup.experiments import PAPER_CONSTRAINED
     from swim_bringup.recorded_run import RUN_TOLERANCES
-    from swim_interfaces.action import PerformManeuver
     Feedback = PerformManeuver.Feedback
     assert (RUN_TOLERANCES.path_alpha_rad, RUN_TOLERANCES.goal_alpha_rad, RUN_TOLERANCES.goal_r_m) == (1.0, 0.25, 0.025)
     feedback: list = []
@@ -186,6 +191,7 @@ def test_a_maneuver_starts_at_the_vehicles_alpha(operator):
 def test_a_goal_for_a_moving_vehicle_is_refused_and_a_cancel_reaches_the_tracker(operator):
     from action_msgs.msg import GoalStatus
     from swim_interfaces.action import PerformManeuver
+
     from swim_ros.calls import cancel_goal
     operator.reset_to_rest()
     feedback: list = []
@@ -213,8 +219,16 @@ def test_a_plan_sent_to_the_tracker_preempts_the_maneuver_under_way(operator):
     from rclpy.action import ActionClient
     from swim_interfaces.action import ExecutePlan, PerformManeuver
     from swim_interfaces.srv import RequestManeuver
-    from swim_ros.calls import (GoalStatusWatch, RetryPolicy, call_service, cancel_goal, goal_result, new_request_id,
-                                send_goal)
+
+    from swim_ros.calls import (
+        GoalStatusWatch,
+        RetryPolicy,
+        call_service,
+        cancel_goal,
+        goal_result,
+        new_request_id,
+        send_goal,
+    )
     policy = RetryPolicy(attempt_timeout_s=10.0, attempts=3, discovery_timeout_s=POLICY_S)
     operator.reset_to_rest()
     feedback: list = []

@@ -9,8 +9,16 @@ from conftest import diagnostics_cdr, tracking_state_cdr
 from swim_bringup.analysis import analyze
 from swim_bringup.bag import BagWriter
 from swim_bringup.experiments import compare, paper_experiments
-from swim_bringup.reports import (ExperimentsSummary, FailedRun, ReportError, RunAnalysis, RunReport,
-                                  SlidingModePair, TrackerResult, run_failures)
+from swim_bringup.reports import (
+    ExperimentsSummary,
+    FailedRun,
+    ReportError,
+    RunAnalysis,
+    RunReport,
+    SlidingModePair,
+    TrackerResult,
+    run_failures,
+)
 
 #: report.json's keys, in order, as swim-demo writes them (the file's readers and the docs rely on them)
 MEASURE_KEYS = ["duration_s", "longitudinal_error_two_norm_m_s05", "lateral_error_two_norm_m_s05",

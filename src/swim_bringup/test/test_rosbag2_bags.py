@@ -21,8 +21,8 @@ from rosbags.rosbag2 import Reader
 from swim_bringup.analysis import analyze_bag
 from swim_bringup.analysis_cli import EXIT_PARTIAL_REPORT, main
 from swim_bringup.bag import BagError, bag_info, read_messages, undecodable_topics
-from swim_ros.typestore import swim_typestore
 from swim_ros.processes import run_child
+from swim_ros.typestore import swim_typestore
 
 HUMBLE_BAG = Path(__file__).parent / "data" / "rosbag2_humble" / "bagfile_0_cut.mcap"
 #: the topics of the Humble bag whose schema rosbag2 wrote with encoding 'unknown' (action feedback messages)

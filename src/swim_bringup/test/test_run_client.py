@@ -10,9 +10,10 @@ from swim_ros.testing.fixtures import new_rclpy_context, ros_domain  # noqa: F40
 def test_header_stamp_read_from_cdr_equals_the_messages_stamp(sec, nanosec):
     from rclpy.serialization import serialize_message
     from sensor_msgs.msg import JointState
+    from swim_interfaces.msg import TrackingState
+
     from swim_bringup.bag import RUN_TOPICS
     from swim_bringup.run_client import LOOP_TOPICS, header_stamp_ns
-    from swim_interfaces.msg import TrackingState
     assert {RUN_TOPICS[topic] for topic in LOOP_TOPICS} == {"sensor_msgs/msg/JointState",
                                                            "swim_interfaces/msg/TrackingState"}   # the types below
     for message in (JointState(name=["phi", "theta"], effort=[0.1, -0.2]),
@@ -27,6 +28,7 @@ def test_the_run_client_leaves_the_nodes_it_starts_fast_dds_defaults(tmp_path, m
     """The run client starts the nodes of a run, which inherit its environment: it sets no Fast DDS profile, or
     every node would take planner_node's large shared-memory segment (swim_ros.transport)."""
     import os
+
     from swim_bringup.run_client import RunClient
     from swim_ros.transport import PROFILE_VARIABLES
     for variable in PROFILE_VARIABLES:
@@ -54,6 +56,7 @@ def test_a_closed_run_client_leaves_the_graph_at_once(tmp_path):
 
 def _closed_clients_leave(tmp_path, probe) -> None:
     import time
+
     from swim_bringup.run_client import RunClient
 
     def readers() -> list[str]:

@@ -7,8 +7,7 @@ import statistics as stdlib
 import pytest
 from scipy import stats
 
-from swim_bringup.statistics import (NormStatistics, PairedChange, Spread, largest_magnitude, relative_change,
-                                     t_quantile)
+from swim_bringup.statistics import NormStatistics, PairedChange, Spread, largest_magnitude, relative_change, t_quantile
 
 SEED_VALUES = [0.031, 0.027, 0.035, 0.029, 0.033]
 

@@ -3,8 +3,14 @@ arrays refused with nothing written."""
 import numpy as np
 import pytest
 
-from swim_bringup.wake_figure import (CLOCKWISE_COLOUR, COUNTER_CLOCKWISE_COLOUR, LARGEST_MARKER_AREA_PT2,
-                                      marker_areas_pt2, marker_colours, write_wake_figure)
+from swim_bringup.wake_figure import (
+    CLOCKWISE_COLOUR,
+    COUNTER_CLOCKWISE_COLOUR,
+    LARGEST_MARKER_AREA_PT2,
+    marker_areas_pt2,
+    marker_colours,
+    write_wake_figure,
+)
 
 
 def test_marker_area_is_proportional_to_the_strength_and_colour_follows_the_sign():

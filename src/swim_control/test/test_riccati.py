@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 import scipy.linalg
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from swim_control.errors import GainComputationError
 from swim_control.riccati import Linearization, LqrWeights, linearize, solve_riccati, terminal_weight
@@ -203,8 +204,7 @@ def test_a_primitive_ending_at_rest_weights_the_task_at_its_end(model_for, const
     """ends_at_rest adds rest_lateral_terminal_weight to S's e_R entry for the free vehicle and
     rest_alpha_terminal_weight to S's e_alpha entry for the constrained one, and nothing else (the other weight does
     nothing to either). Without the flag the weights do nothing."""
-    from swim_control.riccati import (HUB_ERROR_INDEX_CONSTRAINED, LATERAL_ERROR_INDEX, error_state_size,
-                                      primitive_gains)
+    from swim_control.riccati import HUB_ERROR_INDEX_CONSTRAINED, LATERAL_ERROR_INDEX, error_state_size, primitive_gains
     from swim_control.testing.strokes import StrokeSpec, make_stroke
     spec = StrokeSpec("free stroke" if not constrained else "constrained stroke", constrained, 0.43, 40)
     model = model_for(spec)

@@ -13,8 +13,14 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from swim_control.errors import GainComputationError
-from swim_control.riccati import LqrWeights, error_state_size, linearize, primitive_gains, solve_riccati, \
-    terminal_weight
+from swim_control.riccati import (
+    LqrWeights,
+    error_state_size,
+    linearize,
+    primitive_gains,
+    solve_riccati,
+    terminal_weight,
+)
 from swim_control.time_scaling import scale_riccati, scale_weights, scaling_diagonal
 from swim_model import SinusoidalGait, VehicleModel
 from swim_model.gait import zero_momentum_velocity

@@ -3,8 +3,14 @@ import numpy as np
 import pytest
 
 from swim_control.riccati import LqrWeights, linearize, solve_riccati, terminal_weight
-from swim_control.time_scaling import lqr_gain_from, retime_feedback, scale_riccati, scale_weights, \
-    scaling_diagonal, scaling_matrix
+from swim_control.time_scaling import (
+    lqr_gain_from,
+    retime_feedback,
+    scale_riccati,
+    scale_weights,
+    scaling_diagonal,
+    scaling_matrix,
+)
 
 PRIMITIVES = ["constrained", "free"]
 

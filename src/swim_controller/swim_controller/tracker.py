@@ -36,8 +36,8 @@ from numpy.linalg import _umath_linalg
 from swim_control.errors import PlanError
 from swim_control.trajectory import Trajectory, TrajectoryPoint
 from swim_controller.sliding_mode import SlidingMode
-from swim_model.limits import HardLimits
 from swim_model.flow import LAG_STATE_NAMES
+from swim_model.limits import HardLimits
 
 if TYPE_CHECKING:
     from swim_model import VehicleModel

@@ -32,16 +32,21 @@ from swim_control.errors import PlanError, StateMessageError
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.supervisor import Mode, Outcome, StaleStateWatch, Step, Supervisor, Tolerances
 from swim_controller.tracker import CascadeTracker, FoilRangeGuard, model_io_linearization, model_lag_rate
-from swim_model.velocity_filter import DEFAULT_CUTOFF_HZ, VelocityEstimator
 from swim_model import RigParameters, SwimModelError, VehicleModel, load_rig
+from swim_model.velocity_filter import DEFAULT_CUTOFF_HZ, VelocityEstimator
 from swim_ros.codecs import ACTUATED_JOINTS, float_array
 from swim_ros.entry import run_node
 from swim_ros.lifecycle import configure_and_activate, guard_change_state_service
-from swim_ros.parameters import (NodeSettings, ParameterSpec, RealtimeParameterSettings, positive,
-                                 realtime_parameters)
+from swim_ros.parameters import NodeSettings, ParameterSpec, RealtimeParameterSettings, positive, realtime_parameters
 from swim_ros.qos import per_period_publisher, per_period_subscription
-from swim_ros.realtime import (NO_REALTIME_MEANS, PeriodicCollector, RealtimeSettings, make_process_ordinary,
-                               make_process_realtime, make_thread_background)
+from swim_ros.realtime import (
+    NO_REALTIME_MEANS,
+    PeriodicCollector,
+    RealtimeSettings,
+    make_process_ordinary,
+    make_process_realtime,
+    make_thread_background,
+)
 from swim_ros.trajectory_messages import state_from_message, trajectory_from_message
 
 RESULT_CODES = {

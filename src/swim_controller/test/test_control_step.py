@@ -18,8 +18,15 @@ from swim_control.time_scaling import lqr_gain_from
 from swim_control.trajectory import Segment, Trajectory
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.testing.circulatory import gait_run, plan_from_run
-from swim_controller.tracker import (HOLD_DAMPING_PER_S, HOLD_STIFFNESS_PER_S2, CascadeTracker, LagEstimator,
-                                     model_io_linearization, model_lag_rate, solve)
+from swim_controller.tracker import (
+    HOLD_DAMPING_PER_S,
+    HOLD_STIFFNESS_PER_S2,
+    CascadeTracker,
+    LagEstimator,
+    model_io_linearization,
+    model_lag_rate,
+    solve,
+)
 from swim_model import VehicleModel
 
 #: the steps of the ideal-flow run: as many as bench_control_step times (20 s of a 1 kHz loop)

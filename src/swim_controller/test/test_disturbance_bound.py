@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 from builtin_interfaces.msg import Time
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from swim_control.errors import PlanError
 from swim_controller.sliding_mode import SlidingMode

@@ -23,14 +23,22 @@ from typing import Optional
 
 import numpy as np
 import pytest
+import test_tracker_node
 from hypothesis import assume, event, example, given
 from hypothesis import strategies as st
-
-import test_tracker_node
-from swim_ros.testing.fixtures import STARTUP_TIMEOUT_S, new_rclpy_context, running_node
-from swim_ros.testing.fuzz import (EDGE_FLOATS, NON_FINITE, any_float, fuzz_parameter_sets, fuzz_settings,
-                                   joint_states, to_joint_state, unicode_name)
 from test_tracker_node import PERIOD_S, PLAN_DURATION_S, POLICY, run_until, send
+
+from swim_ros.testing.fixtures import STARTUP_TIMEOUT_S, new_rclpy_context, running_node
+from swim_ros.testing.fuzz import (
+    EDGE_FLOATS,
+    NON_FINITE,
+    any_float,
+    fuzz_parameter_sets,
+    fuzz_settings,
+    joint_states,
+    to_joint_state,
+    unicode_name,
+)
 
 JOINTS = ("alpha", "phi", "theta")
 #: a state's command: within a period here; 5 s for a loaded 2-core host (and for discovery on the first one)
@@ -430,6 +438,7 @@ def check_published(tracker, plant, tracking, feedback, torque_limits):
 def fresh_plan(plant, tracking, edit, base_plan, torque_limits):
     """The plant at rest at the origin, nothing recorded; the plan edit re-makes, encoded."""
     from builtin_interfaces.msg import Time
+
     from swim_ros.trajectory_messages import trajectory_to_message
     plant.q, plant.qdot = np.zeros(3), np.zeros(3)
     plant.torques.clear()
@@ -479,6 +488,7 @@ def test_no_interface_version_defect_is_a_readable_version():
 def test_fuzzed_broken_plans_are_refused_with_a_reason_and_change_nothing(tracker, rig_loop, tracking, plan_message,
                                                                           base_plan, torque_limits, defect, edit):
     from swim_interfaces.action import ExecutePlan
+
     from swim_ros.calls import spin_until
     plant, client = rig_loop
     message = fresh_plan(plant, tracking, edit, base_plan, torque_limits)

@@ -100,6 +100,7 @@ class RampedGait:
 @pytest.fixture(scope="module")
 def plan_message():
     from builtin_interfaces.msg import Time
+
     from swim_control.riccati import LqrWeights, primitive_gains
     from swim_control.time_scaling import lqr_gain_from
     from swim_control.trajectory import Segment, Trajectory
@@ -125,6 +126,7 @@ class LockStepPlant:
 
     def __init__(self, node, executor):
         from sensor_msgs.msg import JointState
+
         from swim_model import VehicleModel, load_rig
         self.model = VehicleModel(load_rig(), constrained=True)
         # load the compiled model now: its first use takes ~1 s, longer than the node's stale-state limit
@@ -179,6 +181,7 @@ def rig_loop(tracker, rclpy_context):
     from rclpy.action import ActionClient
     from rclpy.executors import SingleThreadedExecutor
     from swim_interfaces.action import ExecutePlan
+
     from swim_ros.calls import GoalStatusWatch
     node = rclpy.create_node("tracker_test_plant", context=rclpy_context)
     executor = SingleThreadedExecutor(context=rclpy_context)
@@ -197,6 +200,7 @@ def send(plant, client, plan, feedback=None, **tolerances):
 
     The result is asked once: its answer comes when the goal ends, long after discovery matched."""
     from swim_interfaces.action import ExecutePlan
+
     from swim_ros.calls import send_goal
     handle = send_goal(plant.executor, client, ExecutePlan.Goal(plan=plan, **tolerances), plant.goal_status,
                        feedback, POLICY)
@@ -370,6 +374,7 @@ def test_parameters_are_validated_and_switch_sliding_mode_mid_plan(rig_loop, pla
     from rclpy.parameter import Parameter
     from swim_interfaces.action import ExecutePlan
     from swim_interfaces.msg import TrackingState
+
     from swim_ros.calls import ParameterCalls
     plant, client = rig_loop
     tracking = []
@@ -452,6 +457,7 @@ def test_a_time_scale_past_the_motor_limits_refuses_the_goal(rig_loop, plan_mess
     from rclpy.parameter import Parameter
     from swim_interfaces.action import ExecutePlan
     from swim_interfaces.msg import TrackingState
+
     from swim_model import load_rig
     from swim_ros.calls import ParameterCalls
     plant, client = rig_loop
@@ -484,6 +490,7 @@ def test_the_lifecycle_serves_only_while_active(ros_domain, rclpy_context, tmp_p
     import rclpy
     from lifecycle_msgs.msg import Transition
     from rclpy.executors import SingleThreadedExecutor
+
     from swim_ros.calls import change_lifecycle_state
     namespace = "lifecycle_test"
     log_path = tmp_path / "tracker.txt"

@@ -16,9 +16,9 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
-from swim_model import RigParameters, VehicleModel
 
 from swim_hw_bridge.safety import BRAKING_TORQUE_FRACTION, JointDynamicsBounds
+from swim_model import RigParameters, VehicleModel
 
 #: grid points per joint range when searching the largest inertia (M varies smoothly with the joint angles)
 GRID_POINTS = 13

@@ -28,17 +28,22 @@ from swim_hw_bridge.io_loop import IoLoop, Snapshot
 from swim_hw_bridge.safety import Command, FaultCode, SafetyLayer, SafetyLimits, WatchdogState, fault_names
 from swim_hw_bridge.timing import LatencyHistogram
 from swim_model import RigConfigError, load_rig
-from swim_model.vehicle import JOINT_NAMES_UNCONSTRAINED
 from swim_model.flow import FLOWS
 from swim_model.plant import PlantSettings
+from swim_model.vehicle import JOINT_NAMES_UNCONSTRAINED
 from swim_ros.codecs import MessageError, torque_from_command
 from swim_ros.entry import run_node
 from swim_ros.lifecycle import configure_and_activate, guard_change_state_service
 from swim_ros.parameters import NodeSettings, ParameterSpec, RealtimeParameterSettings, one_of, realtime_parameters
 from swim_ros.qos import RECORDABLE_QOS
-from swim_ros.realtime import (NO_REALTIME_MEANS, RealtimeOutcome, RealtimeSettings, make_process_ordinary,
-                               make_process_realtime, memory_locked_kib)
-
+from swim_ros.realtime import (
+    NO_REALTIME_MEANS,
+    RealtimeOutcome,
+    RealtimeSettings,
+    make_process_ordinary,
+    make_process_realtime,
+    memory_locked_kib,
+)
 
 #: the bridge's parameters (swim_ros.parameters). The lifecycle node reads them when it is configured: a value set
 #: while configured or active takes effect at the next configure. What the node builds at start (the diagnostics

@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+
 from swim_model import RigParameters, load_rig
 from swim_model.units import POSITIVE, SIGNED, UNITS, EntryError, entry_to_si
 

@@ -34,15 +34,20 @@ import time
 from typing import Callable, Optional
 
 import numpy as np
-from swim_model.velocity_filter import VelocityEstimator
-from swim_ros.realtime import (NO_REALTIME_MEANS, PeriodicCollector, RealtimeSettings, make_thread_realtime,
-                               thread_policy)
 
 from swim_hw_bridge.conversions import Conversions
 from swim_hw_bridge.device import Device, DeviceError
 from swim_hw_bridge.safety import Command, FaultCode, Motion, SafetyLayer, WatchdogState
 from swim_hw_bridge.timing import LatencyHistogram, OverrunCause, overrun_cause
 from swim_hw_bridge.unwrap import CounterUnwrapper
+from swim_model.velocity_filter import VelocityEstimator
+from swim_ros.realtime import (
+    NO_REALTIME_MEANS,
+    PeriodicCollector,
+    RealtimeSettings,
+    make_thread_realtime,
+    thread_policy,
+)
 
 _RATE_SMOOTHING = 0.05   # weight of the newest interval in the loop-rate average (about 20 periods)
 #: periods between two garbage collections at a period's end: 1 s at 8 ms; what a second of periods leaves

@@ -48,6 +48,7 @@ from typing import Callable
 from swim_hw_bridge.conversions import BridgeConfig
 from swim_model.limits import HardLimits
 
+
 class FaultCode(enum.IntFlag):
     """Latched faults, a bit each (several may be latched at once)."""
 

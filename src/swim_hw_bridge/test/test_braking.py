@@ -8,17 +8,23 @@ import math
 
 import numpy as np
 import pytest
-from swim_model import VehicleModel, load_rig
-from swim_model.plant import PlantSettings
-
 from conftest import PERIOD_S, READ_FAILURE_LIMIT, STALE_READ_LIMIT, WATCHDOG_PERIODS
+
 from swim_hw_bridge.backends.emulated import EmulatedDevice
 from swim_hw_bridge.braking import joint_dynamics_bounds
 from swim_hw_bridge.conversions import Conversions
 from swim_hw_bridge.device import CounterSample
 from swim_hw_bridge.io_loop import IoLoop
-from swim_hw_bridge.safety import (RECOVERY_TORQUE_FRACTION, Command, FaultCode, SafetyLayer, SafetyLimits,
-                                   braking_speed_limit)
+from swim_hw_bridge.safety import (
+    RECOVERY_TORQUE_FRACTION,
+    Command,
+    FaultCode,
+    SafetyLayer,
+    SafetyLimits,
+    braking_speed_limit,
+)
+from swim_model import VehicleModel, load_rig
+from swim_model.plant import PlantSettings
 
 #: periods of full torque per case: 2 s, longer than any link takes to cross its range at full torque
 HELD_PERIODS = 250

@@ -9,8 +9,8 @@ import time
 
 import pytest
 
-from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, running_node
 from swim_ros.calls import ParameterCalls, RetryPolicy, spin_until
+from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, running_node
 
 #: the bridge answers its services within a period or two; a try waits 10 s for a loaded host, a lost answer is
 #: asked again (lifecycle transitions only after reading the node's state)
@@ -66,13 +66,13 @@ class BridgeClient:
     """The test's side of the bridge: lifecycle and e-stop services, commands out, states and diagnostics in."""
 
     def __init__(self, context, namespace="", log_path=None):
+        import rclpy
         from diagnostic_msgs.msg import DiagnosticArray
         from lifecycle_msgs.srv import ChangeState, GetState
         from rclpy.executors import SingleThreadedExecutor
         from sensor_msgs.msg import JointState
         from std_msgs.msg import Bool
         from std_srvs.srv import Trigger
-        import rclpy
         self.log_path = log_path   # the bridge's output, shown when it does not answer
         self.node = rclpy.create_node("bridge_test_client", namespace=namespace or "/", context=context)
         self.executor = SingleThreadedExecutor(context=context)
@@ -405,8 +405,9 @@ def test_a_device_lost_while_active_takes_deactivate_into_error_processing(ros_d
     """
     import yaml
     from lifecycle_msgs.msg import Transition
-    from swim_hw_bridge.testing.fake_serial_firmware import PtyRig
+
     from swim_hw_bridge.conversions import default_config_path
+    from swim_hw_bridge.testing.fake_serial_firmware import PtyRig
     rig = PtyRig(tmp_path / "ttyRIG", command_timeout_ms=FIRMWARE_TIMEOUT_MS, toggle_timeout_ms=FIRMWARE_TIMEOUT_MS)
     config = yaml.safe_load(default_config_path().read_text())
     config["backend_options"]["serial"].update(port=str(rig.link), read_timeout_s=SERIAL_READ_TIMEOUT_S,

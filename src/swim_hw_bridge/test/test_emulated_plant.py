@@ -5,14 +5,13 @@ swims in for each flow, and once with the simulator's physical disturbances (fri
 no quantization: the vehicles' q (and qdot) are compared, not the encoders' counts or the simulator's sensors."""
 import numpy as np
 import pytest
-
 from conftest import PERIOD_S
+
+from swim_hw_bridge.backends.emulated import EmulatedDevice
 from swim_model import load_rig
 from swim_model.disturbances import Disturbances
 from swim_model.plant import Plant, PlantSettings, vehicle_model
 from swim_model.wake_coupling import WakeCoupling
-
-from swim_hw_bridge.backends.emulated import EmulatedDevice
 
 #: 0.48 s: the heave driven into its upper stop and held there, then pulled back, the pitch swinging throughout
 PERIODS = 60

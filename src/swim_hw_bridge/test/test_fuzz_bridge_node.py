@@ -30,12 +30,18 @@ import numpy as np
 import pytest
 from hypothesis import event, example, given
 from hypothesis import strategies as st
+from test_bridge_node import BAD_COMMAND_SPACING_S, HOLD_S, PERIOD_S, POLICY, BridgeClient, efforts
 
 from swim_ros.calls import RetryPolicy
 from swim_ros.testing.fixtures import STARTUP_TIMEOUT_S, new_rclpy_context, running_node
-from swim_ros.testing.fuzz import (fuzz_parameter_sets, fuzz_settings, joint_states, to_joint_state, torques,
-                                   unicode_name)
-from test_bridge_node import BAD_COMMAND_SPACING_S, HOLD_S, PERIOD_S, POLICY, BridgeClient, efforts
+from swim_ros.testing.fuzz import (
+    fuzz_parameter_sets,
+    fuzz_settings,
+    joint_states,
+    to_joint_state,
+    torques,
+    unicode_name,
+)
 
 NAMESPACE = "/fuzz"
 ACTUATED = ("phi", "theta")
@@ -114,6 +120,7 @@ class BridgeUnderTest:
     def start(self):
         from lifecycle_msgs.msg import Transition
         from lifecycle_msgs.srv import ChangeState, GetState
+
         from swim_ros.calls import call_service
         self.starts += 1
         log = self.log_dir / f"log_{self.starts}.txt"

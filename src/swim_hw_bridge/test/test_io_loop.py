@@ -7,14 +7,13 @@ import time
 
 import numpy as np
 import pytest
-
 from conftest import PERIOD_S, READ_FAILURE_LIMIT, STALE_READ_LIMIT
-from swim_model.plant import PlantSettings
 
-from swim_hw_bridge.backends.emulated import EmulatedDevice
 from swim_hw_bridge import io_loop
+from swim_hw_bridge.backends.emulated import EmulatedDevice
 from swim_hw_bridge.io_loop import IoLoop
 from swim_hw_bridge.safety import Command, FaultCode, SafetyLayer, WatchdogState
+from swim_model.plant import PlantSettings
 
 OVERRUN_LIMIT = 3
 

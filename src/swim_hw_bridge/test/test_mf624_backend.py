@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 
 from swim_hw_bridge.backends import mf624_registers as registers
 from swim_hw_bridge.backends.mf624 import Mf624Device
-from swim_hw_bridge.testing.mf624_emulation import EmulatedComedi, EmulatedCounterRegisters
 from swim_hw_bridge.device import DeviceError
+from swim_hw_bridge.testing.mf624_emulation import EmulatedComedi, EmulatedCounterRegisters
 
 GAIN_A_PER_V = 0.2
 AO_SUBDEVICE, DO_SUBDEVICE = 1, 3  # mf6x4's layout, found by type by the backend

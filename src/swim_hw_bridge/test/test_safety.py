@@ -3,12 +3,19 @@ import dataclasses
 import math
 
 import pytest
+from conftest import PERIOD_S, READ_FAILURE_LIMIT, STALE_READ_LIMIT, WATCHDOG_PERIODS
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import PERIOD_S, READ_FAILURE_LIMIT, STALE_READ_LIMIT, WATCHDOG_PERIODS
-from swim_hw_bridge.safety import (Command, FaultCode, Motion, SafetyLayer, WatchdogState, braking_speed_limit,
-                                   soft_limit_scale)
+from swim_hw_bridge.safety import (
+    Command,
+    FaultCode,
+    Motion,
+    SafetyLayer,
+    WatchdogState,
+    braking_speed_limit,
+    soft_limit_scale,
+)
 from swim_ros.codecs import MessageError, torque_from_command
 
 T0 = 100.0

@@ -11,11 +11,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swim_hw_bridge.testing import fake_serial_firmware as fake
 from swim_hw_bridge.backends import serial_protocol as protocol
 from swim_hw_bridge.backends.serial_backend import SerialDevice
-from swim_hw_bridge.testing.fake_serial_firmware import PtyRig
 from swim_hw_bridge.device import DeviceError
+from swim_hw_bridge.testing import fake_serial_firmware as fake
+from swim_hw_bridge.testing.fake_serial_firmware import PtyRig
 
 COUNTS = (1, 2**32 - 1, 123_456_789, 2**31)  # distinct per channel, both ends of the uint32 range
 

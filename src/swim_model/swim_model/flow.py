@@ -28,8 +28,13 @@ import numpy.typing as npt
 
 from swim_model.errors import FlowModelError
 from swim_model.joukowski import AddedMass, JoukowskiFoil
-from swim_model.leading_edge import (CRITICAL_LEADING_EDGE_SUCTION, SPEED_REGULARIZATION_M_S, SUCTION_CAP_EXPONENT,
-                                     is_cap_exponent, smooth_cap)
+from swim_model.leading_edge import (
+    CRITICAL_LEADING_EDGE_SUCTION,
+    SPEED_REGULARIZATION_M_S,
+    SUCTION_CAP_EXPONENT,
+    is_cap_exponent,
+    smooth_cap,
+)
 
 Array = npt.NDArray[np.float64]
 

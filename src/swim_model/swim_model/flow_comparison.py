@@ -15,8 +15,12 @@ from pathlib import Path
 
 import numpy as np
 
-from swim_model.flow import (KINEMATIC_VISCOSITY_WATER_M2_S, FlowParameters, laminar_profile_drag_coefficient,
-                              oscillating_foil)
+from swim_model.flow import (
+    KINEMATIC_VISCOSITY_WATER_M2_S,
+    FlowParameters,
+    laminar_profile_drag_coefficient,
+    oscillating_foil,
+)
 from swim_model.joukowski import JoukowskiFoil
 
 CHORD_M, SPAN_M, THICKNESS_RATIO = 0.10, 0.60, 0.12

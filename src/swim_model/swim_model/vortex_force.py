@@ -55,7 +55,7 @@ class _Kernel:
         compiles against the other's dispatcher and module code calls the dispatcher directly. numba compiles a kernel
         at its first call for the argument types.
         """
-        import numba   # here, not at the module top: the point of the lazy load
+        import numba  # here, not at the module top: the point of the lazy load
         for kernel in _Kernel.registered:
             if kernel.dispatcher is None:
                 # error_model "numpy": a division by zero gives inf or nan as in numpy, not an exception (whose

@@ -22,8 +22,13 @@ import numpy.typing as npt
 
 from swim_model.errors import StateError
 from swim_model.joukowski import JoukowskiFoil
-from swim_model.leading_edge import (CRITICAL_LEADING_EDGE_SUCTION, SPEED_REGULARIZATION_M_S, SUCTION_CAP_EXPONENT,
-                                     is_cap_exponent, smooth_cap)
+from swim_model.leading_edge import (
+    CRITICAL_LEADING_EDGE_SUCTION,
+    SPEED_REGULARIZATION_M_S,
+    SUCTION_CAP_EXPONENT,
+    is_cap_exponent,
+    smooth_cap,
+)
 from swim_model.vortex_force import CirclePlane, angular_impulse_from_terms, compiled, impulse_from_terms
 
 Pose = tuple[float, float, float]        # x_m, y_m (frame origin in the tank frame), theta_rad (chord angle)

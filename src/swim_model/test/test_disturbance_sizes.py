@@ -7,8 +7,8 @@ import math
 import pytest
 import yaml
 
-from swim_model.rig import default_rig_path
 from swim_model.disturbances import Disturbances
+from swim_model.rig import default_rig_path
 
 G_M_S2 = 9.80665            # standard gravity
 DEEP_GROOVE_MU = 0.0015     # SKF Rolling bearings catalogue, "Friction", Table 1: open deep groove ball bearings

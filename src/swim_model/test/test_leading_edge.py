@@ -5,10 +5,15 @@ import math
 import casadi as ca
 import pytest
 
-from swim_model.flow import FlowParameters
 from swim_model.errors import FlowModelError, StateError
-from swim_model.leading_edge import (CRITICAL_LEADING_EDGE_SUCTION, SPEED_REGULARIZATION_M_S, SUCTION_CAP_EXPONENT,
-                                     is_cap_exponent, smooth_cap)
+from swim_model.flow import FlowParameters
+from swim_model.leading_edge import (
+    CRITICAL_LEADING_EDGE_SUCTION,
+    SPEED_REGULARIZATION_M_S,
+    SUCTION_CAP_EXPONENT,
+    is_cap_exponent,
+    smooth_cap,
+)
 from swim_model.wake import WakeParameters
 
 LIMIT = CRITICAL_LEADING_EDGE_SUCTION

@@ -19,11 +19,30 @@ from typing import TYPE_CHECKING, Any
 
 from swim_planner.errors import LibraryError, ManeuverError, PlannerError, PrimitiveSolveError
 from swim_planner.library import PrimitiveLibrary, verify_all
-from swim_planner.maneuver import (DEFAULT_BOUNDS, JUNCTION_TOLERANCE, DisturbanceBounds, PlanBounds, PlanLibrary,
-                                   check_plan_size, concatenate, expand_sequence, flow_model_of, junction_mismatch,
-                                   vary_time_scale)
-from swim_planner.primitives import (PlanningLimits, Primitive, PrimitiveSpec, PrimitiveType, SolverSettings,
-                                     cruise_mean_speed_m_s, cruise_strouhal_number, rest_boundary_state, rest_state)
+from swim_planner.maneuver import (
+    DEFAULT_BOUNDS,
+    JUNCTION_TOLERANCE,
+    DisturbanceBounds,
+    PlanBounds,
+    PlanLibrary,
+    check_plan_size,
+    concatenate,
+    expand_sequence,
+    flow_model_of,
+    junction_mismatch,
+    vary_time_scale,
+)
+from swim_planner.primitives import (
+    PlanningLimits,
+    Primitive,
+    PrimitiveSpec,
+    PrimitiveType,
+    SolverSettings,
+    cruise_mean_speed_m_s,
+    cruise_strouhal_number,
+    rest_boundary_state,
+    rest_state,
+)
 
 if TYPE_CHECKING:
     from swim_planner.primitive_solver import PrimitiveNlp, continuation_bounds, primitive_nlp, solve_primitive

@@ -138,9 +138,10 @@ def _stale(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec]) -> set[str
     return stale
 
 
-def build_library(library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], executor: concurrent.futures.Executor,
-                  limits: Optional[PlanningLimits] = None, progress: Progress = lambda i, s: None,
-                  workers: Optional[int] = None) -> list[str]:
+def build_library(  # noqa: C901 - the build's stages in dependency order (solve, gains, D(t)), each resumable
+        library: PrimitiveLibrary, specs: Sequence[PrimitiveSpec], executor: concurrent.futures.Executor,
+        limits: Optional[PlanningLimits] = None, progress: Progress = lambda i, s: None,
+        workers: Optional[int] = None) -> list[str]:
     """Solve every spec not yet in the library within limits (None: PlanningLimits.of(library.rig)).
 
     Returns the ids that failed (with their reasons reported).

@@ -33,11 +33,10 @@ import json
 import sys
 from pathlib import Path
 
-
 from swim_model import SwimModelError, load_rig
-from swim_planner.build import build_library, dependencies, local_executor
 from swim_model.flow import FLOW_MODELS
 from swim_planner import catalog
+from swim_planner.build import build_library, dependencies, local_executor
 from swim_planner.errors import PlannerError
 from swim_planner.gains import load_lqr_weights
 from swim_planner.library import PrimitiveLibrary

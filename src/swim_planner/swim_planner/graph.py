@@ -175,8 +175,9 @@ def _live_nodes(edges: list[Edge]) -> set[str]:
     return reach(rests, forward) & reach(rests, backward)
 
 
-def plan_to_goal(graph: StateGraph, start: str, goal: str, min_advance_rad: float = 0.0,
-                 max_duration_s: float = math.inf) -> list[tuple[str, int]]:
+def plan_to_goal(  # noqa: C901 - one Dijkstra search, then the cruises repeated to cover the distance asked for
+        graph: StateGraph, start: str, goal: str, min_advance_rad: float = 0.0,
+        max_duration_s: float = math.inf) -> list[tuple[str, int]]:
     """The quickest primitive sequence from ``start`` to ``goal`` covering at least ``min_advance_rad``.
 
     Returns [(primitive_id, repeat_index), ...]. Raises ManeuverError if the goal cannot be reached, the

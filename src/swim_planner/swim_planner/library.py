@@ -42,8 +42,7 @@ from swim_model import MODEL_VERSION, RigParameters
 from swim_model.flow import FLOW_MODELS
 from swim_planner.disturbance import wake_record
 from swim_planner.errors import LibraryError
-from swim_planner.primitives import (Primitive, PrimitiveSpec, PrimitiveType, SolverSettings,
-                                     cruise_mean_speed_m_s)
+from swim_planner.primitives import Primitive, PrimitiveSpec, PrimitiveType, SolverSettings, cruise_mean_speed_m_s
 
 FORMAT_VERSION = 4   # 4: the sliding mode's bound D(t); 3: the flow model and the lag states; 2: tracking gains
 READABLE_FORMAT_VERSIONS = (2, 3, 4)

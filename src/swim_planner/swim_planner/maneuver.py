@@ -38,8 +38,13 @@ import numpy.typing as npt
 from swim_control.errors import PlanError
 from swim_control.riccati import LqrWeights
 from swim_control.time_scaling import lqr_gain_from, retime_feedback
-from swim_control.trajectory import MAX_ABS_START_ALPHA_RAD, MAX_TRACKED_SAMPLES, Segment, Trajectory, \
-    motor_limit_fraction
+from swim_control.trajectory import (
+    MAX_ABS_START_ALPHA_RAD,
+    MAX_TRACKED_SAMPLES,
+    Segment,
+    Trajectory,
+    motor_limit_fraction,
+)
 from swim_model import RigParameters
 from swim_planner.errors import LibraryError, ManeuverError
 from swim_planner.primitives import Primitive, PrimitiveSpec

@@ -24,8 +24,14 @@ from swim_planner.errors import PlannerError
 from swim_planner.gains import RetunedLibrary, load_lqr_weights
 from swim_planner.graph import build_graph, plan_to_goal, rest_node, summarize
 from swim_planner.library import PrimitiveLibrary
-from swim_planner.maneuver import (DEFAULT_BOUNDS, PlanBounds, check_plan_size, check_start_alpha, concatenate,
-                                   expand_sequence)
+from swim_planner.maneuver import (
+    DEFAULT_BOUNDS,
+    PlanBounds,
+    check_plan_size,
+    check_start_alpha,
+    concatenate,
+    expand_sequence,
+)
 from swim_planner.paths import default_library_path
 from swim_ros.entry import run_node
 from swim_ros.parameters import NodeSettings, ParameterSpec, one_of, positive

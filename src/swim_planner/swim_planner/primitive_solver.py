@@ -26,12 +26,20 @@ import numpy as np
 import numpy.typing as npt
 
 from swim_model import SinusoidalGait, VehicleModel, simulate_gait
+from swim_planner import pointwise
 from swim_planner.collocation import collocation_grid, fine_grid_times, hermite_simpson, simpson_integral
 from swim_planner.errors import PrimitiveSolveError
-from swim_planner import pointwise
 from swim_planner.pointwise import PointwiseFunction, PointwiseNlp
-from swim_planner.primitives import (CONVERGED_STATUSES, PlanningLimits, Primitive, PrimitiveSpec, PrimitiveType,
-                                     SolverSettings, rest_boundary_state, rest_state)
+from swim_planner.primitives import (
+    CONVERGED_STATUSES,
+    PlanningLimits,
+    Primitive,
+    PrimitiveSpec,
+    PrimitiveType,
+    SolverSettings,
+    rest_boundary_state,
+    rest_state,
+)
 
 Array = npt.NDArray[np.float64]
 Symbol = TypeVar("Symbol", ca.MX, ca.DM)   # a decision-variable expression or a numeric constant
@@ -364,9 +372,10 @@ def continuation_bounds(model: VehicleModel, spec: PrimitiveSpec, limits: Planni
     return [None, *looser, limits.angle_of_attack_limit_rad]
 
 
-def primitive_nlp(model: VehicleModel, spec: PrimitiveSpec, limits: Optional[PlanningLimits] = None,
-                  start: Optional[tuple[Array, ...]] = None, end: Optional[tuple[Array, ...]] = None,
-                  guess: Optional[Primitive] = None, *, bound_angle_of_attack: bool = True) -> PrimitiveNlp:
+def primitive_nlp(  # noqa: C901 - one NLP: a block of constraints per primitive type, read beside eqs. 9-15
+        model: VehicleModel, spec: PrimitiveSpec, limits: Optional[PlanningLimits] = None,
+        start: Optional[tuple[Array, ...]] = None, end: Optional[tuple[Array, ...]] = None,
+        guess: Optional[Primitive] = None, *, bound_angle_of_attack: bool = True) -> PrimitiveNlp:
     """The NLP of one primitive (docs/model_and_method.md section 3.1).
 
     Parameters

@@ -18,8 +18,7 @@ import pytest
 from swim_model import VehicleModel, load_rig
 from swim_planner.catalog import circulatory_specs, default_specs
 from swim_planner.library import PrimitiveLibrary
-from swim_planner.primitive_solver import (angle_of_attack_bounded, continuation_bounds, primitive_nlp,
-                                           solve_primitive)
+from swim_planner.primitive_solver import angle_of_attack_bounded, continuation_bounds, primitive_nlp, solve_primitive
 from swim_planner.primitives import PlanningLimits, PrimitiveType, rest_boundary_state
 
 LIMITS = PlanningLimits.of(load_rig())

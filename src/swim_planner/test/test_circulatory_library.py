@@ -11,15 +11,27 @@ import pytest
 from swim_controller.testing.closed_loop import simulate
 from swim_controller.tracker import CascadeTracker, model_io_linearization, model_lag_rate
 from swim_model import load_rig
-from swim_planner.catalog import (CIRCULATORY_CONSTRAINED_DECELERATE_FOIL_RATE_RAD_S,
-                                  CIRCULATORY_CONSTRAINED_DECELERATE_REST_WINDOW_S, CIRCULATORY_FREE_DECELERATE_S,
-                                  CIRCULATORY_LONGER_S, PAPER_CONSTRAINED, PAPER_LANE_KEEPING, circulatory_specs,
-                                  cruise_id)
+from swim_planner.catalog import (
+    CIRCULATORY_CONSTRAINED_DECELERATE_FOIL_RATE_RAD_S,
+    CIRCULATORY_CONSTRAINED_DECELERATE_REST_WINDOW_S,
+    CIRCULATORY_FREE_DECELERATE_S,
+    CIRCULATORY_LONGER_S,
+    PAPER_CONSTRAINED,
+    PAPER_LANE_KEEPING,
+    circulatory_specs,
+    cruise_id,
+)
 from swim_planner.errors import ManeuverError
 from swim_planner.graph import build_graph, plan_to_goal, rest_node
 from swim_planner.maneuver import JUNCTION_TOLERANCE, concatenate, expand_sequence
-from swim_planner.primitives import (CONVERGED_STATUSES, PlanningLimits, PrimitiveType, cruise_mean_speed_m_s,
-                                     cruise_strouhal_number, rest_boundary_state)
+from swim_planner.primitives import (
+    CONVERGED_STATUSES,
+    PlanningLimits,
+    PrimitiveType,
+    cruise_mean_speed_m_s,
+    cruise_strouhal_number,
+    rest_boundary_state,
+)
 from swim_planner.testing.consistency import REPLAY_TOLERANCE, replay_open_loop
 
 LIMITS = PlanningLimits.of(load_rig())

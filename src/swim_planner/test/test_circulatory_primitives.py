@@ -18,18 +18,32 @@ from scipy.interpolate import CubicHermiteSpline
 
 from swim_model import VehicleModel, load_rig
 from swim_model.flow import angle_of_attack
-from swim_planner.catalog import (CIRCULATORY_ENERGY_LEVELS_J, CIRCULATORY_FREE_ACCELERATE_S,
-                                  CIRCULATORY_FREE_DECELERATE_CONTINUATION_RAD,
-                                  CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S, CIRCULATORY_FREE_DECELERATE_S,
-                                  CIRCULATORY_CONSTRAINED_DECELERATE_FOIL_RATE_RAD_S,
-                                  CIRCULATORY_CONSTRAINED_DECELERATE_REST_WINDOW_S,
-                                  CIRCULATORY_CONSTRAINED_MIN_STROUHAL, CIRCULATORY_FREE_MIN_STROUHAL,
-                                  CIRCULATORY_LONGER_S, INTERVALS_PER_S,
-                                  circulatory_specs, cruise_id, default_specs)
 from swim_planner.build import solve_from_guess_or_blend
+from swim_planner.catalog import (
+    CIRCULATORY_CONSTRAINED_DECELERATE_FOIL_RATE_RAD_S,
+    CIRCULATORY_CONSTRAINED_DECELERATE_REST_WINDOW_S,
+    CIRCULATORY_CONSTRAINED_MIN_STROUHAL,
+    CIRCULATORY_ENERGY_LEVELS_J,
+    CIRCULATORY_FREE_ACCELERATE_S,
+    CIRCULATORY_FREE_DECELERATE_CONTINUATION_RAD,
+    CIRCULATORY_FREE_DECELERATE_INTERVALS_PER_S,
+    CIRCULATORY_FREE_DECELERATE_S,
+    CIRCULATORY_FREE_MIN_STROUHAL,
+    CIRCULATORY_LONGER_S,
+    INTERVALS_PER_S,
+    circulatory_specs,
+    cruise_id,
+    default_specs,
+)
 from swim_planner.primitive_solver import rest_window_s, solve_primitive
-from swim_planner.primitives import (PlanningLimits, Primitive, PrimitiveType, cruise_mean_speed_m_s,
-                                     cruise_strouhal_number, rest_boundary_state)
+from swim_planner.primitives import (
+    PlanningLimits,
+    Primitive,
+    PrimitiveType,
+    cruise_mean_speed_m_s,
+    cruise_strouhal_number,
+    rest_boundary_state,
+)
 from swim_planner.testing.consistency import REPLAY_TOLERANCE, replay_open_loop
 
 LIMITS = PlanningLimits.of(load_rig())

@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from swim_controller.testing.closed_loop import simulate
 from swim_controller.sliding_mode import SlidingMode
+from swim_controller.testing.closed_loop import simulate
 from swim_controller.tracker import CascadeTracker, model_io_linearization
 
 CONSTRAINED = ["constrained/accelerate/E0.05", "constrained/cruise/E0.05", "constrained/cruise_to_cruise/E0.05-E0.10",

@@ -7,8 +7,8 @@ import pytest
 
 from swim_model import VehicleModel, load_rig
 from swim_planner.catalog import default_specs
-from swim_planner.testing.consistency import REPLAY_TOLERANCE, replay_open_loop
 from swim_planner.primitives import CONVERGED_STATUSES, PlanningLimits, PrimitiveType, rest_state
+from swim_planner.testing.consistency import REPLAY_TOLERANCE, replay_open_loop
 
 LIMITS = PlanningLimits.of(load_rig())
 IDS = [s.primitive_id for s in default_specs(load_rig())]

@@ -12,8 +12,15 @@ import numpy as np
 import pytest
 
 from swim_planner.build import build_library
-from swim_planner.disturbance import (ENVELOPE_HALF_WIDTH_S, MAX_WAKE_STEP_S, bound_envelope, flow_force_mismatch,
-                                      lead_in_ids, measuring_wake, wake_record)
+from swim_planner.disturbance import (
+    ENVELOPE_HALF_WIDTH_S,
+    MAX_WAKE_STEP_S,
+    bound_envelope,
+    flow_force_mismatch,
+    lead_in_ids,
+    measuring_wake,
+    wake_record,
+)
 from swim_planner.errors import LibraryError
 from swim_planner.library import FORMAT_VERSION, MANIFEST, PrimitiveLibrary
 from swim_planner.maneuver import concatenate, expand_sequence

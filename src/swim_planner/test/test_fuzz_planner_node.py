@@ -9,11 +9,11 @@ import time
 import pytest
 from hypothesis import example, given
 from hypothesis import strategies as st
-
 from swim_interfaces.srv import RequestManeuver
+from test_planner_node import PAPER, POLICY
+
 from swim_ros.testing.fixtures import new_rclpy_context, running_node
 from swim_ros.testing.fuzz import any_float, fuzz_parameter_sets, fuzz_settings, unicode_name
-from test_planner_node import PAPER, POLICY
 
 #: the longest answer: a plan at the node's own bounds (7200 s of plan, about 7 s to build on a quiet host, and
 #: the fuzzed counts stay far below it) or a refusal (milliseconds); 20 s for a loaded 2-core host
@@ -38,6 +38,7 @@ def client(planner, ros_domain):
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from swim_interfaces.srv import RequestManeuver
+
     from swim_ros.calls import call_service
     with new_rclpy_context() as context:
         node = rclpy.create_node("planner_fuzz_client", context=context)
@@ -67,6 +68,7 @@ def requests(draw):
     """A RequestManeuver request built field by field: sequences (known and unknown ids, counts matching or not),
     goals (known and unknown states, any goal distance), any time scale and start alpha."""
     from swim_interfaces.srv import RequestManeuver
+
     from swim_ros.calls import new_request_id
     if draw(st.booleans()):   # a sequence: the paper's, or fuzzed ids
         ids = list(PAPER[0]) if draw(st.booleans()) else draw(st.lists(primitive_ids(), max_size=6))
@@ -113,6 +115,7 @@ def test_fuzzed_requests_are_answered_refused_with_a_reason_or_planned_finite(pl
 
 def test_parameter_sets_are_answered_refused_with_a_reason_or_applied(planner, client):
     from swim_interfaces.srv import RequestManeuver
+
     from swim_planner.planner_node import PARAMETERS
     from swim_ros.calls import ParameterCalls, call_service, new_request_id
     node, executor, service = client

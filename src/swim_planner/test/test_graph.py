@@ -53,8 +53,9 @@ def test_unreachable_and_unknown_goals(graph):
 def test_the_summary_lists_every_primitive_with_its_states_energies_and_advance(graph, library):
     """Each primitive's summary against what its id and stored motion say: an accelerate goes from rest to the
     cruise of its energy, a cruise-to-cruise between the two energies of its id, the advance is alpha's change."""
-    import re
     import dataclasses
+    import re
+
     from swim_planner.graph import summarize
     summaries = summarize(library, graph)
     assert [s.primitive_id for s in summaries] == sorted(library.ids())

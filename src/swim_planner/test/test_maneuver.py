@@ -70,6 +70,7 @@ def test_constant_varying_scale_equals_constant_scaling(library, rig):
 def test_a_plan_travels_through_its_message_bit_for_bit(library, rig):
     """planner_node's encoder and tracker_node's decoder (swim_ros.trajectory_messages) on a concatenated plan."""
     from builtin_interfaces.msg import Time
+
     from swim_ros.trajectory_messages import trajectory_from_message, trajectory_to_message
     for plan in (paper_plan(library, rig, 1.2, start_alpha=0.3),
                  concatenate(library, rig, expand_sequence(["free/accelerate/R0.43/E0.05"], []), 0.9)):

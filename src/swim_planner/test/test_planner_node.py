@@ -37,6 +37,7 @@ def client(planner, rclpy_context):
 
 def call(executor, service, ids, counts, time_scale=1.0, mode=0):
     from swim_interfaces.srv import RequestManeuver
+
     from swim_ros.calls import new_request_id
     request = RequestManeuver.Request(mode=mode, primitive_ids=ids, repeat_counts=counts, time_scale=time_scale,
                                       request_id=new_request_id())

@@ -16,6 +16,7 @@ def planner():
     """(planner node spinning in a thread, a client node, the client's executor)."""
     import rclpy
     from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+
     from swim_planner.planner_node import PlannerNode
     from swim_ros.domains import claim_ros_domain
     claim_ros_domain()
@@ -109,6 +110,7 @@ def test_requests_past_a_bound_are_refused_at_once_and_the_node_serves_on(planne
 
 def test_plan_bounds_are_parameters_checked_on_set(planner):
     from rclpy.parameter import Parameter
+
     from swim_ros.calls import ParameterCalls
     node, client, executor = planner
     parameters = ParameterCalls(client, executor, "planner_node", QUICK)
@@ -124,6 +126,7 @@ def test_plan_bounds_are_parameters_checked_on_set(planner):
     ("max_plan_duration_s", 0.0, "above zero")])
 def test_parameters_follow_their_table(planner, name, value, reason):
     from rclpy.parameter import Parameter
+
     from swim_planner.planner_node import PARAMETERS
     from swim_ros.calls import ParameterCalls
     node, client, executor = planner
@@ -139,6 +142,7 @@ def test_parameters_follow_their_table(planner, name, value, reason):
 def _planner_with(*overrides: str):
     """A PlannerNode started with ``name:=value`` parameter overrides, or the exception its start raised."""
     import rclpy
+
     from swim_planner.planner_node import PlannerNode
     from swim_ros.domains import claim_ros_domain
     claim_ros_domain()
@@ -166,6 +170,7 @@ def test_a_library_of_another_flow_model_stops_the_planner_at_start(overrides, e
 def test_the_circulatory_planner_serves_plans_of_its_flow_model():
     import rclpy
     from swim_interfaces.srv import RequestManeuver
+
     from swim_ros.trajectory_messages import trajectory_from_message
     try:
         node = _planner_with("flow_model:=circulatory")

@@ -11,8 +11,16 @@ import time
 import pytest
 from rclpy.executors import SingleThreadedExecutor
 
-from swim_ros.calls import (CallFailed, GoalStatusWatch, ParameterCalls, RetryPolicy, call_service,
-                            change_lifecycle_state, goal_result, send_goal)
+from swim_ros.calls import (
+    CallFailed,
+    GoalStatusWatch,
+    ParameterCalls,
+    RetryPolicy,
+    call_service,
+    change_lifecycle_state,
+    goal_result,
+    send_goal,
+)
 
 #: short tries: these servers answer within milliseconds when they answer at all
 QUICK = RetryPolicy(attempt_timeout_s=1.0, attempts=3, discovery_timeout_s=20.0)
@@ -191,6 +199,7 @@ def test_served_elsewhere_waits_for_another_thread_within_its_poll():
     thread at most a poll late, and gives up at its deadline."""
     import threading
     import time
+
     from swim_ros.calls import ServedElsewhere, spin_until
     done = threading.Event()
     threading.Timer(0.05, done.set).start()

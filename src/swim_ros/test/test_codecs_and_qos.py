@@ -4,8 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from swim_ros.codecs import (MessageError, float_array, joint_state_arrays, seconds_of, stamp_of,
-                             torque_from_command)
+from swim_ros.codecs import MessageError, float_array, joint_state_arrays, seconds_of, stamp_of, torque_from_command
 
 
 def test_float_array_fills_a_message_field_with_the_same_values():
@@ -30,6 +29,7 @@ def test_stamps_round_trip_to_the_nanosecond(time_s):
 def test_per_period_factories_have_no_event_handlers_and_recordable_qos(rclpy_context):
     import rclpy
     from sensor_msgs.msg import JointState
+
     from swim_ros.qos import RECORDABLE_QOS, per_period_publisher, per_period_subscription
     node = rclpy.create_node("swim_ros_qos_test", context=rclpy_context)
     try:

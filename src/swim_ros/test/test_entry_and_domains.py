@@ -2,10 +2,10 @@
 SIGTERM stops every idle node, wherever its executor looked. claim_ros_domain: two live processes never hold the
 same domain."""
 import os
+import select
 import signal
 import subprocess
 import sys
-import select
 import textwrap
 import time
 

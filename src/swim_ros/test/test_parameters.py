@@ -7,8 +7,15 @@ import math
 import pytest
 from rclpy.parameter import Parameter
 
-from swim_ros.parameters import (NodeSettings, ParameterSpec, check_parameters, check_settings_type, declare_parameters,
-                                 markdown_table, positive)
+from swim_ros.parameters import (
+    NodeSettings,
+    ParameterSpec,
+    check_parameters,
+    check_settings_type,
+    declare_parameters,
+    markdown_table,
+    positive,
+)
 
 TABLE = (
     ParameterSpec("period_s", 0.008, "control period, s", range=(0.001, 0.1), read_only=True),

@@ -14,8 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from swim_ros.processes import (ORPHAN_EXIT_STATUS, executable_command, run_child, start_child,
-                                with_parent_death_signal)
+from swim_ros.processes import ORPHAN_EXIT_STATUS, executable_command, run_child, start_child, with_parent_death_signal
 from swim_ros.testing.processes import processes_left, tagged_processes
 
 #: how long a child may take to notice its starter's death and end: the signal is immediate, `sleep` dies of it

@@ -10,8 +10,13 @@ import textwrap
 
 import pytest
 
-from swim_ros.realtime import (NO_REALTIME_MEANS, RealtimeOutcome, RealtimeSettings, parse_cpu_list,
-                               settings_reason_invalid)
+from swim_ros.realtime import (
+    NO_REALTIME_MEANS,
+    RealtimeOutcome,
+    RealtimeSettings,
+    parse_cpu_list,
+    settings_reason_invalid,
+)
 
 #: an unprivileged user to run as (nobody), through util-linux's setpriv
 UNPRIVILEGED = ["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups", "--inh-caps=-all"]

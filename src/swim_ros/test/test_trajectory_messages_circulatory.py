@@ -9,8 +9,12 @@ from swim_control.errors import PlanError
 from swim_control.riccati import error_state_size
 from swim_control.trajectory import Segment, Trajectory
 from swim_ros.codecs import float_array
-from swim_ros.trajectory_messages import (MAX_PLAN_MAGNITUDE, SUPPORTED_INTERFACE_VERSION, trajectory_from_message,
-                                          trajectory_to_message)
+from swim_ros.trajectory_messages import (
+    MAX_PLAN_MAGNITUDE,
+    SUPPORTED_INTERFACE_VERSION,
+    trajectory_from_message,
+    trajectory_to_message,
+)
 
 ARRAYS = ("time_s", "q", "qdot", "foil_acceleration", "torque", "lqr_gain", "riccati_input_gain", "lag")
 SAMPLES = 9

@@ -14,8 +14,14 @@ import numpy as np
 import pytest
 
 from swim_ros.processes import run_child, start_child
-from swim_ros.transport import (FREE_SHM_FACTOR, PROFILE_VARIABLES, choose_transport, large_message_profile,
-                                segment_bytes, use_large_message_transport)
+from swim_ros.transport import (
+    FREE_SHM_FACTOR,
+    PROFILE_VARIABLES,
+    choose_transport,
+    large_message_profile,
+    segment_bytes,
+    use_large_message_transport,
+)
 
 #: the size of a 20-primitive plan with per-sample gains (bench/bench_planner_latency.py's request), bytes
 PLAN_BYTES = 4_600_000
@@ -121,6 +127,7 @@ def test_a_node_sends_a_plan_sized_message_with_the_profile(rclpy_context, monke
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from sensor_msgs.msg import JointState
+
     from swim_ros.calls import spin_until
     from swim_ros.qos import LATCHED_QOS
     _clear(monkeypatch)

@@ -5,8 +5,14 @@ The coupling itself is swim_model.wake_coupling, which this module re-exports fo
 from __future__ import annotations
 
 from swim_model.wake import WakeParameters
-from swim_model.wake_coupling import (FORCE_LIMIT_N, MOMENT_LIMIT_N_M, WakeCoupling, WakeCouplingParameters,
-                                      WakeStatistics, WakeVortices)
+from swim_model.wake_coupling import (
+    FORCE_LIMIT_N,
+    MOMENT_LIMIT_N_M,
+    WakeCoupling,
+    WakeCouplingParameters,
+    WakeStatistics,
+    WakeVortices,
+)
 
 __all__ = ["FORCE_LIMIT_N", "MOMENT_LIMIT_N_M", "WakeCoupling", "WakeCouplingParameters", "WakeStatistics",
            "WakeVortices", "parameter_defaults", "parameters_from_values"]

@@ -12,11 +12,20 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
+from test_sim_node import POLICY, RESEND_AFTER_S, Driver, running_sim
 
 from swim_ros.testing.fixtures import new_rclpy_context
-from swim_ros.testing.fuzz import (EDGE_FLOATS, NON_FINITE, any_float, fuzz_parameter_sets, fuzz_settings, in_order,
-                                   joint_states, to_joint_state, torques)
-from test_sim_node import POLICY, RESEND_AFTER_S, Driver, running_sim
+from swim_ros.testing.fuzz import (
+    EDGE_FLOATS,
+    NON_FINITE,
+    any_float,
+    fuzz_parameter_sets,
+    fuzz_settings,
+    in_order,
+    joint_states,
+    to_joint_state,
+    torques,
+)
 
 SEED = 5
 ACTUATED = ("phi", "theta")
@@ -47,6 +56,7 @@ def set_state(driver):
     """set_state's client, discovered outside the deadlines: an answer sent before the client's reader matched is
     lost, and asked again 10 s later (swim_ros.calls); a request naming no joints is refused and changes nothing."""
     from swim_interfaces.srv import SetVehicleState
+
     from swim_ros.calls import call_service
     client = driver.node.create_client(SetVehicleState, "set_state")
     assert not call_service(driver.executor, client, SetVehicleState.Request(), POLICY).success
@@ -140,6 +150,7 @@ def test_fuzzed_set_state_is_refused_with_a_reason_or_puts_the_vehicle_there(sim
                                                                             reset_after):
     from std_srvs.srv import Trigger
     from swim_interfaces.srv import SetVehicleState
+
     from swim_ros.calls import call_service
     accepted = request.defect is None and within_bounds(request, limits)
     driver.states.clear()

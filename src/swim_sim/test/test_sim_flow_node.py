@@ -6,10 +6,10 @@ import math
 
 import numpy as np
 import pytest
+from test_sim_node import Driver, running_sim
 
 from swim_ros.calls import spin_until
 from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, running_node
-from test_sim_node import Driver, running_sim
 
 SEED = 13
 PERIODS = 60

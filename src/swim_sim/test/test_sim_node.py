@@ -153,6 +153,7 @@ def test_set_state_puts_the_vehicle_there(driver):
 ])
 def test_set_state_out_of_bounds_is_refused_with_its_bound_and_changes_nothing(driver, position, velocity, said):
     import re
+
     from sensor_msgs.msg import JointState
     from swim_interfaces.srv import SetVehicleState
     count = len(driver.states)
@@ -168,6 +169,7 @@ def test_set_state_out_of_bounds_is_refused_with_its_bound_and_changes_nothing(d
 
 def test_seed_is_read_only_and_changeable_parameters_are_checked_and_applied(driver):
     from rclpy.parameter import Parameter
+
     from swim_ros.calls import ParameterCalls
     parameters = ParameterCalls(driver.node, driver.executor, "sim_node", POLICY)
     reply = parameters.set([Parameter("seed", value=12)])[0]

@@ -3,11 +3,11 @@ bit to the library's plant and wake driven by the same commands; reset clears th
 to start with a message naming them."""
 import numpy as np
 import pytest
+from test_sim_flow_node import library_run
+from test_sim_node import Driver, running_sim
 
 from swim_ros.calls import spin_until
 from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, running_node
-from test_sim_flow_node import library_run
-from test_sim_node import Driver, running_sim
 
 SEED = 11
 PERIODS = 120

@@ -16,13 +16,13 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 from scipy.special import hankel2
+from test_plant import swinging_start
 
 from swim_model import StateError, VehicleModel
-from swim_model.wake import WakeParameters
 from swim_model.disturbances import Disturbances
 from swim_model.plant import Plant
+from swim_model.wake import WakeParameters
 from swim_sim.wake_coupling import WakeCoupling, WakeCouplingParameters, parameter_defaults, parameters_from_values
-from test_plant import swinging_start
 
 
 @pytest.fixture(scope="module")

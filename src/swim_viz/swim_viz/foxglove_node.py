@@ -21,8 +21,16 @@ from action_msgs.msg import GoalStatus, GoalStatusArray
 from diagnostic_msgs.msg import DiagnosticArray
 from foxglove import Capability, MessageSchema, Schema, Service, ServiceSchema
 from foxglove.channels import FrameTransformsChannel, LogChannel, SceneUpdateChannel
-from foxglove.messages import (FrameTransform, FrameTransforms, Log, LogLevel, Quaternion, SceneUpdate, Timestamp,
-                               Vector3)
+from foxglove.messages import (
+    FrameTransform,
+    FrameTransforms,
+    Log,
+    LogLevel,
+    Quaternion,
+    SceneUpdate,
+    Timestamp,
+    Vector3,
+)
 from foxglove.websocket import ServerListener
 from rclpy.action import ActionClient
 from rclpy.action.client import qos_profile_action_status_default
@@ -37,14 +45,28 @@ from swim_interfaces.msg import PlannedTrajectory, TrackingState, WakeStatistics
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import Marker, MarkerArray
 
-from swim_ros.calls import (CallFailed, GoalStatusWatch, ServedElsewhere, call_service, cancel_goal, goal_result,
-                            send_goal)
+from swim_ros.calls import (
+    CallFailed,
+    GoalStatusWatch,
+    ServedElsewhere,
+    call_service,
+    cancel_goal,
+    goal_result,
+    send_goal,
+)
 from swim_ros.entry import run_node
 from swim_ros.parameters import NodeSettings, ParameterSpec, positive
 from swim_ros.qos import LATCHED_QOS, per_period_subscription
 from swim_ros.typestore import message_definition
-from swim_viz.live import (MANEUVER_REQUEST_SCHEMA, LogLine, RateGate, fault_changes, parse_maneuver_request,
-                           path_entity, wake_entity)
+from swim_viz.live import (
+    MANEUVER_REQUEST_SCHEMA,
+    LogLine,
+    RateGate,
+    fault_changes,
+    parse_maneuver_request,
+    path_entity,
+    wake_entity,
+)
 
 PARAMETERS = (
     ParameterSpec("host", "127.0.0.1", "the address the server listens on (0.0.0.0: every interface; the server has "

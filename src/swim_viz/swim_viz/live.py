@@ -17,8 +17,18 @@ from typing import Any, Mapping, Optional, Sequence
 
 import numpy as np
 import numpy.typing as npt
-from foxglove.messages import (Color, LinePrimitive, LinePrimitiveLineType, Point3, Pose, Quaternion, SceneEntity,
-                               SpherePrimitive, Timestamp, Vector3)
+from foxglove.messages import (
+    Color,
+    LinePrimitive,
+    LinePrimitiveLineType,
+    Point3,
+    Pose,
+    Quaternion,
+    SceneEntity,
+    SpherePrimitive,
+    Timestamp,
+    Vector3,
+)
 
 #: the latched-fault names a bridge reports when none is latched (swim_hw_bridge.safety)
 NO_FAULT = "NONE"

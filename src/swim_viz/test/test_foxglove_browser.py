@@ -82,6 +82,7 @@ class StandInServer:
 
     def __init__(self) -> None:
         import foxglove
+
         from swim_bringup.bag import swim_typestore
 
         schema_text, _ = swim_typestore().generate_msgdef(MESSAGE_TYPE, ros_version=2)

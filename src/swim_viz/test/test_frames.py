@@ -5,8 +5,16 @@ import numpy as np
 import pytest
 
 from swim_model import load_rig
-from swim_viz.frames import (FOIL_FRAME, TANK_FRAME, JointPositions, fixed_transforms, moving_transforms,
-                             planar_poses, positions_from_names, rig_joints)
+from swim_viz.frames import (
+    FOIL_FRAME,
+    TANK_FRAME,
+    JointPositions,
+    fixed_transforms,
+    moving_transforms,
+    planar_poses,
+    positions_from_names,
+    rig_joints,
+)
 
 RIG = load_rig()
 

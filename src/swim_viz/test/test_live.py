@@ -7,9 +7,19 @@ import pytest
 from foxglove.messages import SceneUpdate
 
 from swim_ros.testing.foxglove_client import decode_protobuf
-from swim_viz.live import (CLOCKWISE_RGBA, COUNTER_CLOCKWISE_RGBA, VORTEX_DIAMETER_RANGE_M,
-                           VORTEX_FULL_SCALE_CIRCULATION_M2_S, LogLine, ManeuverRequestError, RateGate, fault_changes,
-                           parse_maneuver_request, path_entity, wake_entity)
+from swim_viz.live import (
+    CLOCKWISE_RGBA,
+    COUNTER_CLOCKWISE_RGBA,
+    VORTEX_DIAMETER_RANGE_M,
+    VORTEX_FULL_SCALE_CIRCULATION_M2_S,
+    LogLine,
+    ManeuverRequestError,
+    RateGate,
+    fault_changes,
+    parse_maneuver_request,
+    path_entity,
+    wake_entity,
+)
 
 
 def test_a_rate_gate_lets_through_one_message_per_interval_and_drops_the_rest():

@@ -30,12 +30,12 @@ import time
 from typing import Any, cast
 
 import numpy as np
-from swim_model import SwimModelError
-from swim_model.plant import Plant, PlantSettings, SimulationError, make_plant
-from swim_model.wake_coupling import WakeCoupling
 
 from swim_hw_bridge.conversions import BridgeConfig
 from swim_hw_bridge.device import CounterSample, Device, DeviceError
+from swim_model import SwimModelError
+from swim_model.plant import Plant, PlantSettings, SimulationError, make_plant
+from swim_model.wake_coupling import WakeCoupling
 
 DEFAULT_CHARGE_PUMP_TIMEOUT_S = 0.05   # assumed: about 6 periods of 8 ms
 #: steps of the throwaway wake open() swims to load the wake's kernels: enough to shed and move vortices

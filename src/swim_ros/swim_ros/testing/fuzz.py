@@ -78,9 +78,10 @@ class JointStateFields:
 
 
 @st.composite
-def joint_states(draw: Any, joints: tuple[str, ...], value: st.SearchStrategy[float],
-                 velocity_value: Optional[st.SearchStrategy[float]] = None, with_velocity: bool = True,
-                 field: str = "position") -> JointStateFields:
+def joint_states(  # noqa: C901 - one branch per kind of malformed field the strategy draws
+        draw: Any, joints: tuple[str, ...], value: st.SearchStrategy[float],
+        velocity_value: Optional[st.SearchStrategy[float]] = None, with_velocity: bool = True,
+        field: str = "position") -> JointStateFields:
     """A JointState for joints.
 
     Well formed (the joints once each, any order, one finite value each in `field`, velocities empty or one each) with
