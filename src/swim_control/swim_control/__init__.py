@@ -13,26 +13,19 @@ Public API:
 from swim_control.errors import ControllerError, GainComputationError, PlanError, StateMessageError
 from swim_control.measures import two_norm
 from swim_control.riccati import LqrWeights, TrackingGains, error_state_size, primitive_gains, solve_riccati
-from swim_control.time_scaling import (
-                                       lqr_gain_from,
-                                       retime_feedback,
-                                       scale_riccati,
-                                       scale_weights,
-                                       scaling_diagonal,
-                                       scaling_matrix,
-)
+from swim_control.time_scaling import lqr_gain_from, retime_feedback, scale_riccati, scale_weights
 from swim_control.trajectory import (
-                                       MAX_ABS_START_ALPHA_RAD,
-                                       MAX_TRACKED_SAMPLES,
-                                       Segment,
-                                       Trajectory,
-                                       TrajectoryPoint,
-                                       motor_limit_fraction,
+    MAX_ABS_START_ALPHA_RAD,
+    MAX_TRACKED_SAMPLES,
+    Segment,
+    Trajectory,
+    TrajectoryPoint,
+    motor_limit_fraction,
 )
 
 __all__ = [
     "ControllerError", "GainComputationError", "LqrWeights", "MAX_ABS_START_ALPHA_RAD", "MAX_TRACKED_SAMPLES",
     "PlanError", "Segment", "StateMessageError", "TrackingGains", "Trajectory", "TrajectoryPoint",
     "error_state_size", "lqr_gain_from", "motor_limit_fraction", "primitive_gains", "retime_feedback",
-    "scale_riccati", "scale_weights", "scaling_diagonal", "scaling_matrix", "solve_riccati", "two_norm",
+    "scale_riccati", "scale_weights", "solve_riccati", "two_norm",
 ]

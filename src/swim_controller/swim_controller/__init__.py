@@ -11,16 +11,16 @@ Public API (ROS-free; tracker_node wraps it):
 from swim_controller.sliding_mode import SlidingMode
 from swim_controller.supervisor import Mode, Outcome, StaleStateWatch, Step, Supervisor, Tolerances
 from swim_controller.tracker import (
-                                     CascadeTracker,
-                                     ControlOutput,
-                                     FoilRangeGuard,
-                                     IoLinearization,
-                                     LagEstimator,
-                                     LagRate,
-                                     hold_acceleration,
-                                     model_io_linearization,
-                                     model_lag_rate,
-                                     saturate,
+    CascadeTracker,
+    ControlOutput,
+    FoilRangeGuard,
+    IoLinearization,
+    LagEstimator,
+    LagRate,
+    hold_acceleration,
+    model_io_linearization,
+    model_lag_rate,
+    saturate,
 )
 
 __all__ = [

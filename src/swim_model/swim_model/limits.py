@@ -121,8 +121,8 @@ class RigLimits:
 
         Returns
         -------
-        tuple of float
-            (heave, pitch), rad.
+        (float, float)
+            The heave's and the pitch's margin, rad.
         """
         return (self.heave.soft_margin_rad, self.pitch.soft_margin_rad)
 

@@ -287,7 +287,7 @@ def rig_from_mapping(document: Any, origin: str = "<mapping>") -> RigParameters:
     Returns
     -------
     RigParameters
-        The values in SI.
+        The document's values in SI, with ``source_path`` the origin.
 
     Raises
     ------
