@@ -236,7 +236,9 @@ def test_a_plan_sent_to_the_tracker_preempts_the_maneuver_under_way(operator):
     operator.until_tracking(handle, feedback)
     planner = operator.node.create_client(RequestManeuver, "request_maneuver")
     reply = call_service(operator.executor, planner, RequestManeuver.Request(
-        primitive_ids=["constrained/accelerate/E0.05"], repeat_counts=[1], request_id=new_request_id(),
+        # long enough (4 s and 30 cruises) to be still under way when the test cancels it
+        primitive_ids=["constrained/accelerate/E0.05", "constrained/cruise/E0.05"], repeat_counts=[1, 30],
+        request_id=new_request_id(),
         start_alpha_rad=feedback[-1].state.feedback.positions[0]), policy)
     assert reply.success, reply.message
     tracker = ActionClient(operator.node, ExecutePlan, "execute_plan")

@@ -20,10 +20,12 @@ LAG_TOLERANCE_M_S = 2e-3
 #: the node builds the circulatory vehicle model for the goal: 0.5 s from the disk cache, about 7 s compiling on a
 #: cold one on a quiet 2-core host; every state must be answered meanwhile. 60 s for a loaded host
 MODEL_BUILD_TIMEOUT_S = 60.0
-#: a state's command while the model is built, s: milliseconds (the build is on its own thread); a build on the
-#: control thread would hold a state for the whole build (0.2-0.5 s from the cache, seconds compiling), and 0.15 s
-#: leaves room for a loaded host's scheduling
-SLOWEST_ANSWER_S = 0.15
+#: a state's command while the model is built, s: milliseconds (the build is on its own thread); loading a model's
+#: compiled library holds the interpreter for a while, and a fresh-clone CI run saw 0.34 s in a 0.62 s build
+SLOWEST_ANSWER_S = 0.5
+#: states answered while the model is built: a build on the control thread would answer none before it ends (the
+#: state that asked waits for the whole build); from the cache 15-95 are answered
+MIN_ANSWERS_DURING_BUILD = 3
 
 
 @pytest.fixture(scope="module")
@@ -125,6 +127,7 @@ def test_a_circulatory_plan_is_tracked_on_its_estimated_lag_states(circulatory_t
             assert time.monotonic() - sent_s < MODEL_BUILD_TIMEOUT_S, "the circulatory plan never started"
         print(f"model built in {time.monotonic() - sent_s:.2f} s: {len(answers_s)} states answered meanwhile, the "
               f"slowest in {max(answers_s, default=0.0) * 1e3:.0f} ms")
+        assert len(answers_s) >= MIN_ANSWERS_DURING_BUILD, "states were not answered while the model was built"
         assert max(answers_s, default=0.0) < SLOWEST_ANSWER_S
         result = run_until(plant, result_future, int(PLAN_S / PERIOD_S) + 50)
     finally:
