@@ -14,8 +14,7 @@ on first use, so what serves plans (library, graph, maneuvers, planner_node) nev
 """
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from swim_planner.errors import LibraryError, ManeuverError, PlannerError, PrimitiveSolveError
 from swim_planner.library import PrimitiveLibrary, verify_all
@@ -43,12 +42,10 @@ from swim_planner.primitives import (
     rest_boundary_state,
     rest_state,
 )
+from swim_ros.exports import lazy_exports
 
 if TYPE_CHECKING:
     from swim_planner.primitive_solver import PrimitiveNlp, continuation_bounds, primitive_nlp, solve_primitive
-
-#: the names that load swim_planner.primitive_solver on first use
-_SOLVER_NAMES = ("PrimitiveNlp", "continuation_bounds", "primitive_nlp", "solve_primitive")
 
 __all__ = [
     "DEFAULT_BOUNDS", "DisturbanceBounds", "JUNCTION_TOLERANCE", "LibraryError", "ManeuverError", "PlanBounds",
@@ -59,12 +56,7 @@ __all__ = [
     "verify_all",
 ]
 
-
-def __getattr__(name: str) -> Any:
-    """Load the optimizer's names on first use (module docstring).
-
-    The attribute ``name`` from swim_planner.primitive_solver; AttributeError if it is none of the optimizer's.
-    """
-    if name in _SOLVER_NAMES:
-        return getattr(importlib.import_module("swim_planner.primitive_solver"), name)
-    raise AttributeError(f"module 'swim_planner' has no attribute {name!r}")
+#: the optimizer's names, loading swim_planner.primitive_solver on first use (swim_ros.exports)
+_, __getattr__ = lazy_exports(__name__, {
+    "primitive_solver": ("PrimitiveNlp", "continuation_bounds", "primitive_nlp", "solve_primitive"),
+})
