@@ -5,6 +5,8 @@ The towed-foil experiment of Anderson, Streitlien, Barrett & Triantafyllou (J. F
 Re 40 000 in fresh water (0.4 m/s), h0/c = 0.75, nominal angle of attack 15 deg, pitch leading heave by 90 deg;
 the same laminar profile drag for both models (flow.laminar_profile_drag_coefficient). The measurements are read
 from the CSV that the tests use (src/swim_model/test/data/ in the source tree; ``--measurements`` for another).
+Beside them, the NACA 0012's static polar (Sheldahl & Klimas 1981, the CSV beside the tank's) against the reduced
+model's steady normal force and the flat plate's (docs/flow_model.md, "The separated regime").
 """
 from __future__ import annotations
 
@@ -17,6 +19,7 @@ import numpy as np
 
 from swim_model.flow import (
     KINEMATIC_VISCOSITY_WATER_M2_S,
+    CirculatoryFlow,
     FlowParameters,
     laminar_profile_drag_coefficient,
     oscillating_foil,
@@ -29,6 +32,9 @@ WATER_DENSITY_KG_M3 = 998.2
 HEAVE_OVER_CHORD = 0.75
 ALPHA0_DEG = 15.0
 DEFAULT_MEASUREMENTS = Path(__file__).resolve().parents[1] / "test" / "data" / "anderson1998_oscillating_foil.csv"
+STATIC_POLAR_NAME = "naca0012_static_polar_low_re.csv"   # beside the tank's measurements
+POLAR_REYNOLDS = (1.0e4, 4.0e4)    # the rig's order (its foil at 0.17 m/s) and the tank's
+STEADY_ANGLES_DEG = tuple(float(a) for a in range(0, 41))   # the steady normal force's incidences, deg
 
 
 def read_measurements(path: Path) -> dict[str, list[tuple[float, float]]]:
@@ -51,6 +57,58 @@ def read_measurements(path: Path) -> dict[str, list[tuple[float, float]]]:
     return series
 
 
+def read_static_polar(path: Path) -> dict[float, list[tuple[float, float, float]]]:
+    """The static polar from its CSV (comment lines start with #).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The CSV file, columns reynolds_number, alpha_deg, lift_coefficient, drag_coefficient.
+
+    Returns
+    -------
+    dict of float to list of (float, float, float)
+        {Reynolds number: [(alpha deg, C_L, C_D), ...]} in the file's order.
+    """
+    rows = csv.DictReader(line for line in path.read_text().splitlines() if not line.startswith("#"))
+    polar: dict[float, list[tuple[float, float, float]]] = {}
+    for row in rows:
+        polar.setdefault(float(row["reynolds_number"]), []).append(
+            (float(row["alpha_deg"]), float(row["lift_coefficient"]), float(row["drag_coefficient"])))
+    return polar
+
+
+def steady_normal_force_coefficient(angles_deg: tuple[float, ...] = STEADY_ANGLES_DEG,
+                                    params: FlowParameters | None = None) -> list[float]:
+    """The reduced model's normal force coefficient of the tank's foil towed at fixed incidences.
+
+    Its lag states at their steady values (``CirculatoryFlow.steady_lag``), no profile drag: N / (1/2 rho U^2 c s)
+    with N the force along the foil's normal (in steady motion the added mass adds none).
+
+    Parameters
+    ----------
+    angles_deg : tuple of float, optional
+        Incidences, deg, each in [0, 90).
+    params : FlowParameters, optional
+        The model's coefficients (default: FlowParameters() without profile drag).
+
+    Returns
+    -------
+    list of float
+        C_N at each incidence.
+    """
+    speed = REYNOLDS * KINEMATIC_VISCOSITY_WATER_M2_S / CHORD_M
+    foil = JoukowskiFoil(CHORD_M, THICKNESS_RATIO * CHORD_M, SPAN_M)
+    flow = CirculatoryFlow(foil, WATER_DENSITY_KG_M3, params or FlowParameters(profile_drag_coefficient=0.0))
+    reference = 0.5 * WATER_DENSITY_KG_M3 * speed ** 2 * CHORD_M * SPAN_M
+    coefficients = []
+    for angle in angles_deg:
+        velocity = (speed * math.cos(math.radians(angle)), -speed * math.sin(math.radians(angle)), 0.0)
+        force = flow.evaluate(velocity, flow.steady_lag(velocity))["f"]
+        coefficients.append(float(force[1]) / reference)
+    return coefficients
+
+
 def compute(strouhal: list[float],
             models: tuple[str, ...] = ("circulatory", "wake")) -> dict[str, dict[str, list[float]]]:
     """The towed-foil figures of Anderson's case for each flow model.
@@ -65,8 +123,10 @@ def compute(strouhal: list[float],
     Returns
     -------
     dict of str to dict of str to list of float
-        {model: {"strouhal", "thrust_coefficient", "efficiency", "peak_angle_of_attack_deg",
-        "peak_leading_edge_suction_parameter", "min_attached_weight"}} (OscillatingFoilResult's figures).
+        {model: {"strouhal", "thrust_coefficient", "efficiency", "power_coefficient", "heave_power_coefficient",
+        "peak_angle_of_attack_deg", "peak_three_quarter_chord_incidence_deg", "peak_leading_edge_suction_parameter",
+        "peak_free_stream_suction_parameter", "min_attached_weight"}} (OscillatingFoilResult's figures; the heave
+        drive's power over 1/2 rho U^3 c s).
     """
     speed = REYNOLDS * KINEMATIC_VISCOSITY_WATER_M2_S / CHORD_M
     heave = HEAVE_OVER_CHORD * CHORD_M
@@ -74,9 +134,10 @@ def compute(strouhal: list[float],
     params = FlowParameters(profile_drag_coefficient=laminar_profile_drag_coefficient(REYNOLDS, THICKNESS_RATIO))
     results: dict[str, dict[str, list[float]]] = {}
     for model in models:
-        rows: dict[str, list[float]] = {"strouhal": [], "thrust_coefficient": [], "efficiency": [],
-                                 "peak_angle_of_attack_deg": [], "peak_leading_edge_suction_parameter": [],
-                                 "min_attached_weight": []}
+        rows: dict[str, list[float]] = {name: [] for name in (
+            "strouhal", "thrust_coefficient", "efficiency", "power_coefficient", "heave_power_coefficient",
+            "peak_angle_of_attack_deg", "peak_three_quarter_chord_incidence_deg",
+            "peak_leading_edge_suction_parameter", "peak_free_stream_suction_parameter", "min_attached_weight")}
         for st in strouhal:
             run = oscillating_foil(foil, speed_m_s=speed, heave_amplitude_m=heave,
                                    pitch_amplitude_rad=math.atan(math.pi * st) - math.radians(ALPHA0_DEG),
@@ -84,19 +145,25 @@ def compute(strouhal: list[float],
                                    pivot_from_leading_edge_m=CHORD_M / 3, model=model,
                                    averaged_cycles=1 if model == "wake" else 2,
                                    water_density_kg_m3=WATER_DENSITY_KG_M3, flow_parameters=params)
-            rows["strouhal"].append(st)
-            rows["thrust_coefficient"].append(run.thrust_coefficient)
-            rows["efficiency"].append(run.efficiency)
-            rows["peak_angle_of_attack_deg"].append(math.degrees(run.peak_angle_of_attack_rad))
-            rows["peak_leading_edge_suction_parameter"].append(run.peak_leading_edge_suction_parameter)
-            rows["min_attached_weight"].append(run.min_attached_weight)
+            power_reference_w = run.mean_power_w / run.power_coefficient
+            for name, value in (
+                    ("strouhal", st), ("thrust_coefficient", run.thrust_coefficient), ("efficiency", run.efficiency),
+                    ("power_coefficient", run.power_coefficient),
+                    ("heave_power_coefficient", float(np.mean(run.heave_power_w)) / power_reference_w),
+                    ("peak_angle_of_attack_deg", math.degrees(run.peak_angle_of_attack_rad)),
+                    ("peak_three_quarter_chord_incidence_deg",
+                     math.degrees(run.peak_three_quarter_chord_incidence_rad)),
+                    ("peak_leading_edge_suction_parameter", run.peak_leading_edge_suction_parameter),
+                    ("peak_free_stream_suction_parameter", run.peak_free_stream_suction_parameter),
+                    ("min_attached_weight", run.min_attached_weight)):
+                rows[name].append(value)
         results[model] = rows
     return results
 
 
 def plot(results: dict[str, dict[str, list[float]]], measured: dict[str, list[tuple[float, float]]] | None,
-         path: Path) -> None:
-    """Draw thrust coefficient and efficiency against Strouhal number, models and tank.
+         path: Path, polar: dict[float, list[tuple[float, float, float]]] | None = None) -> None:
+    """Draw thrust coefficient and efficiency against Strouhal number, models and tank, and the steady normal force.
 
     Parameters
     ----------
@@ -106,12 +173,14 @@ def plot(results: dict[str, dict[str, list[float]]], measured: dict[str, list[tu
         ``read_measurements``'s output, or None without tank data.
     path : pathlib.Path
         The PNG file to write.
+    polar : dict or None, optional
+        ``read_static_polar``'s output, drawn beside the reduced model's and the flat plate's steady normal force.
     """
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
+    fig, axes = plt.subplots(1, 3, figsize=(16, 4.5))
     styles = {"circulatory": ("tab:blue", "o-", "reduced model (swim_model.flow)"),
               "wake": ("tab:orange", "s--", "vortex wake (swim_model.wake) + profile drag")}
     for model, rows in results.items():
@@ -127,6 +196,19 @@ def plot(results: dict[str, dict[str, list[float]]], measured: dict[str, list[tu
                 title="Thrust")
     axes[1].set(xlabel="Strouhal number 2 h0 f / U", ylabel="efficiency T U / P", title="Efficiency",
                 ylim=(0.0, 1.0))
+    angles = np.array(STEADY_ANGLES_DEG)
+    axes[2].plot(angles, steady_normal_force_coefficient(), "-", color="tab:blue", label="reduced model, steady")
+    axes[2].plot(angles, FlowParameters().flat_plate_normal_force_coefficient * np.sin(np.radians(angles)), ":",
+                 color="grey", label="flat plate, C_N90 sin(alpha)")
+    for reynolds, marker in zip(POLAR_REYNOLDS, ("kv", "k^")):
+        section = np.array((polar or {}).get(reynolds, []))
+        if section.size:
+            alpha = np.radians(section[:, 0])
+            axes[2].plot(section[:, 0], section[:, 1] * np.cos(alpha) + section[:, 2] * np.sin(alpha), marker,
+                         markersize=4,
+                         label=f"NACA 0012 static, Re {reynolds:.0f} (Sheldahl & Klimas 1981)")
+    axes[2].set(xlabel="incidence, deg", ylabel="normal force coefficient N / (1/2 rho U^2 c s)",
+                title="Steady normal force")
     for axis in axes:
         axis.grid(True, alpha=0.3)
         axis.legend(fontsize=8)
@@ -160,9 +242,11 @@ def run(output_dir: Path, measurements: Path | None = None) -> Path:
         strouhal = list(np.round(np.linspace(0.1, 0.5, 9), 3))
     else:
         strouhal = [st for st, _ in measured["thrust_coefficient"]]
+    polar_path = source.parent / STATIC_POLAR_NAME
+    polar = read_static_polar(polar_path) if polar_path.exists() else None
     results = compute(strouhal)
     output_dir.mkdir(parents=True, exist_ok=True)
     figure = output_dir / "flow_comparison.png"
-    plot(results, measured, figure)
+    plot(results, measured, figure, polar)
     (output_dir / "flow_comparison.json").write_text(json.dumps({"models": results, "measured": measured}, indent=2))
     return figure

@@ -260,10 +260,21 @@ class OscillatingFoilResult:
     min_attached_weight : float
         The reduced model's smallest attached-flow weight w (1 attached, 0 stalled; 1 for the wake, whose flow
         never stalls).
+    peak_free_stream_suction_parameter : float
+        Largest |A0 |u| / U|: the same parameter referred to the towing speed U instead of the foil's own speed
+        |u|, as Ramesh et al. (JFM 751, 2014) refer theirs to the free stream.
+    peak_three_quarter_chord_incidence_rad : float
+        Largest |atan2(Q, U)|, Q the normal velocity at the three-quarter chord (heave, pitch and pitch rate, no
+        lag): the quasi-steady incidence there, rad.
     cycles, averaged_cycles, steps_per_cycle : int
         Cycles simulated, cycles averaged (the last ones), time steps per cycle.
     time_s, thrust_n, lift_n, power_w, angle_of_attack_rad : (n,) ndarray
         Series over the averaged cycles: s, N, N, W, rad.
+    heave_power_w : (n,) ndarray
+        The heave drive's share of power_w, -F_Y h', W; the rest, power_w - heave_power_w, is the pitch drive's
+        (M_P theta' about the pivot).
+    leading_edge_suction_parameter : (n,) ndarray
+        A0 over the averaged cycles (before the reduced model's cap), dimensionless.
     """
 
     model: str
@@ -280,6 +291,8 @@ class OscillatingFoilResult:
     mean_lift_n: float
     peak_leading_edge_suction_parameter: float
     min_attached_weight: float
+    peak_free_stream_suction_parameter: float
+    peak_three_quarter_chord_incidence_rad: float
     cycles: int
     averaged_cycles: int
     steps_per_cycle: int
@@ -288,6 +301,8 @@ class OscillatingFoilResult:
     lift_n: Array = dataclasses.field(repr=False)
     power_w: Array = dataclasses.field(repr=False)
     angle_of_attack_rad: Array = dataclasses.field(repr=False)
+    heave_power_w: Array = dataclasses.field(repr=False)
+    leading_edge_suction_parameter: Array = dataclasses.field(repr=False)
 
 
 def _positive(name: str, value: float) -> float:
@@ -416,6 +431,7 @@ def oscillating_foil(  # noqa: C901 - the public entry: each keyword checked, th
         attached_weight = np.ones(1)
         time = (steps - 0.5) * dt          # the wake's force belongs to the middle of its step
         window = slice(total_steps - averaged_steps, total_steps)
+        suction_speed = np.hypot(nu_end[window, 0], nu_end[window, 1])   # A0 is taken at each step's end
         time = time[window]
         velocity = kinematics.velocity(time)
         drag = np.asarray(flow.functions["profile_drag"].map(time.size)(velocity.T), dtype=float).T
@@ -429,6 +445,7 @@ def oscillating_foil(  # noqa: C901 - the public entry: each keyword checked, th
         velocity = velocities[0::2][window]
         terms = flow.evaluate(velocity, lag[window])
         fluid, suction_parameter, attached_weight = terms["f"], terms["lesp"], terms["attached_weight"]
+        suction_speed = np.hypot(velocity[:, 0], velocity[:, 1])
     force = fluid + kirchhoff_force(flow.added_mass, velocity, kinematics.acceleration(time))
 
     _, _, theta = kinematics.pose(time)
@@ -437,8 +454,14 @@ def oscillating_foil(  # noqa: C901 - the public entry: each keyword checked, th
     lift = force[:, 0] * s + force[:, 1] * c
     power = -np.sum(force * velocity, axis=1) + thrust * speed
     angle = np.arctan2(-velocity[:, 1], velocity[:, 0])
+    _, heave_rate, _ = kinematics.heave(time)
+    heave_power = -lift * heave_rate
     pivot = kinematics.pivot_velocity(time)
     pivot_angle = np.arctan2(-pivot[:, 1], pivot[:, 0])
+    # the quasi-steady incidence at the three-quarter chord, and A0 referred to the towing speed
+    normal_34 = -(velocity[:, 1] + velocity[:, 2] * flow.three_quarter_chord_x_m)
+    incidence_34 = np.arctan2(normal_34, velocity[:, 0])
+    free_stream_suction = suction_parameter * suction_speed / speed
     mean_thrust, mean_power = float(np.mean(thrust)), float(np.mean(power))
     reference_force = 0.5 * rho * speed ** 2 * chord * foil.span_m
     harmonic = 2.0 * np.mean(lift * np.exp(-1j * kinematics.omega_rad_s * time))
@@ -453,5 +476,8 @@ def oscillating_foil(  # noqa: C901 - the public entry: each keyword checked, th
         lift_amplitude_n=float(abs(harmonic)), mean_lift_n=float(np.mean(lift)),
         peak_leading_edge_suction_parameter=float(np.max(np.abs(suction_parameter))),
         min_attached_weight=float(np.min(attached_weight)),
+        peak_free_stream_suction_parameter=float(np.max(np.abs(free_stream_suction))),
+        peak_three_quarter_chord_incidence_rad=float(np.max(np.abs(incidence_34))),
         cycles=int(cycles), averaged_cycles=int(averaged_cycles), steps_per_cycle=int(steps_per_cycle),
-        time_s=time, thrust_n=thrust, lift_n=lift, power_w=power, angle_of_attack_rad=angle)
+        time_s=time, thrust_n=thrust, lift_n=lift, power_w=power, angle_of_attack_rad=angle,
+        heave_power_w=heave_power, leading_edge_suction_parameter=np.asarray(suction_parameter, dtype=float))
