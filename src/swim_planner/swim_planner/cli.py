@@ -228,8 +228,11 @@ def command_flows(args, rig) -> int:
         return 0
     print(f"wrote {output}")
     for flow, numbers in summaries.items():
+        suction = ("" if numbers["leading_edge_suction_parameter_p95"] is None else
+                   f", A0 p95 {numbers['leading_edge_suction_parameter_p95']:.3f} (past critical "
+                   f"{100.0 * numbers['time_past_critical_suction']:.0f} % of the time)")
         print(f"{flow:12s} speed {numbers['mean_speed_m_s']:.3f} m/s, AoA p95 {numbers['angle_of_attack_p95_deg']:.1f} "
-              f"deg, power {numbers['mean_power_w']:.4f} W, thrust {numbers['mean_thrust_n']:.4f} N")
+              f"deg, power {numbers['mean_power_w']:.4f} W, thrust {numbers['mean_thrust_n']:.4f} N{suction}")
     return 0
 
 

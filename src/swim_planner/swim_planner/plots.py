@@ -81,6 +81,11 @@ class FlowTraces:
     circulatory_thrust_n: Array
     hub_torque_n_m: Array
     power_w: Array               # tau . psidot, the heave and pitch motors' power
+    #: A0, the leading-edge suction parameter of the circulatory flow before its cap (swim_model.flow: past
+    #: FlowParameters.critical_leading_edge_suction the leading edge separates); None for the ideal flow
+    leading_edge_suction_parameter: Array | None = None
+    #: the model's FlowParameters.critical_leading_edge_suction; None for the ideal flow
+    critical_leading_edge_suction: float | None = None
 
 
 def shown_samples(primitive: Primitive) -> slice:
@@ -131,6 +136,8 @@ def flow_traces(primitive: Primitive, model: VehicleModel) -> FlowTraces:
         if lag_k is not None:
             circulatory_force[k] = model.flow_force(q[k], qdot[k], lag_k)[0]
     force = kirchhoff_force(model.added_mass, velocity, acceleration) + circulatory_force
+    flow = model.circulatory_flow
+    suction_parameter = None if flow is None or lag is None else np.atleast_1d(flow.evaluate(velocity, lag)["lesp"])
     travel = hub_column[:, :2] / np.hypot(hub_column[:, 0], hub_column[:, 1])[:, None]
     return FlowTraces(
         flow_model=model.flow, time_s=primitive.time_s[rows] - primitive.time_s[0],
@@ -139,7 +146,9 @@ def flow_traces(primitive: Primitive, model: VehicleModel) -> FlowTraces:
         thrust_n=np.einsum("ij,ij->i", force[:, :2], travel),
         circulatory_thrust_n=np.einsum("ij,ij->i", circulatory_force[:, :2], travel),
         hub_torque_n_m=np.einsum("ij,ij->i", force, hub_column),
-        power_w=np.einsum("ij,ij->i", primitive.torque[rows], qdot[:, -2:]))
+        power_w=np.einsum("ij,ij->i", primitive.torque[rows], qdot[:, -2:]),
+        leading_edge_suction_parameter=suction_parameter,
+        critical_leading_edge_suction=None if flow is None else flow.params.critical_leading_edge_suction)
 
 
 def _time_mean(values: Array, time_s: Array) -> float:
@@ -157,8 +166,11 @@ def flow_summary(primitive: Primitive, traces: FlowTraces) -> dict:
     Mean speed along the lane (``cruise_mean_speed_m_s``: alpha's advance over the duration x lane radius), heave and
     pitch ranges over the samples shown (rad), the 95th percentile of |angle of attack| over them (deg), and the time
     averages of the motors' power (W) and of the thrust and its circulatory part (N) and of the fluid's torque about the
-    hub (N m), as ``FlowTraces``.
+    hub (N m), as ``FlowTraces``. With the circulatory flow, the 95th percentile of |A0| and the share of the time it
+    spends past the critical value, where the leading edge separates (``time_past_critical_suction``, 0-1; both None
+    for the ideal flow).
     """
+    suction, critical = traces.leading_edge_suction_parameter, traces.critical_leading_edge_suction
     return {
         "flow_model": traces.flow_model,
         "duration_s": float(traces.time_s[-1]),
@@ -170,6 +182,10 @@ def flow_summary(primitive: Primitive, traces: FlowTraces) -> dict:
         "mean_thrust_n": _time_mean(traces.thrust_n, traces.time_s),
         "mean_circulatory_thrust_n": _time_mean(traces.circulatory_thrust_n, traces.time_s),
         "mean_fluid_hub_torque_n_m": _time_mean(traces.hub_torque_n_m, traces.time_s),
+        "leading_edge_suction_parameter_p95": (None if suction is None
+                                               else float(np.percentile(np.abs(suction), 95.0))),
+        "time_past_critical_suction": (None if suction is None or critical is None else
+                                       _time_mean((np.abs(suction) > critical).astype(float), traces.time_s)),
     }
 
 

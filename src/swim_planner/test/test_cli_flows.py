@@ -56,6 +56,25 @@ def test_the_json_numbers_are_the_library_arrays(library, circulatory_library, m
         thrust = _tangent_force(model, primitive, rows)
         assert numbers["mean_thrust_n"] == pytest.approx(_mean(thrust, time_s), rel=1e-6, abs=1e-9)
     assert report["ideal"]["mean_circulatory_thrust_n"] == 0.0
+    # the leading-edge suction parameter, by hand: A0 |u| = Q_eff - Omega (x_mid - x_3/4) (docs/flow_model.md, Sec. 2)
+    assert report["ideal"]["leading_edge_suction_parameter_p95"] is None
+    primitive = circulatory_library.get(CRUISE)
+    model = model_for(primitive.spec, "circulatory")
+    flow, rows = model.circulatory_flow, slice(0, 2 * primitive.spec.intervals + 1)
+    p = flow.params
+    suction = []
+    for q, qdot, z in zip(primitive.q[rows], primitive.qdot[rows], primitive.lag[rows]):
+        u, v, omega = model.foil_velocity_map(q) @ qdot
+        normal = -(v + omega * flow.three_quarter_chord_x_m)
+        effective = (1.0 - p.wagner_slow_gain - p.wagner_fast_gain) * normal + p.wagner_slow_gain * z[0] \
+            + p.wagner_fast_gain * z[1]
+        suction.append((effective - omega * (flow.mid_chord_x_m - flow.three_quarter_chord_x_m)) / np.hypot(u, v))
+    suction = np.abs(suction)
+    numbers = report["circulatory"]
+    assert numbers["leading_edge_suction_parameter_p95"] == pytest.approx(np.percentile(suction, 95), rel=1e-9)
+    past = (suction > p.critical_leading_edge_suction).astype(float)
+    assert numbers["time_past_critical_suction"] == pytest.approx(_mean(past, primitive.time_s[rows]), abs=1e-12)
+    assert 0.0 < numbers["time_past_critical_suction"] < 1.0
 
 
 def test_an_id_missing_from_one_library_is_a_clear_error(tmp_path, capsys, rig, circulatory_library):
