@@ -32,9 +32,34 @@ WATER_DENSITY_KG_M3 = 998.2
 HEAVE_OVER_CHORD = 0.75
 ALPHA0_DEG = 15.0
 DEFAULT_MEASUREMENTS = Path(__file__).resolve().parents[1] / "test" / "data" / "anderson1998_oscillating_foil.csv"
+TOWING_SPEED_M_S = REYNOLDS * KINEMATIC_VISCOSITY_WATER_M2_S / CHORD_M   # Re nu / c: 0.4 m/s
 STATIC_POLAR_NAME = "naca0012_static_polar_low_re.csv"   # beside the tank's measurements
 POLAR_REYNOLDS = (1.0e4, 4.0e4)    # the rig's order (its foil at 0.17 m/s) and the tank's
 STEADY_ANGLES_DEG = tuple(float(a) for a in range(0, 41))   # the steady normal force's incidences, deg
+
+
+def _csv_rows(path: Path) -> csv.DictReader:
+    """The rows of a CSV file whose comment lines start with #, as dicts by the header's names."""
+    return csv.DictReader(line for line in path.read_text().splitlines() if not line.startswith("#"))
+
+
+def section_normal_force_coefficient(alpha_deg: float, lift_coefficient: float, drag_coefficient: float) -> float:
+    """A section's normal force coefficient from its lift and drag at an incidence: C_L cos a + C_D sin a.
+
+    Parameters
+    ----------
+    alpha_deg : float
+        Incidence, deg.
+    lift_coefficient, drag_coefficient : float
+        C_L and C_D there.
+
+    Returns
+    -------
+    float
+        C_N.
+    """
+    alpha = math.radians(alpha_deg)
+    return lift_coefficient * math.cos(alpha) + drag_coefficient * math.sin(alpha)
 
 
 def read_measurements(path: Path) -> dict[str, list[tuple[float, float]]]:
@@ -50,9 +75,8 @@ def read_measurements(path: Path) -> dict[str, list[tuple[float, float]]]:
     dict of str to list of (float, float)
         {quantity: [(St, value), ...]}.
     """
-    rows = csv.DictReader(line for line in path.read_text().splitlines() if not line.startswith("#"))
     series: dict[str, list[tuple[float, float]]] = {}
-    for row in rows:
+    for row in _csv_rows(path):
         series.setdefault(row["quantity"], []).append((float(row["strouhal"]), float(row["value"])))
     return series
 
@@ -70,9 +94,8 @@ def read_static_polar(path: Path) -> dict[float, list[tuple[float, float, float]
     dict of float to list of (float, float, float)
         {Reynolds number: [(alpha deg, C_L, C_D), ...]} in the file's order.
     """
-    rows = csv.DictReader(line for line in path.read_text().splitlines() if not line.startswith("#"))
     polar: dict[float, list[tuple[float, float, float]]] = {}
-    for row in rows:
+    for row in _csv_rows(path):
         polar.setdefault(float(row["reynolds_number"]), []).append(
             (float(row["alpha_deg"]), float(row["lift_coefficient"]), float(row["drag_coefficient"])))
     return polar
@@ -97,7 +120,7 @@ def steady_normal_force_coefficient(angles_deg: tuple[float, ...] = STEADY_ANGLE
     list of float
         C_N at each incidence.
     """
-    speed = REYNOLDS * KINEMATIC_VISCOSITY_WATER_M2_S / CHORD_M
+    speed = TOWING_SPEED_M_S
     foil = JoukowskiFoil(CHORD_M, THICKNESS_RATIO * CHORD_M, SPAN_M)
     flow = CirculatoryFlow(foil, WATER_DENSITY_KG_M3, params or FlowParameters(profile_drag_coefficient=0.0))
     reference = 0.5 * WATER_DENSITY_KG_M3 * speed ** 2 * CHORD_M * SPAN_M
@@ -128,8 +151,9 @@ def compute(strouhal: list[float],
         "peak_free_stream_suction_parameter", "min_attached_weight"}} (OscillatingFoilResult's figures; the heave
         drive's power over 1/2 rho U^3 c s).
     """
-    speed = REYNOLDS * KINEMATIC_VISCOSITY_WATER_M2_S / CHORD_M
+    speed = TOWING_SPEED_M_S
     heave = HEAVE_OVER_CHORD * CHORD_M
+    power_reference_w = 0.5 * WATER_DENSITY_KG_M3 * speed ** 3 * CHORD_M * SPAN_M   # C_P's 1/2 rho U^3 c s
     foil = JoukowskiFoil(CHORD_M, THICKNESS_RATIO * CHORD_M, SPAN_M)
     params = FlowParameters(profile_drag_coefficient=laminar_profile_drag_coefficient(REYNOLDS, THICKNESS_RATIO))
     results: dict[str, dict[str, list[float]]] = {}
@@ -145,7 +169,6 @@ def compute(strouhal: list[float],
                                    pivot_from_leading_edge_m=CHORD_M / 3, model=model,
                                    averaged_cycles=1 if model == "wake" else 2,
                                    water_density_kg_m3=WATER_DENSITY_KG_M3, flow_parameters=params)
-            power_reference_w = run.mean_power_w / run.power_coefficient
             for name, value in (
                     ("strouhal", st), ("thrust_coefficient", run.thrust_coefficient), ("efficiency", run.efficiency),
                     ("power_coefficient", run.power_coefficient),
@@ -201,11 +224,10 @@ def plot(results: dict[str, dict[str, list[float]]], measured: dict[str, list[tu
     axes[2].plot(angles, FlowParameters().flat_plate_normal_force_coefficient * np.sin(np.radians(angles)), ":",
                  color="grey", label="flat plate, C_N90 sin(alpha)")
     for reynolds, marker in zip(POLAR_REYNOLDS, ("kv", "k^")):
-        section = np.array((polar or {}).get(reynolds, []))
-        if section.size:
-            alpha = np.radians(section[:, 0])
-            axes[2].plot(section[:, 0], section[:, 1] * np.cos(alpha) + section[:, 2] * np.sin(alpha), marker,
-                         markersize=4,
+        section = (polar or {}).get(reynolds, [])
+        if section:
+            axes[2].plot([row[0] for row in section], [section_normal_force_coefficient(*row) for row in section],
+                         marker, markersize=4,
                          label=f"NACA 0012 static, Re {reynolds:.0f} (Sheldahl & Klimas 1981)")
     axes[2].set(xlabel="incidence, deg", ylabel="normal force coefficient N / (1/2 rho U^2 c s)",
                 title="Steady normal force")

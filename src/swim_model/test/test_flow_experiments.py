@@ -19,7 +19,6 @@ the tank's; at the two highest (0.46, 0.50) the reduced model's thrust is 21 % a
 26 % above at 0.50; the wake's efficiency is 0.09-0.15 below the tank's from St = 0.31 on. Where the models' power
 goes and what the separation indicators say about the misses: docs/flow_model.md, "The separated regime".
 """
-import csv
 import functools
 import math
 from pathlib import Path
@@ -29,7 +28,13 @@ import pytest
 
 from swim_model import JoukowskiFoil, load_rig
 from swim_model.flow import FlowParameters, laminar_profile_drag_coefficient, oscillating_foil
-from swim_model.flow_comparison import STATIC_POLAR_NAME, read_static_polar, steady_normal_force_coefficient
+from swim_model.flow_comparison import (
+    STATIC_POLAR_NAME,
+    read_measurements,
+    read_static_polar,
+    section_normal_force_coefficient,
+    steady_normal_force_coefficient,
+)
 from swim_model.towed_foil import TowedFoilKinematics, kirchhoff_force
 
 DATA = Path(__file__).parent / "data" / "anderson1998_oscillating_foil.csv"
@@ -45,15 +50,7 @@ TANK_FOIL = JoukowskiFoil(CHORD_M, THICKNESS_RATIO * CHORD_M, SPAN_M)
 TANK_FLOW = FlowParameters(profile_drag_coefficient=laminar_profile_drag_coefficient(REYNOLDS, THICKNESS_RATIO))
 
 
-def measurements() -> dict[str, list[tuple[float, float]]]:
-    rows = csv.DictReader(line for line in DATA.read_text().splitlines() if not line.startswith("#"))
-    series: dict[str, list[tuple[float, float]]] = {}
-    for row in rows:
-        series.setdefault(row["quantity"], []).append((float(row["strouhal"]), float(row["value"])))
-    return series
-
-
-MEASURED = measurements()
+MEASURED = read_measurements(DATA)
 
 
 def pitch_amplitude(strouhal: float) -> float:
@@ -281,11 +278,6 @@ def static_polar() -> dict[float, list[tuple[float, float, float]]]:
     return read_static_polar(POLAR)
 
 
-def normal_force(alpha_deg: float, lift: float, drag: float) -> float:
-    alpha = math.radians(alpha_deg)
-    return lift * math.cos(alpha) + drag * math.sin(alpha)
-
-
 def test_static_polar_keeps_its_source_and_covers_the_range():
     header = [line for line in POLAR.read_text().splitlines() if line.startswith("#")]
     assert any("Sheldahl and P. C. Klimas" in line for line in header)
@@ -313,7 +305,7 @@ def test_below_stall_the_section_carries_the_attached_flows_normal_force_less_it
     it is 0.4-0.9 and falls with incidence: the laminar separation the rig's foil meets (docs/flow_model.md)."""
     model = steady_normal_force_coefficient(tuple(float(a) for a in range(1, 6)))
     for (alpha_deg, lift, drag), attached in zip(static_polar()[reynolds][1:6], model):
-        assert 0.85 * attached < normal_force(alpha_deg, lift, drag) < attached
+        assert 0.85 * attached < section_normal_force_coefficient(alpha_deg, lift, drag) < attached
 
 
 @pytest.mark.parametrize("reynolds", [1e4, 2e4, 4e4, 8e4])
@@ -325,5 +317,5 @@ def test_past_stall_the_section_carries_the_flat_plates_normal_force(reynolds):
     coefficient = FlowParameters().flat_plate_normal_force_coefficient
     for alpha_deg, lift, drag in static_polar()[reynolds]:
         if alpha_deg >= 20.0:
-            assert normal_force(alpha_deg, lift, drag) == pytest.approx(
+            assert section_normal_force_coefficient(alpha_deg, lift, drag) == pytest.approx(
                 coefficient * math.sin(math.radians(alpha_deg)), rel=0.13)
