@@ -124,8 +124,7 @@ def flow_traces(primitive: Primitive, model: VehicleModel) -> FlowTraces:
                            f"states does not belong to the {model.flow} flow model")
     rate_bias = _foil_velocity_rate_bias(model)
     n = len(q)
-    velocity, acceleration = np.empty((n, 3)), np.empty((n, 3))
-    circulatory_force, hub_column = np.zeros((n, 3)), np.empty((n, 3))
+    velocity, acceleration, hub_column = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
     for k in range(n):
         lag_k = None if lag is None else lag[k]
         q2 = model.foil_velocity_map(q[k])
@@ -133,11 +132,12 @@ def flow_traces(primitive: Primitive, model: VehicleModel) -> FlowTraces:
         velocity[k] = q2 @ qdot[k]
         acceleration[k] = q2 @ qddot + np.asarray(rate_bias(q[k], qdot[k])).reshape(-1)
         hub_column[k] = q2[:, 0]
-        if lag_k is not None:
-            circulatory_force[k] = model.flow_force(q[k], qdot[k], lag_k)[0]
-    force = kirchhoff_force(model.added_mass, velocity, acceleration) + circulatory_force
+    # the circulatory flow's force and suction parameter at every sample, in one call
     flow = model.circulatory_flow
-    suction_parameter = None if flow is None or lag is None else np.atleast_1d(flow.evaluate(velocity, lag)["lesp"])
+    terms = None if flow is None or lag is None else flow.evaluate(velocity, lag)
+    circulatory_force = np.zeros((n, 3)) if terms is None else np.atleast_2d(terms["f"])
+    suction_parameter = None if terms is None else np.atleast_1d(terms["lesp"])
+    force = kirchhoff_force(model.added_mass, velocity, acceleration) + circulatory_force
     travel = hub_column[:, :2] / np.hypot(hub_column[:, 0], hub_column[:, 1])[:, None]
     return FlowTraces(
         flow_model=model.flow, time_s=primitive.time_s[rows] - primitive.time_s[0],
