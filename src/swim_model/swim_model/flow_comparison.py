@@ -38,7 +38,7 @@ POLAR_REYNOLDS = (1.0e4, 4.0e4)    # the rig's order (its foil at 0.17 m/s) and 
 STEADY_ANGLES_DEG = tuple(float(a) for a in range(0, 41))   # the steady normal force's incidences, deg
 
 
-def _csv_rows(path: Path) -> csv.DictReader:
+def _csv_rows(path: Path) -> "csv.DictReader[str]":
     """The rows of a CSV file whose comment lines start with #, as dicts by the header's names."""
     return csv.DictReader(line for line in path.read_text().splitlines() if not line.startswith("#"))
 
