@@ -11,9 +11,17 @@ thread. rclpy's own SIGTERM handling alone loses some: its signal thread wakes t
 the contexts down, so an executor that looks at its context in between waits again, and an idle node (no timer,
 no message coming) never stops; about one SIGTERM in a hundred here. SIGINT never had that gap: rclpy passes it on
 to Python's handler, which raises KeyboardInterrupt, and now passes SIGTERM on the same way.
+
+The node's DDS teardown is bounded. Fast DDS's participant teardown spins, holding the participant's listener
+mutex, while a discovery callback is in flight (eProsima/Fast-DDS#6513); when peers leave at the same moment, as a
+whole system stopping does, that callback can starve for good on a busy host, and the process would never end (a
+second Ctrl-C cannot help: the spin holds the GIL). A process that has not finished tearing its node down after
+DDS_TEARDOWN_TIMEOUT_S dumps every thread's stack to stderr and exits with status 1 (Python's faulthandler, whose
+watchdog needs no GIL).
 """
 from __future__ import annotations
 
+import faulthandler
 import threading
 from typing import Callable, Optional, TypeVar
 
@@ -29,6 +37,10 @@ NodeT = TypeVar("NodeT", bound=Node)
 
 #: the exit status of a node that could not start (bad parameters or files): a usage error, as argparse's
 FATAL_EXIT_STATUS = 2
+#: how long a stopped node's DDS teardown may take before the process dumps its stacks and exits with status 1
+#: (module docstring): a teardown takes well under a second, and 5 s stays inside a starter's grace period
+#: (swim_ros.processes.STOP_GRACE_S)
+DDS_TEARDOWN_TIMEOUT_S = 5.0
 
 
 def run_node(make_node: Callable[[], NodeT], args: Optional[list[str]] = None, *, name: str,
@@ -48,7 +60,8 @@ def run_node(make_node: Callable[[], NodeT], args: Optional[list[str]] = None, *
         stop: called with the node however spinning ends, before shutdown (for example to release hardware).
         large_messages: the node sends plans: run it with swim's Fast DDS profile (swim_ros.transport).
     """
-    if threading.current_thread() is threading.main_thread():
+    owns_process = threading.current_thread() is threading.main_thread()
+    if owns_process:
         interrupt_on_sigterm()   # before rclpy.init, so that rclpy's handler passes SIGTERM on to it
     transport = use_large_message_transport() if large_messages else None
     rclpy.init(args=args)   # this rclpy's init() is not a context manager, hence try/finally
@@ -72,12 +85,30 @@ def run_node(make_node: Callable[[], NodeT], args: Optional[list[str]] = None, *
     except _rclpy.RCLError:
         _raise_unless_shut_down()
     finally:
-        if node is not None and stop is not None:
-            stop(node)
         try:
-            rclpy.try_shutdown()
-        except _rclpy.RCLError:
-            _raise_unless_shut_down()
+            if node is not None and stop is not None:
+                stop(node)
+        finally:
+            _tear_down(node, bounded=owns_process)
+
+
+def _tear_down(node: Optional[Node], *, bounded: bool) -> None:
+    """Destroy the node (the context's last: its DDS participant goes with it) and shut the context down.
+
+    bounded: the process ends, with its stacks on stderr and status 1, if this takes DDS_TEARDOWN_TIMEOUT_S (module
+    docstring); only for the process's own main thread.
+    """
+    if bounded:
+        faulthandler.dump_traceback_later(DDS_TEARDOWN_TIMEOUT_S, exit=True)
+    try:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    except _rclpy.RCLError:
+        _raise_unless_shut_down()
+    finally:
+        if bounded:
+            faulthandler.cancel_dump_traceback_later()
 
 
 def _raise_unless_shut_down() -> None:
