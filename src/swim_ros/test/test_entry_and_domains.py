@@ -50,6 +50,8 @@ START_TIMEOUT_S = 30.0
 IDLE_NODES_AT_ONCE = 8
 IDLE_ROUNDS = 3
 IDLE_WAIT_S = 0.3
+#: what faulthandler writes when a node's teardown outlived DDS_TEARDOWN_TIMEOUT_S
+TEARDOWN_TIMED_OUT = "Timeout ("
 
 
 def _start(mode):
@@ -94,15 +96,11 @@ def test_sigterm_stops_every_idle_node(ros_domain):
                 out, err = process.communicate(timeout=START_TIMEOUT_S)
                 assert "stopped entry_demo" in out, err
                 # 0, or the bounded teardown's 1 when Fast DDS's own teardown hung (test below)
-                assert process.returncode == 0 or (process.returncode == 1 and _TEARDOWN_TIMED_OUT in err), err
+                assert process.returncode == 0 or (process.returncode == 1 and TEARDOWN_TIMED_OUT in err), err
         finally:
             for process in processes:
                 process.kill()
                 process.wait()
-
-
-#: what faulthandler writes when the teardown's time is up
-_TEARDOWN_TIMED_OUT = "Timeout ("
 
 
 def test_a_teardown_that_hangs_ends_the_process_with_its_stack(ros_domain):
@@ -116,7 +114,7 @@ def test_a_teardown_that_hangs_ends_the_process_with_its_stack(ros_domain):
     out, err = process.communicate(timeout=START_TIMEOUT_S)
     took_s = time.monotonic() - interrupted
     assert process.returncode == 1 and "stopped entry_demo" in out, err
-    assert _TEARDOWN_TIMED_OUT in err and "in destroy_node" in err and "in run_node" in err
+    assert TEARDOWN_TIMED_OUT in err and "in destroy_node" in err and "in run_node" in err
     assert DDS_TEARDOWN_TIMEOUT_S <= took_s < DDS_TEARDOWN_TIMEOUT_S + START_TIMEOUT_S / 2
 
 
