@@ -26,6 +26,8 @@ PACKAGES = ("swim_model", "swim_control", "swim_ros", "swim_planner", "swim_cont
 #: a whole swim-demo process (bring-up, maneuver, recording, analysis, stop): about 10-20 s (bench_demo_walltime:
 #: 17 s at load ~5), more on a busier host; 300 s only stops a hung run (the demo's --timeout bounds the maneuver)
 DEMO_TIMEOUT_S = 300.0
+#: the lines of each node's log a failed demo's message ends with
+LOG_TAIL_LINES = 12
 #: Docker's default /dev/shm, MiB: what a run in a container has for Fast DDS's shared memory
 CONTAINER_SHM_MIB = 64
 #: the environment variable that runs the tests marked slow (SWIM_SLOW_TESTS=1)
@@ -68,8 +70,18 @@ def run_demo(run_dir: Path, *arguments: str, timeout_s: float = DEMO_TIMEOUT_S, 
             pytest.skip("a /dev/shm of the run's own needs a mount namespace (root)")
         argv = ["unshare", "-m", "bash", "-c", f"mount -t tmpfs -o size={shm_mib}m tmpfs /dev/shm && {command}"]
     result = run_child(argv, cwd=WORKSPACE, capture_output=True, text=True, timeout_s=timeout_s)
-    assert result.returncode == expected_returncode, result.stdout[-2000:] + result.stderr[-2000:]
+    assert result.returncode == expected_returncode, (result.stdout[-2000:] + result.stderr[-2000:]
+                                                      + log_tails(run_dir / "logs"))
     return result.stdout + result.stderr
+
+
+def log_tails(log_dir: Path, lines: int = LOG_TAIL_LINES) -> str:
+    """The last lines of each node's log in log_dir, for a failed run's message (CI keeps no run folder)."""
+    tails = []
+    for log in sorted(log_dir.glob("*.log")):
+        tail = log.read_text(errors="replace").splitlines()[-lines:]
+        tails.append(f"\n--- {log.name}, last {len(tail)} lines\n" + "\n".join(tail))
+    return "".join(tails)
 
 
 def track_plan(library, sequence: tuple[list[str], list[int]], time_scale: float, plant, constrained: bool = False,

@@ -47,6 +47,9 @@ SHORT_MANEUVER = {"mode": "sequence", "primitive_ids": ["free/accelerate/R0.43/E
                   "path_tolerance_alpha_rad": 1.0, "goal_tolerance_alpha_rad": 0.25, "goal_tolerance_r_m": 0.025}
 #: the maneuver's wall time: its plan, and the model the tracker builds for it the first time on a loaded host
 MANEUVER_TIMEOUT_S = 300.0
+#: the depth of the observer's subscriptions: a reader's keep-last history drops its oldest unread message once full,
+#: and the observer reads only while a test spins it; minutes of 125 Hz topics fit, so it loses nothing
+OBSERVER_DEPTH = 100_000
 FORWARDED = ("/joint_states", "/joint_commands", "/tracking_state", "/plan", "/diagnostics", "/wake_statistics",
              "/wake_vortices", "/robot_description", "/markers")
 
@@ -72,10 +75,10 @@ class Observer:
         self.tracking: set[tuple[int, int, float]] = set()   # (sec, nanosec, plan_time_s) of each tracking_state
         self.transforms: set[tuple] = set()
         self.faults: list[str] = []
-        self.node.create_subscription(JointState, "/joint_states", self._on_joint_state, 1000, raw=True)
-        self.node.create_subscription(TFMessage, "/tf", self._on_tf, 1000)
+        self.node.create_subscription(JointState, "/joint_states", self._on_joint_state, OBSERVER_DEPTH, raw=True)
+        self.node.create_subscription(TFMessage, "/tf", self._on_tf, OBSERVER_DEPTH)
         self.node.create_subscription(TrackingState, "/tracking_state", lambda m: self.tracking.add(
-            (m.header.stamp.sec, m.header.stamp.nanosec, m.plan_time_s)), 1000)
+            (m.header.stamp.sec, m.header.stamp.nanosec, m.plan_time_s)), OBSERVER_DEPTH)
         self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diagnostics, 100)
         self.maneuvers = GoalStatusWatch(self.node, "perform_maneuver")
 

@@ -25,6 +25,9 @@ READ_MANEUVER = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05", "c
                  [1, 3, 1])
 #: a lock-step run on a loaded host
 RUN_TIMEOUT_S = 300.0
+#: the depth of the observer's subscriptions: a reader's keep-last history drops its oldest unread message once
+#: full, and a lock-step loop on a loaded host outruns the observer's thread for a while; the whole run fits
+OBSERVER_DEPTH = 100_000
 
 
 class Observer(threading.Thread):
@@ -52,9 +55,10 @@ class Observer(threading.Thread):
         rclpy.init(context=context)
         try:
             node = rclpy.create_node("foxglove_lockstep_observer", context=context)
-            node.create_subscription(JointState, "/joint_states", lambda raw: self.joint_states.add(raw), 1000,
-                                     raw=True)
-            node.create_subscription(TFMessage, "/tf", lambda m: self.transforms.update(tf_message_keys(m)), 1000)
+            node.create_subscription(JointState, "/joint_states", lambda raw: self.joint_states.add(raw),
+                                     OBSERVER_DEPTH, raw=True)
+            node.create_subscription(TFMessage, "/tf", lambda m: self.transforms.update(tf_message_keys(m)),
+                                     OBSERVER_DEPTH)
             executor = SingleThreadedExecutor(context=context)
             executor.add_node(node)
             count = 0

@@ -73,8 +73,14 @@ def run_recorded(specs: list[NodeSpec], run_dir: Path, primitive_ids: list[str],
                 progress(fraction)
             if system.dead():
                 raise RunError(f"{', '.join(system.dead())} died (see {run_dir / 'logs'})")
-        result = run_maneuver(run_dir / "bag", primitive_ids, repeat_counts, time_scale, timeout_s, on_progress,
-                              tolerances)
+        try:
+            result = run_maneuver(run_dir / "bag", primitive_ids, repeat_counts, time_scale, timeout_s, on_progress,
+                                  tolerances)
+        except RunError as err:   # a node that died meanwhile is what the reader needs to know first
+            dead = system.dead()
+            if dead and "died" not in str(err):
+                raise RunError(f"{err}; {', '.join(dead)} died (see {run_dir / 'logs'})") from err
+            raise
     return write_run_report(run_dir, result, started, rig_path)
 
 
