@@ -25,6 +25,7 @@ from swim_model import StateError, SwimModelError, load_rig
 from swim_model.disturbances import Disturbances
 from swim_model.flow import FLOWS
 from swim_model.plant import Plant, PlantSettings, SimulationError, make_plant
+from swim_model.wake import compile_kernels
 from swim_ros.codecs import MessageError, float_array, joint_state_arrays, stamp_of, torque_from_command
 from swim_ros.entry import run_node
 from swim_ros.parameters import NodeSettings, ParameterSpec, ParameterValue, finite, one_of
@@ -214,6 +215,11 @@ class SimNode(Node):
             self.create_timer(0.25 * settings.resend_after_s, self._resend)
             if self._hold_enabled:
                 self.create_timer(self.plant.sample_period_s, self._republish_held_state)
+        if self.plant.wake is not None:
+            # the first state tells a controller and a run's client that the loop is up: the wake's kernels (a
+            # second or more on a loaded host) are loaded before it, not in the first period's preparation, which
+            # a goal sent on that state would meet as a stalled plant
+            compile_kernels()
         self._publish_state()
         self._prepare_period()
         self.get_logger().info(f"simulating the {'constrained' if model.constrained else 'free'} vehicle, "

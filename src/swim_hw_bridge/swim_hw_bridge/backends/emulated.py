@@ -35,11 +35,9 @@ from swim_hw_bridge.conversions import BridgeConfig
 from swim_hw_bridge.device import CounterSample, Device, DeviceError
 from swim_model import SwimModelError
 from swim_model.plant import Plant, PlantSettings, SimulationError, make_plant
-from swim_model.wake_coupling import WakeCoupling
+from swim_model.wake import compile_kernels
 
 DEFAULT_CHARGE_PUMP_TIMEOUT_S = 0.05   # assumed: about 6 periods of 8 ms
-#: steps of the throwaway wake open() swims to load the wake's kernels: enough to shed and move vortices
-WAKE_WARM_UP_STEPS = 4
 #: options that are the plant's settings (PlantSettings), refused as the device's
 PLANT_OPTIONS = ("flow", "substeps", "hard_stops", "foil_axial_drag_coefficient", "foil_normal_drag_coefficient")
 
@@ -89,10 +87,8 @@ class EmulatedDevice(Device):
             self.plant.reset(self.home, np.zeros(self.plant.model.nq))
             if self.plant.wake is not None:
                 # load the wake's compiled kernels now (numba's import and its cache, about 0.3-0.5 s), not in the
-                # I/O loop's first periods: a throwaway wake swims a few steps of a pitching foil
-                warm_up = WakeCoupling(self.plant.model)
-                for k in range(WAKE_WARM_UP_STEPS):
-                    warm_up.step(self.home, np.array([0.0, 0.0, 0.0, 1.0 if k % 2 else -1.0]), 1e-3)
+                # I/O loop's periods: shedding, merging (once the wake is full) and the Kelvin statistics
+                compile_kernels()
         self.is_open = True
         self.commanded_currents_a = (0.0, 0.0)
         self.enable_requested = False
