@@ -129,7 +129,7 @@ class FlowParameters:
     suction_cap_exponent: int = SUCTION_CAP_EXPONENT
     # assumed: the order of the smooth saturation (swim_model.leading_edge)
     stall_angle_rad: float = math.radians(28.0)
-    # set on Anderson et al.'s 90 deg series only (docs/flow_model.md, Sec. 7): the three-quarter-chord incidence
+    # set on Anderson et al.'s 90 deg series only (docs/flow_model.md, Sec. 5): the three-quarter-chord incidence
     # where attached and separated flow weigh equally. Whole degrees from 26 to 30 give the reduced model's thrust
     # at St 0.41-0.50 -8 to +7 %, -2 to +10 % and +5 to +14 %; 28 is the one inside 10 % at all three. It is a
     # dynamic-stall delay far above the section's static stall (Sheldahl & Klimas 1981 at Re 4e4: 6-7 deg), of
@@ -333,7 +333,7 @@ class CirculatoryFlow:
         moment_separated = pressure_centre * normal_separated - munk
 
         # transition on the three-quarter-chord incidence, unlagged: where the pitch rate adds to the heave's
-        # angle, which sorts the tank's separated points (docs/flow_model.md, Sec. 7)
+        # angle, which sorts the tank's separated points (docs/flow_model.md, Sec. 5)
         cos_incidence = u / speed_34
         width = math.sin(p.stall_angle_rad) * p.stall_width_rad
         weight = 0.5 * (1.0 + ca.tanh((cos_incidence - math.cos(p.stall_angle_rad)) / width))
