@@ -53,7 +53,6 @@ def main() -> None:
 def measure() -> tuple[list[float], int]:
     """The acceptance-to-first-period spans of RUNS goals (after one that builds the model), and their segments."""
     import rclpy
-    from rclpy.action import ActionClient
     from rclpy.executors import SingleThreadedExecutor
     from sensor_msgs.msg import JointState
     from std_srvs.srv import Trigger
@@ -61,6 +60,7 @@ def measure() -> tuple[list[float], int]:
     from swim_interfaces.msg import TrackingState
 
     from swim_ros.calls import (
+        ActionClient,
         GoalStatusWatch,
         RetryPolicy,
         call_service,

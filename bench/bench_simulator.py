@@ -60,13 +60,12 @@ class LoopClient:
 
     def __init__(self) -> None:
         import rclpy
-        from rclpy.action import ActionClient
         from rclpy.executors import SingleThreadedExecutor
         from std_srvs.srv import Trigger
         from swim_interfaces.action import ExecutePlan
         from swim_interfaces.srv import RequestManeuver
 
-        from swim_ros.calls import GoalStatusWatch
+        from swim_ros.calls import ActionClient, GoalStatusWatch
         self.context = rclpy.Context()
         rclpy.init(context=self.context)
         self.node = rclpy.create_node("bench_simulator", context=self.context)

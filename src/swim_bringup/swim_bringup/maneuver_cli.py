@@ -637,10 +637,9 @@ class ManeuverRun:
     """One perform_maneuver goal from its sending to its result, on a session (a RunClient when recorded)."""
 
     def __init__(self, session: Any, interrupt: InterruptWatch) -> None:
-        from rclpy.action import ActionClient
         from swim_interfaces.action import PerformManeuver
 
-        from swim_ros.calls import GoalStatusWatch
+        from swim_ros.calls import ActionClient, GoalStatusWatch
         self.session, self.interrupt = session, interrupt
         self.action = ActionClient(session.node, PerformManeuver, "perform_maneuver")
         self.status = GoalStatusWatch(session.node, "perform_maneuver")

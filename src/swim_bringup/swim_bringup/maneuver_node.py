@@ -11,7 +11,7 @@ import threading
 import time
 from typing import Any, Optional
 
-from rclpy.action import ActionClient, ActionServer, CancelResponse, GoalResponse
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
@@ -25,6 +25,7 @@ from swim_controller.supervisor import Tolerances
 from swim_model.vehicle import JOINT_NAMES_CONSTRAINED, JOINT_NAMES_UNCONSTRAINED
 from swim_model.velocity_filter import VelocityEstimator
 from swim_ros.calls import (
+    ActionClient,
     CallFailed,
     GoalStatusWatch,
     RetryPolicy,

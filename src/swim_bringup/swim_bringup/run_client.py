@@ -59,10 +59,11 @@ class RunClient:
             raise ValueError(f"RunClient records topics under their full names (/joint_states), not: "
                              f"{', '.join(relative)}")
         import rclpy
-        from rclpy.action import ActionClient
         from rclpy.executors import SingleThreadedExecutor
         from swim_interfaces.action import ExecutePlan
         from swim_interfaces.srv import RequestManeuver
+
+        from swim_ros.calls import ActionClient
         self.context = rclpy.Context()
         rclpy.init(context=self.context)
         self._closed = False

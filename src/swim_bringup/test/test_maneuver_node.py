@@ -35,12 +35,11 @@ class Operator:
 
     def __init__(self, context) -> None:
         import rclpy
-        from rclpy.action import ActionClient
         from rclpy.executors import SingleThreadedExecutor
         from sensor_msgs.msg import JointState
         from swim_interfaces.action import PerformManeuver
 
-        from swim_ros.calls import GoalStatusWatch
+        from swim_ros.calls import ActionClient, GoalStatusWatch
         self.node = rclpy.create_node("maneuver_test_operator", context=context)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
@@ -216,11 +215,11 @@ def test_a_goal_for_a_moving_vehicle_is_refused_and_a_cancel_reaches_the_tracker
 
 def test_a_plan_sent_to_the_tracker_preempts_the_maneuver_under_way(operator):
     """Preemption keeps execute_plan's meaning: a goal the tracker starts ends the maneuver under way, PREEMPTED."""
-    from rclpy.action import ActionClient
     from swim_interfaces.action import ExecutePlan, PerformManeuver
     from swim_interfaces.srv import RequestManeuver
 
     from swim_ros.calls import (
+        ActionClient,
         GoalStatusWatch,
         RetryPolicy,
         call_service,

@@ -178,11 +178,10 @@ class LockStepPlant:
 @pytest.fixture()
 def rig_loop(tracker, rclpy_context):
     import rclpy
-    from rclpy.action import ActionClient
     from rclpy.executors import SingleThreadedExecutor
     from swim_interfaces.action import ExecutePlan
 
-    from swim_ros.calls import GoalStatusWatch
+    from swim_ros.calls import ActionClient, GoalStatusWatch
     node = rclpy.create_node("tracker_test_plant", context=rclpy_context)
     executor = SingleThreadedExecutor(context=rclpy_context)
     executor.add_node(node)

@@ -77,12 +77,11 @@ def _plant_and_client(name, rclpy_context, circulatory_run):
     """(node, its executor, the lock-step CirculatoryPlant on it, the TrackingState messages received, an
     execute_plan action client) for one test."""
     import rclpy
-    from rclpy.action import ActionClient
     from rclpy.executors import SingleThreadedExecutor
     from swim_interfaces.action import ExecutePlan
     from swim_interfaces.msg import TrackingState
 
-    from swim_ros.calls import GoalStatusWatch
+    from swim_ros.calls import ActionClient, GoalStatusWatch
     from swim_ros.qos import per_period_subscription
 
     node = rclpy.create_node(name, context=rclpy_context)

@@ -18,7 +18,7 @@ from swim_ros.exports import lazy_exports
 
 #: the public names by module, each imported on first use
 __all__, __getattr__ = lazy_exports(__name__, {
-    "calls": ("CallFailed", "RetryPolicy", "call_service", "send_goal", "goal_result", "cancel_goal",
+    "calls": ("ActionClient", "CallFailed", "RetryPolicy", "call_service", "send_goal", "goal_result", "cancel_goal",
               "change_lifecycle_state"),
     "codecs": ("MessageError", "float_array", "stamp_of", "joint_state_arrays", "torque_from_command"),
     "domains": ("claim_ros_domain",),

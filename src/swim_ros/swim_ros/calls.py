@@ -12,6 +12,9 @@ first answer of any attempt is taken. A request is repeated as it is only when a
   without starting it again, and the action's status topic (transient local) tells whether that id was accepted;
 - a lifecycle transition is repeated only after reading the node's current state (it may have happened).
 
+Actions go through ``ActionClient``, rclpy's with a lock that keeps an executor thread from taking an answer
+before its request is filed.
+
 A call that finally fails raises ``CallFailed``, which says which service, how many tries and how long.
 All functions spin the given executor while they wait, so the caller's other callbacks keep running. A caller that
 runs inside a callback of a multi-threaded executor, whose other threads serve the answers, passes a
@@ -20,11 +23,13 @@ runs inside a callback of a multi-threaded executor, whose other threads serve t
 from __future__ import annotations
 
 import dataclasses
+import threading
 import time
 import uuid
 import weakref
 from typing import Any, Callable, Optional, Protocol, Sequence
 
+from rclpy.action import ActionClient as RclpyActionClient
 from rclpy.client import Client
 from rclpy.node import Node
 from rclpy.task import Future
@@ -222,6 +227,44 @@ def change_lifecycle_state(node: Node, executor: Spinner, target_node: str, tran
 
 
 # ----- actions ------------------------------------------------------------------------------------------------
+class ActionClient(RclpyActionClient):
+    """rclpy's ActionClient whose requests are filed before their answers can be taken.
+
+    rclpy 7.1.6 sends a goal, cancel or result request first and files the request's future after. An executor
+    thread that takes the answer in between either drops it as unexpected (the future never completes) or
+    completes the future before its done callback is set; that callback then runs in the caller and raises
+    ``ValueError: list.remove(x): x not in list``. One lock over sending and filing, and over taking answers, closes
+    both (ros2/rclpy#1123; upstream rclpy takes the same lock, ros2/rclpy#1519).
+    Constructed and used as rclpy's.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        # before rclpy's constructor, which hands the client to the executors that call take_data
+        self._request_lock = threading.Lock()
+        super().__init__(*args, **kwargs)
+
+    def take_data(self) -> Any:
+        """The answers, feedback and statuses ready, taken only while no request is being sent and filed."""
+        with self._request_lock:
+            return super().take_data()
+
+    def send_goal_async(self, goal: Any, feedback_callback: Optional[Callable[[Any], None]] = None,
+                        goal_uuid: Any = None) -> Future:
+        """The goal's acceptance future (as rclpy's send_goal_async), its request sent and filed under the lock."""
+        with self._request_lock:
+            return super().send_goal_async(goal, feedback_callback=feedback_callback, goal_uuid=goal_uuid)
+
+    def _cancel_goal_async(self, goal_handle: Any) -> Future:
+        """The cancel's answer future (as rclpy's), its request sent and filed under the lock."""
+        with self._request_lock:
+            return super()._cancel_goal_async(goal_handle)
+
+    def _get_result_async(self, goal_handle: Any) -> Future:
+        """The result's future (as rclpy's), its request sent and filed under the lock."""
+        with self._request_lock:
+            return super()._get_result_async(goal_handle)
+
+
 class GoalStatusWatch:
     """The latest goal statuses an action server published (its status topic is transient local)."""
 

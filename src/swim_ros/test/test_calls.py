@@ -16,6 +16,7 @@ from swim_ros.calls import (
     GoalStatusWatch,
     ParameterCalls,
     RetryPolicy,
+    ServedElsewhere,
     call_service,
     change_lifecycle_state,
     goal_result,
@@ -171,8 +172,10 @@ class _DroppingHandle:
 
 
 def test_a_goal_whose_acceptance_was_lost_is_started_once_and_followed(pair):
-    from rclpy.action import ActionClient, ActionServer
+    from rclpy.action import ActionServer
     from swim_interfaces.action import ExecutePlan
+
+    from swim_ros.calls import ActionClient
     server, client, executor = pair
     started = []
 
@@ -211,3 +214,84 @@ def test_served_elsewhere_waits_for_another_thread_within_its_poll():
     assert 0.1 <= time.monotonic() - start < 0.5
     with pytest.raises(ValueError, match="poll_s"):
         ServedElsewhere(poll_s=0.0)
+
+
+class _SlowFiling(dict):
+    """A table of pending action requests that pauses the caller's thread at one point of filing a request.
+
+    rclpy's ActionClient tests the table for the new sequence number right after sending the request
+    ("sent"), then stores the future ("filed") and only then sets its done callback: in either pause an
+    executor thread can take the request's answer.
+    """
+
+    def __init__(self, caller, where, pause_s):
+        super().__init__()
+        self.caller, self.where, self.pause_s = caller, where, pause_s
+
+    def _pause(self, where):
+        if self.where == where and threading.current_thread() is self.caller:
+            time.sleep(self.pause_s)
+
+    def __contains__(self, key):
+        self._pause("sent")
+        return super().__contains__(key)
+
+    def __setitem__(self, key, value):
+        super().__setitem__(key, value)
+        self._pause("filed")
+
+
+#: how long a request's filing is paused (s): long beside the server's answer on this host (milliseconds)
+FILING_PAUSE_S = 0.3
+
+
+@pytest.mark.parametrize("where", ["sent", "filed"])
+@pytest.mark.parametrize("request_table", ["_pending_goal_requests", "_pending_result_requests"])
+def test_an_answer_taken_while_its_request_is_filed_completes_the_request(rclpy_context, request_table, where):
+    """A goal's acceptance or its result, answered while the caller is between sending and filing the request,
+    completes the caller's future (rclpy's own client drops the answer, or raises ValueError from the result's
+    filing)."""
+    import rclpy
+    from rclpy.action import ActionServer
+    from rclpy.executors import MultiThreadedExecutor
+    from swim_interfaces.action import ExecutePlan
+
+    from swim_ros.calls import ActionClient, spin_until
+    server = rclpy.create_node("filing_test_server", context=rclpy_context)
+    client = rclpy.create_node("filing_test_client", context=rclpy_context)
+
+    def execute(goal_handle):
+        goal_handle.succeed()
+        return ExecutePlan.Result(duration_s=goal_handle.request.goal_tolerance_alpha_rad)
+    action_server = ActionServer(server, ExecutePlan, "execute_plan", execute)
+    action_client = ActionClient(client, ExecutePlan, "execute_plan")
+    executors = [SingleThreadedExecutor(context=rclpy_context), MultiThreadedExecutor(context=rclpy_context)]
+    executors[0].add_node(server)
+    executors[1].add_node(client)
+    threads = [threading.Thread(target=e.spin, daemon=True) for e in executors]
+    for thread in threads:
+        thread.start()
+    try:
+        assert action_client.wait_for_server(timeout_sec=20.0)
+        caller = threading.current_thread()
+        setattr(action_client, request_table, _SlowFiling(caller, where, FILING_PAUSE_S))
+        waiting = ServedElsewhere()
+        accepted = action_client.send_goal_async(ExecutePlan.Goal(goal_tolerance_alpha_rad=0.25))
+        assert spin_until(waiting, accepted.done, 10.0), "the goal's acceptance never completed its future"
+        handle = accepted.result()
+        assert handle.accepted
+        result = handle.get_result_async()
+        assert spin_until(waiting, result.done, 10.0), "the goal's result never completed its future"
+        assert result.result().result.duration_s == 0.25
+        # the requests' done callbacks (run by the executor after the futures complete) forget both
+        assert spin_until(waiting, lambda: action_client._futures == [], 5.0)
+        assert dict(action_client._pending_goal_requests) == dict(action_client._pending_result_requests) == {}
+    finally:
+        for executor in executors:
+            executor.shutdown()
+        for thread in threads:
+            thread.join(timeout=5.0)
+        action_server.destroy()
+        action_client.destroy()
+        server.destroy_node()
+        client.destroy_node()

@@ -32,7 +32,6 @@ from foxglove.messages import (
     Vector3,
 )
 from foxglove.websocket import ServerListener
-from rclpy.action import ActionClient
 from rclpy.action.client import qos_profile_action_status_default
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, QoSReliabilityPolicy
@@ -46,6 +45,7 @@ from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import Marker, MarkerArray
 
 from swim_ros.calls import (
+    ActionClient,
     CallFailed,
     GoalStatusWatch,
     ServedElsewhere,
