@@ -101,8 +101,7 @@ class FlowParameters:
     suction_cap_exponent : int
         Order of the smooth saturation, an even integer >= 2.
     stall_angle_rad : float
-        Three-quarter-chord incidence (quasi-steady: the pitch rate's share in, no Wagner lag) where attached and
-        separated flow weigh equally, rad.
+        Lagged effective incidence where attached and separated flow weigh equally, rad.
     stall_width_rad : float
         Half-width of the attached-to-separated transition, rad.
     flat_plate_normal_force_coefficient : float
@@ -128,15 +127,12 @@ class FlowParameters:
     # the edge's critical leading-edge suction parameter (swim_model.leading_edge: Ramesh et al., JFM 751, 2014)
     suction_cap_exponent: int = SUCTION_CAP_EXPONENT
     # assumed: the order of the smooth saturation (swim_model.leading_edge)
-    stall_angle_rad: float = math.radians(28.0)
-    # set on Anderson et al.'s 90 deg series only (docs/flow_model.md, Sec. 5): the three-quarter-chord incidence
-    # where attached and separated flow weigh equally. Whole degrees from 26 to 30 give the reduced model's thrust
-    # at St 0.41-0.50 -8 to +7 %, -2 to +10 % and +5 to +14 %; 28 is the one inside 10 % at all three. It is a
-    # dynamic-stall delay far above the section's static stall (Sheldahl & Klimas 1981 at Re 4e4: 6-7 deg), of
-    # the order of the 20-25 deg lift peaks of oscillating NACA 0012 sections (McCroskey, AGARD-CP-227, 1981)
+    stall_angle_rad: float = math.radians(25.0)
+    # assumed: angle of the lagged effective incidence where attached and separated flow weigh equally; of the order
+    # of the dynamic-stall lift peak of oscillating NACA 0012 sections (McCroskey, AGARD-CP-227, 1981: 20-25 deg
+    # at reduced frequencies 0.05-0.15), above the 10-14 deg static stall
     stall_width_rad: float = math.radians(2.5)
-    # assumed: half-width of the transition, in cos(incidence) times sin(stall_angle_rad); the attached weight is
-    # 0.996 at 20 deg, 0.975 at 23 deg, 0.111 at 30.5 deg and 0.013 at 33 deg
+    # assumed: half-width of the transition; the attached weight is 0.997 at 20 deg and 0.003 at 30 deg
     flat_plate_normal_force_coefficient: float = 1.98
     # Hoerner, Fluid-Dynamic Drag (1965), Ch. 3: two-dimensional flat plate normal to the flow, C_D = 1.98
     # (White, Fluid Mechanics, Table 7.2: 2.0); C_N = C_N90 sin(alpha) past stall (Fage & Johansen, Proc. R. Soc.
@@ -332,11 +328,10 @@ class CirculatoryFlow:
         munk = (self.added_mass.m11 - self.added_mass.m22) * u * v
         moment_separated = pressure_centre * normal_separated - munk
 
-        # transition on the three-quarter-chord incidence, unlagged: where the pitch rate adds to the heave's
-        # angle, which sorts the tank's separated points (docs/flow_model.md, Sec. 5)
-        cos_incidence = u / speed_34
+        # transition on the lagged effective incidence
+        cos_effective = u / ca.sqrt(u * u + effective * effective + eps2)
         width = math.sin(p.stall_angle_rad) * p.stall_width_rad
-        weight = 0.5 * (1.0 + ca.tanh((cos_incidence - math.cos(p.stall_angle_rad)) / width))
+        weight = 0.5 * (1.0 + ca.tanh((cos_effective - math.cos(p.stall_angle_rad)) / width))
 
         # on a thin section every chordwise pressure force is leading-edge suction, so the ideal model's
         # velocity-dependent chordwise force (eq. 46: m22 Omega V + m26 Omega^2, the non-circulatory part of the

@@ -7,8 +7,7 @@ h0/c = 0.75, nominal angle of attack alpha0 = 15 deg, pitch leading heave by 90 
 the Joukowski section of the same chord and 12 % thickness; the water is fresh water at 20 C (998.2 kg/m^3,
 1.0e-6 m^2/s), so the towing speed is Re nu / c = 0.4 m/s; the profile drag is the laminar flat plate's friction on
 both sides times Hoerner's thickness factor at Re 40 000 (flow.laminar_profile_drag_coefficient: 0.0166), for both
-models. One coefficient is set on this series: the reduced model's stall angle (flow.FlowParameters.stall_angle_rad,
-on the three-quarter-chord incidence); the series the repository does not hold judge it.
+models. No coefficient is fitted to this series.
 
 Section data (data/naca0012_static_polar_low_re.csv, copied with its source header): Sheldahl & Klimas, Sandia
 SAND80-2114 (1981), the NACA 0012's static lift and drag at Re 1e4-8e4, 0-25 deg. It checks the laminar profile
@@ -16,7 +15,8 @@ drag at zero incidence, the attached flow's normal force below stall and the fla
 
 Both models are held at all 20 points of the tank's file (St 0.09-0.50). Known disagreements, marked xfail (strict,
 so a change that removes one is seen): at the lowest Strouhal number (0.09) both models' thrust is about 50 % above
-the tank's; the wake's efficiency is 0.09-0.16 below the tank's from St = 0.31 on. Where the models' power goes
+the tank's; at the two highest (0.46, 0.50) the reduced model's thrust is 21 % and 31 % above (the vortex wake's
+8 % and 17 %); the wake's efficiency is 0.09-0.16 below the tank's from St = 0.31 on. Where the models' power goes
 and what the separation indicators say about the misses: docs/flow_model.md, "The separated regime".
 """
 import functools
@@ -164,7 +164,7 @@ def test_reduced_model_agrees_with_the_wake_at_small_angles(k):
 LOW_STROUHAL = "attached-flow models overpredict the thrust at the lowest Strouhal number (module docstring)"
 HIGH_STROUHAL = "attached-flow models overpredict the thrust at the highest Strouhal numbers (module docstring)"
 WAKE_POWER = "the inviscid vortex wake needs more power than the tank's foil at large amplitude (module docstring)"
-REDUCED_THRUST_MISSES = {0.09: LOW_STROUHAL}
+REDUCED_THRUST_MISSES = {0.09: LOW_STROUHAL, 0.46: HIGH_STROUHAL, 0.5: HIGH_STROUHAL}
 WAKE_THRUST_MISSES = {0.09: LOW_STROUHAL}
 WAKE_EFFICIENCY_MISSES = {st: WAKE_POWER for st in (0.31, 0.36, 0.41, 0.46, 0.5)}
 
@@ -177,7 +177,7 @@ def known(points: list[tuple[float, float]], misses: dict[float, str]) -> list:
 
 @pytest.mark.parametrize("strouhal, measured", known(MEASURED["thrust_coefficient"], REDUCED_THRUST_MISSES))
 def test_reduced_model_thrust_against_the_tank(strouhal, measured):
-    """Thrust coefficient within 20 % of the tank's (measured: +54, +10, +7, -2, +0, +6, +0, -2, +1, +10 %)."""
+    """Thrust coefficient within 20 % of the tank's (measured: +54, +10, +7, -2, +0, +6, +4, +13, +21, +31 %)."""
     assert tank_run("circulatory", strouhal).thrust_coefficient == pytest.approx(measured, rel=0.20)
 
 
@@ -223,9 +223,7 @@ def test_the_separation_indicators_single_out_the_misses_only_against_the_free_s
     the low end and lowest at the high end, so no critical value separates the high-St misses alone. Referred to the
     towing speed, as Ramesh et al. (JFM 751, 2014) refer theirs to the free stream, it is higher at both ends than
     anywhere between; the quasi-steady incidence at the three-quarter chord rises with St and passes 32 deg only
-    at the high end. The reduced model's stall, judged on that incidence, barely acts where the models agree
-    (attached weight at least 0.97 at St 0.22-0.31) and takes the peaks of the cycle at St 0.50 (docs/flow_model.md,
-    "The separated regime")."""
+    at the high end, where the reduced model's stall acts (docs/flow_model.md, "The separated regime")."""
     runs = {round(st, 2): tank_run("circulatory", st) for st, _ in MEASURED["thrust_coefficient"]}
     agree = [runs[st] for st in (0.22, 0.27, 0.31)]
     ends = [runs[0.09], runs[0.46], runs[0.5]]
@@ -238,7 +236,7 @@ def test_the_separation_indicators_single_out_the_misses_only_against_the_free_s
     incidence_deg = [math.degrees(r.peak_three_quarter_chord_incidence_rad) for r in runs.values()]
     assert np.all(np.diff(incidence_deg) > 0.0)
     assert incidence_deg[-3] < 32.0 < incidence_deg[-2]
-    assert min(r.min_attached_weight for r in agree) > 0.95 and runs[0.5].min_attached_weight < 0.1
+    assert min(r.min_attached_weight for r in agree) > 0.99 and runs[0.5].min_attached_weight < 0.9
     # the wake's attached flow reads the same
     wake_ends = [tank_run("wake", st) for st in (0.0898, 0.4955)]
     wake_agree = tank_run("wake", 0.2675)
@@ -250,7 +248,7 @@ def test_the_models_power_is_the_heave_drives_and_the_added_mass_puts_in_none():
 
     The added-mass force's mean power is zero (it is the rate of a periodic kinetic energy) to round-off; the heave
     drive's power -F_Y h' (computed here from the lift and the kinematics) is OscillatingFoilResult.heave_power_w;
-    the reduced model's pitch drive puts in at most 5 % of the total at 90 deg, and the vortex wake's, at St 0.46
+    the reduced model's pitch drive puts in at most 3 % of the total at 90 deg, and the vortex wake's, at St 0.46
     and 0.50, 10-12 %: the wake's excess power over the reduced model's there is mostly its pitch moment's."""
     for st in (0.2214, 0.4955):
         frequency = st * SPEED_M_S / (2.0 * HEAVE_M)
@@ -265,7 +263,7 @@ def test_the_models_power_is_the_heave_drives_and_the_added_mass_puts_in_none():
             assert abs(np.mean(np.sum(added * velocity, axis=1))) < 1e-12 * run.mean_power_w
         pitch_share = {model: 1.0 - np.mean(tank_run(model, st).heave_power_w) / tank_run(model, st).mean_power_w
                        for model in ("circulatory", "wake")}
-        assert abs(pitch_share["circulatory"]) < 0.05
+        assert abs(pitch_share["circulatory"]) < 0.03
         if st > 0.45:
             assert 0.09 < pitch_share["wake"] < 0.15
             reduced, wake = tank_run("circulatory", st), tank_run("wake", st)

@@ -227,28 +227,6 @@ def test_foil_broadside_sees_the_flat_plates_normal_force():
     assert peak < slope * math.sin(flow.params.stall_angle_rad + 2 * flow.params.stall_width_rad)
 
 
-def test_stall_is_judged_on_the_three_quarter_chord_incidence_without_lag():
-    """The attached weight follows atan(Q/U) at the three-quarter chord, whatever the lag states hold: a pitch rate
-    that lifts the incidence there past the stall angle stalls the foil at once, with the lags still at zero (the
-    lagged normal velocity half of Q, an incidence of 15-18 deg that would weigh attached); the same incidence reached
-    by a steady heave, lags at rest, weighs the same. Four widths below the stall angle the weight is 1 within 2e-3,
-    four above it 0 within 2e-3, and 0.5 at the stall angle itself."""
-    flow = CirculatoryFlow(RIG_FOIL, RHO, INVISCID)
-    p = flow.params
-    x_34 = flow.three_quarter_chord_x_m
-    for degrees, expected in ((p.stall_angle_rad - 4 * p.stall_width_rad, 1.0),
-                              (p.stall_angle_rad, 0.5), (p.stall_angle_rad + 4 * p.stall_width_rad, 0.0)):
-        normal = SPEED_M_S * math.tan(degrees)
-        pitching = (SPEED_M_S, 0.0, -normal / x_34)       # Q = -(V + Omega x_34) from the pitch rate alone
-        heaving = (SPEED_M_S, -normal, 0.0)               # the same Q from the heave alone
-        at_rest_lags = flow.evaluate(pitching, (0.0, 0.0))
-        assert at_rest_lags["Q"] == pytest.approx(normal, rel=1e-12)
-        assert at_rest_lags["Q_eff"] == pytest.approx(0.5 * normal, rel=1e-12)   # 1 - A1 - A2 of it
-        steady = flow.evaluate(heaving, flow.steady_lag(heaving))
-        assert at_rest_lags["attached_weight"] == pytest.approx(expected, abs=2e-3)
-        assert steady["attached_weight"] == pytest.approx(at_rest_lags["attached_weight"], abs=1e-12)
-
-
 def towed_thrust(alpha0_deg: float, params: FlowParameters, strouhal: float) -> tuple[float, float]:
     """(C_T, peak angle of attack at the foil frame's origin) of the rig's foil, Anderson et al.'s kinematics."""
     chord = RIG_FOIL.chord_m
@@ -264,9 +242,8 @@ def towed_thrust(alpha0_deg: float, params: FlowParameters, strouhal: float) -> 
 @pytest.mark.parametrize("strouhal", [0.3, 0.5])
 def test_thrust_stops_growing_past_stall(strouhal):
     """Heave 0.75 c, pitch leading by 90 deg, the nominal angle of attack raised by lowering the pitch amplitude:
-    thrust peaks with the angle of attack at 20-30 deg (measured 20.9 and 27.8 deg at St 0.3 and 0.5, the
-    three-quarter-chord incidence there 23.8 and 37.7 deg) and falls past 40 deg; the same model with stall and the
-    suction cap removed keeps gaining thrust (so the test would see a model without stall)."""
+    thrust peaks with the angle of attack at 25-40 deg and falls after; the same model with stall and the suction
+    cap removed keeps gaining thrust (so the test would see a model without stall)."""
     attached_only = FlowParameters(stall_angle_rad=math.radians(85.0), stall_width_rad=math.radians(1.0),
                                    critical_leading_edge_suction=1e3)
     nominal = [5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0, 45.0, 50.0]
@@ -274,7 +251,7 @@ def test_thrust_stops_growing_past_stall(strouhal):
     thrust = np.array([r[0] for r in runs])
     peak_angle = np.array([r[1] for r in runs])
     best = int(np.argmax(thrust))
-    assert 20.0 <= peak_angle[best] <= 30.0, (peak_angle, thrust)
+    assert 25.0 <= peak_angle[best] <= 40.0, (peak_angle, thrust)
     assert np.all(thrust[peak_angle > 40.0] < thrust[best])
     attached = [towed_thrust(a, attached_only, strouhal)[0] for a in (nominal[best], nominal[-1])]
     assert attached[1] > 1.3 * attached[0]

@@ -2,8 +2,7 @@
 
 Layout of a library directory::
 
-    manifest.json              format version, rig digest, model version, flow model (and the digest of the
-                               circulatory flow's coefficients, FlowParameters.digest), creation time, solver
+    manifest.json              format version, rig digest, model version, flow model, creation time, solver
                                settings, the LQ weights the stored gains were computed with, and per
                                primitive: its spec, index J, effort, solver status, solve time, whether it has
                                gains, a cruise's mean speed, the array file's name and SHA-256
@@ -21,9 +20,7 @@ stored D(t) (an ideal-flow one, or any of a format-3 library) leaves the tracker
 
 Loading refuses, with a LibraryError naming the cause: a missing or unparsable manifest, another format
 version, a library built for other rig parameters, another model version or another flow model than the one
-asked for, a circulatory library planned with other flow coefficients than swim_model's FlowParameters (its
-stall angle, lags or suction cap), and an array file that is missing, truncated or altered (its SHA-256 differs
-from the manifest's).
+asked for, and an array file that is missing, truncated or altered (its SHA-256 differs from the manifest's).
 """
 from __future__ import annotations
 
@@ -42,7 +39,7 @@ import numpy as np
 
 from swim_control.riccati import LqrWeights, TrackingGains
 from swim_model import MODEL_VERSION, RigParameters
-from swim_model.flow import FLOW_MODELS, FlowParameters
+from swim_model.flow import FLOW_MODELS
 from swim_planner.disturbance import wake_record
 from swim_planner.errors import LibraryError
 from swim_planner.primitives import Primitive, PrimitiveSpec, PrimitiveType, SolverSettings, cruise_mean_speed_m_s
@@ -81,38 +78,6 @@ def check_flow_model(flow_model: str) -> str:
     if flow_model not in FLOW_MODELS:
         raise LibraryError(f"unknown flow model {flow_model!r}: one of {', '.join(FLOW_MODELS)}")
     return flow_model
-
-
-def flow_parameters_digest(flow_model: str) -> Optional[str]:
-    """The digest of the flow coefficients a library of flow_model is planned with.
-
-    Parameters
-    ----------
-    flow_model : str
-        One of swim_model's FLOW_MODELS.
-
-    Returns
-    -------
-    str or None
-        The circulatory flow's ``FlowParameters().digest()``; None for the ideal flow, which has no coefficients.
-    """
-    return FlowParameters().digest() if flow_model == "circulatory" else None
-
-
-def _check_built_for(directory: Path, manifest: dict, rig: RigParameters, flow_model: str) -> None:
-    """LibraryError unless the manifest's library was built for rig, this swim_model and its flow coefficients."""
-    if manifest.get("rig_digest") != rig.digest():
-        raise LibraryError(f"{directory} was built for other rig parameters (digest "
-                           f"{str(manifest.get('rig_digest'))[:12]}..., this rig {rig.digest()[:12]}...); "
-                           "rebuild it for this rig")
-    if manifest.get("model_version") != MODEL_VERSION:
-        raise LibraryError(f"{directory} was built with swim_model version {manifest.get('model_version')!r}, "
-                           f"this is version {MODEL_VERSION}; rebuild it")
-    expected_flow_digest = flow_parameters_digest(flow_model)
-    if expected_flow_digest is not None and manifest.get("flow_parameters_digest") != expected_flow_digest:
-        raise LibraryError(f"{directory} was planned with other {flow_model} flow coefficients (digest "
-                           f"{str(manifest.get('flow_parameters_digest'))[:12]}..., this swim_model's "
-                           f"{expected_flow_digest[:12]}...); rebuild it")
 
 
 def _file_name(primitive_id: str) -> str:
@@ -362,7 +327,6 @@ class PrimitiveLibrary:
             "rig_digest": self.rig.digest(),
             "model_version": MODEL_VERSION,
             "flow_model": self.flow_model,
-            "flow_parameters_digest": flow_parameters_digest(self.flow_model),
             "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
             "solver": dataclasses.asdict(self.solver),
             "lqr_weights": dataclasses.asdict(self.lqr_weights),
@@ -393,8 +357,8 @@ class PrimitiveLibrary:
         Raises
         ------
         LibraryError
-            For a missing or unparsable manifest, another format version, another rig, model version, flow
-            model or flow coefficients, or unknown settings (module docstring).
+            For a missing or unparsable manifest, another format version, another rig, model version or flow
+            model, or unknown settings (module docstring).
         """
         directory = Path(path)
         try:
@@ -414,7 +378,13 @@ class PrimitiveLibrary:
         if flow_model is not None and stored_flow != check_flow_model(flow_model):
             raise LibraryError(f"{directory} holds primitives of the {stored_flow} flow model, not the {flow_model} "
                                f"one asked for; use a library built with `swim-primitives build --flow {flow_model}`")
-        _check_built_for(directory, manifest, rig, stored_flow)
+        if manifest.get("rig_digest") != rig.digest():
+            raise LibraryError(f"{directory} was built for other rig parameters (digest "
+                               f"{str(manifest.get('rig_digest'))[:12]}..., this rig {rig.digest()[:12]}...); "
+                               "rebuild it for this rig")
+        if manifest.get("model_version") != MODEL_VERSION:
+            raise LibraryError(f"{directory} was built with swim_model version {manifest.get('model_version')!r}, "
+                               f"this is version {MODEL_VERSION}; rebuild it")
         try:
             # a manifest without a derivatives setting (the shipped library's) was solved with CasADi's own AD
             solver = SolverSettings(**{"derivatives": "casadi", **manifest.get("solver", {})})

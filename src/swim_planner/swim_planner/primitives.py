@@ -71,9 +71,8 @@ class PlanningLimits:
     # at the collocation points outside angle_of_attack_free_from_rest_s. A NACA 0012-like section stalls
     # statically near 12-15 deg; oscillating, its lift peaks later, at 20-25 deg (McCroskey, AGARD-CP-227,
     # 1981). 20 deg keeps the plans at the attached end
-    # of swim_model.flow's stall transition (stall_angle_rad 28 deg on the three-quarter-chord incidence, width
-    # 2.5 deg: attached weight 0.996 at 20 deg), where the reduced model is the validated thin-aerofoil theory and
-    # not its flat-plate fallback
+    # of swim_model.flow's stall transition (stall_angle_rad 25 deg, width 2.5 deg: attached weight 0.997 at
+    # 20 deg), where the reduced model is the validated thin-aerofoil theory and not its flat-plate fallback
     angle_of_attack_free_from_rest_s: float = 0.2
     # assumed, circulatory flow only: the angle-of-attack bound is left out within this time of rest (an
     # accelerate's start, a decelerate's end). From rest no foil motion starts inside the bound: with p_alpha

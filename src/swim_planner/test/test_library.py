@@ -8,7 +8,6 @@ import pytest
 
 from swim_planner.errors import LibraryError
 from swim_planner.library import FORMAT_VERSION, MANIFEST, PrimitiveLibrary
-from swim_planner.paths import default_library_path
 
 SOME = ["constrained/cruise/E0.05", "constrained/accelerate/E0.05"]
 
@@ -66,24 +65,6 @@ def test_bad_manifest_is_refused(rig, copy, change, message):
     _edit_manifest(copy, change)
     with pytest.raises(LibraryError, match=message):
         PrimitiveLibrary.load(copy, rig)
-
-
-def test_a_circulatory_library_of_other_flow_coefficients_is_refused(circulatory_library, rig, tmp_path):
-    """A circulatory library records the digest of the FlowParameters it was planned with; one planned with other
-    coefficients (another stall angle, say), or that records none, is refused. An ideal library records none and
-    needs none."""
-    from swim_model.flow import FlowParameters
-    path = tmp_path / "circulatory"
-    new = PrimitiveLibrary.create_or_open(path, rig, flow_model="circulatory")
-    new.add(circulatory_library.get("constrained/cruise/E0.05"))
-    assert json.loads((path / MANIFEST).read_text())["flow_parameters_digest"] == FlowParameters().digest()
-    assert PrimitiveLibrary.load(path, rig, "circulatory").ids() == ["constrained/cruise/E0.05"]
-    other = FlowParameters(stall_angle_rad=FlowParameters().stall_angle_rad + 0.01).digest()
-    for recorded in (other, None):
-        _edit_manifest(path, lambda m: m.__setitem__("flow_parameters_digest", recorded))
-        with pytest.raises(LibraryError, match="other circulatory flow coefficients"):
-            PrimitiveLibrary.load(path, rig, "circulatory")
-    assert PrimitiveLibrary.load(default_library_path(), rig).flow_model == "ideal"
 
 
 def test_truncated_array_file_is_refused(rig, copy):
