@@ -21,6 +21,7 @@ from swim_model import RigParameters, StateError, VehicleModel, codegen
 from swim_model.disturbances import GRAVITY_M_S2, Disturbances
 from swim_model.flow import FLOWS
 from swim_model.limits import HardLimits
+from swim_model.wake import compile_kernels
 from swim_model.wake_coupling import WakeCoupling, WakeCouplingParameters, separation_drag
 
 Array = npt.NDArray[np.float64]
@@ -725,7 +726,8 @@ def make_plant(settings: PlantSettings, rig: Optional[RigParameters], hard_limit
     Returns
     -------
     Plant
-        The plant, at rest at the origin.
+        The plant, at rest at the origin; in flow "wake" with the wake's compiled kernels loaded (numba's cache, a
+        second or more on a loaded host), so that its first periods do not load them.
 
     Raises
     ------
@@ -736,5 +738,6 @@ def make_plant(settings: PlantSettings, rig: Optional[RigParameters], hard_limit
     wake = None
     if settings.flow == "wake":
         wake = WakeCoupling(model, wake_parameters or WakeCouplingParameters())
+        compile_kernels()
     return Plant(model, settings.disturbances, sample_period_s, settings.substeps, seed, wake,
                  hard_limits_rad if settings.hard_stops else None, flow=settings.flow)

@@ -25,7 +25,6 @@ from swim_model import StateError, SwimModelError, load_rig
 from swim_model.disturbances import Disturbances
 from swim_model.flow import FLOWS
 from swim_model.plant import Plant, PlantSettings, SimulationError, make_plant
-from swim_model.wake import compile_kernels
 from swim_ros.codecs import MessageError, float_array, joint_state_arrays, stamp_of, torque_from_command
 from swim_ros.entry import run_node
 from swim_ros.parameters import NodeSettings, ParameterSpec, ParameterValue, finite, one_of
@@ -175,6 +174,8 @@ class SimNode(Node):
         rig = load_rig(settings.rig_path or None)
         flow = settings.flow
         wake_parameters = parameters_from_values(settings.wake) if flow == "wake" else None
+        # the plant's integrator and a wake's kernels load here, before the first state, which tells a controller
+        # and a run's client that the loop is up
         self.plant = make_plant(PlantSettings(flow, settings.substeps, settings.disturbances), rig,
                                 rig.hard_limits_rad, settings.constrained, settings.lane_radius_m or None,
                                 settings.sample_period_s, settings.seed, wake_parameters)
@@ -215,11 +216,6 @@ class SimNode(Node):
             self.create_timer(0.25 * settings.resend_after_s, self._resend)
             if self._hold_enabled:
                 self.create_timer(self.plant.sample_period_s, self._republish_held_state)
-        if self.plant.wake is not None:
-            # the first state tells a controller and a run's client that the loop is up: the wake's kernels (a
-            # second or more on a loaded host) are loaded before it, not in the first period's preparation, which
-            # a goal sent on that state would meet as a stalled plant
-            compile_kernels()
         self._publish_state()
         self._prepare_period()
         self.get_logger().info(f"simulating the {'constrained' if model.constrained else 'free'} vehicle, "

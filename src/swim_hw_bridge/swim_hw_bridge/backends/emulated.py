@@ -35,7 +35,6 @@ from swim_hw_bridge.conversions import BridgeConfig
 from swim_hw_bridge.device import CounterSample, Device, DeviceError
 from swim_model import SwimModelError
 from swim_model.plant import Plant, PlantSettings, SimulationError, make_plant
-from swim_model.wake import compile_kernels
 
 DEFAULT_CHARGE_PUMP_TIMEOUT_S = 0.05   # assumed: about 6 periods of 8 ms
 #: options that are the plant's settings (PlantSettings), refused as the device's
@@ -82,13 +81,9 @@ class EmulatedDevice(Device):
     def open(self) -> None:
         """Build the plant (once) and load its compiled code; outputs at zero, amplifiers disabled."""
         if self.plant is None:
-            # compiles and loads the plant's integrator now, not in the first period of the loop
+            # compiles and loads the plant's integrator (and a wake's kernels) now, not in the loop's periods
             self.plant = make_plant(self.plant_settings, self.bridge.rig, self.bridge.rig.hard_limits_rad)
             self.plant.reset(self.home, np.zeros(self.plant.model.nq))
-            if self.plant.wake is not None:
-                # load the wake's compiled kernels now (numba's import and its cache, about 0.3-0.5 s), not in the
-                # I/O loop's periods: shedding, merging (once the wake is full) and the Kelvin statistics
-                compile_kernels()
         self.is_open = True
         self.commanded_currents_a = (0.0, 0.0)
         self.enable_requested = False
