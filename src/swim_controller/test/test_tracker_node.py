@@ -275,8 +275,12 @@ def test_a_new_goal_preempts_and_cancel_holds(rig_loop, plan_message):
 #: a state's command while the model of another lane is built: milliseconds (the build is on its own thread: the
 #: build's thread held the GIL at most 10 ms at a time, measured beside a 1 ms sleep loop); on the control thread a
 #: state would wait for the whole build (2 s and more: NEW_LANES_M are compiled from nothing). 0.5 s leaves room for
-#: a loaded host's scheduling: a fresh-clone CI run saw one state wait 0.227 s
+#: a quiet host's scheduling: a fresh-clone CI run saw one state wait 0.227 s
 SLOWEST_ANSWER_S = 0.5
+#: a loaded host delays single answers by more (1.3 s measured beside two experiment jobs), and the build by as
+#: much; a state that waited for the build itself would take nearly the whole wait, so an answer slower than
+#: SLOWEST_ANSWER_S still passes while it is under this share of the wait for the model
+BLOCKED_SHARE_OF_WAIT = 0.5
 #: the build of another lane's ideal model: about 2-3 s compiling on a quiet 2-core host; 60 s for a loaded one
 MODEL_BUILD_TIMEOUT_S = 60.0
 #: lanes no other test of this module plans on (the rig's lanes are 0.43 and 0.48 m; the tank's radius 0.875 m), so
@@ -296,7 +300,7 @@ def on_lane(plan_message, lane_radius_m):
 
 def test_a_new_lane_model_is_built_while_the_plan_under_way_is_tracked(rig_loop, plan_message):
     """A plan on a lane the node has no model for starts once its model is built (preempting the plan under way,
-    unless that one ended first); meanwhile every state is answered within milliseconds."""
+    unless that one ended first); meanwhile every state is answered, none waiting for the build."""
     from swim_interfaces.action import ExecutePlan
     plant, client = rig_loop
     _, first = send(plant, client, plan_message)
@@ -304,7 +308,8 @@ def test_a_new_lane_model_is_built_while_the_plan_under_way_is_tracked(rig_loop,
     feedback = []
     second_handle, second = send(plant, client, on_lane(plan_message, NEW_LANES_M[0]), feedback.append)
     answers_s = []
-    deadline = time.monotonic() + MODEL_BUILD_TIMEOUT_S
+    waiting_since = time.monotonic()
+    deadline = waiting_since + MODEL_BUILD_TIMEOUT_S
     def tracking() -> bool:
         return any(f.feedback.phase == ExecutePlan.Feedback.PHASE_TRACKING for f in feedback)
     while not tracking():   # the new lane's plan under way
@@ -313,7 +318,10 @@ def test_a_new_lane_model_is_built_while_the_plan_under_way_is_tracked(rig_loop,
         answers_s.append(time.monotonic() - start)
         assert start < deadline and not second.done(), "the plan on the new lane never started"
     assert run_until(plant, first, 0).error_code in (ExecutePlan.Result.PREEMPTED, ExecutePlan.Result.SUCCESSFUL)
-    assert max(answers_s) < SLOWEST_ANSWER_S, f"a state waited {max(answers_s):.3f} s during the build"
+    wait_s = time.monotonic() - waiting_since
+    slowest_s = max(answers_s)
+    assert slowest_s < max(SLOWEST_ANSWER_S, BLOCKED_SHARE_OF_WAIT * wait_s), (
+        f"a state waited {slowest_s:.3f} s of the {wait_s:.3f} s the model took ({len(answers_s)} states answered)")
     # the wait was announced first, once, with no tracking state yet
     assert feedback[0].feedback.phase == ExecutePlan.Feedback.PHASE_WAITING_FOR_MODEL
     assert feedback[0].feedback.state.plan_time_s == 0.0 and not feedback[0].feedback.state.joint_names
