@@ -2,20 +2,14 @@
 backend, autostart: swim_model's free vehicle in real time), planner_node and tracker_node, runs a short free
 lane-keeping maneuver, records and analyses it. The report is checked against bounds and against the bridge's own
 joint_states read back from the bag."""
-import shutil
-from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 from conftest import run_demo
 
 PERIOD_S = 0.008
 LANE_M = 0.43   # the emulated rig's home lane (swim_hw_bridge config: rail_home_position)
 SHORT_FREE = ["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05"]   # 3 s + 1 s
-#: other builds and tests share this 2-core host (both cores busy) and can stall a process for longer than the
-#: tracker's 200 ms stale-state limit (config/tracker.yaml; 0.6 s seen), which would abort the run: 2 s here
-STALE_AFTER_S = 2.0
 #: the demo's --timeout (wall time of the maneuver's execution): the bridge runs in real time, 4 s; 60 s fails a
 #: stalled loop long before the whole process's DEMO_TIMEOUT_S
 MANEUVER_TIMEOUT_S = 60
@@ -23,17 +17,9 @@ MANEUVER_TIMEOUT_S = 60
 
 @pytest.fixture(scope="module")
 def bridge_run(ros_domain, tmp_path_factory):
-    from swim_bringup.system import config_dir
+    from swim_bringup.testing import shared_host_config
     work = tmp_path_factory.mktemp("bridge_demo")
-    config = Path(shutil.copytree(config_dir("paper"), work / "config"))
-    tracker = yaml.safe_load((config / "tracker.yaml").read_text())
-    tracker["tracker_node"]["ros__parameters"]["stale_after_periods"] = round(STALE_AFTER_S / PERIOD_S)
-    (config / "tracker.yaml").write_text(yaml.safe_dump(tracker))
-    # likewise the bridge's overrun latch (3 late periods in a row: right for a machine that runs only the rig;
-    # test_bridge_node checks the latch itself)
-    bridge = yaml.safe_load((config / "bridge.yaml").read_text())
-    bridge["bridge_node"]["ros__parameters"]["overrun_limit"] = 50
-    (config / "bridge.yaml").write_text(yaml.safe_dump(bridge))
+    config = shared_host_config("paper", work)   # the bridge's overrun latch and the tracker's stale limit raised
     stdout = run_demo(work / "run", "--plant", "bridge", "--primitives", *SHORT_FREE, "--repeats", "1", "1",
                       "--config", str(config), "--timeout", str(MANEUVER_TIMEOUT_S),
                       "--goal-tolerance-r", "0.05")   # bound below

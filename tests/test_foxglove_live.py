@@ -1,6 +1,7 @@
 """foxglove_node live, as the Foxglove app meets it: `swim-bringup bridge --foxglove PORT` (the emulated rig in
-real time, the planner, the tracker, the maneuver server and the visualization nodes) in a ROS domain of the
-test's, and a client speaking the Foxglove WebSocket protocol (swim_ros.testing.foxglove_client).
+real time, the planner, the tracker, the maneuver server and the visualization nodes; the latches a shared host
+needs raised, swim_bringup.testing) in a ROS domain of the test's, and a client speaking the Foxglove WebSocket
+protocol (swim_ros.testing.foxglove_client).
 
 It checks the server's info and advertised channels with their schemas; that the messages a client receives are the
 ones DDS carried (joint_states byte for byte, /tf transform for transform, stamps included); that the maneuver
@@ -111,14 +112,21 @@ class Observer:
 
 @pytest.fixture(scope="module")
 def live(ros_domain, tmp_path_factory):  # noqa: F811 - the session's domain fixture (conftest)
-    """The bridge set with foxglove_node, its client and the test's observer, up and swimming at rest."""
+    """The bridge set with foxglove_node, its client and the test's observer, up and swimming at rest.
+
+    The realistic pipeline's parameter files with the bridge's overrun latch and the tracker's stale limit raised
+    for a shared host (swim_bringup.testing): the host's stalls latched OVERRUN mid-maneuver with the shipped latch.
+    """
     from ament_index_python.packages import get_package_prefix
+
+    from swim_bringup.testing import shared_host_config
     folder = tmp_path_factory.mktemp("foxglove_live")
+    config = shared_host_config("realistic", folder)
     port = free_port()
     executable = Path(get_package_prefix("swim_bringup")) / "lib" / "swim_bringup" / "swim-bringup"
     with open(folder / "swim-bringup.out", "w") as output:
-        bringup = start_child([str(executable), "bridge", "--foxglove", str(port), "--log-dir", str(folder / "logs")],
-                              stdout=output, stderr=output)
+        bringup = start_child([str(executable), "bridge", "--foxglove", str(port), "--config", str(config),
+                               "--log-dir", str(folder / "logs")], stdout=output, stderr=output)
     try:
         with new_rclpy_context() as context:
             observer = Observer(context)

@@ -15,7 +15,6 @@ once; the tests then check what the fixture kept.
 import contextlib
 import math
 import os
-import shutil
 import signal
 import subprocess
 import threading
@@ -24,7 +23,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 
 from swim_ros.processes import run_child, start_child
 from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, new_rclpy_context, ros_domain, running_node  # noqa: F401
@@ -41,12 +39,6 @@ SET_STARTUP_WAIT_S = 60.0
 #: the cruises of the run the sim set stops by Ctrl-C: 20 of 5 s, 108 s of plan with the accelerate and decelerate,
 #: 20-40 s in lock-step
 CANCELED_CRUISES = 20
-#: the bridge's overrun latch: 3 late periods in a row is right for a machine that runs only the rig; other tests
-#: share this host (as tests/test_bridge_closed_loop.py raises it)
-OVERRUN_LIMIT = 50
-#: tracker_node's stale limit on the bridge, periods of 8 ms: stalls of a loaded host reach 0.6 s (as
-#: tests/test_bridge_closed_loop.py raises it)
-STALE_AFTER_PERIODS = 250
 #: a vehicle at rest moves under maneuver_node's rest bound (0.15 rad/s) while its goal is planned and its tracking
 #: starts (well under a second): its plan starts within this of the alpha measured when tracking begins
 START_ALPHA_TOLERANCE_RAD = 0.05
@@ -414,14 +406,9 @@ def bridge_set(ros_domain, tmp_path_factory):  # noqa: F811
     """The emulated bridge set (realistic pipeline; the bridge's overrun latch and the tracker's stale limit raised
     for a shared host) asked for a goal the planner refuses, then for the paper's lane keeping, each recorded, then for
     its status, an e-stop and a lifecycle round; the commands' results and their folders."""
-    from swim_bringup.system import config_dir
+    from swim_bringup.testing import shared_host_config
     work = tmp_path_factory.mktemp("bridge_set")
-    config = Path(shutil.copytree(config_dir("realistic"), work / "config"))
-    for name, node, parameter, value in (("bridge.yaml", "bridge_node", "overrun_limit", OVERRUN_LIMIT),
-                                         ("tracker.yaml", "tracker_node", "stale_after_periods", STALE_AFTER_PERIODS)):
-        parameters = yaml.safe_load((config / name).read_text())
-        parameters[node]["ros__parameters"][parameter] = value
-        (config / name).write_text(yaml.safe_dump(parameters))
+    config = shared_host_config("realistic", work)
     wait = ("--wait", str(SET_STARTUP_WAIT_S))
     results = {}
     with brought_up(work, "bridge", "--config", str(config)):
