@@ -13,9 +13,11 @@ pytestmark = pytest.mark.skipif(os.geteuid() != 0, reason="the real-time means n
 
 #: the demo's wall-time limit of the maneuver, s (23 s of plan in real time)
 MANEUVER_TIMEOUT_S = 120
-#: the I/O loop's wake-up lateness at p99 on a 2-core host with one busy process and the real-time means, ms: a
-#: fifth of the period; without the means it is most of a period (docs/realtime.md)
-WAKE_LATENESS_P99_BOUND_MS = 1.6
+#: the I/O loop's wake-up lateness at p99 on a 2-core host with one busy process and the real-time means, ms: half
+#: the period. With the means it is 0.13-0.63 ms, and 2.65 ms was seen in an hour when the VM stalled the loop for up
+#: to 323 ms; without them 6.1-29 ms (docs/realtime.md). The bound tells the two apart; the figure itself is
+#: bench_loop_under_load's
+WAKE_LATENESS_P99_BOUND_MS = 4.0
 
 
 @pytest.fixture(scope="module")
