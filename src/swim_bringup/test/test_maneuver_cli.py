@@ -462,7 +462,7 @@ def test_the_paper_lane_keeping_ends_within_the_default_tolerances(bridge_set):
     """The lane keeping from the home pose, recorded: its plan starts at the alpha the bridge measured, it ends
     within the default tolerances with no bridge fault, and its report and plots are written. On a run the host
     stalled (HOST_STALL_BOUND_MS), it is tracked to its end all the same: the goal's tolerances are the only check it
-    may fail."""
+    may fail, and the rest holds."""
     import re
 
     from swim_interfaces.action import ExecutePlan
@@ -478,14 +478,14 @@ def test_the_paper_lane_keeping_ends_within_the_default_tolerances(bridge_set):
         assert_clean_exit(results["lane keeping"], 1)
         assert report.result.error_code == ExecutePlan.Result.GOAL_TOLERANCE_VIOLATED, report.result
         assert "GOAL_TOLERANCE_VIOLATED: goal tolerance violated; 23.000 s tracked" in results["lane keeping"].stdout
-        return
-    assert_clean_exit(results["lane keeping"], 0)
-    summary = re.search(r"SUCCESSFUL: succeeded; 23\.000 s tracked, final alpha error ([-+\d.]+) mrad, R error "
-                        r"([-+\d.]+) mm", results["lane keeping"].stdout)
-    assert summary is not None, results["lane keeping"].stdout[-2000:]
-    assert abs(float(summary[1])) * 1e-3 <= RUN_TOLERANCES.goal_alpha_rad
-    assert abs(float(summary[2])) * 1e-3 <= RUN_TOLERANCES.goal_r_m
-    assert report.result.error_code == 0
+    else:
+        assert_clean_exit(results["lane keeping"], 0)
+        summary = re.search(r"SUCCESSFUL: succeeded; 23\.000 s tracked, final alpha error ([-+\d.]+) mrad, R error "
+                            r"([-+\d.]+) mm", results["lane keeping"].stdout)
+        assert summary is not None, results["lane keeping"].stdout[-2000:]
+        assert abs(float(summary[1])) * 1e-3 <= RUN_TOLERANCES.goal_alpha_rad
+        assert abs(float(summary[2])) * 1e-3 <= RUN_TOLERANCES.goal_r_m
+        assert report.result.error_code == 0
     plan = [message for _, _, message in read_messages(run / "bag", ("/plan",))][-1]
     first_tracked = next(message for _, _, message in read_messages(run / "bag", ("/tracking_state",)))
     assert plan.positions[0] == pytest.approx(first_tracked.feedback.positions[0], abs=START_ALPHA_TOLERANCE_RAD)
