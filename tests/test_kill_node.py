@@ -25,21 +25,18 @@ from rosbags.rosbag2 import Reader
 from swim_bringup.bag import RUN_TOPICS, read_messages
 from swim_bringup.run_client import RunClient, header_stamp_ns
 from swim_bringup.system import System, closed_loop_specs, config_dir
+from swim_bringup.testing import SHARED_HOST_OVERRUN_LIMIT, SHARED_HOST_STALE_AFTER_PERIODS
 from swim_model.rig import load_rig
 
 PERIOD_S = 0.008
 KILL_AT_PLAN_TIME_S = 1.0
 CONSTRAINED_SHORT = (["constrained/accelerate/E0.05", "constrained/cruise/E0.05"], [1, 1])   # 9 s
 FREE_SHORT = (["free/accelerate/R0.43/E0.05", "free/cruise/R0.43/E0.05"], [1, 1])            # 4 s, real time
-# other builds and tests share this 2-core host (both cores busy): a process can stall for more than the
-# configured 200 ms (0.6 s seen), which would end the maneuver before the kill; these tests are about the kill,
-# so the tracker waits 2 s
-STALE_AFTER_S = 2.0
-TRACKER_OVERRIDES = (f"stale_after_periods:={round(STALE_AFTER_S / PERIOD_S)}",)
-#: likewise bridge_node's overrun latch (3 late periods in a row: right for a machine that runs only the rig;
-#: swim_hw_bridge's tests check the latch itself): latched before the kill (seen 60 ms after activation on a busy
-#: host), it holds the motors at zero from the start, and there is no torque left for the watchdog to zero
-BRIDGE_OVERRUN_LIMIT = 50
+# other builds and tests share this 2-core host: these tests are about the kill, so the tracker's stale limit and
+# the bridge's overrun latch are swim_bringup.testing's shared-host values (a latch before the kill would hold the
+# motors at zero from the start, and leave no torque for the watchdog to zero)
+STALE_AFTER_S = SHARED_HOST_STALE_AFTER_PERIODS * PERIOD_S
+TRACKER_OVERRIDES = (f"stale_after_periods:={SHARED_HOST_STALE_AFTER_PERIODS}",)
 #: bring-up to the plan's first tracked second: nodes and discovery take seconds on a loaded host, the second itself
 #: 1 s on the bridge (real time), less in lock-step; 60 s margin
 FIRST_SECOND_TIMEOUT_S = 60.0
@@ -135,7 +132,7 @@ def test_killing_the_simulator_makes_the_tracker_zero_its_torque(ros_domain, tmp
 
 def test_killing_the_tracker_makes_the_bridge_zero_the_torque(ros_domain, tmp_path):
     with maneuver_under_way(tmp_path, "bridge", FREE_SHORT, plant_overrides=(
-            "diagnostics_rate_hz:=20.0", f"overrun_limit:={BRIDGE_OVERRUN_LIMIT}")) as (system, client, _, result):
+            "diagnostics_rate_hz:=20.0", f"overrun_limit:={SHARED_HOST_OVERRUN_LIMIT}")) as (system, client, _, result):
         killed_ns = kill(system, "tracker_node")
         settled_ns = killed_ns + WATCHDOG_SETTLE_S * 1e9
         sampled = sampled_stamps(client, "/joint_states")

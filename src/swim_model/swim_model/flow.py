@@ -38,7 +38,11 @@ from swim_model.leading_edge import (
 
 Array = npt.NDArray[np.float64]
 
+#: the Wagner lag states, m/s: every circulatory model has them
 LAG_STATE_NAMES = ("wagner_lag_slow", "wagner_lag_fast")
+#: the trailing-edge separation's lag states, m/s, after the Wagner ones when FlowParameters.separation_onset_rad
+#: is set: the effective normal velocity lagged by the pressure lag, and the speed times the lagged separation point
+SEPARATION_LAG_STATE_NAMES = ("separation_lag_normal_velocity", "separation_lag_point_speed")
 #: the water a simulated vehicle swims in (swim_model.plant: the simulator's and the emulated rig's), each with the
 #: VehicleModel flow model it integrates: "ideal" (the paper's added mass only), "circulatory" (this module's
 #: force and lag states) and "wake" (the ideal model plus swim_model.wake_coupling's wake force and separation drag)
@@ -110,12 +114,23 @@ class FlowParameters:
         C_D0 of the attached flow (``laminar_profile_drag_coefficient``), dimensionless.
     speed_regularization_m_s : float
         eps in sqrt(speed^2 + eps^2), m/s.
+    separation_onset_rad : float or None
+        Incidence where the static separation point f is at 1/2 (Beddoes-Leishman trailing-edge separation, from a
+        static polar: ``flow_comparison.static_separation_fit``), rad; None for attached flow to the stall (no
+        separation lag states).
+    separation_width_rad : float
+        Width of the static f's fall, rad: f = 1 / (1 + exp((|a| - onset) / width)).
+    separation_pressure_lag_semichords : float
+        T_p, the lag of the incidence that f is read at, semichords travelled.
+    separation_point_lag_semichords : float
+        T_f, the lag of f itself, semichords travelled.
 
     Raises
     ------
     FlowModelError
-        For a rate, cap or width that is not positive, a negative gain or drag, gains summing to 1 or more, a stall
-        range reaching 90 deg, or a cap exponent that is not an even integer >= 2.
+        For a rate, cap, width or lag that is not positive, a negative gain or drag, gains summing to 1 or more, a
+        stall range reaching 90 deg, a separation onset outside (0, 45 deg), or a cap exponent that is not an even
+        integer >= 2.
     """
 
     wagner_slow_gain: float = 0.165
@@ -142,11 +157,27 @@ class FlowParameters:
     # and thickness ratio 0.133: 0.0312
     speed_regularization_m_s: float = SPEED_REGULARIZATION_M_S
     # assumed: eps in sqrt(speed^2 + eps^2), smooth at rest (swim_model.leading_edge)
+    separation_onset_rad: float | None = None
+    # None: the attached flow up to the stall; a static polar's value (flow_comparison.static_separation_fit) adds
+    # Beddoes-Leishman's trailing-edge separation and its two lag states (docs/flow_model.md, Sec. 6)
+    separation_width_rad: float = math.radians(0.3)
+    # the static polar's fall (flow_comparison.static_separation_fit); used only with separation_onset_rad
+    separation_pressure_lag_semichords: float = 3.4
+    separation_point_lag_semichords: float = 6.0
+    # set on the 90 deg tank series (docs/flow_model.md, Sec. 6): twice Leishman & Beddoes's NACA 0012 values
+    # T_p = 1.7 and T_f = 3.0 (J. Am. Helicopter Soc. 34, 1989, Table 1); the published ones remove 15-28 % of the
+    # thrust the tank measured
+
+    @property
+    def separates(self) -> bool:
+        """Whether the trailing edge separates (``separation_onset_rad`` set)."""
+        return self.separation_onset_rad is not None
 
     def __post_init__(self) -> None:
         """Check every coefficient's range (the class's Raises)."""
         positive = ("wagner_slow_rate", "wagner_fast_rate", "critical_leading_edge_suction", "stall_angle_rad",
-                    "stall_width_rad", "flat_plate_normal_force_coefficient", "speed_regularization_m_s")
+                    "stall_width_rad", "flat_plate_normal_force_coefficient", "speed_regularization_m_s",
+                    "separation_width_rad", "separation_pressure_lag_semichords", "separation_point_lag_semichords")
         for name in positive:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
@@ -159,6 +190,9 @@ class FlowParameters:
             raise FlowModelError("FlowParameters: the Wagner gains must sum to less than 1 (phi(0) > 0)")
         if not self.stall_angle_rad + 2.0 * self.stall_width_rad < math.pi / 2:
             raise FlowModelError("FlowParameters: stall_angle_rad + 2 stall_width_rad must stay below 90 deg")
+        onset = self.separation_onset_rad
+        if onset is not None and not (math.isfinite(onset) and 0.0 < onset < math.pi / 4):
+            raise FlowModelError(f"FlowParameters.separation_onset_rad must be None or in (0, 45 deg), got {onset!r}")
         if not is_cap_exponent(self.suction_cap_exponent):
             raise FlowModelError("FlowParameters.suction_cap_exponent must be an even integer >= 2")
 
@@ -218,8 +252,8 @@ class FlowTerms:
     ----------
     force : (3,) casadi.SX
         (fx N, fy N, mz N m) in foil axes at F, whole span.
-    lag_rate : (2,) casadi.SX
-        dz/dt, m/s^2.
+    lag_rate : (n_lag,) casadi.SX
+        dz/dt, m/s^2 (``CirculatoryFlow.lag_state_names``).
     normal_velocity : casadi.SX
         Q at the three-quarter chord, m/s.
     effective_normal_velocity : casadi.SX
@@ -230,6 +264,9 @@ class FlowTerms:
         w in [0, 1]: 1 attached, 0 separated.
     circulation : casadi.SX
         Gamma, m^2/s.
+    separation_point : casadi.SX
+        f in [0, 1], the lagged trailing-edge separation point: 1 attached, 0 separated from the trailing edge to
+        the leading edge (1 without separation).
     """
 
     force: ca.SX                # (fx, fy, mz): N, N, N m; foil axes at F, whole span
@@ -239,6 +276,7 @@ class FlowTerms:
     suction_parameter: ca.SX    # Q_s / |u| (the leading-edge suction parameter before the cap)
     attached_weight: ca.SX      # w in [0, 1]
     circulation: ca.SX          # Gamma, m^2/s
+    separation_point: ca.SX     # f in [0, 1]
 
 
 class CirculatoryFlow:
@@ -263,14 +301,15 @@ class CirculatoryFlow:
     docs/flow_model.md, Sec. 2.
     """
 
-    lag_state_count = 2
-
     def __init__(self, foil: JoukowskiFoil, rho_kg_m3: float, params: FlowParameters | None = None) -> None:
         if not (math.isfinite(rho_kg_m3) and rho_kg_m3 > 0.0):
             raise FlowModelError(f"CirculatoryFlow: rho_kg_m3 must be positive, got {rho_kg_m3!r}")
         self.foil = foil
         self.rho_kg_m3 = float(rho_kg_m3)
         self.params = params if params is not None else FlowParameters()
+        self.lag_state_names: tuple[str, ...] = LAG_STATE_NAMES + (
+            SEPARATION_LAG_STATE_NAMES if self.params.separates else ())
+        self.lag_state_count = len(self.lag_state_names)
         m = foil.map
         self.chord_m = foil.leading_edge_x_m - foil.trailing_edge_x_m
         self.semichord_m = 0.5 * self.chord_m
@@ -291,8 +330,8 @@ class CirculatoryFlow:
         ----------
         velocity : (3,) casadi.SX
             Foil velocity (U m/s, V m/s, Omega rad/s) in foil axes.
-        lag : (2,) casadi.SX
-            Lag states, m/s.
+        lag : (n_lag,) casadi.SX
+            Lag states (``lag_state_names``), m/s.
 
         Returns
         -------
@@ -310,7 +349,7 @@ class CirculatoryFlow:
         gains = (p.wagner_slow_gain, p.wagner_fast_gain)
         rates = (p.wagner_slow_rate, p.wagner_fast_rate)
         effective = (1.0 - gains[0] - gains[1]) * normal + gains[0] * lag[0] + gains[1] * lag[1]
-        lag_rate = ca.vertcat(*[speed / self.semichord_m * rates[i] * (normal - lag[i]) for i in range(2)])
+        lag_rates = [speed / self.semichord_m * rates[i] * (normal - lag[i]) for i in range(2)]
 
         # attached flow
         circulation = 4.0 * math.pi * r * effective
@@ -320,6 +359,28 @@ class CirculatoryFlow:
         suction_velocity = effective - omega * (self.mid_chord_x_m - self.three_quarter_chord_x_m)
         capped = smooth_cap(suction_velocity, p.critical_leading_edge_suction * speed, p.suction_cap_exponent)
         suction = 4.0 * math.pi * rho_s * r * capped * capped
+
+        # trailing-edge separation (Leishman & Beddoes 1989): the static separation point f at the effective
+        # incidence lagged by T_p, lagged by T_f; Kirchhoff's flow keeps ((1 + sqrt f) / 2)^2 of the normal force and
+        # its moment and sqrt f of the suction. Both lags are velocities (P3): the lagged normal velocity, and the
+        # speed times the lagged f
+        if p.separates:
+            assert p.separation_onset_rad is not None
+            lagged_normal, point_speed = lag[2], lag[3]
+            static_point = self._static_separation_point(u, lagged_normal)
+            lag_rates.append(speed / (self.semichord_m * p.separation_pressure_lag_semichords)
+                             * (effective - lagged_normal))
+            lag_rates.append(speed / (self.semichord_m * p.separation_point_lag_semichords)
+                             * (speed * static_point - point_speed))
+            separation_point = ca.fmax(point_speed, 0.0) / speed
+            root = ca.sqrt(separation_point)
+            kirchhoff = 0.25 * (1.0 + root) ** 2
+            normal_attached = kirchhoff * normal_attached
+            moment_attached = kirchhoff * moment_attached
+            suction = root * suction
+        else:
+            separation_point = 1.0 + 0.0 * u
+        lag_rate = ca.vertcat(*lag_rates)
 
         # separated flow: the flat plate
         speed_34 = ca.sqrt(u * u + normal * normal + eps2)
@@ -342,7 +403,21 @@ class CirculatoryFlow:
                            weight * (normal_attached - drag * v) + (1.0 - weight) * normal_separated,
                            weight * moment_attached + (1.0 - weight) * moment_separated)
         return FlowTerms(force=force, lag_rate=lag_rate, normal_velocity=normal, effective_normal_velocity=effective,
-                         suction_parameter=suction_velocity / speed, attached_weight=weight, circulation=circulation)
+                         suction_parameter=suction_velocity / speed, attached_weight=weight, circulation=circulation,
+                         separation_point=separation_point)
+
+    def _static_separation_point(self, u: Any, normal: Any) -> Any:
+        """The static polar's separation point at the incidence atan(normal / u), a logistic in sin^2 of it.
+
+        ``1 / (1 + exp((sin^2 a - sin^2 a_f) / (width sin 2 a_f)))``: f = 1/2 at the onset a_f, the fall's width
+        as an angle there, smooth through zero incidence and degree 0 in the velocities.
+        """
+        p = self.params
+        assert p.separation_onset_rad is not None
+        sin2 = normal * normal / (u * u + normal * normal + p.speed_regularization_m_s ** 2)
+        onset = p.separation_onset_rad
+        scale = p.separation_width_rad * math.sin(2.0 * onset)
+        return 1.0 / (1.0 + ca.exp((sin2 - math.sin(onset) ** 2) / scale))
 
     def profile_drag(self, velocity: ca.SX) -> ca.SX:
         """The attached flow's profile drag alone, for the vortex wake (whose flow is always attached).
@@ -367,10 +442,11 @@ class CirculatoryFlow:
         """The model's CasADi functions.
 
         ``flow_force(nu, lag) -> f``, ``flow_lag_rate(nu, lag) -> lag_dot``,
-        ``flow_terms(nu, lag) -> (f, lag_dot, Q, Q_eff, lesp, w, Gamma)``, ``profile_drag(nu) -> f``, and
+        ``flow_terms(nu, lag) -> (f, lag_dot, Q, Q_eff, lesp, w, Gamma, separation_point)``,
+        ``profile_drag(nu) -> f``, and
         ``flow_lag_step(lag, nu0, nu_half, nu1, h) -> lag_next`` (one RK4 step with the velocity prescribed).
         """
-        nu, lag = ca.SX.sym("nu", 3), ca.SX.sym("lag", 2)
+        nu, lag = ca.SX.sym("nu", 3), ca.SX.sym("lag", self.lag_state_count)
         t = self.terms(nu, lag)
         rate = ca.Function("flow_lag_rate", [nu, lag], [t.lag_rate], ["nu", "lag"], ["lag_dot"])
         nu0, nu_half, nu1, h = ca.SX.sym("nu0", 3), ca.SX.sym("nu_half", 3), ca.SX.sym("nu1", 3), ca.SX.sym("h")
@@ -385,8 +461,9 @@ class CirculatoryFlow:
             "flow_terms": ca.Function(
                 "flow_terms", [nu, lag],
                 [t.force, t.lag_rate, t.normal_velocity, t.effective_normal_velocity, t.suction_parameter,
-                 t.attached_weight, t.circulation],
-                ["nu", "lag"], ["f", "lag_dot", "Q", "Q_eff", "lesp", "attached_weight", "circulation"]),
+                 t.attached_weight, t.circulation, t.separation_point],
+                ["nu", "lag"], ["f", "lag_dot", "Q", "Q_eff", "lesp", "attached_weight", "circulation",
+                                "separation_point"]),
             "profile_drag": ca.Function("profile_drag", [nu], [self.profile_drag(nu)], ["nu"], ["f"]),
             "flow_lag_step": ca.Function("flow_lag_step", [lag, nu0, nu_half, nu1, h], [step],
                                          ["lag", "nu0", "nu_half", "nu1", "h"], ["lag_next"]),
@@ -400,27 +477,27 @@ class CirculatoryFlow:
         ----------
         velocity : (n, 3) or (3,) array_like
             Foil velocity (U m/s, V m/s, Omega rad/s) in foil axes.
-        lag : (n, 2) or (2,) array_like
-            Lag states, m/s.
+        lag : (n, n_lag) or (n_lag,) array_like
+            Lag states (``lag_state_names``), m/s.
 
         Returns
         -------
         dict of str to ndarray
-            Keyed as ``flow_terms``'s outputs: ``f`` (n, 3), ``lag_dot`` (n, 2), ``Q``, ``Q_eff``, ``lesp``,
-            ``attached_weight``, ``circulation`` (n,); for one sample given as vectors (3,) and (2,), without the n
-        axis.
+            Keyed as ``flow_terms``'s outputs: ``f`` (n, 3), ``lag_dot`` (n, n_lag), ``Q``, ``Q_eff``, ``lesp``,
+            ``attached_weight``, ``circulation``, ``separation_point`` (n,); for one sample given as vectors (3,)
+            and (n_lag,), without the n axis.
 
         Raises
         ------
         FlowModelError
-            For shapes other than (n, 3) and (n, 2).
+            For shapes other than (n, 3) and (n, n_lag).
         """
         single = np.ndim(velocity) == 1
         nu = np.atleast_2d(np.asarray(velocity, dtype=float))
         z = np.atleast_2d(np.asarray(lag, dtype=float))
-        if nu.shape[1] != 3 or z.shape != (nu.shape[0], 2):
-            raise FlowModelError(f"CirculatoryFlow.evaluate: velocity must be (n, 3) and lag (n, 2), got "
-                                 f"{nu.shape} and {z.shape}")
+        if nu.shape[1] != 3 or z.shape != (nu.shape[0], self.lag_state_count):
+            raise FlowModelError(f"CirculatoryFlow.evaluate: velocity must be (n, 3) and lag "
+                                 f"(n, {self.lag_state_count}), got {nu.shape} and {z.shape}")
         function = self.functions["flow_terms"]
         outputs = function.map(nu.shape[0])(nu.T, z.T)
         result = {}
@@ -431,7 +508,7 @@ class CirculatoryFlow:
         return result
 
     def steady_lag(self, velocity: Iterable[float]) -> Array:
-        """The lag states of steady motion at this velocity (z_i = Q).
+        """The lag states of steady motion at this velocity (each lagged normal velocity Q; f static at Q's incidence).
 
         Parameters
         ----------
@@ -440,12 +517,16 @@ class CirculatoryFlow:
 
         Returns
         -------
-        (2,) ndarray
-            Lag states, m/s.
+        (n_lag,) ndarray
+            Lag states (``lag_state_names``), m/s.
         """
         u, v, omega = (float(x) for x in velocity)
         normal = -(v + omega * self.three_quarter_chord_x_m)
-        return np.array([normal, normal])
+        if not self.params.separates:
+            return np.array([normal, normal])
+        speed = math.sqrt(u * u + v * v + self.params.speed_regularization_m_s ** 2)
+        point = float(self._static_separation_point(ca.DM(u), ca.DM(normal)))
+        return np.array([normal, normal, normal, speed * point])
 
     def integrate_lag(self, velocities: npt.ArrayLike, step_s: float, lag0: npt.ArrayLike) -> Array:
         """Lag states under a prescribed motion, RK4 in one call.
@@ -456,12 +537,12 @@ class CirculatoryFlow:
             Foil velocities (U m/s, V m/s, Omega rad/s) at t0, t0 + h/2, t0 + h, ..., t0 + n h.
         step_s : float
             h, s.
-        lag0 : (2,) array_like
+        lag0 : (n_lag,) array_like
             Lag states at t0, m/s.
 
         Returns
         -------
-        (n + 1, 2) ndarray
+        (n + 1, n_lag) ndarray
             Lag states at t0, t0 + h, ..., t0 + n h, m/s.
 
         Raises
@@ -474,7 +555,7 @@ class CirculatoryFlow:
             raise FlowModelError(f"integrate_lag: velocities must be (2n + 1, 3), got {nu.shape}")
         steps = (nu.shape[0] - 1) // 2
         accumulate = self.functions["flow_lag_step"].mapaccum(steps)
-        z0 = np.asarray(lag0, dtype=float).reshape(2)
+        z0 = np.asarray(lag0, dtype=float).reshape(self.lag_state_count)
         states = np.asarray(accumulate(z0, nu[0:-1:2].T, nu[1::2].T, nu[2::2].T, float(step_s)), dtype=float)
         return np.column_stack([z0, states]).T
 
@@ -483,4 +564,5 @@ class CirculatoryFlow:
 from swim_model.towed_foil import OscillatingFoilResult, oscillating_foil  # noqa: E402
 
 __all__ = ["CirculatoryFlow", "FLOWS", "FLOW_MODELS", "FlowParameters", "FlowTerms", "LAG_STATE_NAMES",
+           "SEPARATION_LAG_STATE_NAMES",
            "OscillatingFoilResult", "angle_of_attack", "laminar_profile_drag_coefficient", "oscillating_foil"]

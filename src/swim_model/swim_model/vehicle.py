@@ -24,7 +24,7 @@ import numpy.typing as npt
 
 from swim_model import codegen
 from swim_model.errors import FlowModelError, StateError
-from swim_model.flow import FLOW_MODELS, LAG_STATE_NAMES, CirculatoryFlow, FlowParameters
+from swim_model.flow import FLOW_MODELS, CirculatoryFlow, FlowParameters
 from swim_model.joukowski import AddedMass, JoukowskiFoil
 from swim_model.kinematics import Coordinates, foil_reference_point, foil_velocity_map, rigid_mass_matrix
 from swim_model.rig import RigParameters, load_rig
@@ -133,7 +133,7 @@ class VehicleModel:
         R of the locked rails, m (default: the rig's ``constrained_lane_radius_m``).
     flow : {"ideal", "circulatory"}, optional
         "ideal" (the paper's added mass only) or "circulatory" (plus swim_model.flow's lift, suction, drag and
-        stall, with n_lag = 2 lag states).
+        stall, with its n_lag lag states: 2, or 4 with the trailing edge separating).
     flow_parameters : FlowParameters, optional
         The circulatory model's coefficients (default: FlowParameters()); refused with ``flow="ideal"``.
 
@@ -167,7 +167,8 @@ class VehicleModel:
         self.circulatory_flow: CirculatoryFlow | None = (
             CirculatoryFlow(self.foil, self.rig.water_density_kg_m3, flow_parameters) if flow == "circulatory"
             else None)
-        self.lag_names: tuple[str, ...] = LAG_STATE_NAMES if flow == "circulatory" else ()
+        self.lag_names: tuple[str, ...] = (
+            self.circulatory_flow.lag_state_names if self.circulatory_flow is not None else ())
         self.n_lag = len(self.lag_names)
         self.nx = 2 * self.nq + self.n_lag
 

@@ -18,6 +18,10 @@ so a change that removes one is seen): at the lowest Strouhal number (0.09) both
 the tank's; at the two highest (0.46, 0.50) the reduced model's thrust is 21 % and 31 % above (the vortex wake's
 8 % and 17 %); the wake's efficiency is 0.09-0.16 below the tank's from St = 0.31 on. Where the models' power goes
 and what the separation indicators say about the misses: docs/flow_model.md, "The separated regime".
+
+The reduced model with the trailing edge separating (FlowParameters.separation_onset_rad, the onset from the polar
+at the tank's Reynolds number, the lags set on this series) is held at the same points: its thrust within 20 % at
+all ten, its efficiency within 0.08 at all but St 0.36 (strict xfail).
 """
 import functools
 import math
@@ -27,12 +31,22 @@ import numpy as np
 import pytest
 
 from swim_model import JoukowskiFoil, load_rig
-from swim_model.flow import FlowParameters, laminar_profile_drag_coefficient, oscillating_foil
+from swim_model.errors import FlowModelError
+from swim_model.flow import (
+    LAG_STATE_NAMES,
+    SEPARATION_LAG_STATE_NAMES,
+    CirculatoryFlow,
+    FlowParameters,
+    laminar_profile_drag_coefficient,
+    oscillating_foil,
+)
 from swim_model.flow_comparison import (
     STATIC_POLAR_NAME,
     read_measurements,
     read_static_polar,
     section_normal_force_coefficient,
+    static_separation_fit,
+    static_separation_points,
     steady_normal_force_coefficient,
 )
 from swim_model.towed_foil import TowedFoilKinematics, kirchhoff_force
@@ -59,7 +73,8 @@ def pitch_amplitude(strouhal: float) -> float:
 
 
 @functools.lru_cache(maxsize=None)
-def tank_run(model: str, strouhal: float, steps_per_cycle: int | None = None):
+def tank_run(model: str, strouhal: float, steps_per_cycle: int | None = None,
+             flow_parameters: FlowParameters = TANK_FLOW):
     """One run (at oscillating_foil's default steps a cycle unless given); the wake averages one cycle (two give the
     same means to 4 digits at 2.5 times the cost)."""
     frequency = strouhal * SPEED_M_S / (2.0 * HEAVE_M)
@@ -67,7 +82,19 @@ def tank_run(model: str, strouhal: float, steps_per_cycle: int | None = None):
                             pitch_amplitude_rad=pitch_amplitude(strouhal), frequency_hz=frequency,
                             phase_rad=math.pi / 2, pivot_from_leading_edge_m=CHORD_M / 3, model=model,
                             averaged_cycles=1 if model == "wake" else 2, water_density_kg_m3=RHO,
-                            flow_parameters=TANK_FLOW, steps_per_cycle=steps_per_cycle)
+                            flow_parameters=flow_parameters, steps_per_cycle=steps_per_cycle)
+
+
+def small_angle_settings(k: float) -> tuple[JoukowskiFoil, dict]:
+    """The rig's foil heaving (path angle 8 deg) and pitching 4 deg about c/3 at reduced frequency k, pitch leading
+    by 90 deg, at 0.2 m/s: oscillating_foil's foil and keyword arguments but the model and the flow parameters."""
+    rig = load_rig()
+    foil = JoukowskiFoil(rig.foil_chord_m, rig.foil_max_thickness_m, rig.foil_span_m)
+    semichord, speed = 0.5 * rig.foil_chord_m, 0.2
+    return foil, dict(speed_m_s=speed, heave_amplitude_m=semichord * math.tan(math.radians(8.0)) / k,
+                      pitch_amplitude_rad=math.radians(4.0), frequency_hz=k * speed / semichord / (2.0 * math.pi),
+                      phase_rad=math.pi / 2, pivot_from_leading_edge_m=rig.foil_chord_m / 3,
+                      water_density_kg_m3=rig.water_density_kg_m3)
 
 
 def at_thrust_strouhal(series: str) -> list[tuple[float, float]]:
@@ -141,15 +168,9 @@ def test_reduced_model_agrees_with_the_wake_at_small_angles(k):
     of attack 4-7 deg. Mean thrust and lift amplitude within 15 % of the vortex wake's (both inviscid: no profile
     drag). Measured: thrust +6.9, +5.3, +3.1, -3.6 %; lift +5.2, +1.9, -3.0, -6.9 % at k = 0.5, 1, 2, 4. The peak
     leading-edge suction parameters agree within 15 % too (+3.4, -0.6, -4.0, -11.9 %), and neither flow stalls."""
-    rig = load_rig()
-    foil = JoukowskiFoil(rig.foil_chord_m, rig.foil_max_thickness_m, rig.foil_span_m)
-    semichord, speed = 0.5 * rig.foil_chord_m, 0.2
-    settings = dict(speed_m_s=speed, heave_amplitude_m=semichord * math.tan(math.radians(8.0)) / k,
-                    pitch_amplitude_rad=math.radians(4.0), frequency_hz=k * speed / semichord / (2.0 * math.pi),
-                    phase_rad=math.pi / 2, pivot_from_leading_edge_m=rig.foil_chord_m / 3,
-                    water_density_kg_m3=rig.water_density_kg_m3,
-                    flow_parameters=FlowParameters(profile_drag_coefficient=0.0))
-    runs = {model: oscillating_foil(foil, model=model, **settings) for model in ("circulatory", "wake")}
+    foil, settings = small_angle_settings(k)
+    runs = {model: oscillating_foil(foil, model=model, flow_parameters=FlowParameters(profile_drag_coefficient=0.0),
+                                    **settings) for model in ("circulatory", "wake")}
     reduced, wake = runs["circulatory"], runs["wake"]
     assert reduced.peak_angle_of_attack_rad < math.radians(8.0)
     assert reduced.mean_thrust_n > 0.0
@@ -335,3 +356,144 @@ def test_past_stall_the_section_carries_the_flat_plates_normal_force(reynolds):
         if alpha_deg >= 20.0:
             assert section_normal_force_coefficient(alpha_deg, lift, drag) == pytest.approx(
                 coefficient * math.sin(math.radians(alpha_deg)), rel=0.13)
+
+# --- trailing-edge separation (FlowParameters.separation_onset_rad) ---------------------------------------------------
+# Leishman & Beddoes's separation (J. Am. Helicopter Soc. 34, 1989): the static separation point f from the polar
+# through Kirchhoff's flow (flow_comparison.static_separation_points, fitted by static_separation_fit), read at the
+# effective incidence lagged by T_p, itself lagged by T_f; the normal force and its moment times ((1 + sqrt f)/2)^2,
+# the suction times sqrt f. The lags are FlowParameters' (twice the published NACA 0012 values, set on this series:
+# docs/flow_model.md, Sec. 6).
+#: the separation's efficiency miss on this series: the attached model is already 0.077 under the tank there, and
+#: the separation takes 0.005 more
+SEPARATED_EFFICIENCY_MISSES = {0.36: "the models' input power is above the tank's at St 0.36 (docs/flow_model.md)"}
+
+
+@functools.lru_cache(maxsize=None)
+def polar_separation(reynolds: float) -> tuple[float, float]:
+    """(onset rad, width rad) fitted to the polar at one Reynolds number."""
+    polar = read_static_polar(POLAR)[reynolds]
+    attached = steady_normal_force_coefficient(tuple(alpha for alpha, _, _ in polar))
+    return static_separation_fit(static_separation_points(polar, attached))
+
+
+def separated(reynolds: float = REYNOLDS, **fields) -> FlowParameters:
+    """FlowParameters with the separation of the polar at this Reynolds number."""
+    onset, width = polar_separation(reynolds)
+    return FlowParameters(separation_onset_rad=onset, separation_width_rad=width, **fields)
+
+
+#: the tank's flow with the separation of its polar, at the tank's Reynolds number
+TANK_SEPARATED_FLOW = separated(profile_drag_coefficient=TANK_FLOW.profile_drag_coefficient)
+
+
+def test_the_separation_adds_two_lag_states_and_the_default_has_none():
+    flow = CirculatoryFlow(TANK_FOIL, RHO)
+    assert not flow.params.separates and flow.lag_state_names == LAG_STATE_NAMES
+    with_separation = CirculatoryFlow(TANK_FOIL, RHO, TANK_SEPARATED_FLOW)
+    assert with_separation.lag_state_names == LAG_STATE_NAMES + SEPARATION_LAG_STATE_NAMES
+    assert with_separation.lag_state_count == 4
+    assert TANK_SEPARATED_FLOW.digest() != TANK_FLOW.digest()
+
+
+@pytest.mark.parametrize("onset_deg", [0.0, 45.0, math.nan])
+def test_a_separation_onset_outside_its_range_is_refused(onset_deg):
+    with pytest.raises(FlowModelError, match="separation_onset_rad"):
+        FlowParameters(separation_onset_rad=math.radians(onset_deg))
+
+
+@pytest.mark.parametrize("reynolds", [1e4, 2e4, 4e4, 8e4])
+def test_the_fitted_onset_is_where_the_polars_separation_point_crosses_one_half(reynolds):
+    """The fit's onset lies between the polar's last incidence with f >= 1/2 and its first with f < 1/2 (read off
+    the points, no fit), and the logistic follows the points up to 15 deg within 0.12 rms."""
+    polar = read_static_polar(POLAR)[reynolds]
+    points = static_separation_points(polar, steady_normal_force_coefficient(tuple(a for a, _, _ in polar)))
+    first_below = next(alpha for alpha, f in points if f < 0.5)
+    last_above = max(alpha for alpha, f in points if f >= 0.5 and alpha < first_below)
+    onset, width = polar_separation(reynolds)
+    assert last_above <= math.degrees(onset) <= first_below
+    used = [(math.radians(alpha), f) for alpha, f in points if alpha <= 15.0]
+    model = [1.0 / (1.0 + math.exp((math.sin(a) ** 2 - math.sin(onset) ** 2) / (width * math.sin(2 * onset))))
+             for a, _ in used]
+    assert float(np.sqrt(np.mean([(m - f) ** 2 for m, (_, f) in zip(model, used)]))) < 0.12
+
+
+@pytest.mark.parametrize("alpha_deg, attached", [(2.0, True), (12.0, False)])
+def test_steady_flow_keeps_kirchhoffs_share_of_the_normal_force(alpha_deg, attached):
+    """Towed steadily at a fixed incidence with its lag states steady: below the onset (6.3 deg at Re 4e4) the
+    force is the attached model's; above it (and below the stall) f is near 0, the normal force a quarter of the
+    attached one and the suction gone: ((1 + sqrt f) / 2)^2 and sqrt f, evaluated on the model's own f."""
+    params = separated(profile_drag_coefficient=0.0)
+    plain = CirculatoryFlow(TANK_FOIL, RHO, FlowParameters(profile_drag_coefficient=0.0))
+    flow = CirculatoryFlow(TANK_FOIL, RHO, params)
+    velocity = (SPEED_M_S * math.cos(math.radians(alpha_deg)), -SPEED_M_S * math.sin(math.radians(alpha_deg)), 0.0)
+    base = plain.evaluate(velocity, plain.steady_lag(velocity))
+    terms = flow.evaluate(velocity, flow.steady_lag(velocity))
+    assert np.allclose(terms["lag_dot"], 0.0, atol=1e-12)
+    point = float(terms["separation_point"])
+    kirchhoff = 0.25 * (1.0 + math.sqrt(point)) ** 2
+    assert float(base["attached_weight"]) > 0.99            # below the stall: the attached flow's force
+    attached_normal = base["f"][1]
+    if attached:
+        assert point > 0.999
+        assert np.allclose(terms["f"], base["f"], rtol=1e-3)
+    else:
+        assert point < 1e-6
+        assert terms["f"][1] == pytest.approx(kirchhoff * attached_normal, rel=0.01)
+        assert terms["f"][1] == pytest.approx(0.25 * attached_normal, rel=0.01)
+        assert abs(terms["f"][0]) < 1e-3 * abs(base["f"][0])
+
+
+def test_a_plate_held_at_90_deg_keeps_the_flat_plates_normal_force():
+    params = separated(profile_drag_coefficient=0.0)
+    plain = CirculatoryFlow(TANK_FOIL, RHO, FlowParameters(profile_drag_coefficient=0.0))
+    flow = CirculatoryFlow(TANK_FOIL, RHO, params)
+    velocity = (0.0, -SPEED_M_S, 0.0)
+    expected = 0.5 * RHO * SPAN_M * CHORD_M * params.flat_plate_normal_force_coefficient * SPEED_M_S ** 2
+    for model in (plain, flow):
+        force = model.evaluate(velocity, model.steady_lag(velocity))["f"]
+        assert force[1] == pytest.approx(expected, rel=1e-3)
+
+
+@pytest.mark.parametrize("time_scale", [0.5, 2.0])
+def test_the_separations_lag_states_are_velocities_so_time_scaling_holds(time_scale):
+    """Every force and lag rate is homogeneous of degree 2 in (velocities, lag states), as the Wagner states are
+    (P3: flow.py's docstring): scaled by lambda, the force and lag rate scale by lambda^2 (eps to zero)."""
+    flow = CirculatoryFlow(TANK_FOIL, RHO, separated(speed_regularization_m_s=1e-9))
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        velocity = np.array([0.3, -0.1, 2.0]) + rng.normal(0.0, [0.1, 0.2, 3.0])
+        lag = np.concatenate([rng.normal(0.0, 0.2, 3), [abs(rng.normal(0.2, 0.1))]])
+        base = flow.evaluate(velocity, lag)
+        scaled = flow.evaluate(time_scale * velocity, time_scale * lag)
+        assert np.allclose(scaled["f"], time_scale ** 2 * base["f"], rtol=1e-9, atol=1e-12)
+        assert np.allclose(scaled["lag_dot"], time_scale ** 2 * base["lag_dot"], rtol=1e-9, atol=1e-12)
+        assert scaled["separation_point"] == pytest.approx(base["separation_point"], rel=1e-9)
+
+
+@pytest.mark.parametrize("k", [0.5, 1.0, 2.0, 4.0])
+def test_small_incidence_is_unchanged_below_the_polars_onset(k):
+    """test_flow_experiments.py's small-angle case (peak incidence 4-7 deg) with the tank's polar, onset 6.3 deg:
+    mean thrust and lift amplitude within 1 % of the attached model's (measured: -0.10 to -0.05 %). With the rig's
+    Re 1e4 polar, onset 3.2 deg, the same motion separates in part (-4.0 to -0.8 %: docs/flow_model.md)."""
+    foil, settings = small_angle_settings(k)
+    plain = oscillating_foil(foil, model="circulatory", flow_parameters=FlowParameters(profile_drag_coefficient=0.0),
+                             **settings)
+    run = oscillating_foil(foil, model="circulatory", flow_parameters=separated(profile_drag_coefficient=0.0),
+                           **settings)
+    assert run.mean_thrust_n == pytest.approx(plain.mean_thrust_n, rel=0.01)
+    assert run.lift_amplitude_n == pytest.approx(plain.lift_amplitude_n, rel=0.01)
+
+
+@pytest.mark.parametrize("strouhal, measured", MEASURED["thrust_coefficient"])
+def test_with_the_separation_the_reduced_models_thrust_is_within_20_percent_at_every_point(strouhal, measured):
+    """All ten points, St 0.09-0.50, the attached model's three misses (+54 % at St 0.09, +21 and +31 % at St
+    0.46-0.50) included: measured +1, -15, -11, -16, -13, -8, -10, -2, +6, +14 %."""
+    run = tank_run("circulatory", strouhal, flow_parameters=TANK_SEPARATED_FLOW)
+    assert run.thrust_coefficient == pytest.approx(measured, rel=0.20)
+
+
+@pytest.mark.parametrize("strouhal, measured", known(MEASURED["efficiency"], SEPARATED_EFFICIENCY_MISSES))
+def test_with_the_separation_the_reduced_models_efficiency_is_within_0_08(strouhal, measured):
+    """At the efficiency series' own Strouhal numbers; St 0.36 misses by 0.082 (the attached model: 0.077)."""
+    run = tank_run("circulatory", strouhal, flow_parameters=TANK_SEPARATED_FLOW)
+    assert run.efficiency == pytest.approx(measured, abs=0.08)
