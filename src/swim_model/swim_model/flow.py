@@ -35,13 +35,14 @@ from swim_model.leading_edge import (
     is_cap_exponent,
     smooth_cap,
 )
+from swim_model.separation import TrailingEdgeSeparation, static_separation_point
 
 Array = npt.NDArray[np.float64]
 
 #: the Wagner lag states, m/s: every circulatory model has them
 LAG_STATE_NAMES = ("wagner_lag_slow", "wagner_lag_fast")
-#: the trailing-edge separation's lag states, m/s, after the Wagner ones when FlowParameters.separation_onset_rad
-#: is set: the effective normal velocity lagged by the pressure lag, and the speed times the lagged separation point
+#: the trailing-edge separation's lag states, m/s, after the Wagner ones when FlowParameters.separation is set:
+#: the effective normal velocity lagged by the pressure lag, and the speed times the lagged separation point
 SEPARATION_LAG_STATE_NAMES = ("separation_lag_normal_velocity", "separation_lag_point_speed")
 #: the water a simulated vehicle swims in (swim_model.plant: the simulator's and the emulated rig's), each with the
 #: VehicleModel flow model it integrates: "ideal" (the paper's added mass only), "circulatory" (this module's
@@ -114,23 +115,15 @@ class FlowParameters:
         C_D0 of the attached flow (``laminar_profile_drag_coefficient``), dimensionless.
     speed_regularization_m_s : float
         eps in sqrt(speed^2 + eps^2), m/s.
-    separation_onset_rad : float or None
-        Incidence where the static separation point f is at 1/2 (Beddoes-Leishman trailing-edge separation, from a
-        static polar: ``flow_comparison.static_separation_fit``), rad; None for attached flow to the stall (no
-        separation lag states).
-    separation_width_rad : float
-        Width of the static f's fall, rad: f = 1 / (1 + exp((|a| - onset) / width)).
-    separation_pressure_lag_semichords : float
-        T_p, the lag of the incidence that f is read at, semichords travelled.
-    separation_point_lag_semichords : float
-        T_f, the lag of f itself, semichords travelled.
+    separation : TrailingEdgeSeparation or None
+        The trailing edge's separation from a static polar (swim_model.separation), with its two lag states; None:
+        attached flow up to the stall.
 
     Raises
     ------
     FlowModelError
-        For a rate, cap, width or lag that is not positive, a negative gain or drag, gains summing to 1 or more, a
-        stall range reaching 90 deg, a separation onset outside (0, 45 deg), or a cap exponent that is not an even
-        integer >= 2.
+        For a rate, cap or width that is not positive, a negative gain or drag, gains summing to 1 or more, a stall
+        range reaching 90 deg, or a cap exponent that is not an even integer >= 2.
     """
 
     wagner_slow_gain: float = 0.165
@@ -157,27 +150,19 @@ class FlowParameters:
     # and thickness ratio 0.133: 0.0312
     speed_regularization_m_s: float = SPEED_REGULARIZATION_M_S
     # assumed: eps in sqrt(speed^2 + eps^2), smooth at rest (swim_model.leading_edge)
-    separation_onset_rad: float | None = None
-    # None: the attached flow up to the stall; a static polar's value (flow_comparison.static_separation_fit) adds
-    # Beddoes-Leishman's trailing-edge separation and its two lag states (docs/flow_model.md, Sec. 6)
-    separation_width_rad: float = math.radians(0.3)
-    # the static polar's fall (flow_comparison.static_separation_fit); used only with separation_onset_rad
-    separation_pressure_lag_semichords: float = 3.4
-    separation_point_lag_semichords: float = 6.0
-    # set on the 90 deg tank series (docs/flow_model.md, Sec. 6): twice Leishman & Beddoes's NACA 0012 values
-    # T_p = 1.7 and T_f = 3.0 (J. Am. Helicopter Soc. 34, 1989, Table 1); the published ones remove 15-28 % of the
-    # thrust the tank measured
+    separation: TrailingEdgeSeparation | None = None
+    # None: the attached flow up to the stall; a section's separation (swim_model.separation, its onset from a static
+    # polar: flow_comparison.static_separation_fit) adds it and its two lag states (docs/flow_model.md, Sec. 6)
 
     @property
     def separates(self) -> bool:
-        """Whether the trailing edge separates (``separation_onset_rad`` set)."""
-        return self.separation_onset_rad is not None
+        """Whether the trailing edge separates (``separation`` set)."""
+        return self.separation is not None
 
     def __post_init__(self) -> None:
         """Check every coefficient's range (the class's Raises)."""
         positive = ("wagner_slow_rate", "wagner_fast_rate", "critical_leading_edge_suction", "stall_angle_rad",
-                    "stall_width_rad", "flat_plate_normal_force_coefficient", "speed_regularization_m_s",
-                    "separation_width_rad", "separation_pressure_lag_semichords", "separation_point_lag_semichords")
+                    "stall_width_rad", "flat_plate_normal_force_coefficient", "speed_regularization_m_s")
         for name in positive:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
@@ -190,9 +175,9 @@ class FlowParameters:
             raise FlowModelError("FlowParameters: the Wagner gains must sum to less than 1 (phi(0) > 0)")
         if not self.stall_angle_rad + 2.0 * self.stall_width_rad < math.pi / 2:
             raise FlowModelError("FlowParameters: stall_angle_rad + 2 stall_width_rad must stay below 90 deg")
-        onset = self.separation_onset_rad
-        if onset is not None and not (math.isfinite(onset) and 0.0 < onset < math.pi / 4):
-            raise FlowModelError(f"FlowParameters.separation_onset_rad must be None or in (0, 45 deg), got {onset!r}")
+        if self.separation is not None and not isinstance(self.separation, TrailingEdgeSeparation):
+            raise FlowModelError(f"FlowParameters.separation must be a TrailingEdgeSeparation or None, got "
+                                 f"{self.separation!r}")
         if not is_cap_exponent(self.suction_cap_exponent):
             raise FlowModelError("FlowParameters.suction_cap_exponent must be an even integer >= 2")
 
@@ -364,13 +349,12 @@ class CirculatoryFlow:
         # incidence lagged by T_p, lagged by T_f; Kirchhoff's flow keeps ((1 + sqrt f) / 2)^2 of the normal force and
         # its moment and sqrt f of the suction. Both lags are velocities (P3): the lagged normal velocity, and the
         # speed times the lagged f
-        if p.separates:
-            assert p.separation_onset_rad is not None
+        if p.separation is not None:
             lagged_normal, point_speed = lag[2], lag[3]
-            static_point = self._static_separation_point(u, lagged_normal)
-            lag_rates.append(speed / (self.semichord_m * p.separation_pressure_lag_semichords)
+            static_point = static_separation_point(u, lagged_normal, p.separation, p.speed_regularization_m_s)
+            lag_rates.append(speed / (self.semichord_m * p.separation.pressure_lag_semichords)
                              * (effective - lagged_normal))
-            lag_rates.append(speed / (self.semichord_m * p.separation_point_lag_semichords)
+            lag_rates.append(speed / (self.semichord_m * p.separation.point_lag_semichords)
                              * (speed * static_point - point_speed))
             separation_point = ca.fmax(point_speed, 0.0) / speed
             root = ca.sqrt(separation_point)
@@ -406,18 +390,6 @@ class CirculatoryFlow:
                          suction_parameter=suction_velocity / speed, attached_weight=weight, circulation=circulation,
                          separation_point=separation_point)
 
-    def _static_separation_point(self, u: Any, normal: Any) -> Any:
-        """The static polar's separation point at the incidence atan(normal / u), a logistic in sin^2 of it.
-
-        ``1 / (1 + exp((sin^2 a - sin^2 a_f) / (width sin 2 a_f)))``: f = 1/2 at the onset a_f, the fall's width
-        as an angle there, smooth through zero incidence and degree 0 in the velocities.
-        """
-        p = self.params
-        assert p.separation_onset_rad is not None
-        sin2 = normal * normal / (u * u + normal * normal + p.speed_regularization_m_s ** 2)
-        onset = p.separation_onset_rad
-        scale = p.separation_width_rad * math.sin(2.0 * onset)
-        return 1.0 / (1.0 + ca.exp((sin2 - math.sin(onset) ** 2) / scale))
 
     def profile_drag(self, velocity: ca.SX) -> ca.SX:
         """The attached flow's profile drag alone, for the vortex wake (whose flow is always attached).
@@ -522,10 +494,11 @@ class CirculatoryFlow:
         """
         u, v, omega = (float(x) for x in velocity)
         normal = -(v + omega * self.three_quarter_chord_x_m)
-        if not self.params.separates:
+        p = self.params
+        if p.separation is None:
             return np.array([normal, normal])
-        speed = math.sqrt(u * u + v * v + self.params.speed_regularization_m_s ** 2)
-        point = float(self._static_separation_point(ca.DM(u), ca.DM(normal)))
+        speed = math.sqrt(u * u + v * v + p.speed_regularization_m_s ** 2)
+        point = static_separation_point(u, normal, p.separation, p.speed_regularization_m_s)
         return np.array([normal, normal, normal, speed * point])
 
     def integrate_lag(self, velocities: npt.ArrayLike, step_s: float, lag0: npt.ArrayLike) -> Array:

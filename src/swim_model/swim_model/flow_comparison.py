@@ -11,6 +11,7 @@ model's steady normal force and the flat plate's (docs/flow_model.md, "The separ
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -25,6 +26,7 @@ from swim_model.flow import (
     oscillating_foil,
 )
 from swim_model.joukowski import JoukowskiFoil
+from swim_model.separation import TrailingEdgeSeparation
 
 CHORD_M, SPAN_M, THICKNESS_RATIO = 0.10, 0.60, 0.12
 REYNOLDS = 40_000.0
@@ -34,6 +36,8 @@ ALPHA0_DEG = 15.0
 DEFAULT_MEASUREMENTS = Path(__file__).resolve().parents[1] / "test" / "data" / "anderson1998_oscillating_foil.csv"
 TOWING_SPEED_M_S = REYNOLDS * KINEMATIC_VISCOSITY_WATER_M2_S / CHORD_M   # Re nu / c: 0.4 m/s
 STATIC_POLAR_NAME = "naca0012_static_polar_low_re.csv"   # beside the tank's measurements
+#: compute's key for the reduced model with the trailing edge separating as the polar at the tank's Reynolds number
+SEPARATED = "circulatory_separated"
 POLAR_REYNOLDS = (1.0e4, 4.0e4)    # the rig's order (its foil at 0.17 m/s) and the tank's
 STEADY_ANGLES_DEG = tuple(float(a) for a in range(0, 41))   # the steady normal force's incidences, deg
 
@@ -184,7 +188,7 @@ def static_separation_fit(points: list[tuple[float, float]]) -> tuple[float, flo
     Returns
     -------
     (float, float)
-        ``separation_onset_rad`` and ``separation_width_rad``.
+        ``TrailingEdgeSeparation``'s ``onset_rad`` and ``width_rad``.
     """
     used = [(math.radians(alpha), f) for alpha, f in points if alpha <= SEPARATION_FIT_UP_TO_DEG]
     alpha = np.array([a for a, _ in used])
@@ -198,8 +202,31 @@ def static_separation_fit(points: list[tuple[float, float]]) -> tuple[float, flo
     return float(onsets[i, 0, 0]), float(widths[0, j, 0])
 
 
-def compute(strouhal: list[float],
-            models: tuple[str, ...] = ("circulatory", "wake")) -> dict[str, dict[str, list[float]]]:
+def polar_separation(polar: dict[float, list[tuple[float, float, float]]],
+                     reynolds: float = REYNOLDS) -> TrailingEdgeSeparation:
+    """The section's trailing-edge separation at one of the polar's Reynolds numbers, its lags the default ones.
+
+    Parameters
+    ----------
+    polar : dict
+        ``read_static_polar``'s output.
+    reynolds : float, optional
+        One of its Reynolds numbers (default: the tank's).
+
+    Returns
+    -------
+    TrailingEdgeSeparation
+        Onset and width from ``static_separation_fit`` of ``static_separation_points`` against the reduced model's
+        steady normal force at the polar's incidences.
+    """
+    section = polar[reynolds]
+    attached = steady_normal_force_coefficient(tuple(alpha for alpha, _, _ in section))
+    onset, width = static_separation_fit(static_separation_points(section, attached))
+    return TrailingEdgeSeparation(onset, width)
+
+
+def compute(strouhal: list[float], models: tuple[str, ...] = ("circulatory", "wake"),
+            separation: TrailingEdgeSeparation | None = None) -> dict[str, dict[str, list[float]]]:
     """The towed-foil figures of Anderson's case for each flow model.
 
     Parameters
@@ -208,22 +235,27 @@ def compute(strouhal: list[float],
         Strouhal numbers 2 h0 f / U to run.
     models : tuple of str, optional
         ``oscillating_foil``'s models.
+    separation : TrailingEdgeSeparation, optional
+        With it, the reduced model with the trailing edge separating too, as ``SEPARATED``.
 
     Returns
     -------
     dict of str to dict of str to list of float
-        {model: {"strouhal", "thrust_coefficient", "efficiency", "power_coefficient", "heave_power_coefficient",
-        "peak_angle_of_attack_deg", "peak_three_quarter_chord_incidence_deg", "peak_leading_edge_suction_parameter",
-        "peak_free_stream_suction_parameter", "min_attached_weight"}} (OscillatingFoilResult's figures; the heave
-        drive's power over 1/2 rho U^3 c s).
+        {model (or SEPARATED): {"strouhal", "thrust_coefficient", "efficiency", "power_coefficient",
+        "heave_power_coefficient", "peak_angle_of_attack_deg", "peak_three_quarter_chord_incidence_deg",
+        "peak_leading_edge_suction_parameter", "peak_free_stream_suction_parameter", "min_attached_weight"}}
+        (OscillatingFoilResult's figures; the heave drive's power over 1/2 rho U^3 c s).
     """
     speed = TOWING_SPEED_M_S
     heave = HEAVE_OVER_CHORD * CHORD_M
     power_reference_w = 0.5 * WATER_DENSITY_KG_M3 * speed ** 3 * CHORD_M * SPAN_M   # C_P's 1/2 rho U^3 c s
     foil = JoukowskiFoil(CHORD_M, THICKNESS_RATIO * CHORD_M, SPAN_M)
     params = FlowParameters(profile_drag_coefficient=laminar_profile_drag_coefficient(REYNOLDS, THICKNESS_RATIO))
+    runs = [(model, model, params) for model in models]
+    if separation is not None:
+        runs.append((SEPARATED, "circulatory", dataclasses.replace(params, separation=separation)))
     results: dict[str, dict[str, list[float]]] = {}
-    for model in models:
+    for key, model, flow_parameters in runs:
         rows: dict[str, list[float]] = {name: [] for name in (
             "strouhal", "thrust_coefficient", "efficiency", "power_coefficient", "heave_power_coefficient",
             "peak_angle_of_attack_deg", "peak_three_quarter_chord_incidence_deg",
@@ -234,7 +266,7 @@ def compute(strouhal: list[float],
                                    frequency_hz=st * speed / (2.0 * heave), phase_rad=math.pi / 2,
                                    pivot_from_leading_edge_m=CHORD_M / 3, model=model,
                                    averaged_cycles=1 if model == "wake" else 2,
-                                   water_density_kg_m3=WATER_DENSITY_KG_M3, flow_parameters=params)
+                                   water_density_kg_m3=WATER_DENSITY_KG_M3, flow_parameters=flow_parameters)
             for name, value in (
                     ("strouhal", st), ("thrust_coefficient", run.thrust_coefficient), ("efficiency", run.efficiency),
                     ("power_coefficient", run.power_coefficient),
@@ -246,12 +278,13 @@ def compute(strouhal: list[float],
                     ("peak_free_stream_suction_parameter", run.peak_free_stream_suction_parameter),
                     ("min_attached_weight", run.min_attached_weight)):
                 rows[name].append(value)
-        results[model] = rows
+        results[key] = rows
     return results
 
 
 def plot(results: dict[str, dict[str, list[float]]], measured: dict[str, list[tuple[float, float]]] | None,
-         path: Path, polar: dict[float, list[tuple[float, float, float]]] | None = None) -> None:
+         path: Path, polar: dict[float, list[tuple[float, float, float]]] | None = None,
+         separation: TrailingEdgeSeparation | None = None) -> None:
     """Draw thrust coefficient and efficiency against Strouhal number, models and tank, and the steady normal force.
 
     Parameters
@@ -264,6 +297,8 @@ def plot(results: dict[str, dict[str, list[float]]], measured: dict[str, list[tu
         The PNG file to write.
     polar : dict or None, optional
         ``read_static_polar``'s output, drawn beside the reduced model's and the flat plate's steady normal force.
+    separation : TrailingEdgeSeparation, optional
+        The separation of ``SEPARATED``, whose steady normal force is drawn too.
     """
     import matplotlib
     matplotlib.use("Agg")
@@ -271,7 +306,8 @@ def plot(results: dict[str, dict[str, list[float]]], measured: dict[str, list[tu
 
     fig, axes = plt.subplots(1, 3, figsize=(16, 4.5))
     styles = {"circulatory": ("tab:blue", "o-", "reduced model (swim_model.flow)"),
-              "wake": ("tab:orange", "s--", "vortex wake (swim_model.wake) + profile drag")}
+              "wake": ("tab:orange", "s--", "vortex wake (swim_model.wake) + profile drag"),
+              SEPARATED: ("tab:green", "d-.", f"reduced model, trailing edge separating (Re {REYNOLDS:.0f} polar)")}
     for model, rows in results.items():
         colour, style, label = styles[model]
         axes[0].plot(rows["strouhal"], rows["thrust_coefficient"], style, color=colour, label=label)
@@ -287,6 +323,10 @@ def plot(results: dict[str, dict[str, list[float]]], measured: dict[str, list[tu
                 ylim=(0.0, 1.0))
     angles = np.array(STEADY_ANGLES_DEG)
     axes[2].plot(angles, steady_normal_force_coefficient(), "-", color="tab:blue", label="reduced model, steady")
+    if separation is not None:
+        axes[2].plot(angles, steady_normal_force_coefficient(params=FlowParameters(profile_drag_coefficient=0.0,
+                                                                                   separation=separation)),
+                     "-.", color="tab:green", label="reduced model, steady, trailing edge separating")
     axes[2].plot(angles, FlowParameters().flat_plate_normal_force_coefficient * np.sin(np.radians(angles)), ":",
                  color="grey", label="flat plate, C_N90 sin(alpha)")
     for reynolds, marker in zip(POLAR_REYNOLDS, ("kv", "k^")):
@@ -332,9 +372,10 @@ def run(output_dir: Path, measurements: Path | None = None) -> Path:
         strouhal = [st for st, _ in measured["thrust_coefficient"]]
     polar_path = source.parent / STATIC_POLAR_NAME
     polar = read_static_polar(polar_path) if polar_path.exists() else None
-    results = compute(strouhal)
+    separation = polar_separation(polar) if polar is not None and REYNOLDS in polar else None
+    results = compute(strouhal, separation=separation)
     output_dir.mkdir(parents=True, exist_ok=True)
     figure = output_dir / "flow_comparison.png"
-    plot(results, measured, figure, polar)
+    plot(results, measured, figure, polar, separation)
     (output_dir / "flow_comparison.json").write_text(json.dumps({"models": results, "measured": measured}, indent=2))
     return figure

@@ -19,7 +19,7 @@ the tank's; at the two highest (0.46, 0.50) the reduced model's thrust is 21 % a
 8 % and 17 %); the wake's efficiency is 0.09-0.16 below the tank's from St = 0.31 on. Where the models' power goes
 and what the separation indicators say about the misses: docs/flow_model.md, "The separated regime".
 
-The reduced model with the trailing edge separating (FlowParameters.separation_onset_rad, the onset from the polar
+The reduced model with the trailing edge separating (FlowParameters.separation, the onset from the polar
 at the tank's Reynolds number, the lags set on this series) is held at the same points: its thrust within 20 % at
 all ten, its efficiency within 0.08 at all but St 0.36 (strict xfail).
 """
@@ -42,13 +42,14 @@ from swim_model.flow import (
 )
 from swim_model.flow_comparison import (
     STATIC_POLAR_NAME,
+    polar_separation,
     read_measurements,
     read_static_polar,
     section_normal_force_coefficient,
-    static_separation_fit,
     static_separation_points,
     steady_normal_force_coefficient,
 )
+from swim_model.separation import TrailingEdgeSeparation
 from swim_model.towed_foil import TowedFoilKinematics, kirchhoff_force
 
 DATA = Path(__file__).parent / "data" / "anderson1998_oscillating_foil.csv"
@@ -357,7 +358,7 @@ def test_past_stall_the_section_carries_the_flat_plates_normal_force(reynolds):
             assert section_normal_force_coefficient(alpha_deg, lift, drag) == pytest.approx(
                 coefficient * math.sin(math.radians(alpha_deg)), rel=0.13)
 
-# --- trailing-edge separation (FlowParameters.separation_onset_rad) ---------------------------------------------------
+# --- trailing-edge separation (FlowParameters.separation) -------------------------------------------------------------
 # Leishman & Beddoes's separation (J. Am. Helicopter Soc. 34, 1989): the static separation point f from the polar
 # through Kirchhoff's flow (flow_comparison.static_separation_points, fitted by static_separation_fit), read at the
 # effective incidence lagged by T_p, itself lagged by T_f; the normal force and its moment times ((1 + sqrt f)/2)^2,
@@ -368,18 +369,9 @@ def test_past_stall_the_section_carries_the_flat_plates_normal_force(reynolds):
 SEPARATED_EFFICIENCY_MISSES = {0.36: "the models' input power is above the tank's at St 0.36 (docs/flow_model.md)"}
 
 
-@functools.lru_cache(maxsize=None)
-def polar_separation(reynolds: float) -> tuple[float, float]:
-    """(onset rad, width rad) fitted to the polar at one Reynolds number."""
-    polar = read_static_polar(POLAR)[reynolds]
-    attached = steady_normal_force_coefficient(tuple(alpha for alpha, _, _ in polar))
-    return static_separation_fit(static_separation_points(polar, attached))
-
-
 def separated(reynolds: float = REYNOLDS, **fields) -> FlowParameters:
-    """FlowParameters with the separation of the polar at this Reynolds number."""
-    onset, width = polar_separation(reynolds)
-    return FlowParameters(separation_onset_rad=onset, separation_width_rad=width, **fields)
+    """FlowParameters with the separation of the polar at this Reynolds number (its lags the default ones)."""
+    return FlowParameters(separation=polar_separation(static_polar(), reynolds), **fields)
 
 
 #: the tank's flow with the separation of its polar, at the tank's Reynolds number
@@ -395,21 +387,27 @@ def test_the_separation_adds_two_lag_states_and_the_default_has_none():
     assert TANK_SEPARATED_FLOW.digest() != TANK_FLOW.digest()
 
 
-@pytest.mark.parametrize("onset_deg", [0.0, 45.0, math.nan])
-def test_a_separation_onset_outside_its_range_is_refused(onset_deg):
-    with pytest.raises(FlowModelError, match="separation_onset_rad"):
-        FlowParameters(separation_onset_rad=math.radians(onset_deg))
+@pytest.mark.parametrize("fields, match", [
+    (dict(onset_rad=0.0, width_rad=0.01), "onset_rad"), (dict(onset_rad=math.radians(45.0), width_rad=0.01), "onset"),
+    (dict(onset_rad=math.nan, width_rad=0.01), "onset"), (dict(onset_rad=0.1, width_rad=0.0), "width_rad"),
+    (dict(onset_rad=0.1, width_rad=0.01, point_lag_semichords=-1.0), "point_lag")])
+def test_a_separation_outside_its_range_is_refused(fields, match):
+    with pytest.raises(FlowModelError, match=match):
+        TrailingEdgeSeparation(**fields)
+    with pytest.raises(FlowModelError, match="TrailingEdgeSeparation"):
+        FlowParameters(separation=0.1)
 
 
 @pytest.mark.parametrize("reynolds", [1e4, 2e4, 4e4, 8e4])
 def test_the_fitted_onset_is_where_the_polars_separation_point_crosses_one_half(reynolds):
     """The fit's onset lies between the polar's last incidence with f >= 1/2 and its first with f < 1/2 (read off
     the points, no fit), and the logistic follows the points up to 15 deg within 0.12 rms."""
-    polar = read_static_polar(POLAR)[reynolds]
+    polar = static_polar()[reynolds]
     points = static_separation_points(polar, steady_normal_force_coefficient(tuple(a for a, _, _ in polar)))
     first_below = next(alpha for alpha, f in points if f < 0.5)
     last_above = max(alpha for alpha, f in points if f >= 0.5 and alpha < first_below)
-    onset, width = polar_separation(reynolds)
+    separation = polar_separation(static_polar(), reynolds)
+    onset, width = separation.onset_rad, separation.width_rad
     assert last_above <= math.degrees(onset) <= first_below
     used = [(math.radians(alpha), f) for alpha, f in points if alpha <= 15.0]
     model = [1.0 / (1.0 + math.exp((math.sin(a) ** 2 - math.sin(onset) ** 2) / (width * math.sin(2 * onset))))

@@ -19,9 +19,13 @@ from scipy.integrate import solve_ivp
 
 from swim_model import StateError, VehicleModel, codegen
 from swim_model.errors import FlowModelError
-from swim_model.flow import CirculatoryFlow
+from swim_model.flow import CirculatoryFlow, FlowParameters
+from swim_model.separation import TrailingEdgeSeparation
 
 MODELS = {constrained: VehicleModel(constrained=constrained, flow="circulatory") for constrained in (False, True)}
+#: the trailing edge separating as on the tank's NACA 0012 at Re 4e4 (flow_comparison.static_separation_fit: onset
+#: 6.3 deg, width 0.2 deg); its two more lag states
+SEPARATED = FlowParameters(separation=TrailingEdgeSeparation(math.radians(6.3), math.radians(0.2)))
 IDEAL = {constrained: VehicleModel(constrained=constrained) for constrained in (False, True)}
 
 
@@ -33,14 +37,16 @@ def random_state(model: VehicleModel, rng: np.random.Generator) -> tuple[np.ndar
     qdot = rng.uniform(-2.0, 2.0, model.nq)
     u, v, w = model.foil_velocity_map(q) @ qdot
     steady = model.circulatory_flow.steady_lag((u, v, w))
-    return q, qdot, steady * rng.uniform(0.5, 1.5, 2)
+    return q, qdot, steady * rng.uniform(0.5, 1.5, model.n_lag)
 
 
-@pytest.mark.parametrize("constrained", [False, True])
-def test_power_and_hub_torque_of_the_flow_on_the_vector_field(constrained):
+@pytest.mark.parametrize("constrained, separation", [(False, False), (True, False), (False, True)])
+def test_power_and_hub_torque_of_the_flow_on_the_vector_field(constrained, separation):
     """dT/dt (exact derivative along the dynamics) = qdot' Q_flow = (U, V, Omega) . f, and dp_alpha/dt = Q_flow[0],
-    to 1e-9 relative; Q_flow = Q2' f against the foil velocity map and swim_model.flow evaluated separately."""
-    model = MODELS[constrained]
+    to 1e-9 relative; Q_flow = Q2' f against the foil velocity map and swim_model.flow evaluated separately. With
+    the trailing edge separating too (four lag states)."""
+    model = (VehicleModel(constrained=constrained, flow="circulatory", flow_parameters=SEPARATED) if separation
+             else MODELS[constrained])
     s = model.symbolic
     xdot = model.state_derivative_function()(ca.vertcat(s.q, s.qdot, s.lag), ca.DM.zeros(2))
     energy = 0.5 * s.qdot.T @ s.mass @ s.qdot
@@ -49,7 +55,7 @@ def test_power_and_hub_torque_of_the_flow_on_the_vector_field(constrained):
     rates = ca.Function("rates", [s.q, s.qdot, s.lag],
                         [ca.jtimes(energy, x, xdot), ca.jtimes(momentum, x, xdot)])
     rng = np.random.default_rng(21)
-    flow = CirculatoryFlow(model.foil, model.rig.water_density_kg_m3)
+    flow = CirculatoryFlow(model.foil, model.rig.water_density_kg_m3, model.circulatory_flow.params)
     for _ in range(20):
         q, qdot, lag = random_state(model, rng)
         f, generalized = model.flow_force(q, qdot, lag)
