@@ -1,7 +1,8 @@
 """A reduced-order circulatory flow model of the foil.
 
 Lift with Wagner's lag, leading-edge suction with a cap, profile drag and a smooth transition to the flat plate's
-normal force past stall.
+normal force past stall; with ``FlowParameters.separation``, the trailing edge's separation from a static polar
+(swim_model.separation) too.
 The ideal (paper's) model applies the added-mass force of Kirchhoff's equations (eq. 46, ``hydrodynamics.py``).
 This module is the rest, the force the vortex wake would add (``wake.py``: ``F_v = -dI_v/dt``), as a generalized
 force ``Q2(q)' f`` with ``f = (fx, fy, mz)`` in foil axes at the foil frame's origin F for the whole span; the
@@ -389,7 +390,6 @@ class CirculatoryFlow:
         return FlowTerms(force=force, lag_rate=lag_rate, normal_velocity=normal, effective_normal_velocity=effective,
                          suction_parameter=suction_velocity / speed, attached_weight=weight, circulation=circulation,
                          separation_point=separation_point)
-
 
     def profile_drag(self, velocity: ca.SX) -> ca.SX:
         """The attached flow's profile drag alone, for the vortex wake (whose flow is always attached).
