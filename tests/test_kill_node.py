@@ -119,7 +119,7 @@ def test_killing_the_simulator_makes_the_tracker_zero_its_torque(ros_domain, tmp
     # torque the tracker commanded answered the last state it tracked, the one that ended the goal (its plan time
     # from the plan's first torque is the goal's duration, within a period), a state the simulator published
     # (recorded, or one of the periods' states the simulator had not yet delivered to the lagging recorder when it
-    # was killed, lost with it: on its 8 ms grid after the last recorded one; a loaded host left 200 so); after
+    # was killed, lost with it: on its 8 ms grid after the last recorded one, 200 of them on a loaded host); after
     # it, only zero commands (one each period of the watchdog, 20 of them at least)
     efforts = [list(m.effort) for _, m in topics["/joint_commands"]]
     first_torque = min(i for i, effort in enumerate(efforts) if effort != [0.0, 0.0])
