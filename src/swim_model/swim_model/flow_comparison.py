@@ -26,7 +26,7 @@ from swim_model.flow import (
     oscillating_foil,
 )
 from swim_model.joukowski import JoukowskiFoil
-from swim_model.separation import TrailingEdgeSeparation
+from swim_model.separation import TrailingEdgeSeparation, logistic_separation_point
 
 CHORD_M, SPAN_M, THICKNESS_RATIO = 0.10, 0.60, 0.12
 REYNOLDS = 40_000.0
@@ -175,10 +175,10 @@ def static_separation_points(section: list[tuple[float, float, float]],
 
 
 def static_separation_fit(points: list[tuple[float, float]]) -> tuple[float, float]:
-    """The logistic ``FlowParameters`` gives f, fitted to a polar's separation points by least squares.
+    """The separation's logistic (``separation.logistic_separation_point``), fitted to a polar's points.
 
-    f(a) = 1 / (1 + exp((sin^2 a - sin^2 a_f) / (w sin 2 a_f))) over the points up to
-    ``SEPARATION_FIT_UP_TO_DEG``, on a grid of 0.05 deg in the onset a_f and 0.05 deg in the width w (0.05-3 deg).
+    Least squares over the points up to ``SEPARATION_FIT_UP_TO_DEG``, on a grid of 0.05 deg in the onset a_f and
+    0.05 deg in the width w (0.05-3 deg).
 
     Parameters
     ----------
@@ -195,8 +195,7 @@ def static_separation_fit(points: list[tuple[float, float]]) -> tuple[float, flo
     measured = np.array([f for _, f in used])
     onsets = np.radians(np.arange(0.5, SEPARATION_FIT_UP_TO_DEG, 0.05))[:, None, None]
     widths = np.radians(np.arange(0.05, 3.0001, 0.05))[None, :, None]
-    exponent = (np.sin(alpha) ** 2 - np.sin(onsets) ** 2) / (widths * np.sin(2.0 * onsets))
-    model = 1.0 / (1.0 + np.exp(np.clip(exponent, -50.0, 50.0)))
+    model = logistic_separation_point(np.sin(alpha) ** 2, onsets, widths)
     error = np.sum((model - measured) ** 2, axis=-1)
     i, j = np.unravel_index(int(np.argmin(error)), error.shape)
     return float(onsets[i, 0, 0]), float(widths[0, j, 0])

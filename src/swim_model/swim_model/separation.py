@@ -7,7 +7,8 @@ is read at the incidence lagged by T_p (the pressure's lag) and lags itself by T
 semichords travelled. swim_model.flow scales its normal force and suction by it (docs/flow_model.md, Sec. 6,
 "Trailing-edge separation from the static polar"); the vortex wake has no separation of its own.
 
-Pure arithmetic: static_separation_point works on floats and on CasADi expressions alike.
+Pure arithmetic: static_separation_point and logistic_separation_point work on floats, numpy arrays and CasADi
+expressions alike.
 """
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ import math
 from typing import Any
 
 import casadi as ca
+import numpy as np
 
 from swim_model.errors import FlowModelError
 
@@ -26,7 +28,7 @@ PUBLISHED_POINT_LAG_SEMICHORDS = 3.0
 #: set on the 90 deg tank series (docs/flow_model.md, Sec. 6): both published lags doubled, the one number set
 #: there; with the published ones the separation removes 15-28 % of the thrust the tank measured
 TANK_LAG_FACTOR = 2.0
-#: the largest exponent static_separation_point evaluates on floats (f underflows to 0 beyond it)
+#: the largest exponent logistic_separation_point evaluates in numpy (f underflows to 0 beyond it)
 _MAX_EXPONENT = 700.0
 
 
@@ -68,10 +70,7 @@ class TrailingEdgeSeparation:
 
 def static_separation_point(u_m_s: Any, normal_m_s: Any, separation: TrailingEdgeSeparation,
                             speed_regularization_m_s: float) -> Any:
-    """The static separation point at the incidence atan(normal / u): a logistic in sin^2 of it.
-
-    ``1 / (1 + exp((sin^2 a - sin^2 a_f) / (w sin 2 a_f)))``: 1/2 at the onset a_f, its fall's width an angle
-    there, even in the incidence and smooth through zero, degree 0 in the velocities.
+    """The static separation point at the incidence atan(normal / u) (``logistic_separation_point``).
 
     Parameters
     ----------
@@ -90,8 +89,31 @@ def static_separation_point(u_m_s: Any, normal_m_s: Any, separation: TrailingEdg
         f in (0, 1).
     """
     sin2 = normal_m_s * normal_m_s / (u_m_s * u_m_s + normal_m_s * normal_m_s + speed_regularization_m_s ** 2)
-    onset = separation.onset_rad
-    exponent = (sin2 - math.sin(onset) ** 2) / (separation.width_rad * math.sin(2.0 * onset))
+    return logistic_separation_point(sin2, separation.onset_rad, separation.width_rad)
+
+
+def logistic_separation_point(sin2: Any, onset_rad: Any, width_rad: Any) -> Any:
+    """``1 / (1 + exp((sin^2 a - sin^2 a_f) / (w sin 2 a_f)))``: f at an incidence a given as sin^2 a.
+
+    1/2 at the onset a_f, its fall's width an angle there, even in the incidence and smooth through zero.
+
+    Parameters
+    ----------
+    sin2 : float, ndarray or casadi expression
+        sin^2 of the incidence.
+    onset_rad, width_rad : float or ndarray
+        a_f and w, rad (arrays broadcast against sin2: ``flow_comparison.static_separation_fit``'s grid).
+
+    Returns
+    -------
+    float, ndarray or casadi expression
+        f in (0, 1), of the broadcast shape.
+    """
+    onset_sin2, scale = np.sin(onset_rad) ** 2, width_rad * np.sin(2.0 * onset_rad)
+    if np.ndim(scale) == 0:   # plain floats, so that a CasADi sin2 stays a CasADi expression
+        onset_sin2, scale = float(onset_sin2), float(scale)
+    exponent = (sin2 - onset_sin2) / scale
     if isinstance(exponent, (ca.SX, ca.MX, ca.DM)):
         return 1.0 / (1.0 + ca.exp(exponent))
-    return 1.0 / (1.0 + math.exp(min(float(exponent), _MAX_EXPONENT)))
+    point = 1.0 / (1.0 + np.exp(np.minimum(exponent, _MAX_EXPONENT)))
+    return float(point) if np.ndim(point) == 0 else point
