@@ -190,7 +190,10 @@ def make_process_realtime(settings: RealtimeSettings) -> RealtimeOutcome:
         cpus = parse_cpu_list(settings.cpu_affinity)
         try:
             for thread_id in _thread_ids():
-                os.sched_setaffinity(thread_id, cpus)
+                try:
+                    os.sched_setaffinity(thread_id, cpus)
+                except ProcessLookupError:
+                    pass   # the thread ended meanwhile
             applied.append(f"CPUs {settings.cpu_affinity}")
         except OSError as err:
             refused.append(f"CPUs {settings.cpu_affinity}: {err.strerror} (this host has CPUs "

@@ -33,18 +33,28 @@ def run_child(code: str, prefix: tuple[str, ...] = ()) -> dict:
 APPLY = """
     import json, os, threading
     from swim_ros.realtime import RealtimeSettings, make_process_realtime, memory_locked_kib
+    def each_thread(read):
+        values = []
+        for name in os.listdir("/proc/self/task"):
+            try:
+                values.append(read(int(name)))
+            except ProcessLookupError:   # a thread joined can still be listed for a moment after it ended
+                pass
+        return values
     started = threading.Event(); stop = threading.Event()
     def worker():
         started.set(); stop.wait()
     thread = threading.Thread(target=worker); thread.start(); started.wait()   # a thread made before
-    outcome = make_process_realtime(RealtimeSettings(**{settings}))
-    later = {{}}
-    def made_after():
-        later["policy"] = os.sched_getscheduler(0)
-    after = threading.Thread(target=made_after); after.start(); after.join()
-    policies = [os.sched_getscheduler(int(t)) for t in os.listdir("/proc/self/task")]
-    priorities = [os.sched_getparam(int(t)).sched_priority for t in os.listdir("/proc/self/task")]
-    stop.set(); thread.join()
+    try:
+        outcome = make_process_realtime(RealtimeSettings(**{settings}))
+        later = {{}}
+        def made_after():
+            later["policy"] = os.sched_getscheduler(0)
+        after = threading.Thread(target=made_after); after.start(); after.join()
+        policies = each_thread(os.sched_getscheduler)
+        priorities = each_thread(lambda t: os.sched_getparam(t).sched_priority)
+    finally:   # an error still ends the worker, so the process exits with it instead of waiting for the thread
+        stop.set(); thread.join()
     print(json.dumps({{"applied": outcome.applied, "refused": outcome.refused, "policies": policies,
                       "priorities": priorities, "later": later["policy"], "locked_kib": memory_locked_kib(),
                       "affinity": sorted(os.sched_getaffinity(0))}}))
