@@ -53,6 +53,12 @@ REDUCED_STARTUP_CHORDS = 30.0              # Jones's slow lag decays as e^{-0.04
 WAKE_MIN_STEPS_PER_CYCLE = 800
 WAKE_MAX_TRAVEL_PER_STEP_CHORDS = 1.0 / 30.0  # the trailing edge's travel per shed vortex, as test_wake.py
 WAKE_STARTUP_CHORDS = 8.0                  # the starting vortex is 8 chords behind before averaging starts
+# the towed foil's trailing edge never rests (it moves at the towing speed at least), so the least shedding distance
+# only keeps a new vortex off the cusp: a ten-thousandth of the chord, under half the trailing edge's travel in a
+# step at 1600 steps a cycle up to k = 8. The wake's own default, sized for the closed loop's 8 ms step where the
+# foil does rest, would set the shedding distance of these short steps instead of the travel (docs/flow_model.md,
+# "The wake's time step")
+WAKE_MIN_SHED_DISTANCE_CHORDS = 1.0e-4
 
 
 @dataclasses.dataclass(frozen=True)
@@ -416,7 +422,7 @@ def oscillating_foil(  # noqa: C901 - the public entry: each keyword checked, th
     if wake_model:
         params = wake_parameters or WakeParameters(
             rho_kg_m3=rho, max_vortex_count=max(300, steps_per_cycle + 100),
-            protected_vortex_count=steps_per_cycle + 50,
+            protected_vortex_count=steps_per_cycle + 50, min_shed_distance_m=WAKE_MIN_SHED_DISTANCE_CHORDS * chord,
             critical_leading_edge_suction=flow.params.critical_leading_edge_suction,
             suction_cap_exponent=flow.params.suction_cap_exponent,
             speed_regularization_m_s=flow.params.speed_regularization_m_s)

@@ -474,14 +474,17 @@ class Wake:
         return zeta
 
     def _absorb_at_surface(self, zeta: npt.NDArray[np.complex128]) -> npt.NDArray[np.complex128]:
-        """Remove the vortices closer to the circle than surface_absorption_gap_m.
+        """Remove the vortices over the surface closer to the circle than surface_absorption_gap_m.
 
+        Over the surface: forward of the trailing edge. A vortex aft of it is in the wake, however near the cusp:
+        one just shed there sits closer to the circle than the gap when the step is short.
         zeta holds the vortices' circle-plane positions; returns those of the vortices kept.
         """
         gap_m = self.params.surface_absorption_gap_m
         if gap_m == 0.0 or zeta.size == 0:
             return zeta
-        absorbed = np.abs(zeta) - self.plane.r_m < gap_m
+        over_surface = self.plane.to_foil(zeta).real > self.plane.z_te.real
+        absorbed = (np.abs(zeta) - self.plane.r_m < gap_m) & over_surface
         if not np.any(absorbed):
             return zeta
         self.absorbed_count += int(np.count_nonzero(absorbed))
