@@ -483,8 +483,10 @@ class Wake:
         gap_m = self.params.surface_absorption_gap_m
         if gap_m == 0.0 or zeta.size == 0:
             return zeta
-        over_surface = self.plane.to_foil(zeta).real > self.plane.z_te.real
-        absorbed = (np.abs(zeta) - self.plane.r_m < gap_m) & over_surface
+        absorbed = np.abs(zeta) - self.plane.r_m < gap_m
+        if not np.any(absorbed):
+            return zeta
+        absorbed[absorbed] = self.plane.to_foil(zeta[absorbed]).real > self.plane.z_te.real   # over the surface
         if not np.any(absorbed):
             return zeta
         self.absorbed_count += int(np.count_nonzero(absorbed))

@@ -4,7 +4,9 @@
   is booked as absorbed (free + absorbed = everything shed or placed), Kelvin's total circulation, measured from
   the velocity field, stays zero, and the force of the step is the impulse it carried handed to the foil, by the
   closed form ``I = -i rho Gamma (zeta - r^2 / conj(zeta))``.
-* A vortex just outside the gap, and any vortex with the absorption off, stays.
+* A vortex just outside the gap, and any vortex with the absorption off, stays. So does a vortex aft of the
+  trailing edge, in the wake, however near the cusp: there the circle plane stretches distances, and a vortex shed
+  a short step's travel behind the cusp sits inside the gap.
 * Spikes: a foil that swims forward, heaving and pitching, then reverses and runs trailing edge first through its
   own wake (what the closed loop's foil does once the tracking is lost) carries vortices onto its surface. The
   bound: the largest circulatory force attached flow can give, thin-aerofoil lift at sin(alpha) = 1,
@@ -93,6 +95,22 @@ def test_a_vortex_outside_the_gap_or_with_absorption_off_stays(gap_factor, absor
     assert wake.absorbed_count == 0
     assert wake.vortex_count() == 3
     assert wake.circulations_m2_s[1] == 0.05 * CIRCULATION_M2_S
+
+
+@pytest.mark.parametrize("behind_cusp_m", [3.0e-5, 2.0e-4])
+def test_a_vortex_aft_of_the_trailing_edge_is_in_the_wake_and_stays(behind_cusp_m):
+    """On the chord line behind the cusp, half a towed step's travel (0.03 mm) and the closed loop's least shedding
+    distance (0.2 mm): inside the gap in the circle plane for the first, outside for the second; both stay."""
+    wake = foil_at_rest()
+    z = wake.plane.z_te - behind_cusp_m
+    zeta = complex(wake.plane.to_circle(np.array([z]))[0])
+    inside_gap = abs(zeta) - wake.plane.r_m < wake.params.surface_absorption_gap_m
+    assert inside_gap == (behind_cusp_m < 1.0e-4)
+    wake.add_vortex(z, 1.0e-9)   # so weak that it stays where it is placed over the step
+    wake.step(STEP_S, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    assert wake.absorbed_count == 0
+    assert wake.circulations_m2_s[1] == 1.0e-9
+    assert abs(wake.positions_m[1] - z) < 1e-3 * behind_cusp_m
 
 
 def test_bad_absorption_input_is_refused():
