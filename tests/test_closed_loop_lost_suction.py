@@ -4,8 +4,8 @@ the separation drag) with the physical disturbances (seed 3) and the rig's stops
 
 The plans' model holds the leading edge's suction at the critical leading-edge suction parameter; in the last
 decelerate the wake's attached flow asks the edge for several times that. With the wake's leading edge losing
-the suction beyond the same parameter (WakeParameters' default) the lane change ends 1.9 mm off its outer lane;
-with the attached flow's whole suction, 15.4 mm.
+the suction beyond the same parameter (WakeParameters' default) the lane change ends 1.4 mm off its outer lane;
+with the attached flow's whole suction, 11.3 mm.
 """
 import pytest
 from conftest import track_plan

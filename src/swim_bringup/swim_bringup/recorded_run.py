@@ -19,7 +19,7 @@ from typing import Callable, Optional
 from swim_bringup.analysis import rig_hard_limits, run_analysis
 from swim_bringup.figures import write_run_figures
 from swim_bringup.reports import RunReport, TrackerResult
-from swim_bringup.run_client import STARTUP_TIMEOUT_S, RunClient, RunError
+from swim_bringup.run_client import STARTUP_TIMEOUT_S, NodeDied, RunClient, RunError
 from swim_bringup.run_record import read_bag
 from swim_bringup.system import System
 from swim_controller.supervisor import Tolerances
@@ -72,15 +72,21 @@ def run_recorded(specs: list[NodeSpec], run_dir: Path, primitive_ids: list[str],
             if progress is not None:
                 progress(fraction)
             if system.dead():
-                raise RunError(f"{', '.join(system.dead())} died (see {run_dir / 'logs'})")
+                raise NodeDied(system.dead(), run_dir / "logs")
         try:
             result = run_maneuver(run_dir / "bag", primitive_ids, repeat_counts, time_scale, timeout_s, on_progress,
                                   tolerances)
+        except NodeDied:
+            raise
         except RunError as err:   # a node that died meanwhile is what the reader needs to know first
             dead = system.dead()
-            if dead and "died" not in str(err):
-                raise RunError(f"{err}; {', '.join(dead)} died (see {run_dir / 'logs'})") from err
+            if dead:
+                raise NodeDied(dead, run_dir / "logs", str(err)) from err
             raise
+        dead = system.dead()   # a dead simulator ends the goal (STATE_LOST), a dead tracker its feedback
+        if dead:
+            raise NodeDied(dead, run_dir / "logs", f"the goal ended after {result.duration_s:.3f} s with code "
+                                                   f"{result.error_code}: {result.error_string}")
     return write_run_report(run_dir, result, started, rig_path)
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import struct
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, Optional
+from typing import TYPE_CHECKING, Callable, Optional, Sequence
 
 from swim_bringup.bag import LATCHED_TOPICS, RUN_TOPICS, BagWriter
 from swim_bringup.recorder import RECORD_DEPTH, TopicRecorder
@@ -44,6 +44,30 @@ IDLE_LOOP_TOPICS = ("/joint_states", "/joint_commands")
 
 class RunError(RuntimeError):
     """The run could not be done (a node did not start or died, the planner refused, ...)."""
+
+
+class NodeDied(RunError):
+    """Nodes of the run died.
+
+    Parameters
+    ----------
+    nodes : sequence of str
+        The dead nodes' executables.
+    logs : Path
+        Where their logs are.
+    cause : str, optional
+        What the run met first, when that was not the death itself.
+
+    Attributes
+    ----------
+    nodes : tuple of str
+        The dead nodes' executables.
+    """
+
+    def __init__(self, nodes: Sequence[str], logs: Path, cause: str = "") -> None:
+        died = f"{', '.join(nodes)} died (see {logs})"
+        super().__init__(f"{cause}; {died}" if cause else died)
+        self.nodes = tuple(nodes)
 
 
 class RunClient:
