@@ -14,7 +14,7 @@ import argparse
 import dataclasses
 import time
 from pathlib import Path
-from typing import Callable, Optional
+from typing import Callable, Optional, Sequence
 
 from swim_bringup.analysis import rig_hard_limits, run_analysis
 from swim_bringup.figures import write_run_figures
@@ -36,14 +36,15 @@ Progress = Callable[[float], None]   # called with the fraction of the plan done
 
 def run_maneuver(bag_path: Path, primitive_ids: list[str], repeat_counts: list[int], time_scale: float,
                  timeout_s: float, progress: Optional[Progress] = None,
-                 tolerances: Tolerances = RUN_TOLERANCES) -> TrackerResult:
+                 tolerances: Tolerances = RUN_TOLERANCES, first_messages: Sequence[str] = ()) -> TrackerResult:
     """Request the maneuver, execute it and record the run; the tracker's result.
 
-    Request the maneuver, execute it, record the run into the bag at bag_path; the tracker's result. RunError
+    Request the maneuver, execute it, record the run into the bag at bag_path; the tracker's result. The request
+    waits for the loop (RunClient.wait_for_nodes) and for a first message on each of first_messages. RunError
     if the run could not be done.
     """
     with RunClient(bag_path) as client:
-        client.wait_for_nodes(STARTUP_TIMEOUT_S)
+        client.wait_for_nodes(STARTUP_TIMEOUT_S, first_messages)
         handle = client.execute(client.request(primitive_ids, repeat_counts, time_scale), progress, tolerances)
         result = client.result(handle, timeout_s)
         try:
@@ -53,6 +54,16 @@ def run_maneuver(bag_path: Path, primitive_ids: list[str], repeat_counts: list[i
                            f"{result.error_string}") from err
         return TrackerResult(error_code=result.error_code, error_string=result.error_string,
                              final_alpha_error_rad=result.final_alpha_error_rad, duration_s=result.duration_s)
+
+
+#: what a node publishes while the loop idles, by executable: a run with the node waits for its first message, so
+#: that the bag holds it from the maneuver's start (a short lock-step run can end before discovery delivers it)
+IDLE_PUBLICATIONS = {"rig_state_publisher": ("/tf",)}
+
+
+def idle_topics_of(specs: Sequence[NodeSpec]) -> tuple[str, ...]:
+    """The topics IDLE_PUBLICATIONS names for the nodes of specs."""
+    return tuple(topic for spec in specs for topic in IDLE_PUBLICATIONS.get(spec.executable, ()))
 
 
 def run_recorded(specs: list[NodeSpec], run_dir: Path, primitive_ids: list[str], repeat_counts: list[int],
@@ -75,7 +86,7 @@ def run_recorded(specs: list[NodeSpec], run_dir: Path, primitive_ids: list[str],
                 raise NodeDied(system.dead(), run_dir / "logs")
         try:
             result = run_maneuver(run_dir / "bag", primitive_ids, repeat_counts, time_scale, timeout_s, on_progress,
-                                  tolerances)
+                                  tolerances, idle_topics_of(specs))
         except NodeDied:
             raise
         except RunError as err:   # a node that died meanwhile is what the reader needs to know first

@@ -172,8 +172,12 @@ class RunClient:
             self.executor.spin_once(timeout_sec=min(0.01, max(end - time.monotonic(), 0.0)))
 
     # --- the run -------------------------------------------------------------------------------------------
-    def wait_for_nodes(self, timeout_s: float = STARTUP_TIMEOUT_S) -> None:
-        """Wait for the planner, the tracker and the loop's topics to be matched; RunError after timeout_s."""
+    def wait_for_nodes(self, timeout_s: float = STARTUP_TIMEOUT_S, first_messages: Sequence[str] = ()) -> None:
+        """Wait for the planner, the tracker and the loop's topics to be matched; RunError after timeout_s.
+
+        first_messages: recorded topics whose first message must have come too (a node that publishes them while
+        the loop idles is among the run's nodes: rig_state_publisher's /tf).
+        """
         try:
             wait_for_server(self.executor, self.planner.service_is_ready, "planner_node", timeout_s)
             wait_for_server(self.executor, self.tracker.server_is_ready, "tracker_node", timeout_s)
@@ -184,13 +188,14 @@ class RunClient:
         # (a bridge run's bag once lacked the first 56 ms of joint_states). A first message received proves the
         # writer's side; tracking_state has none before the plan, but the tracker that sent joint_commands to
         # this recorder already knew its tracking_state reader (made before, see __init__).
+        awaited = IDLE_LOOP_TOPICS + tuple(topic for topic in first_messages if topic in self.recordings)
+
         def unmatched() -> list[str]:
-            return [topic for topic in LOOP_TOPICS if topic in self.recordings and (
-                self.recordings[topic].get_publisher_count() == 0
-                or topic in IDLE_LOOP_TOPICS and topic not in self.latest_cdr)]
+            return [topic for topic in LOOP_TOPICS if topic in self.recordings
+                    and self.recordings[topic].get_publisher_count() == 0] \
+                + [topic for topic in awaited if topic in self.recordings and topic not in self.latest_cdr]
         self.spin_until(lambda: not unmatched(), timeout_s,
-                        f"publisher on each of {', '.join(LOOP_TOPICS)} and a first message on "
-                        f"{', '.join(IDLE_LOOP_TOPICS)}")
+                        f"publisher on each of {', '.join(LOOP_TOPICS)} and a first message on {', '.join(awaited)}")
 
     def request(self, primitive_ids: list[str], repeat_counts: list[int], time_scale: float):
         """The planner's plan (swim_interfaces/PlannedTrajectory) for the sequence; RunError if refused."""
