@@ -43,10 +43,15 @@ def jones_wagner(s: np.ndarray) -> np.ndarray:
     return 1.0 - 0.165 * np.exp(-0.0455 * s) - 0.335 * np.exp(-0.3 * s)
 
 
+def theodorsen(k: float) -> complex:
+    """Theodorsen's C(k) = H1(k) / (H1(k) + i H0(k)) (module docstring)."""
+    return complex(hankel2(1, k) / (hankel2(1, k) + 1j * hankel2(0, k)))
+
+
 def garrick_heave(k: float, h0_over_c: float) -> tuple[float, float]:
     """(C_T, eta) of Garrick's linear theory for pure heave (module docstring)."""
-    theodorsen = hankel2(1, k) / (hankel2(1, k) + 1j * hankel2(0, k))
-    f, g = theodorsen.real, theodorsen.imag
+    c = theodorsen(k)
+    f, g = c.real, c.imag
     return 4.0 * math.pi * k * k * h0_over_c ** 2 * (f * f + g * g), (f * f + g * g) / f
 
 
@@ -366,14 +371,14 @@ def test_pitching_foil_follows_theodorsen(k):
                               frequency_hz=omega / (2.0 * math.pi), phase_rad=0.0,
                               pivot_from_leading_edge_m=(1.0 + a) * b, model="wake",
                               flow_parameters=FlowParameters(profile_drag_coefficient=0.0), water_density_kg_m3=RHO)
-    theodorsen = complex(hankel2(1, k) / (hankel2(1, k) + 1j * hankel2(0, k)))
+    c = theodorsen(k)
     # complex amplitudes of alpha = amplitude sin(omega t) = Re(-i amplitude e^{i omega t})
     alpha, rate, acceleration = -1j * amplitude, omega * amplitude, 1j * omega ** 2 * amplitude
     q = SPEED_M_S * alpha + b * (0.5 - a) * rate
     lift = math.pi * RHO * b * b * (SPEED_M_S * rate - b * a * acceleration) + 2.0 * math.pi * RHO * SPEED_M_S * b \
-        * theodorsen * q
+        * c * q
     moment = -math.pi * RHO * b * b * (SPEED_M_S * b * (0.5 - a) * rate + b * b * (0.125 + a * a) * acceleration) \
-        + 2.0 * math.pi * RHO * SPEED_M_S * b * b * (a + 0.5) * theodorsen * q
+        + 2.0 * math.pi * RHO * SPEED_M_S * b * b * (a + 0.5) * c * q
     power = -0.5 * (moment * rate.conjugate()).real * foil.span_m
     measured = 2.0 * np.mean(result.lift_n * np.exp(-1j * omega * result.time_s))
     assert abs(measured) == pytest.approx(abs(lift) * foil.span_m, rel=0.03)
