@@ -36,7 +36,7 @@ from swim_model.leading_edge import (
     is_cap_exponent,
     smooth_cap,
 )
-from swim_model.separation import TrailingEdgeSeparation, static_separation_point
+from swim_model.separation import TrailingEdgeSeparation, kirchhoff_share, static_separation_point
 
 Array = npt.NDArray[np.float64]
 
@@ -358,11 +358,10 @@ class CirculatoryFlow:
             lag_rates.append(speed / (self.semichord_m * p.separation.point_lag_semichords)
                              * (speed * static_point - point_speed))
             separation_point = ca.fmax(point_speed, 0.0) / speed
-            root = ca.sqrt(separation_point)
-            kirchhoff = 0.25 * (1.0 + root) ** 2
+            kirchhoff = kirchhoff_share(separation_point)
             normal_attached = kirchhoff * normal_attached
             moment_attached = kirchhoff * moment_attached
-            suction = root * suction
+            suction = ca.sqrt(separation_point) * suction
         else:
             separation_point = 1.0 + 0.0 * u
         lag_rate = ca.vertcat(*lag_rates)

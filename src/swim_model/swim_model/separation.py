@@ -5,10 +5,11 @@ trailing edge forward to a point f (1 attached, 0 separated to the leading edge)
 gives as a function of incidence through Kirchhoff's flow, C_N = C_N,attached ((1 + sqrt f) / 2)^2. In motion f
 is read at the incidence lagged by T_p (the pressure's lag) and lags itself by T_f (the boundary layer's), both in
 semichords travelled. swim_model.flow scales its normal force and suction by it (docs/flow_model.md, Sec. 6,
-"Trailing-edge separation from the static polar"); the vortex wake has no separation of its own.
+"Trailing-edge separation from the static polar"); the vortex wake, given f, holds its bound circulation at the
+same share (swim_model.wake).
 
-Pure arithmetic: static_separation_point and logistic_separation_point work on floats, numpy arrays and CasADi
-expressions alike.
+Pure arithmetic: kirchhoff_share, static_separation_point and logistic_separation_point work on floats and CasADi
+expressions alike (the last two on numpy arrays too).
 """
 from __future__ import annotations
 
@@ -66,6 +67,24 @@ class TrailingEdgeSeparation:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise FlowModelError(f"TrailingEdgeSeparation.{name} must be positive and finite, got {value!r}")
+
+
+def kirchhoff_share(separation_point: Any) -> Any:
+    """``((1 + sqrt f) / 2)^2``: the share of the attached normal force (and circulation) that Kirchhoff's flow keeps.
+
+    Parameters
+    ----------
+    separation_point : float or casadi expression
+        f >= 0 (1 attached; the lagged f passes 1 a little where the speed falls).
+
+    Returns
+    -------
+    float or casadi expression
+        K, 1/4 at f = 0 and 1 at f = 1.
+    """
+    root = ca.sqrt(separation_point) if isinstance(separation_point, (ca.SX, ca.MX, ca.DM)) else math.sqrt(
+        separation_point)
+    return 0.25 * (1.0 + root) ** 2
 
 
 def static_separation_point(u_m_s: Any, normal_m_s: Any, separation: TrailingEdgeSeparation,

@@ -358,8 +358,8 @@ def oscillating_foil(  # noqa: C901 - the public entry: each keyword checked, th
     water_density_kg_m3 : float, optional
         rho, kg/m^3.
     flow_parameters : FlowParameters, optional
-        The reduced model's coefficients (the wake uses its profile drag coefficient and its leading edge's
-        critical suction).
+        The reduced model's coefficients (the wake uses its profile drag coefficient, its leading edge's critical
+        suction, and with ``separation`` set its separation point, from its lag states under the same motion).
     wake_parameters : WakeParameters, optional
         The wake's numerical parameters (default: WakeParameters with room for one cycle of unmerged vortices).
 
@@ -418,6 +418,10 @@ def oscillating_foil(  # noqa: C901 - the public entry: each keyword checked, th
     dt = period / steps_per_cycle
     total_steps = cycles * steps_per_cycle
     averaged_steps = averaged_cycles * steps_per_cycle
+    # the reduced model's lag states at every step's end under the prescribed motion (the wake takes its separation
+    # point from them)
+    half_step_velocities = kinematics.velocity(np.arange(2 * total_steps + 1, dtype=float) * (0.5 * dt))
+    lag = flow.integrate_lag(half_step_velocities, dt, flow.steady_lag(half_step_velocities[0]))
 
     if wake_model:
         params = wake_parameters or WakeParameters(
@@ -430,10 +434,15 @@ def oscillating_foil(  # noqa: C901 - the public entry: each keyword checked, th
         steps = np.arange(1, total_steps + 1, dtype=float)
         x, y, theta = kinematics.pose(steps * dt)
         nu_end = kinematics.velocity(steps * dt)
+        # the trailing edge's separation point at each step's end: the reduced model's, from its lag states under
+        # the same motion (1 throughout without FlowParameters.separation)
+        separation_point = (np.asarray(flow.evaluate(half_step_velocities[2::2], lag[1:])["separation_point"],
+                                       dtype=float) if flow.params.separates else np.ones(total_steps))
         vortical = np.zeros((total_steps, 3))
         suction_parameter = np.zeros(averaged_steps)
         for i in range(total_steps):
-            force = wake.step(dt, (x[i], y[i], theta[i]), (nu_end[i, 0], nu_end[i, 1], nu_end[i, 2]))
+            force = wake.step(dt, (x[i], y[i], theta[i]), (nu_end[i, 0], nu_end[i, 1], nu_end[i, 2]),
+                              float(separation_point[i]))
             vortical[i] = (force.fx_n, force.fy_n, force.moment_n_m)
             if i >= total_steps - averaged_steps:
                 suction_parameter[i - total_steps + averaged_steps] = wake.leading_edge_suction_parameter()
@@ -446,12 +455,9 @@ def oscillating_foil(  # noqa: C901 - the public entry: each keyword checked, th
         drag = np.asarray(flow.functions["profile_drag"].map(time.size)(velocity.T), dtype=float).T
         fluid = vortical[window] + drag
     else:
-        half_steps = np.arange(2 * total_steps + 1, dtype=float) * (0.5 * dt)
-        velocities = kinematics.velocity(half_steps)
-        lag = flow.integrate_lag(velocities, dt, flow.steady_lag(velocities[0]))
         window = slice(total_steps - averaged_steps, total_steps)
         time = np.arange(total_steps + 1, dtype=float)[window] * dt
-        velocity = velocities[0::2][window]
+        velocity = half_step_velocities[0::2][window]
         terms = flow.evaluate(velocity, lag[window])
         fluid, suction_parameter, attached_weight = terms["f"], terms["lesp"], terms["attached_weight"]
         suction_speed = np.hypot(velocity[:, 0], velocity[:, 1])

@@ -399,10 +399,49 @@ class CirclePlane:
         float
             The new vortex's circulation, m^2/s.
         """
+        known = self._trailing_edge_tangential_velocity(zeta_k, gamma_k, velocity)
+        return float(-known / self.unit_vortex_potential_derivative(self.zeta_te, zeta_new).imag)
+
+    def separated_kutta_strength(self, zeta_new: complex, zeta_k: Complex, gamma_k: npt.NDArray[np.float64],
+                                 velocity: tuple[float, float, float], attached_share: float) -> float:
+        """Strength of a vortex at zeta_new that leaves the trailing edge's flow K times the attached circulation's.
+
+        The condition: Im(dw/dzeta) at the trailing edge is (1 - K) times that of the same flow without its bound
+        circulation (the free vortices' images carry -sum(gamma) about the circle; a vortex of +sum(gamma) at the
+        centre takes it off). K = 1 is the Kutta condition (``kutta_strength``). In steady flow the bound
+        circulation settles at K times the Kutta circulation whatever the step, since the condition holds the edge's
+        whole velocity rather than the new vortex's share of it: Kirchhoff's flow with K = ((1 + sqrt f)/2)^2
+        (swim_model.separation.kirchhoff_share; docs/flow_model.md, Sec. 6).
+
+        Parameters
+        ----------
+        zeta_new, zeta_k, gamma_k, velocity
+            As for ``kutta_strength``.
+        attached_share : float
+            K > 0.
+
+        Returns
+        -------
+        float
+            The new vortex's circulation, m^2/s.
+        """
+        if attached_share == 1.0:
+            return self.kutta_strength(zeta_new, zeta_k, gamma_k, velocity)
+        known = self._trailing_edge_tangential_velocity(zeta_k, gamma_k, velocity)
+        unit = self.unit_vortex_potential_derivative(self.zeta_te, zeta_new).imag
+        per_bound_circulation = 1.0 / (2.0 * math.pi * self.r_m)   # Im(dw/dzeta) at -r of a unit vortex at the centre
+        shed = float(np.sum(gamma_k))
+        detached = 1.0 - attached_share
+        return float((detached * shed * per_bound_circulation - attached_share * known)
+                     / (attached_share * unit - detached * per_bound_circulation))
+
+    def _trailing_edge_tangential_velocity(self, zeta_k: Complex, gamma_k: npt.NDArray[np.float64],
+                                           velocity: tuple[float, float, float]) -> float:
+        """Im(dw/dzeta) at the trailing edge of the body's flow and the free vortices' with their images, m/s."""
         te = self.zeta_te
         known = self.body_potential_derivative(te, velocity) + self.vortex_potential_derivative(
             np.array([te]), zeta_k, gamma_k)[0]
-        return float(-known.imag / self.unit_vortex_potential_derivative(te, zeta_new).imag)
+        return float(known.imag)
 
     def unit_vortex_potential_derivative(self, point: complex, zeta_new: complex) -> complex:
         """dw/dzeta at a point of a vortex of unit strength at zeta_new with its image.

@@ -6,10 +6,11 @@ Ch. 13. The closed forms are ``vortex_force.py``'s; this module holds the wake's
 
 ``Wake.step(dt, pose, velocity)`` convects the free vortices (Adams-Bashforth), moves the foil, reflects the
 vortices it carried inside and absorbs those at the surface into the bound circulation, sheds one vortex by the
-Kutta condition, returns the vortical force and moment ``F_v = -dI_v/dt`` (the added-mass force stays the ideal
-model's: nothing is counted twice), with the leading-edge suction beyond the critical LESP taken off, and
-amalgamates vortices above ``max_vortex_count``. Each rule, with its sources, the viscous core growth and the
-assumptions: docs/wake_study.md, Sec. 1.2; the absorption: docs/wake_near_surface.md.
+Kutta condition (relaxed to Kirchhoff's share when the trailing edge separates), returns the vortical force and
+moment ``F_v = -dI_v/dt`` (the added-mass force stays the ideal model's: nothing is counted twice), with the
+leading-edge suction beyond the critical LESP taken off, and amalgamates vortices above ``max_vortex_count``. Each
+rule, with its sources, the viscous core growth and the assumptions: docs/wake_study.md, Sec. 1.2; the absorption:
+docs/wake_near_surface.md.
 """
 from __future__ import annotations
 
@@ -29,6 +30,7 @@ from swim_model.leading_edge import (
     is_cap_exponent,
     smooth_cap,
 )
+from swim_model.separation import kirchhoff_share
 from swim_model.vortex_force import CirclePlane, angular_impulse_from_terms, compiled, impulse_from_terms
 
 Pose = tuple[float, float, float]        # x_m, y_m (frame origin in the tank frame), theta_rad (chord angle)
@@ -255,6 +257,7 @@ class Wake:
         self._zeta: npt.NDArray[np.complex128] | None = None
         self._impulse_terms = np.zeros(0, dtype=complex)
         self._angular_terms = np.zeros(0)
+        self._separation_point = 1.0   # f of the current step (Wake.step)
         self.reflected_count = 0
         self.merged_count = 0
         self.absorbed_count = 0
@@ -363,10 +366,13 @@ class Wake:
         self._impulse, self._angular_impulse = self._impulses()
 
     # --- the step ----------------------------------------------------------------------------------------------
-    def step(self, dt_s: float, pose: Pose, velocity: Velocity) -> WakeForce:
+    def step(self, dt_s: float, pose: Pose, velocity: Velocity, separation_point: float = 1.0) -> WakeForce:
         """Advance by dt_s to the foil's new pose and velocity; return the vortical force over the step.
 
-        The step's rules: docs/wake_study.md, Sec. 1.2.
+        The step's rules: docs/wake_study.md, Sec. 1.2. With the trailing edge separated (separation_point f below
+        1), the step's vortex holds the bound circulation at Kirchhoff's share ((1 + sqrt f)/2)^2 of the attached
+        flow's (``CirclePlane.separated_kutta_strength``), and the edge keeps sqrt f of its suction, as
+        swim_model.flow's separation does (docs/flow_model.md, Sec. 6).
 
         Parameters
         ----------
@@ -376,6 +382,9 @@ class Wake:
             (x m, y m, theta rad) of the foil frame in the tank frame at the end of the step.
         velocity : tuple of 3 floats
             (U m/s, V m/s, Omega rad/s) in foil axes at the end of the step.
+        separation_point : float, optional
+            f >= 0 of the trailing edge's separation at the end of the step (swim_model.separation; 1: attached,
+            the Kutta condition; the reduced model's lagged f passes 1 a little where the speed falls).
 
         Returns
         -------
@@ -385,13 +394,17 @@ class Wake:
         Raises
         ------
         StateError
-            For a step that is not positive, or a non-finite pose or velocity.
+            For a step that is not positive, a non-finite pose or velocity, or a separation point that is not finite
+            and >= 0; the wake is unchanged.
         """
         if not (math.isfinite(dt_s) and dt_s > 0.0):
             raise StateError(f"Wake.step: dt_s must be positive and finite, got {dt_s!r}")
         values = tuple(float(v) for v in (*pose, *velocity))
         if len(values) != 6 or not all(math.isfinite(v) for v in values):
             raise StateError(f"Wake.step: pose and velocity must be 3 finite numbers each, got {pose!r}, {velocity!r}")
+        if not (math.isfinite(separation_point) and separation_point >= 0.0):
+            raise StateError(f"Wake.step: separation_point must be finite and >= 0, got {separation_point!r}")
+        self._separation_point = float(separation_point)
         new_pose: Pose = values[:3]
         new_velocity: Velocity = values[3:]
         old_pose = new_pose if self._pose is None else self._pose
@@ -502,14 +515,16 @@ class Wake:
         """Shed the step's vortex.
 
         Its strength is the Kutta condition's against the vortices at zeta, their circle-plane positions at the
-        current pose; keeps the circle-plane positions and impulse terms of all (``_map_vortices``).
+        current pose, relaxed to Kirchhoff's share when the trailing edge separates; keeps the circle-plane
+        positions and impulse terms of all (``_map_vortices``).
         """
         u, v, omega = self._velocity
         te_speed = abs(complex(u, v) + 1j * omega * self.plane.z_te)
         distance = max(self.params.shed_distance_fraction * te_speed * dt_s, self.params.min_shed_distance_m)
         zeta_new = complex(self.plane.to_circle(np.array([self.plane.z_te - distance]))[0])
         rotation = self._rotation()
-        gamma = self.plane.kutta_strength(zeta_new, zeta, self.circulations_m2_s, self._velocity)
+        gamma = self.plane.separated_kutta_strength(zeta_new, zeta, self.circulations_m2_s, self._velocity,
+                                                    kirchhoff_share(self._separation_point))
         x, y, _ = self._pose  # type: ignore[misc]
         position = complex(x, y) + rotation * (self.plane.z_te - distance)
         self.positions_m = np.append(self.positions_m, position)
@@ -546,16 +561,17 @@ class Wake:
     def _lost_suction(self) -> float:
         """The leading-edge suction the edge cannot hold, per metre of span along the chord, N/m.
 
-        The attached flow's 4 pi rho r (LESP |u|)^2 less the same with LESP capped at critical_leading_edge_suction as
-        swim_model.flow caps it (0 when the parameter is None).
+        The attached flow's 4 pi rho r (LESP |u|)^2 less sqrt f times the same with LESP capped at
+        critical_leading_edge_suction as swim_model.flow caps it (0 when the parameter is None and f is 1).
         """
         critical = self.params.critical_leading_edge_suction
-        if critical is None:
+        kept_share = math.sqrt(self._separation_point)
+        if critical is None and kept_share == 1.0:
             return 0.0
         speed = self._speed_m_s()
         lesp = self.leading_edge_suction_parameter()
-        capped = smooth_cap(lesp, critical, self.params.suction_cap_exponent)
-        lost_squared = lesp * lesp - capped * capped
+        capped = lesp if critical is None else smooth_cap(lesp, critical, self.params.suction_cap_exponent)
+        lost_squared = lesp * lesp - kept_share * capped * capped
         return float(4.0 * math.pi * self.params.rho_kg_m3 * self.plane.r_m * speed * speed * lost_squared)
 
     def _impulses(self) -> tuple[complex, float]:

@@ -21,7 +21,9 @@ and what the separation indicators say about the misses: docs/flow_model.md, "Th
 
 The reduced model with the trailing edge separating (FlowParameters.separation, the onset from the polar
 at the tank's Reynolds number, the lags set on this series) is held at the same points: its thrust within 20 % at
-all ten, its efficiency within 0.08 at all but St 0.36 (strict xfail).
+all ten, its efficiency within 0.08 at all but St 0.36 (strict xfail). The vortex wake given the same separation
+(the reduced model's separation point, Kirchhoff's share of the bound circulation) is held there too: its thrust
+within 20 % at all ten; its efficiency stays 0.09-0.16 under the tank's at every point (strict xfails).
 """
 import functools
 import math
@@ -98,6 +100,13 @@ def small_angle_settings(k: float) -> tuple[JoukowskiFoil, dict]:
                       water_density_kg_m3=rig.water_density_kg_m3)
 
 
+@functools.lru_cache(maxsize=None)
+def small_angle_run(k: float, model: str, flow_parameters: FlowParameters):
+    """One run of the small-angle case (small_angle_settings), shared by the tests that compare it."""
+    foil, settings = small_angle_settings(k)
+    return oscillating_foil(foil, model=model, flow_parameters=flow_parameters, **settings)
+
+
 def at_thrust_strouhal(series: str) -> list[tuple[float, float]]:
     """The series at the thrust series' Strouhal numbers (one run for both quantities); the efficiency measured there
     is interpolated between its neighbours, whose Strouhal numbers differ by 0.002-0.005."""
@@ -169,10 +178,8 @@ def test_reduced_model_agrees_with_the_wake_at_small_angles(k):
     of attack 4-7 deg. Mean thrust and lift amplitude within 15 % of the vortex wake's (both inviscid: no profile
     drag). Measured: thrust +6.9, +9.1, +10.5, +4.3 %; lift +5.2, +5.9, +4.9, +1.5 % at k = 0.5, 1, 2, 4. The peak
     leading-edge suction parameters agree within 15 % too (+3.4, -0.2, -4.6, -14.0 %), and neither flow stalls."""
-    foil, settings = small_angle_settings(k)
-    runs = {model: oscillating_foil(foil, model=model, flow_parameters=FlowParameters(profile_drag_coefficient=0.0),
-                                    **settings) for model in ("circulatory", "wake")}
-    reduced, wake = runs["circulatory"], runs["wake"]
+    inviscid = FlowParameters(profile_drag_coefficient=0.0)
+    reduced, wake = (small_angle_run(k, model, inviscid) for model in ("circulatory", "wake"))
     assert reduced.peak_angle_of_attack_rad < math.radians(8.0)
     assert reduced.mean_thrust_n > 0.0
     assert reduced.mean_thrust_n == pytest.approx(wake.mean_thrust_n, rel=0.15)
@@ -472,16 +479,15 @@ def test_the_separations_lag_states_are_velocities_so_time_scaling_holds(time_sc
         assert scaled["separation_point"] == pytest.approx(base["separation_point"], rel=1e-9)
 
 
+@pytest.mark.parametrize("model", ["circulatory", "wake"])
 @pytest.mark.parametrize("k", [0.5, 1.0, 2.0, 4.0])
-def test_small_incidence_is_unchanged_below_the_polars_onset(k):
+def test_small_incidence_is_unchanged_below_the_polars_onset(k, model):
     """The small-angle case (small_angle_settings: peak incidence 4-7 deg) with the tank's polar, onset 6.3 deg:
-    mean thrust and lift amplitude within 1 % of the attached model's (measured: -0.10 to -0.05 %). With the rig's
-    Re 1e4 polar, onset 3.2 deg, the same motion separates in part (-4.0 to -0.8 %: docs/flow_model.md)."""
-    foil, settings = small_angle_settings(k)
-    plain = oscillating_foil(foil, model="circulatory", flow_parameters=FlowParameters(profile_drag_coefficient=0.0),
-                             **settings)
-    run = oscillating_foil(foil, model="circulatory", flow_parameters=separated(profile_drag_coefficient=0.0),
-                           **settings)
+    mean thrust and lift amplitude within 1 % of the attached flow's, in both models (measured: thrust -0.10 to
+    -0.05 % reduced, -0.09 to +0.005 % wake; lift -0.08 to -0.06 % and -0.03 to -0.007 %). With the rig's Re 1e4
+    polar, onset 3.2 deg, the same motion separates in part (-4.0 to -0.8 %: docs/flow_model.md)."""
+    plain = small_angle_run(k, model, FlowParameters(profile_drag_coefficient=0.0))
+    run = small_angle_run(k, model, separated(profile_drag_coefficient=0.0))
     assert run.mean_thrust_n == pytest.approx(plain.mean_thrust_n, rel=0.01)
     assert run.lift_amplitude_n == pytest.approx(plain.lift_amplitude_n, rel=0.01)
 
@@ -499,4 +505,28 @@ def test_with_the_separation_the_reduced_models_efficiency_is_within_0_08(strouh
     """At the efficiency series' own Strouhal numbers (measured: -0.002 at St 0.09, -0.036 to -0.064 from St 0.13);
     St 0.36 misses by 0.083 (the attached model: 0.077)."""
     run = tank_run("circulatory", strouhal, flow_parameters=TANK_SEPARATED_FLOW)
+    assert run.efficiency == pytest.approx(measured, abs=0.08)
+
+
+# The wake given the same separation (its separation point the reduced model's, from the same motion): each step's
+# vortex holds the bound circulation at Kirchhoff's share of the attached flow's (Wake.step), the suction times sqrt f.
+#: the wake's efficiency stays under the tank's at every point with the separation (docs/flow_model.md, Sec. 6: its
+#: lift changes only by shedding, and at these frequencies keeps near its attached amplitude)
+WAKE_SEPARATED_POWER = "the wake with the separation still needs more power than the tank (module docstring)"
+
+
+@pytest.mark.parametrize("strouhal, measured", MEASURED["thrust_coefficient"])
+def test_with_the_separation_the_wakes_thrust_is_within_20_percent_at_every_point(strouhal, measured):
+    """All ten points, the attached wake's miss at St 0.09 (+46 %) included: measured -14, -18, -10, -13, -9, -3,
+    -5, +2, +9, +19 %."""
+    run = tank_run("wake", strouhal, flow_parameters=TANK_SEPARATED_FLOW)
+    assert run.thrust_coefficient == pytest.approx(measured, rel=0.20)
+
+
+@pytest.mark.parametrize("strouhal, measured", known(at_thrust_strouhal("efficiency"), {
+    round(st, 2): WAKE_SEPARATED_POWER for st, _ in MEASURED["thrust_coefficient"]}))
+def test_with_the_separation_the_wakes_efficiency_is_within_0_08(strouhal, measured):
+    """Measured -0.124, -0.125, -0.086, -0.102, -0.098, -0.103, -0.137, -0.125, -0.152, -0.155 at St 0.09-0.50
+    (the attached wake: +0.047 to -0.158)."""
+    run = tank_run("wake", strouhal, flow_parameters=TANK_SEPARATED_FLOW)
     assert run.efficiency == pytest.approx(measured, abs=0.08)
