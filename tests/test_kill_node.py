@@ -101,14 +101,39 @@ def sampled_stamps(client, topic, message_type=None):
     return stamps
 
 
+def watchdog_zeros_recorded(client, end_plan_time_s: float, zeros: int):
+    """A predicate: the recorder holds every command up to the goal's end and ``zeros`` of the watchdog's after it.
+
+    The recorder writes each topic in the order published, but may lag a lock-step loop by hundreds of periods, so
+    a count of commands recorded after the goal's end can be of the backlog. The watchdog's zeros carry the stamp
+    of the last state the tracker tracked (the one at end_plan_time_s, as its tracking_state): once the latest
+    recorded command is a zero with that stamp, every torque before it is in the bag; then ``zeros`` - 1 more.
+    (RunClient.drain waits for the states too, which the killed simulator may have taken with it.)
+    """
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import JointState
+    first_zero = []   # the command count when the recorder first held a watchdog's zero
+
+    def recorded() -> bool:
+        if not first_zero:
+            tracking, command = client.latest_cdr.get("/tracking_state"), client.latest_cdr.get("/joint_commands")
+            if tracking is None or command is None or client.last_plan_time_s < end_plan_time_s - 0.5 * PERIOD_S:
+                return False
+            if any(deserialize_message(command, JointState).effort) or header_stamp_ns(command) < header_stamp_ns(
+                    tracking):
+                return False
+            first_zero.append(client.bag.counts["/joint_commands"])
+        return client.bag.counts["/joint_commands"] >= first_zero[0] + zeros - 1
+    return recorded
+
+
 def test_killing_the_simulator_makes_the_tracker_zero_its_torque(ros_domain, tmp_path):
     from swim_interfaces.action import ExecutePlan
     with maneuver_under_way(tmp_path, "sim", CONSTRAINED_SHORT) as (system, client, _, result):
         kill(system, "sim_node")
         outcome = client.wait_for(result, STATE_LOST_RESULT_TIMEOUT_S, "end of the goal").result
-        ended = client.bag.counts["/joint_commands"]
-        client.spin_until(lambda: client.bag.counts["/joint_commands"] >= ended + 20, MESSAGE_TIMEOUT_S,
-                          "commands after the end")
+        client.spin_until(watchdog_zeros_recorded(client, outcome.duration_s, 20), MESSAGE_TIMEOUT_S,
+                          "the commands up to the end and 20 of the watchdog's zeros, recorded")
         assert system.dead() == ["sim_node"]   # the tracker and the planner carry on
         client.close()
         topics = read_back(tmp_path / "bag", client.bag.counts)
