@@ -206,8 +206,10 @@ def test_amalgamation_keeps_the_mean_of_the_squared_cores_by_the_centroids_weigh
 
 # --- Wagner --------------------------------------------------------------------------------------------------------
 def run_impulsive_start(foil: JoukowskiFoil, alpha_rad: float, semichords: float, steps_per_chord: int,
-                        params: WakeParameters) -> tuple[Wake, np.ndarray, np.ndarray, np.ndarray]:
-    """Foil started impulsively at SPEED_M_S, angle of attack alpha; (wake, s, lift / steady lift, moment / lift)."""
+                        params: WakeParameters, separation_point: float = 1.0
+                        ) -> tuple[Wake, np.ndarray, np.ndarray, np.ndarray]:
+    """Foil started impulsively at SPEED_M_S, angle of attack alpha, its trailing edge separated at
+    separation_point throughout; (wake, s, lift / steady lift, moment / lift)."""
     wake = Wake(foil, params)
     dt = CHORD_M / steps_per_chord / SPEED_M_S
     velocity = (SPEED_M_S * math.cos(alpha_rad), -SPEED_M_S * math.sin(alpha_rad), 0.0)
@@ -216,7 +218,7 @@ def run_impulsive_start(foil: JoukowskiFoil, alpha_rad: float, semichords: float
     s, lift, arm = [], [], []
     for n in range(1, int(semichords * steps_per_chord / 2) + 1):
         position = SPEED_M_S * n * dt * direction
-        force = wake.step(dt, (position.real, position.imag, 0.0), velocity)
+        force = wake.step(dt, (position.real, position.imag, 0.0), velocity, separation_point)
         normal_force = (complex(force.fx_n, force.fy_n) / direction).imag  # perpendicular to the motion
         s.append(SPEED_M_S * force.time_s / SEMICHORD_M)
         lift.append(normal_force / steady_lift)
@@ -317,15 +319,10 @@ def test_the_leading_edges_cap_is_validated():
 def towed_bound_circulation(separation_point: float, steps_per_chord: int) -> tuple[Wake, float]:
     """The rig's foil towed 40 chords at 10 deg with a fixed separation point: (wake, bound circulation over the
     steady Kutta circulation)."""
-    foil = JoukowskiFoil(CHORD_M, RIG_THICKNESS_M)
-    wake = Wake(foil, WakeParameters(max_vortex_count=240, protected_vortex_count=80))
     alpha = math.radians(10.0)
-    velocity = (SPEED_M_S * math.cos(alpha), -SPEED_M_S * math.sin(alpha), 0.0)
-    direction = complex(math.cos(alpha), -math.sin(alpha))
-    dt = CHORD_M / steps_per_chord / SPEED_M_S
-    for n in range(1, 40 * steps_per_chord + 1):
-        position = SPEED_M_S * n * dt * direction
-        wake.step(dt, (position.real, position.imag, 0.0), velocity, separation_point)
+    wake, _, _, _ = run_impulsive_start(JoukowskiFoil(CHORD_M, RIG_THICKNESS_M), alpha, 80.0, steps_per_chord,
+                                        WakeParameters(max_vortex_count=240, protected_vortex_count=80),
+                                        separation_point)
     return wake, wake.bound_circulation() / steady_kutta_circulation(wake.plane, SPEED_M_S, alpha)
 
 
