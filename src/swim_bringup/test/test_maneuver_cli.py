@@ -462,7 +462,7 @@ def test_the_paper_lane_keeping_ends_within_the_default_tolerances(bridge_set):
     """The lane keeping from the home pose, recorded: its plan starts at the alpha the bridge measured, it ends
     within the default tolerances with no bridge fault, and its report and plots are written. On a run the host
     stalled (HOST_STALL_BOUND_MS), it is tracked to its end all the same: the goal's tolerances are the only check it
-    may fail, and the rest holds."""
+    may fail (a stall of a few hundred milliseconds may leave it within them or not), and the rest holds."""
     import re
 
     from swim_interfaces.action import ExecutePlan
@@ -474,7 +474,8 @@ def test_the_paper_lane_keeping_ends_within_the_default_tolerances(bridge_set):
     run = work / "lane_keeping"
     report = RunReport.load(run / "report.json")
     assert report.bridge is not None and report.bridge.bridge_faults == "NONE"
-    if host_stalled(report):
+    if report.result.error_code != 0:
+        assert host_stalled(report), report.result
         assert_clean_exit(results["lane keeping"], 1)
         assert report.result.error_code == ExecutePlan.Result.GOAL_TOLERANCE_VIOLATED, report.result
         assert "GOAL_TOLERANCE_VIOLATED: goal tolerance violated; 23.000 s tracked" in results["lane keeping"].stdout
@@ -502,8 +503,9 @@ def test_status_shows_the_bridge_and_its_faults(bridge_set):
     assert "up as /bridge_node" in out and "bridge lifecycle state: active" in out, out
     # its level is what the bridge says then (a late command on a loaded host is a watchdog WARN)
     assert "\nbridge I/O loop: " in out and "bridge faults latched: NONE; emergency stop pending: False" in out, out
-    # the lane keeping's end: aborted by its goal tolerance on a run the host stalled (as its test checks)
-    last = "aborted" if host_stalled(RunReport.load(work / "lane_keeping" / "report.json")) else "succeeded"
+    # the lane keeping's end: succeeded, or aborted by its goal tolerance on a run the host stalled (as its test
+    # checks)
+    last = "succeeded" if RunReport.load(work / "lane_keeping" / "report.json").result.error_code == 0 else "aborted"
     assert f"execute_plan (tracker_node): no goal under way; 1 ended, the last {last}" in out
     assert f"perform_maneuver (maneuver_node): no goal under way; 2 ended, the last {last}" in out
 

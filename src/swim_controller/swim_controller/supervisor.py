@@ -246,6 +246,9 @@ class StaleStateWatch:
     ----------
     last_state_s : float
         When the newest state arrived, s.
+    check_gap_s : float
+        The time between the last check and the one before it, s (what tells a stalled asker from a silent
+        plant in a report).
     """
 
     def __init__(self, now_s: float, check_period_s: float, late_periods: float = 3.0) -> None:
@@ -254,6 +257,7 @@ class StaleStateWatch:
         self.last_state_s = now_s
         self._last_check_s = now_s
         self._skipped = False
+        self.check_gap_s = 0.0
 
     def state_arrived(self, now_s: float) -> None:
         """Record a state's arrival.
@@ -280,7 +284,8 @@ class StaleStateWatch:
         bool
             True if the state is stale and this check may judge (it did not come late).
         """
-        came_late = now_s - self._last_check_s > self.late_periods * self.check_period_s
+        self.check_gap_s = now_s - self._last_check_s
+        came_late = self.check_gap_s > self.late_periods * self.check_period_s
         skip = came_late and not self._skipped
         self._last_check_s, self._skipped = now_s, skip
         return not skip and now_s - self.last_state_s > limit_s

@@ -490,11 +490,16 @@ class TrackerNode(LifecycleNode):
 
     def _check_stale(self) -> None:
         limit = self.settings.stale_limit_s
-        if not self.active or not self._stale_watch.stale(time.monotonic(), limit):
+        now = time.monotonic()
+        watch = self._stale_watch
+        if not self.active or not watch.stale(now, limit):
             return
         if self._supervisor is not None and self._supervisor.mode is not Mode.STOPPED:
             self._supervisor.state_lost()
-            self.get_logger().error(f"no valid joint_states for {limit * 1e3:.0f} ms: torque zeroed")
+            self.get_logger().error(f"no valid joint_states for {limit * 1e3:.0f} ms: torque zeroed (the newest "
+                                    f"arrived {(now - watch.last_state_s) * 1e3:.0f} ms ago, this check "
+                                    f"{watch.check_gap_s * 1e3:.1f} ms after the one before; states rejected "
+                                    f"so far: {self.rejected_states})")
             if self._goal is not None:
                 self._goal.finish(Outcome.STATE_LOST, f"no valid joint_states for {limit * 1e3:.0f} ms")
         self._velocity.reset()

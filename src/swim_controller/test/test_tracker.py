@@ -83,8 +83,8 @@ def test_stale_state_watch_judges_on_time_checks_and_skips_one_late_check():
     assert not watch.stale(0.208, limit)
     # ... but with no state at all, the next check judges even if it is late too
     watch = StaleStateWatch(0.0, period)
-    assert not watch.stale(0.2, limit)
-    assert watch.stale(0.4, limit)
+    assert not watch.stale(0.2, limit) and watch.check_gap_s == pytest.approx(0.2)
+    assert watch.stale(0.4, limit) and watch.check_gap_s == pytest.approx(0.2)
     # on a host where every check is late, a dead plant is still caught within one extra check
     watch = StaleStateWatch(0.0, period)
     late = [0.05 * k for k in range(1, 8)]

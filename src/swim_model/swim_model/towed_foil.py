@@ -419,9 +419,10 @@ def oscillating_foil(  # noqa: C901 - the public entry: each keyword checked, th
     total_steps = cycles * steps_per_cycle
     averaged_steps = averaged_cycles * steps_per_cycle
     # the reduced model's lag states at every step's end under the prescribed motion (the wake takes its separation
-    # point from them)
+    # point from them, and needs none without one)
     half_step_velocities = kinematics.velocity(np.arange(2 * total_steps + 1, dtype=float) * (0.5 * dt))
-    lag = flow.integrate_lag(half_step_velocities, dt, flow.steady_lag(half_step_velocities[0]))
+    lag = (flow.integrate_lag(half_step_velocities, dt, flow.steady_lag(half_step_velocities[0]))
+           if not wake_model or flow.params.separates else None)
 
     if wake_model:
         params = wake_parameters or WakeParameters(
@@ -436,8 +437,9 @@ def oscillating_foil(  # noqa: C901 - the public entry: each keyword checked, th
         nu_end = kinematics.velocity(steps * dt)
         # the trailing edge's separation point at each step's end: the reduced model's, from its lag states under
         # the same motion (1 throughout without FlowParameters.separation)
-        separation_point = (np.asarray(flow.evaluate(half_step_velocities[2::2], lag[1:])["separation_point"],
-                                       dtype=float) if flow.params.separates else np.ones(total_steps))
+        separation_point = (np.ones(total_steps) if lag is None else
+                            np.asarray(flow.evaluate(half_step_velocities[2::2], lag[1:])["separation_point"],
+                                       dtype=float))
         vortical = np.zeros((total_steps, 3))
         suction_parameter = np.zeros(averaged_steps)
         for i in range(total_steps):
@@ -458,6 +460,7 @@ def oscillating_foil(  # noqa: C901 - the public entry: each keyword checked, th
         window = slice(total_steps - averaged_steps, total_steps)
         time = np.arange(total_steps + 1, dtype=float)[window] * dt
         velocity = half_step_velocities[0::2][window]
+        assert lag is not None   # integrated for the reduced model
         terms = flow.evaluate(velocity, lag[window])
         fluid, suction_parameter, attached_weight = terms["f"], terms["lesp"], terms["attached_weight"]
         suction_speed = np.hypot(velocity[:, 0], velocity[:, 1])

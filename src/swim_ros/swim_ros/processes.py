@@ -203,11 +203,17 @@ def main(argv: Sequence[str]) -> None:
     """`python -m swim_ros.processes STARTER_PID COMMAND [ARGUMENTS...]`.
 
     start_child for a shell script. The script passes its own pid ($$) and runs this in the foreground or background;
-    this process becomes COMMAND (same pid), which ends when the script ends.
+    this process becomes COMMAND (same pid), which ends when the script ends. A STARTER_PID that is this process's own
+    is refused: bash expands the words of a background command (`... "$BASHPID" ... &`) in the child it forked, so
+    $BASHPID there names the child, and the parent check would end COMMAND before it ran.
     """
     if len(argv) < 2 or not argv[0].isdigit():
         sys.exit("usage: python -m swim_ros.processes STARTER_PID COMMAND [ARGUMENTS...]")
-    command = with_parent_death_signal(executable_command(argv[1:]), int(argv[0]))
+    starter_pid = int(argv[0])
+    if starter_pid == os.getpid():
+        sys.exit(f"swim_ros.processes: STARTER_PID {starter_pid} is this process, not its starter: pass the script's "
+                 "pid ($$), or $BASHPID read before the command is put in the background")
+    command = with_parent_death_signal(executable_command(argv[1:]), starter_pid)
     os.execvp(command[0], command)
 
 

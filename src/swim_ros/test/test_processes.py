@@ -127,18 +127,32 @@ def test_interrupt_on_sigterm_lets_a_cli_stop_what_it_started():
     assert out.strip() == "stopped" and "KeyboardInterrupt" in err
 
 
+def with_python_on_path(tag: str) -> dict[str, str]:
+    """This process's environment, tagged tag, with this interpreter first on PATH (for `python -m` in a script)."""
+    return {**os.environ, TAG_VARIABLE: tag, "PATH": f"{Path(sys.executable).parent}:{os.environ['PATH']}"}
+
+
 def test_a_shell_scripts_child_ends_with_the_script():
-    """`python -m swim_ros.processes $BASHPID command` in a bash script killed outright."""
+    """`python -m swim_ros.processes $$ command &` in a bash script killed outright: the command runs (the child's
+    pid executes python, setpriv, sh, then sleep itself) and ends with the script."""
     tag = uuid.uuid4().hex
-    script = 'python -m swim_ros.processes "$BASHPID" sleep 60 & echo $!; wait'
-    process = start_child(["bash", "-c", script], stdout=subprocess.PIPE, text=True,
-                          env={**os.environ, TAG_VARIABLE: tag, "PATH": f"{Path(sys.executable).parent}:"
-                                                                        f"{os.environ['PATH']}"})
+    script = 'python -m swim_ros.processes "$$" sleep 60 & echo $!; wait'
+    process = start_child(["bash", "-c", script], stdout=subprocess.PIPE, text=True, env=with_python_on_path(tag))
     child_pid = int(process.stdout.readline())
     deadline = time.monotonic() + END_TIMEOUT_S
-    while b"sleep" not in Path(f"/proc/{child_pid}/cmdline").read_bytes():   # executed: python, setpriv, sh, sleep
-        assert time.monotonic() < deadline
+    while Path(f"/proc/{child_pid}/comm").read_text().strip() != "sleep":
+        assert time.monotonic() < deadline, "the script's command never ran"
         time.sleep(0.05)
     process.kill()
     process.wait()
     assert wait_until_none_left(tag) == []
+
+
+def test_a_background_commands_own_pid_is_refused_as_its_starter():
+    """bash expands `"$BASHPID"` of a background command in the child it forked: that pid is the child's own."""
+    tag = uuid.uuid4().hex
+    script = 'python -m swim_ros.processes "$BASHPID" sleep 60 & wait $!'
+    result = subprocess.run(["bash", "-c", script], capture_output=True, text=True, timeout=END_TIMEOUT_S,
+                            env=with_python_on_path(tag))
+    assert result.returncode == 1 and "is this process, not its starter" in result.stderr
+    assert tagged(tag) == []
