@@ -75,6 +75,8 @@ class BridgeMeasures:
     bridge_command_latency_p99_ms: Optional[float] = None
     bridge_command_jitter_p50_ms: Optional[float] = None    # |interval between two commands' receipts - period|
     bridge_command_jitter_p99_ms: Optional[float] = None
+    bridge_state_interval_max_ms: Optional[float] = None   # the longest time between two states it published
+    bridge_state_publish_max_ms: Optional[float] = None    # the longest publish of a state (a blocked middleware)
 
 
 @dataclasses.dataclass(frozen=True)

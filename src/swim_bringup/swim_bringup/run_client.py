@@ -36,6 +36,10 @@ STARTUP_TIMEOUT_S = 60.0
 #: a repeat carries the same request id, so the planner never plans twice
 PLANNER_POLICY = RetryPolicy(attempt_timeout_s=20.0, attempts=3, discovery_timeout_s=STARTUP_TIMEOUT_S)
 DRAIN_TIMEOUT_S = 60.0
+#: a bridge reports its I/O loop on /diagnostics at diagnostics_rate_hz (2 Hz in config/bridge.yaml): the recording
+#: waits this long past the plan's last period for the report that follows it, so that a run's bridge figures
+#: (overruns, worst lateness) cover its whole length, its last half second included
+BRIDGE_REPORT_WAIT_S = 2.0
 #: published every period by the nodes of a run (keys of RUN_TOPICS)
 LOOP_TOPICS = ("/joint_states", "/joint_commands", "/tracking_state")
 #: ... these also before a plan (plant and idle tracker)
@@ -247,7 +251,9 @@ class RunClient:
         Record until the plan's last period (plan time duration_s) is in the bag on every loop topic, and the
         plan itself, then a few more periods. The recorder may lag a faster-than-real-time loop, and by more on
         joint_states and joint_commands, which flowed (and queued) before the plan while tracking_state did not.
-        RunError if that does not happen within DRAIN_TIMEOUT_S.
+        RunError if that does not happen within DRAIN_TIMEOUT_S. Where a bridge reports on /diagnostics, then
+        until its first report stamped after that period, for at most BRIDGE_REPORT_WAIT_S (a bridge that stopped
+        reporting leaves its last report the run's).
         """
         deadline = time.monotonic() + DRAIN_TIMEOUT_S
         final_stamp_ns, checked = None, None
@@ -264,6 +270,11 @@ class RunClient:
                     final_stamp_ns = header_stamp_ns(latest)
         for _ in range(20):   # a few periods of the hold after it
             self.executor.spin_once(timeout_sec=0.01)
+        if "/diagnostics" in self.latest_cdr:
+            assert final_stamp_ns is not None   # the loop above ends only with it
+            deadline = time.monotonic() + BRIDGE_REPORT_WAIT_S
+            while header_stamp_ns(self.latest_cdr["/diagnostics"]) < final_stamp_ns and time.monotonic() < deadline:
+                self.executor.spin_once(timeout_sec=0.05)
 
     def _recorded_up_to(self, stamp_ns: Optional[int]) -> bool:
         """Whether every loop topic is recorded up to stamp_ns and the plan is recorded.

@@ -142,7 +142,9 @@ def bridge_measures_of(diagnostic_arrays: Iterable[Any]) -> Optional[BridgeMeasu
         bridge_command_latency_p50_ms=number("command_latency_p50_ms"),
         bridge_command_latency_p99_ms=number("command_latency_p99_ms"),
         bridge_command_jitter_p50_ms=number("command_jitter_p50_ms"),
-        bridge_command_jitter_p99_ms=number("command_jitter_p99_ms"))
+        bridge_command_jitter_p99_ms=number("command_jitter_p99_ms"),
+        bridge_state_interval_max_ms=number("state_interval_max_ms"),
+        bridge_state_publish_max_ms=number("state_publish_max_ms"))
 
 
 @dataclasses.dataclass(frozen=True)

@@ -36,9 +36,9 @@ def test_the_loops_timing_is_its_last_report(tmp_path):
     bag = BagWriter(tmp_path / "bag", {"/diagnostics": "diagnostic_msgs/msg/DiagnosticArray"})
     first = {"worst_lateness_ms": "1.000", "worst_lateness_cause": "SLOW_READ", "wake_lateness_p99_ms": "0.1",
              "command_latency_p50_ms": "2.0", "command_latency_p99_ms": "3.0", "command_jitter_p50_ms": "0.1",
-             "command_jitter_p99_ms": "0.9"}
+             "command_jitter_p99_ms": "0.9", "state_interval_max_ms": "8.5", "state_publish_max_ms": "0.2"}
     last = {**first, "worst_lateness_ms": "12.500", "worst_lateness_cause": "LATE_WAKEUP",
-            "command_jitter_p99_ms": "nan"}
+            "command_jitter_p99_ms": "nan", "state_interval_max_ms": "331.000"}
     for sec, timing in enumerate((first, last, None), start=1):   # the last status: a bridge without timing
         bag.write("/diagnostics", sec * 1_000_000_000,
                   diagnostics_cdr(bag.store, "bridge_node", "NONE", 1, sec, timing))
@@ -46,4 +46,5 @@ def test_the_loops_timing_is_its_last_report(tmp_path):
     assert bridge_measures(tmp_path / "bag") == BridgeMeasures(
         bridge_faults="NONE", bridge_overruns=1, bridge_worst_lateness_ms=12.5, bridge_overrun_cause="LATE_WAKEUP",
         bridge_wake_lateness_p99_ms=0.1, bridge_command_latency_p50_ms=2.0, bridge_command_latency_p99_ms=3.0,
-        bridge_command_jitter_p50_ms=0.1, bridge_command_jitter_p99_ms=None)
+        bridge_command_jitter_p50_ms=0.1, bridge_command_jitter_p99_ms=None, bridge_state_interval_max_ms=331.0,
+        bridge_state_publish_max_ms=0.2)

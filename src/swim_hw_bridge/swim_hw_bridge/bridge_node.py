@@ -196,13 +196,18 @@ class BridgeNode(LifecycleNode):
         self.realtime_outcome = outcome
 
     def _reset_command_timing(self) -> None:
-        """The command timing of an activation, from its start.
+        """The command and state timing of an activation, from its start.
 
         The latency is the receipt of each command past the state it answers; the jitter its receipt past the
-        command before, less the period.
+        command before, less the period. The state interval is the time between two states published, and the
+        state publish the time the middleware's publish took: a plant silent for longer than a period shows in the
+        first, and one whose publish blocked in the second as well (the loop's own lateness shows a stalled loop).
         """
         self.command_latency = LatencyHistogram()
         self.command_jitter = LatencyHistogram()
+        self.state_interval = LatencyHistogram()
+        self.state_publish = LatencyHistogram()
+        self._last_state_published_s = float("nan")
         self._state_samples: collections.OrderedDict[int, float] = collections.OrderedDict()
         self._last_command_received_s = float("nan")
 
@@ -330,7 +335,12 @@ class BridgeNode(LifecycleNode):
         message.position = list(snapshot.positions)
         message.velocity = list(snapshot.velocities)
         message.effort = [0.0, 0.0, snapshot.torques_n_m[0], snapshot.torques_n_m[1]]
+        publish_start_s = time.monotonic()
         self.state_publisher.publish(message)
+        published_s = time.monotonic()
+        self.state_publish.add(published_s - publish_start_s)
+        self.state_interval.add(published_s - self._last_state_published_s)   # NaN, not counted, for the first
+        self._last_state_published_s = published_s
 
     def _restart_diagnostics_timer(self) -> None:
         self.destroy_timer(self._diagnostics_timer)
@@ -364,7 +374,8 @@ class BridgeNode(LifecycleNode):
         values["worst_lateness_ms"] = f"{snapshot.worst_lateness_s * 1e3:.3f}"
         values["worst_lateness_cause"] = snapshot.worst_lateness_cause.name
         for name, histogram in (("wake_lateness", loop.wake_lateness if loop is not None else None),
-                                ("command_latency", self.command_latency), ("command_jitter", self.command_jitter)):
+                                ("command_latency", self.command_latency), ("command_jitter", self.command_jitter),
+                                ("state_interval", self.state_interval), ("state_publish", self.state_publish)):
             for percent in (50, 99):
                 value_s = histogram.percentile_s(percent) if histogram is not None else float("nan")
                 values[f"{name}_p{percent}_ms"] = f"{value_s * 1e3:.3f}"

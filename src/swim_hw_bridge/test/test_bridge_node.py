@@ -373,6 +373,10 @@ def test_diagnostics_report_the_loop(bridge):
     for key in ("overruns", "consecutive_overruns", "saturation_count", "fault_code", "periods"):
         assert int(values[key]) >= 0
     assert values["fault_code"] == "0" and values["watchdog"] == "OK"
+    interval_p50_ms = float(values["state_interval_p50_ms"])
+    assert interval_p50_ms == pytest.approx(PERIOD_S * 1e3, rel=0.25)   # one state a period
+    assert float(values["state_interval_max_ms"]) >= interval_p50_ms
+    assert 0.0 < float(values["state_publish_p50_ms"]) < PERIOD_S * 1e3
     saturated = int(values["saturation_count"])
     bridge.send([50.0, 0.0])   # far past the 1.25 N m heave limit: clipped and counted
     sent = time.monotonic()
