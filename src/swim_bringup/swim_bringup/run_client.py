@@ -192,12 +192,12 @@ class RunClient:
         # (a bridge run's bag once lacked the first 56 ms of joint_states). A first message received proves the
         # writer's side; tracking_state has none before the plan, but the tracker that sent joint_commands to
         # this recorder already knew its tracking_state reader (made before, see __init__).
-        awaited = IDLE_LOOP_TOPICS + tuple(topic for topic in first_messages if topic in self.recordings)
+        awaited = tuple(topic for topic in (*IDLE_LOOP_TOPICS, *first_messages) if topic in self.recordings)
 
         def unmatched() -> list[str]:
             return [topic for topic in LOOP_TOPICS if topic in self.recordings
                     and self.recordings[topic].get_publisher_count() == 0] \
-                + [topic for topic in awaited if topic in self.recordings and topic not in self.latest_cdr]
+                + [topic for topic in awaited if topic not in self.latest_cdr]
         self.spin_until(lambda: not unmatched(), timeout_s,
                         f"publisher on each of {', '.join(LOOP_TOPICS)} and a first message on {', '.join(awaited)}")
 

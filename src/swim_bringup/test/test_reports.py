@@ -27,7 +27,8 @@ MEASURE_KEYS = ["duration_s", "longitudinal_error_two_norm_m_s05", "lateral_erro
                 "energy_used_j", "sliding_mode_enabled", "periods"]
 BRIDGE_KEYS = ["bridge_faults", "bridge_overruns", "bridge_worst_lateness_ms", "bridge_overrun_cause",
                "bridge_wake_lateness_p99_ms", "bridge_command_latency_p50_ms", "bridge_command_latency_p99_ms",
-               "bridge_command_jitter_p50_ms", "bridge_command_jitter_p99_ms"]
+               "bridge_command_jitter_p50_ms", "bridge_command_jitter_p99_ms", "bridge_state_interval_max_ms",
+               "bridge_state_publish_max_ms"]
 RESULT_KEYS = ["error_code", "error_string", "final_alpha_error_rad", "duration_s"]
 #: experiments.json's keys: a row (the keys of one seed's row, then the seeds'), its pairs of runs, its two-norm
 #: comparisons, its runs by seed and its statistics
