@@ -147,8 +147,8 @@ class Bringup:
         except subprocess.TimeoutExpired:
             pytest.fail(f"swim-bringup still running {EXIT_TIMEOUT_S} s on:\n{self.output()}")
 
-    def close(self) -> list[int]:
-        """SIGKILL swim-bringup and every process it left (a failed test's); the pids that were left."""
+    def close(self) -> list[str]:
+        """SIGKILL swim-bringup and every process it left (a failed test's); those that were left, described."""
         if self.process.poll() is None:
             self.process.kill()
             self.process.wait()

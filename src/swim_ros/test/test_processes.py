@@ -33,7 +33,7 @@ def tagged(tag: str) -> list[int]:
     return list(tagged_processes(TAG_VARIABLE, tag))
 
 
-def wait_until_none_left(tag: str, timeout_s: float = END_TIMEOUT_S) -> list[int]:
+def wait_until_none_left(tag: str, timeout_s: float = END_TIMEOUT_S) -> list[str]:
     return processes_left(TAG_VARIABLE, tag, timeout_s)
 
 

@@ -33,18 +33,34 @@ def tagged_processes(variable: str, tag: str) -> dict[int, str]:
     return found
 
 
-def processes_left(variable: str, tag: str, timeout_s: float) -> list[int]:
+def processes_left(variable: str, tag: str, timeout_s: float) -> list[str]:
     """The processes tagged variable=tag still alive timeout_s from now, each then killed (SIGKILL).
 
-    An empty list as soon as none is alive. Killing the rest makes sure a failed test leaves nothing behind.
+    An empty list as soon as two looks a poll apart find none alive; otherwise each as "pid (state): command line",
+    the state as /proc/<pid>/stat gives it (S sleeping, R running, T stopped, Z ended, ...), for a failed test's
+    message. Killing them makes sure a failed test leaves nothing behind. Two looks, because one can miss a live
+    process: its environment is unreadable for a moment while it executes a new program or exits.
     """
     deadline = time.monotonic() + timeout_s
-    while tagged_processes(variable, tag) and time.monotonic() < deadline:
+    looks_without = 0
+    while True:
+        left = tagged_processes(variable, tag)
+        looks_without = 0 if left else looks_without + 1
+        if looks_without >= 2 or time.monotonic() >= deadline:
+            break
         time.sleep(POLL_PERIOD_S)
-    left = sorted(tagged_processes(variable, tag))
+    described = [f"{pid} ({_process_state(pid)}): {command_line}" for pid, command_line in sorted(left.items())]
     for pid in left:
         try:
             os.kill(pid, signal.SIGKILL)
         except ProcessLookupError:
             pass
-    return left
+    return described
+
+
+def _process_state(pid: int) -> str:
+    """The process's state letter from /proc/<pid>/stat, "gone" if it ended meanwhile."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()[0]
+    except (OSError, IndexError):
+        return "gone"
