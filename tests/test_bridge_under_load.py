@@ -20,8 +20,9 @@ MANEUVER_TIMEOUT_S = 120
 #: to 323 ms; without them 6.1-29 ms (docs/realtime.md). The bound tells the two apart; the figure itself is
 #: bench_loop_under_load's
 WAKE_LATENESS_P99_BOUND_MS = 4.0
-#: a stall of the whole host longer than this, s, can lose the run whatever its means: the tracker's 200 ms without
-#: a state, or the bridge's 3 late periods in a row, each past the loop's 5.5 ms of slack
+#: a stall of the whole host longer than this, s, can lose the run whatever its means: the emulated rig integrates
+#: its plant over the stall with the torques held, a disturbance past what the tolerances allow for (the maneuver
+#: CLI test's HOST_STALL_BOUND_MS), and from 200 ms on the tracker has no state
 HOST_STALL_BOUND_S = 0.1
 
 
