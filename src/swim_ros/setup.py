@@ -10,7 +10,8 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
-        ('share/' + package_name + '/config', ['config/fastdds_large_messages.xml']),
+        ('share/' + package_name + '/config', ['config/fastdds_large_messages.xml', 'config/fastdds_real_time.xml',
+                                                   'config/fastdds_real_time_localhost.xml']),
     ],
     install_requires=['setuptools'],
     zip_safe=True,

@@ -39,6 +39,7 @@ from swim_ros.entry import run_node
 from swim_ros.parameters import NodeSettings, ParameterSpec, positive
 from swim_ros.qos import per_period_subscription
 from swim_ros.trajectory_messages import state_from_message
+from swim_ros.transport import use_large_message_transport
 
 Result = PerformManeuver.Result
 Feedback = PerformManeuver.Feedback
@@ -358,7 +359,8 @@ def goal_of(request) -> ManeuverGoal:
 def main(args: list[str] | None = None) -> None:
     """Run maneuver_node."""
     run_node(ManeuverNode, args, name="maneuver_node",
-             executor=functools.partial(MultiThreadedExecutor, num_threads=EXECUTOR_THREADS), large_messages=True)
+             executor=functools.partial(MultiThreadedExecutor, num_threads=EXECUTOR_THREADS),
+             transport=use_large_message_transport)
 
 
 if __name__ == "__main__":

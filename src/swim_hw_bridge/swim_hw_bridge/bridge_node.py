@@ -44,6 +44,7 @@ from swim_ros.realtime import (
     make_process_realtime,
     memory_locked_kib,
 )
+from swim_ros.transport import use_real_time_transport
 
 #: the bridge's parameters (swim_ros.parameters). The lifecycle node reads them when it is configured: a value set
 #: while configured or active takes effect at the next configure. What the node builds at start (the diagnostics
@@ -444,8 +445,9 @@ def autostart(node: BridgeNode) -> None:
 def main(args: list[str] | None = None) -> None:
     """Run bridge_node until shut down; args are ROS's command-line arguments."""
     # release: zero, then disable, then close, however the node stops: never leave the amplifiers driven
+    # UDP only: a reader's shared-memory port opened mid-run would hold a state's publish (swim_ros.transport)
     run_node(functools.partial(BridgeNode, owns_process=True), args, name="bridge_node", start=autostart,
-             stop=BridgeNode.release)
+             stop=BridgeNode.release, transport=use_real_time_transport)
 
 
 if __name__ == "__main__":

@@ -5,11 +5,15 @@ lifecycle through bridge_node/change_state as a lifecycle manager would.
 """
 import math
 import os
+import subprocess
+import sys
+import textwrap
 import time
 
 import pytest
 
 from swim_ros.calls import ParameterCalls, RetryPolicy, spin_until
+from swim_ros.processes import start_child
 from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, running_node
 
 #: the bridge answers its services within a period or two; a try waits 10 s for a loaded host, a lost answer is
@@ -51,6 +55,16 @@ AFTER_RESET_WINDOW_S = 0.08
 #: between malformed commands: more than one 8 ms period, so a bad command the bridge used would show in a state of
 #: its own
 BAD_COMMAND_SPACING_S = 0.01
+#: readers that join the running bridge from processes whose shared-memory port has been idle (a viewer or a
+#: recorder started mid-run): one in 8 to 40 held a publish of Fast DDS's default transport for 333 ms
+#: (docs/realtime.md); 30 joiners meet that at least once with a probability of 0.5 to 0.98
+IDLE_JOINERS = 30
+#: how long the joiners' participants idle before the first subscribes, s (Fast DDS's health watchdog looks at a
+#: port once a second), and the time between two subscriptions, s
+JOINERS_IDLE_S, JOINERS_SPACING_S = 2.5, 0.3
+#: a state's publish that takes longer than this, ms, was held by the middleware: the bridge's publish takes well
+#: under a millisecond, a held one 333 ms
+HELD_PUBLISH_MS = 50.0
 #: the emulated serial board's own command and enable-toggle timeouts (its firmware watchdogs): generous for a
 #: loaded host
 FIRMWARE_TIMEOUT_MS = 300
@@ -182,11 +196,17 @@ def efforts(client, since):
 
 
 @pytest.fixture(scope="module")
-def bridge_log(ros_domain, tmp_path_factory):
+def bridge_process(ros_domain, tmp_path_factory):
+    """The shared bridge's process and its log."""
     log = tmp_path_factory.mktemp("bridge_node") / "log.txt"
     with running_node("swim_hw_bridge", "bridge_node", log, "-p", f"watchdog_periods:={WATCHDOG_PERIODS}",
-                      "-p", "diagnostics_rate_hz:=20.0"):
-        yield log
+                      "-p", "diagnostics_rate_hz:=20.0") as process:
+        yield process, log
+
+
+@pytest.fixture(scope="module")
+def bridge_log(bridge_process):
+    return bridge_process[1]
 
 
 @pytest.fixture()
@@ -472,3 +492,76 @@ def test_a_device_lost_while_active_takes_deactivate_into_error_processing(ros_d
         finally:
             client.close()
             rig.close()
+
+
+#: a process of IDLE_JOINERS participants (an rclpy context each) that idle, then subscribe to joint_states one after
+#: another; it prints how many of them received a state
+IDLE_JOINERS_SCRIPT = textwrap.dedent("""
+    import sys, time
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from sensor_msgs.msg import JointState
+    count, idle_s, spacing_s = int(sys.argv[1]), float(sys.argv[2]), float(sys.argv[3])
+    joiners = []
+    for i in range(count):
+        context = rclpy.Context()
+        rclpy.init(context=context)
+        node = rclpy.create_node(f"idle_joiner_{i}", context=context)
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(node)
+        joiners.append((context, node, executor, []))
+    time.sleep(idle_s)
+    for index, (_, node, _, received) in enumerate(joiners):
+        node.create_subscription(JointState, "joint_states", received.append, 10)
+        end = time.monotonic() + spacing_s
+        while time.monotonic() < end:
+            for _, _, executor, _ in joiners[:index + 1]:
+                executor.spin_once(timeout_sec=0.0)
+            time.sleep(0.005)
+    end = time.monotonic() + 5.0
+    while time.monotonic() < end and not all(received for *_, received in joiners):
+        for _, _, executor, _ in joiners:
+            executor.spin_once(timeout_sec=0.0)
+        time.sleep(0.005)
+    print(sum(bool(received) for *_, received in joiners), flush=True)
+    for context, node, executor, _ in joiners:
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.shutdown(context=context)
+""")
+
+
+def fast_dds_shared_memory(pid):
+    """The Fast DDS shared-memory files the process pid has mapped."""
+    with open(f"/proc/{pid}/maps") as maps:
+        return {line.split()[-1] for line in maps if "/dev/shm/fastrtps_" in line}
+
+
+def test_the_bridge_keeps_off_shared_memory(bridge_process, bridge):
+    """The bridge's participant talks UDP only (swim_ros.transport): it maps none of Fast DDS's shared memory, which
+    the test's own participant, on Fast DDS's default transports and matched with it, does."""
+    process, log = bridge_process
+    assert fast_dds_shared_memory(os.getpid())
+    assert not fast_dds_shared_memory(process.pid)
+    assert "UDP only" in log.read_text()
+
+
+def test_readers_joining_a_running_bridge_never_hold_its_publish(bridge):
+    """Readers that join the running bridge from idle processes: every one gets states, and no state's publish
+    waits on them (the bridge's state_publish maximum, over its whole run)."""
+    joiners = start_child([sys.executable, "-c", IDLE_JOINERS_SCRIPT, str(IDLE_JOINERS), str(JOINERS_IDLE_S),
+                           str(JOINERS_SPACING_S)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        while joiners.poll() is None:
+            bridge.hold(HOLD_S)
+        out, err = joiners.communicate()
+    finally:
+        if joiners.poll() is None:
+            joiners.kill()
+            joiners.communicate()
+    assert joiners.returncode == 0, err
+    assert int(out.strip()) == IDLE_JOINERS
+    bridge.hold(HOLD_S)
+    _, values = bridge.latest_diagnostic()
+    assert float(values["state_publish_max_ms"]) < HELD_PUBLISH_MS, (
+        f"a state's publish took {values['state_publish_max_ms']} ms")

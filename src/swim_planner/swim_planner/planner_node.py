@@ -37,6 +37,7 @@ from swim_ros.entry import run_node
 from swim_ros.parameters import NodeSettings, ParameterSpec, one_of, positive
 from swim_ros.qos import LATCHED_QOS
 from swim_ros.trajectory_messages import trajectory_to_message
+from swim_ros.transport import use_large_message_transport
 
 #: threads serving requests at once: a request whose primitives need new gains does not hold up the others
 SERVICE_THREADS = 4
@@ -244,7 +245,8 @@ class PlannerNode(Node):
 def main(args: list[str] | None = None) -> None:
     """Run the planner node in its own process (ros2 run swim_planner planner_node)."""
     run_node(PlannerNode, args, name="planner_node", fatal_errors=(PlannerError, SwimModelError),
-             executor=functools.partial(MultiThreadedExecutor, num_threads=SERVICE_THREADS), large_messages=True)
+             executor=functools.partial(MultiThreadedExecutor, num_threads=SERVICE_THREADS),
+             transport=use_large_message_transport)
 
 
 if __name__ == "__main__":

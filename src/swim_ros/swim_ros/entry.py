@@ -1,6 +1,6 @@
 """``run_node``: the one ``main()`` of every swim node.
 
-Follows ros2/demos: init (with swim's Fast DDS profile where the node sends plans, swim_ros.transport), make the
+Follows ros2/demos: init (with the Fast DDS profile the node's transport chooses, swim_ros.transport), make the
 node, spin; Ctrl-C (SIGINT, SIGTERM) and an external shutdown are a normal stop, wherever in the executor's loop
 they land; the context is shut down however the process ends. A node whose construction raises one of
 ``fatal_errors`` (a bad parameter, a library that does not load) logs the reason as fatal and exits with status 2,
@@ -31,7 +31,7 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 
 from swim_ros.processes import interrupt_on_sigterm
-from swim_ros.transport import use_large_message_transport
+from swim_ros.transport import TransportChoice
 
 NodeT = TypeVar("NodeT", bound=Node)
 
@@ -47,7 +47,8 @@ def run_node(make_node: Callable[[], NodeT], args: Optional[list[str]] = None, *
              fatal_errors: tuple[type[BaseException], ...] = (ValueError,),
              executor: Callable[[], Executor] = SingleThreadedExecutor,
              start: Optional[Callable[[NodeT], object]] = None,
-             stop: Optional[Callable[[NodeT], object]] = None, large_messages: bool = False) -> None:
+             stop: Optional[Callable[[NodeT], object]] = None,
+             transport: Optional[Callable[[], TransportChoice]] = None) -> None:
     """Run one node until SIGINT or shutdown.
 
     Args:
@@ -58,16 +59,18 @@ def run_node(make_node: Callable[[], NodeT], args: Optional[list[str]] = None, *
         executor: makes the executor to spin in (single-threaded by default).
         start: called once with the node before spinning (for example a lifecycle node's autostart).
         stop: called with the node however spinning ends, before shutdown (for example to release hardware).
-        large_messages: the node sends plans: run it with swim's Fast DDS profile (swim_ros.transport).
+        transport: chooses the node's Fast DDS profile before rclpy.init (swim_ros.transport:
+            use_large_message_transport for a node that sends plans, use_real_time_transport for one with a real-time
+            loop); None: Fast DDS's defaults.
     """
     owns_process = threading.current_thread() is threading.main_thread()
     if owns_process:
         interrupt_on_sigterm()   # before rclpy.init, so that rclpy's handler passes SIGTERM on to it
-    transport = use_large_message_transport() if large_messages else None
+    choice = transport() if transport is not None else None
     rclpy.init(args=args)   # this rclpy's init() is not a context manager, hence try/finally
-    if transport is not None:
+    if choice is not None:
         logger = rclpy.logging.get_logger(name)
-        (logger.warning if transport.warning else logger.info)(transport.reason)
+        (logger.warning if choice.warning else logger.info)(choice.reason)
     node: Optional[NodeT] = None
     try:
         try:

@@ -1,6 +1,13 @@
-"""swim's Fast DDS profile: set for Fast DDS unless the user chose a profile, another RMW or a /dev/shm too small
-for its segment (checked in a tmpfs of a known size, in a mount namespace of its own); a valid profile that keeps
-UDP (other hosts) and enlarges shared memory; a node run with it sends a plan-sized message intact."""
+"""swim's Fast DDS profiles.
+
+The large-message profile: set for Fast DDS unless the user chose a profile, another RMW or a /dev/shm too small for
+its segment (checked in a tmpfs of a known size, in a mount namespace of its own); a valid profile that keeps UDP
+(other hosts) and enlarges shared memory; a node run with it sends a plan-sized message intact.
+
+The real-time profile: UDP only, with discovery as far as the user's ROS_AUTOMATIC_DISCOVERY_RANGE reaches (on this
+host, the range is handed to the profile, since rmw_fastrtps adds shared memory to LOCALHOST's); left alone where it
+cannot carry the user's discovery. bridge_node's tests check a node run with it (src/swim_hw_bridge/test).
+"""
 import os
 import select
 import shutil
@@ -15,12 +22,15 @@ import pytest
 
 from swim_ros.processes import run_child, start_child
 from swim_ros.transport import (
+    DISCOVERY_RANGE_VARIABLE,
     FREE_SHM_FACTOR,
     PROFILE_VARIABLES,
     choose_transport,
     large_message_profile,
+    real_time_profile,
     segment_bytes,
     use_large_message_transport,
+    use_real_time_transport,
 )
 
 #: the size of a 20-primitive plan with per-sample gains (bench/bench_planner_latency.py's request), bytes
@@ -76,28 +86,85 @@ def test_a_small_dev_shm_keeps_fast_dds_defaults():
     assert _choice_in_shm_of(64).startswith(f"{profile} False {profile} ")
 
 
-def test_a_users_profile_or_rmw_is_left_alone(monkeypatch, tmp_path):
+@pytest.mark.parametrize("use", [use_large_message_transport, use_real_time_transport])
+def test_a_users_profile_or_rmw_is_left_alone(use, monkeypatch, tmp_path):
+    monkeypatch.setenv(DISCOVERY_RANGE_VARIABLE, "LOCALHOST")
     for variable in PROFILE_VARIABLES:
         _clear(monkeypatch)
         monkeypatch.setenv(variable, str(tmp_path / "mine.xml"))
-        assert use_large_message_transport().profile is None
+        assert use().profile is None
         assert os.environ[variable] == str(tmp_path / "mine.xml")
     _clear(monkeypatch)
     monkeypatch.setenv("RMW_IMPLEMENTATION", "rmw_cyclonedds_cpp")
-    assert use_large_message_transport().profile is None
+    assert use().profile is None
     assert not any(os.environ.get(variable) for variable in PROFILE_VARIABLES)
+    assert os.environ[DISCOVERY_RANGE_VARIABLE] == "LOCALHOST"
+
+
+@pytest.mark.parametrize("discovery_range, localhost", [("LOCALHOST", True), ("SUBNET", False),
+                                                        ("SYSTEM_DEFAULT", False), (None, False)])
+def test_a_real_time_process_gets_udp_with_the_users_discovery(discovery_range, localhost, monkeypatch):
+    """On this host (LOCALHOST), the profile that keeps discovery here, and the range handed to it (SYSTEM_DEFAULT:
+    rmw_fastrtps takes the profile as it is); otherwise the plain one, the range untouched."""
+    _clear(monkeypatch)
+    for variable in ("RMW_IMPLEMENTATION", "ROS_STATIC_PEERS", "ROS_LOCALHOST_ONLY", DISCOVERY_RANGE_VARIABLE):
+        monkeypatch.delenv(variable, raising=False)
+    if discovery_range is not None:
+        monkeypatch.setenv(DISCOVERY_RANGE_VARIABLE, discovery_range)
+    choice = use_real_time_transport()
+    assert choice.profile == real_time_profile(localhost) and not choice.warning
+    assert os.environ[PROFILE_VARIABLES[0]] == str(choice.profile)
+    assert os.environ.get(DISCOVERY_RANGE_VARIABLE) == ("SYSTEM_DEFAULT" if localhost else discovery_range)
+
+
+@pytest.mark.parametrize("variable, value, warning", [(DISCOVERY_RANGE_VARIABLE, "OFF", False),
+                                                      ("ROS_STATIC_PEERS", "192.168.1.7", True),
+                                                      ("ROS_LOCALHOST_ONLY", "1", True)])
+def test_discovery_the_profile_would_not_carry_keeps_fast_dds_defaults(variable, value, warning, monkeypatch):
+    _clear(monkeypatch)
+    monkeypatch.setenv(DISCOVERY_RANGE_VARIABLE, "LOCALHOST")
+    monkeypatch.setenv(variable, value)
+    choice = use_real_time_transport()
+    assert choice.profile is None and choice.warning == warning
+    assert not any(os.environ.get(v) for v in PROFILE_VARIABLES)
+    assert os.environ[variable] == value
+
+
+def _participant_and_transports(profile):
+    root = ElementTree.parse(profile).getroot()
+    transports = {d.findtext("p:transport_id", namespaces=NAMESPACE): d
+                  for d in root.iterfind("p:transport_descriptors/p:transport_descriptor", NAMESPACE)}
+    participant = root.find("p:participant", NAMESPACE)
+    assert participant.get("is_default_profile") == "true"
+    assert participant.findtext("p:rtps/p:useBuiltinTransports", namespaces=NAMESPACE) == "false"
+    used = [t.text for t in participant.iterfind("p:rtps/p:userTransports/p:transport_id", NAMESPACE)]
+    assert sorted(used) == sorted(transports)
+    return participant, transports
+
+
+@pytest.mark.parametrize("localhost", [False, True])
+def test_the_real_time_profiles_are_udp_only(localhost):
+    """No shared memory: UDPv4 is the one transport. The localhost variant carries what rmw_fastrtps's LOCALHOST
+    range sets: no multicast (a unicast metatraffic locator only), 127.0.0.1 as the initial peer, 32 participant
+    ports tried on it."""
+    participant, transports = _participant_and_transports(real_time_profile(localhost))
+    assert [d.findtext("p:type", namespaces=NAMESPACE) for d in transports.values()] == ["UDPv4"]
+    builtin = participant.find("p:rtps/p:builtin", NAMESPACE)
+    if not localhost:
+        assert builtin is None
+        return
+    assert builtin.find("p:metatrafficMulticastLocatorList", NAMESPACE) is None
+    assert len(builtin.findall("p:metatrafficUnicastLocatorList/p:locator", NAMESPACE)) == 1
+    peers = [a.text for a in builtin.iterfind("p:initialPeersList/p:locator/p:udpv4/p:address", NAMESPACE)]
+    assert peers == ["127.0.0.1"]
+    (udp,) = transports.values()
+    assert udp.findtext("p:maxInitialPeersRange", namespaces=NAMESPACE) == "32"
 
 
 def test_profile_keeps_udp_and_holds_a_plan_in_shared_memory():
-    root = ElementTree.parse(large_message_profile()).getroot()
-    transports = {d.findtext("p:transport_id", namespaces=NAMESPACE): d
-                  for d in root.iterfind("p:transport_descriptors/p:transport_descriptor", NAMESPACE)}
+    _, transports = _participant_and_transports(large_message_profile())
     kinds = {d.findtext("p:type", namespaces=NAMESPACE) for d in transports.values()}
     assert kinds == {"UDPv4", "SHM"}
-    participant = root.find("p:participant", NAMESPACE)
-    assert participant.get("is_default_profile") == "true"
-    used = [t.text for t in participant.iterfind("p:rtps/p:userTransports/p:transport_id", NAMESPACE)]
-    assert sorted(used) == sorted(transports)
     shm = next(d for d in transports.values() if d.findtext("p:type", namespaces=NAMESPACE) == "SHM")
     assert int(shm.findtext("p:segment_size", namespaces=NAMESPACE)) >= 3 * PLAN_BYTES   # three plans in flight
 
@@ -110,6 +177,7 @@ SENDER_SCRIPT = textwrap.dedent("""
     from swim_ros.codecs import float_array
     from swim_ros.entry import run_node
     from swim_ros.qos import LATCHED_QOS
+    from swim_ros.transport import use_large_message_transport
 
     class Sender(Node):
         def __init__(self):
@@ -119,7 +187,7 @@ SENDER_SCRIPT = textwrap.dedent("""
             self.create_publisher(JointState, "large", LATCHED_QOS).publish(message)
             print(os.environ["FASTRTPS_DEFAULT_PROFILES_FILE"], flush=True)
 
-    run_node(Sender, name="large_message_sender", large_messages=True)
+    run_node(Sender, name="large_message_sender", transport=use_large_message_transport)
 """)
 
 
