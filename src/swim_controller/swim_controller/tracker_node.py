@@ -48,6 +48,7 @@ from swim_ros.realtime import (
     make_thread_background,
 )
 from swim_ros.trajectory_messages import state_from_message, trajectory_from_message
+from swim_ros.transport import use_real_time_transport
 
 RESULT_CODES = {
     Outcome.SUCCEEDED: ExecutePlan.Result.SUCCESSFUL,
@@ -643,8 +644,9 @@ def autostart(node: TrackerNode) -> None:
 
 def main(args: list[str] | None = None) -> None:
     """Run the tracker node in its own process (ros2 run swim_controller tracker_node)."""
+    # UDP only: a reader's shared-memory port opened mid-run would hold a command's publish (swim_ros.transport)
     run_node(functools.partial(TrackerNode, owns_process=True), args, name="tracker_node",
-             fatal_errors=(ValueError, SwimModelError), start=autostart)
+             fatal_errors=(ValueError, SwimModelError), start=autostart, transport=use_real_time_transport)
 
 
 if __name__ == "__main__":

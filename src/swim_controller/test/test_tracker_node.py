@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from swim_ros.calls import RetryPolicy, cancel_goal, spin_until
-from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, running_node
+from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, fast_dds_shared_memory, running_node
 
 PERIOD_S = 0.008
 # 2 s, as in test_kill_node: the plant is this test process, which stops stepping during each parameter round
@@ -438,7 +438,8 @@ def test_a_rig_file_that_does_not_load_stops_the_node_with_the_reason(ros_domain
 @pytest.mark.parametrize("policy", ["fifo", "other"])
 def test_the_node_takes_its_real_time_means_once_started(ros_domain, tmp_path, policy):
     """With realtime_policy fifo (the default) every thread of the process runs at SCHED_FIFO 70 once the node is
-    up, its memory locked; with other, the policy it was started with. The node says which, once."""
+    up, its memory locked; with other, the policy it was started with. The node says which, once. Either way its
+    participant talks UDP only (swim_ros.transport): it maps none of Fast DDS's shared memory."""
     log_path = tmp_path / "tracker.txt"
     with running_node("swim_controller", "tracker_node", log_path, "-p", f"realtime_policy:={policy}") as process:
         deadline = time.monotonic() + STARTUP_TIMEOUT_S
@@ -452,6 +453,8 @@ def test_the_node_takes_its_real_time_means_once_started(ros_domain, tmp_path, p
             except ProcessLookupError:
                 pass
         status = Path(f"/proc/{process.pid}/status").read_text()
+        shared_memory = fast_dds_shared_memory(process.pid)
+    assert not shared_memory and "UDP only" in log, (shared_memory, log[-2000:])
     assert log.count("real-time means in effect") == 1 and "refused" not in log, log[-2000:]
     assert policies == ({(os.SCHED_FIFO, 70)} if policy == "fifo" else {(os.SCHED_OTHER, 0)})
     locked_kib = int(next(line for line in status.splitlines() if line.startswith("VmLck:")).split()[1])

@@ -14,7 +14,7 @@ import pytest
 
 from swim_ros.calls import ParameterCalls, RetryPolicy, spin_until
 from swim_ros.processes import start_child
-from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, running_node
+from swim_ros.testing.fixtures import MESSAGE_TIMEOUT_S, STARTUP_TIMEOUT_S, fast_dds_shared_memory, running_node
 
 #: the bridge answers its services within a period or two; a try waits 10 s for a loaded host, a lost answer is
 #: asked again (lifecycle transitions only after reading the node's state)
@@ -529,12 +529,6 @@ IDLE_JOINERS_SCRIPT = textwrap.dedent("""
         node.destroy_node()
         rclpy.shutdown(context=context)
 """)
-
-
-def fast_dds_shared_memory(pid):
-    """The Fast DDS shared-memory files the process pid has mapped."""
-    with open(f"/proc/{pid}/maps") as maps:
-        return {line.split()[-1] for line in maps if "/dev/shm/fastrtps_" in line}
 
 
 def test_the_bridge_keeps_off_shared_memory(bridge_process, bridge):

@@ -12,8 +12,9 @@ Real time. A Fast DDS writer opens a reader's shared-memory port the first time 
 and checks the port's health as it opens it. A port that has received nothing for a while fails the first look by a
 race with Fast DDS's health watchdog, and the writer then sleeps a third of the health timeout (333 ms) holding
 itself: the next publish waits as long, in rclpy with the interpreter lock held. A viewer or a recorder that starts
-reading a running rig can so stop the bridge's loop for 333 ms (docs/realtime.md, "A publish held for 333 ms"). The
-profile ``config/fastdds_real_time.xml`` keeps such a process on UDP only, where a send never waits for the reader.
+reading a running rig can so stop the bridge's or the tracker's loop for 333 ms (docs/realtime.md, "A publish held
+for 333 ms"). The profile ``config/fastdds_real_time.xml`` keeps such a process (bridge_node, tracker_node) on UDP
+only, where a send never waits for the reader.
 
 Fast DDS reads the variable in this process and every process it starts: set it only in a process that starts no
 nodes of its own (the run client, which starts them, does not). A user's own profile, or another RMW, is left alone.

@@ -66,3 +66,9 @@ def running_node(package: str, executable: str, log_path: Path, *ros_args: str) 
         node.interrupt()
         node.wait(STOP_GRACE_S)
         node.kill()
+
+
+def fast_dds_shared_memory(pid: int) -> set[str]:
+    """The Fast DDS shared-memory files (segments and ports under /dev/shm) the process pid has mapped."""
+    with open(f"/proc/{pid}/maps") as maps:
+        return {line.split()[-1] for line in maps if "/dev/shm/fastrtps_" in line}
