@@ -46,7 +46,7 @@ class TransportChoice:
     """What use_large_message_transport or use_real_time_transport decided.
 
     The profile set (None: Fast DDS's defaults or the user's), why (a sentence for the process's log), and whether that
-    is worth a warning (the profile did not fit).
+    is worth a warning (the profile did not fit, or could not carry the user's discovery).
     """
 
     profile: Optional[Path]
