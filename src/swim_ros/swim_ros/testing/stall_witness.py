@@ -4,7 +4,7 @@ One process per CPU, pinned to it at SCHED_FIFO WITNESS_PRIORITY (above every th
 locked, wakes on an absolute grid every PERIOD_S and writes each wake-up later than REPORT_LATENESS_S to its file. A
 process that does nothing else can be woken that late only by the kernel or the hypervisor: no process of the run
 can delay it. So a run lost while the witness saw no stall was lost to the run's own processes, and one lost while
-it saw the host stall for longer than the run's limits is the host's (docs/realtime.md, "A single stall of 300 ms").
+it saw the host stall for longer than the run's limits is the host's (docs/realtime.md, "A publish held for 333 ms").
 
     with StallWitness(tmp_path) as witness:
         ...   # the run
