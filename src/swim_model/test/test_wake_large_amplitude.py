@@ -49,8 +49,8 @@ BLOB_CORE_M = 1.5e-3             # the wake's default core (WakeParameters.core_
 
 @dataclasses.dataclass(frozen=True)
 class PlateRun:
-    """The reference plate's last cycle: coefficients on 1/2 rho U^2 c (per metre of span), and the lift's first
-    harmonic, N/m (complex amplitude against e^{i w t})."""
+    """The reference plate's last cycle: C_T on 1/2 rho U^2 c and the power coefficients on 1/2 rho U^3 c (per metre
+    of span), and the lift's first harmonic, N/m (complex amplitude against e^{i w t})."""
 
     thrust_coefficient: float
     power_coefficient: float
@@ -68,6 +68,13 @@ def induced_velocity(targets: np.ndarray, sources: np.ndarray, circulations: np.
     offsets = targets[:, None] - sources[None, :]
     distance_squared = (offsets * offsets.conjugate()).real + core_m * core_m
     return (1j * offsets / distance_squared * circulations[None, :]).sum(axis=1) / (2.0 * math.pi)
+
+
+def unit_normal_velocity(targets: np.ndarray, sources: np.ndarray, normal: complex) -> np.ndarray:
+    """The velocity along ``normal`` at each target (rows) of a point vortex of unit circulation at each source
+    (columns), m/s per m^2/s."""
+    offsets = targets[:, None] - sources[None, :]
+    return (1j * offsets / (offsets * offsets.conjugate()).real * normal.conjugate()).real / (2.0 * math.pi)
 
 
 def lumped_vortex_plate(heave_amplitude_m: float, pitch_amplitude_rad: float, frequency_hz: float,
@@ -103,12 +110,7 @@ def lumped_vortex_plate(heave_amplitude_m: float, pitch_amplitude_rad: float, fr
         shed_at = trailing_edge - toward_le * 0.5 * edge_speed * dt
         # normal velocity at the collocation points: unit bound vortices, a unit shed vortex, and what is known
         system = np.zeros((PLATE_PANELS + 1, PLATE_PANELS + 1))
-        offsets = collocation[:, None] - vortices[None, :]
-        system[:PLATE_PANELS, :PLATE_PANELS] = (1j * offsets / (offsets * offsets.conjugate()).real
-                                                * normal.conjugate()).real / (2.0 * math.pi)
-        shed_offsets = collocation - shed_at
-        system[:PLATE_PANELS, PLATE_PANELS] = (1j * shed_offsets / (shed_offsets * shed_offsets.conjugate()).real
-                                               * normal.conjugate()).real / (2.0 * math.pi)
+        system[:PLATE_PANELS, :] = unit_normal_velocity(collocation, np.append(vortices, shed_at), normal)
         system[PLATE_PANELS, :] = 1.0                                  # Kelvin
         plate_velocity = pivot_velocity + 1j * rate * (collocation - pivot)
         wake_velocity = induced_velocity(collocation, wake_z, wake_gamma, 0.0)
