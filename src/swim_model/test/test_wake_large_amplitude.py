@@ -28,6 +28,7 @@ from test_wake import THEODORSEN_PIVOT_SEMICHORDS, theodorsen
 
 from swim_model import JoukowskiFoil
 from swim_model.flow import FlowParameters, oscillating_foil
+from swim_model.towed_foil import WAKE_MIN_SHED_DISTANCE_CHORDS, WAKE_MIN_STEPS_PER_CYCLE
 from swim_model.wake import WakeParameters
 
 RHO = 998.2                      # fresh water at 20 C, as rig.yaml
@@ -183,7 +184,7 @@ def test_the_wakes_pitch_power_at_the_tanks_amplitudes_is_the_inviscid_flows():
     plate = lumped_vortex_plate(HEAVE_M, pitch_amplitude, frequency, math.pi / 2, CHORD_M / 3,
                                 startup_cycles(frequency) + 1)
     foil = JoukowskiFoil(CHORD_M, THIN_THICKNESS_RATIO * CHORD_M, SPAN_M)
-    steps_per_cycle = 800
+    steps_per_cycle = WAKE_MIN_STEPS_PER_CYCLE   # oscillating_foil's default at these Strouhal numbers
     wake = oscillating_foil(
         foil, speed_m_s=SPEED_M_S, heave_amplitude_m=HEAVE_M, pitch_amplitude_rad=pitch_amplitude,
         frequency_hz=frequency, phase_rad=math.pi / 2, pivot_from_leading_edge_m=CHORD_M / 3, model="wake",
@@ -191,7 +192,8 @@ def test_the_wakes_pitch_power_at_the_tanks_amplitudes_is_the_inviscid_flows():
         flow_parameters=FlowParameters(profile_drag_coefficient=0.0),
         wake_parameters=WakeParameters(rho_kg_m3=RHO, max_vortex_count=steps_per_cycle + 100,
                                        protected_vortex_count=steps_per_cycle + 50,
-                                       min_shed_distance_m=1e-4 * CHORD_M, critical_leading_edge_suction=None))
+                                       min_shed_distance_m=WAKE_MIN_SHED_DISTANCE_CHORDS * CHORD_M,
+                                       critical_leading_edge_suction=None))
     dynamic_power = 0.5 * RHO * SPEED_M_S ** 3 * CHORD_M * SPAN_M
     wake_pitch_part = float(np.mean(wake.power_w - wake.heave_power_w)) / dynamic_power
     wake_harmonic = complex(2.0 * np.mean(wake.lift_n * np.exp(-1j * 2.0 * math.pi * frequency * wake.time_s)))
