@@ -24,18 +24,14 @@ import math
 
 import numpy as np
 import pytest
+from test_flow_experiments import CHORD_M, HEAVE_M, RHO, SPAN_M, SPEED_M_S, pitch_amplitude
 from test_wake import THEODORSEN_PIVOT_SEMICHORDS, theodorsen
 
 from swim_model import JoukowskiFoil
 from swim_model.flow import FlowParameters, oscillating_foil
-from swim_model.towed_foil import WAKE_MIN_SHED_DISTANCE_CHORDS, WAKE_MIN_STEPS_PER_CYCLE
+from swim_model.towed_foil import WAKE_MIN_SHED_DISTANCE_CHORDS, WAKE_MIN_STEPS_PER_CYCLE, WAKE_STARTUP_CHORDS
 from swim_model.wake import WakeParameters
 
-RHO = 998.2                      # fresh water at 20 C, as rig.yaml
-# the tank's foil and towing speed (Anderson et al. 1998, as test_flow_experiments.py), and the 90 deg series' motion
-CHORD_M, SPAN_M, SPEED_M_S = 0.10, 0.60, 0.40
-HEAVE_M = 0.75 * CHORD_M
-ALPHA0_RAD = math.radians(15.0)
 # a thin section, so that the Joukowski foil and the flat plate are the same body: the wake's pitch part at St 0.50
 # is 0.293 with it and 0.297 with the tank's 12 %, neither with profile drag nor a suction cap
 THIN_THICKNESS_RATIO = 0.02
@@ -63,19 +59,17 @@ class PlateRun:
         return self.thrust_coefficient / self.power_coefficient
 
 
+def unit_vortex_velocities(targets: np.ndarray, sources: np.ndarray, core_m: float) -> np.ndarray:
+    """u + iv at each target (rows) of a vortex of unit circulation at each source (columns), Krasny blobs of core
+    core_m (complex positions, m; m/s per m^2/s)."""
+    offsets = targets[:, None] - sources[None, :]
+    return 1j * offsets / ((offsets * offsets.conjugate()).real + core_m * core_m) / (2.0 * math.pi)
+
+
 def induced_velocity(targets: np.ndarray, sources: np.ndarray, circulations: np.ndarray,
                      core_m: float) -> np.ndarray:
-    """u + iv at each target of the point vortices at sources (complex positions, m; circulations, m^2/s)."""
-    offsets = targets[:, None] - sources[None, :]
-    distance_squared = (offsets * offsets.conjugate()).real + core_m * core_m
-    return (1j * offsets / distance_squared * circulations[None, :]).sum(axis=1) / (2.0 * math.pi)
-
-
-def unit_normal_velocity(targets: np.ndarray, sources: np.ndarray, normal: complex) -> np.ndarray:
-    """The velocity along ``normal`` at each target (rows) of a point vortex of unit circulation at each source
-    (columns), m/s per m^2/s."""
-    offsets = targets[:, None] - sources[None, :]
-    return (1j * offsets / (offsets * offsets.conjugate()).real * normal.conjugate()).real / (2.0 * math.pi)
+    """u + iv at each target of the vortices at sources (circulations, m^2/s)."""
+    return unit_vortex_velocities(targets, sources, core_m) @ circulations
 
 
 def lumped_vortex_plate(heave_amplitude_m: float, pitch_amplitude_rad: float, frequency_hz: float,
@@ -84,7 +78,8 @@ def lumped_vortex_plate(heave_amplitude_m: float, pitch_amplitude_rad: float, fr
     averaged (module docstring)."""
     omega = 2.0 * math.pi * frequency_hz
     panel_m = CHORD_M / PLATE_PANELS
-    steps_per_cycle = math.ceil(SPEED_M_S / (frequency_hz * panel_m))
+    # a panel's travel or less a step; the factor keeps a whole ratio (240 at St 0.50) from rounding up a step
+    steps_per_cycle = math.ceil(SPEED_M_S / (frequency_hz * panel_m) * (1.0 - 1e-12))
     dt = 1.0 / (frequency_hz * steps_per_cycle)
     vortex_from_le = (np.arange(PLATE_PANELS) + 0.25) * panel_m
     collocation_from_le = (np.arange(PLATE_PANELS) + 0.75) * panel_m
@@ -111,7 +106,8 @@ def lumped_vortex_plate(heave_amplitude_m: float, pitch_amplitude_rad: float, fr
         shed_at = trailing_edge - toward_le * 0.5 * edge_speed * dt
         # normal velocity at the collocation points: unit bound vortices, a unit shed vortex, and what is known
         system = np.zeros((PLATE_PANELS + 1, PLATE_PANELS + 1))
-        system[:PLATE_PANELS, :] = unit_normal_velocity(collocation, np.append(vortices, shed_at), normal)
+        system[:PLATE_PANELS, :] = (unit_vortex_velocities(collocation, np.append(vortices, shed_at), 0.0)
+                                    * normal.conjugate()).real
         system[PLATE_PANELS, :] = 1.0                                  # Kelvin
         plate_velocity = pivot_velocity + 1j * rate * (collocation - pivot)
         wake_velocity = induced_velocity(collocation, wake_z, wake_gamma, 0.0)
@@ -142,8 +138,9 @@ def lumped_vortex_plate(heave_amplitude_m: float, pitch_amplitude_rad: float, fr
 
 
 def startup_cycles(frequency_hz: float) -> int:
-    """Cycles that carry the starting vortex 8 chords behind (oscillating_foil's wake start-up), at least 2."""
-    return max(2, math.ceil(8.0 * CHORD_M * frequency_hz / SPEED_M_S))
+    """Cycles that carry the starting vortex WAKE_STARTUP_CHORDS behind, as oscillating_foil's wake starts, at least
+    2."""
+    return max(2, math.ceil(WAKE_STARTUP_CHORDS * CHORD_M * frequency_hz / SPEED_M_S))
 
 
 def test_the_reference_plate_follows_theodorsen_in_pitch():
@@ -179,14 +176,13 @@ def test_the_wakes_pitch_power_at_the_tanks_amplitudes_is_the_inviscid_flows():
     whose lag states are linear theory's planar wake, puts 0.043 into the pitch drive there (docs/flow_model.md,
     "Power")."""
     strouhal = 0.50
-    pitch_amplitude = math.atan(math.pi * strouhal) - ALPHA0_RAD
     frequency = strouhal * SPEED_M_S / (2.0 * HEAVE_M)
-    plate = lumped_vortex_plate(HEAVE_M, pitch_amplitude, frequency, math.pi / 2, CHORD_M / 3,
+    plate = lumped_vortex_plate(HEAVE_M, pitch_amplitude(strouhal), frequency, math.pi / 2, CHORD_M / 3,
                                 startup_cycles(frequency) + 1)
     foil = JoukowskiFoil(CHORD_M, THIN_THICKNESS_RATIO * CHORD_M, SPAN_M)
     steps_per_cycle = WAKE_MIN_STEPS_PER_CYCLE   # oscillating_foil's default at these Strouhal numbers
     wake = oscillating_foil(
-        foil, speed_m_s=SPEED_M_S, heave_amplitude_m=HEAVE_M, pitch_amplitude_rad=pitch_amplitude,
+        foil, speed_m_s=SPEED_M_S, heave_amplitude_m=HEAVE_M, pitch_amplitude_rad=pitch_amplitude(strouhal),
         frequency_hz=frequency, phase_rad=math.pi / 2, pivot_from_leading_edge_m=CHORD_M / 3, model="wake",
         averaged_cycles=1, water_density_kg_m3=RHO, steps_per_cycle=steps_per_cycle,
         flow_parameters=FlowParameters(profile_drag_coefficient=0.0),
