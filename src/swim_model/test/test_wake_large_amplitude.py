@@ -17,14 +17,15 @@ closed forms: a flat plate of lumped vortices with a free wake (Katz & Plotkin, 
   "Vortex Dynamics", 1992, Sec. 3.2). For a plate of no thickness these are the whole fluid force, added mass and
   leading-edge suction included.
 
-The reference is checked against Theodorsen's pitching foil before it judges the wake.
+The reference is checked against Theodorsen's pitching foil before it judges the wake. Given the models' profile drag,
+it then measures how far the attached inviscid flow's efficiency lies under the tank's.
 """
 import dataclasses
 import math
 
 import numpy as np
 import pytest
-from test_flow_experiments import CHORD_M, HEAVE_M, RHO, SPAN_M, SPEED_M_S, pitch_amplitude
+from test_flow_experiments import CHORD_M, HEAVE_M, MEASURED, RHO, SPAN_M, SPEED_M_S, TANK_FLOW, pitch_amplitude
 from test_wake import THEODORSEN_PIVOT_SEMICHORDS, theodorsen
 
 from swim_model import JoukowskiFoil
@@ -198,3 +199,27 @@ def test_the_wakes_pitch_power_at_the_tanks_amplitudes_is_the_inviscid_flows():
     assert wake.efficiency == pytest.approx(plate.efficiency, abs=0.02)
     assert wake.thrust_coefficient == pytest.approx(plate.thrust_coefficient, rel=0.10)
     assert abs(wake_harmonic / SPAN_M - plate.lift_harmonic_n_m) < 0.10 * abs(plate.lift_harmonic_n_m)
+
+
+def test_the_tanks_efficiency_is_above_the_attached_inviscid_flows_by_more_than_the_bound():
+    """The 90 deg series' two highest efficiency points (St 0.357 and 0.495): the plate with the models' profile drag
+    (TANK_FLOW's C_D0 on the pivot's speed, as the models count it) is under the tank's efficiency by more than the
+    0.08 the models are held to. Measured: 0.652 and 0.542 against 0.759 and 0.668 (0.107 and 0.126 under; without
+    the drag 0.681 and 0.561); 160 panels would add 0.001-0.004 (PLATE_PANELS). A model of the attached inviscid
+    flow, however solved, misses the series' efficiency there; a separation that loses suction or adds pitch power
+    misses it by more (docs/flow_model.md, section 6)."""
+    drag = TANK_FLOW.profile_drag_coefficient
+    bound = 0.08                                                  # the efficiency bound test_flow_experiments holds
+    phase = np.linspace(0.0, 2.0 * math.pi, 4096, endpoint=False)
+    points = [(st, efficiency) for st, efficiency in MEASURED["efficiency"] if round(st, 2) in (0.36, 0.50)]
+    assert len(points) == 2
+    for strouhal, tank_efficiency in points:
+        frequency = strouhal * SPEED_M_S / (2.0 * HEAVE_M)
+        plate = lumped_vortex_plate(HEAVE_M, pitch_amplitude(strouhal), frequency, math.pi / 2, CHORD_M / 3,
+                                    startup_cycles(frequency) + 1)
+        heave_speed = HEAVE_M * 2.0 * math.pi * frequency * np.cos(phase) / SPEED_M_S    # on the towing speed
+        speed = np.sqrt(1.0 + heave_speed ** 2)
+        thrust = plate.thrust_coefficient - drag * float(np.mean(speed))
+        power = plate.power_coefficient + drag * float(np.mean(speed * heave_speed ** 2))
+        assert plate.efficiency < tank_efficiency                 # before any drag, already under the tank
+        assert thrust / power < tank_efficiency - bound, (strouhal, thrust / power, tank_efficiency)
