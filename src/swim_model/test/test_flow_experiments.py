@@ -75,12 +75,17 @@ def pitch_amplitude(strouhal: float) -> float:
     return math.atan(math.pi * strouhal) - ALPHA0_RAD
 
 
+def heave_frequency(strouhal: float) -> float:
+    """The frequency, Hz, of the paper's St = 2 h0 f / U."""
+    return strouhal * SPEED_M_S / (2.0 * HEAVE_M)
+
+
 @functools.lru_cache(maxsize=None)
 def tank_run(model: str, strouhal: float, steps_per_cycle: int | None = None,
              flow_parameters: FlowParameters = TANK_FLOW):
     """One run (at oscillating_foil's default steps a cycle unless given); the wake averages one cycle (two give the
     same means to 4 digits at 2.5 times the cost)."""
-    frequency = strouhal * SPEED_M_S / (2.0 * HEAVE_M)
+    frequency = heave_frequency(strouhal)
     return oscillating_foil(TANK_FOIL, speed_m_s=SPEED_M_S, heave_amplitude_m=HEAVE_M,
                             pitch_amplitude_rad=pitch_amplitude(strouhal), frequency_hz=frequency,
                             phase_rad=math.pi / 2, pivot_from_leading_edge_m=CHORD_M / 3, model=model,
@@ -129,7 +134,7 @@ def test_kinematic_definitions_are_the_papers(strouhal):
     """St = 2 h0 f / U; the angle of attack at the pivot at the instant of largest heave velocity (t = 0) is alpha0
     in size (theta0 = atan(pi St) - alpha0), the heave's path angle minus the pitch; the reported peak at the foil
     frame's origin is atan2(-V, U) of eq. 40's velocity there."""
-    frequency = strouhal * SPEED_M_S / (2.0 * HEAVE_M)
+    frequency = heave_frequency(strouhal)
     theta0 = pitch_amplitude(strouhal)
     kinematics = TowedFoilKinematics(SPEED_M_S, HEAVE_M, theta0, frequency, math.pi / 2,
                                      TANK_FOIL.leading_edge_x_m - CHORD_M / 3)
@@ -157,7 +162,7 @@ def test_thrust_and_power_definitions():
     """Mean thrust is the mean force along the towing direction; the input power is that of the heave force and
     the pitch moment about the pivot (computed here from the tank-frame force, moment and the pivot's motion)."""
     result = tank_run("circulatory", 0.3)
-    frequency = 0.3 * SPEED_M_S / (2.0 * HEAVE_M)
+    frequency = heave_frequency(0.3)
     kinematics = TowedFoilKinematics(SPEED_M_S, HEAVE_M, pitch_amplitude(0.3), frequency, math.pi / 2,
                                      TANK_FOIL.leading_edge_x_m - CHORD_M / 3)
     assert result.mean_thrust_n == pytest.approx(np.mean(result.thrust_n), rel=1e-12)
@@ -280,7 +285,7 @@ def test_the_models_power_is_the_heave_drives_and_the_added_mass_puts_in_none():
     the reduced model's pitch drive puts in at most 3 % of the total at 90 deg, and the vortex wake's, at St 0.46
     and 0.50, 10-12 %: the wake's excess power over the reduced model's there is mostly its pitch moment's."""
     for st in (0.2214, 0.4955):
-        frequency = st * SPEED_M_S / (2.0 * HEAVE_M)
+        frequency = heave_frequency(st)
         kinematics = TowedFoilKinematics(SPEED_M_S, HEAVE_M, pitch_amplitude(st), frequency, math.pi / 2,
                                          TANK_FOIL.leading_edge_x_m - CHORD_M / 3)
         for model in ("circulatory", "wake"):
@@ -306,7 +311,7 @@ def test_the_three_quarter_chord_incidence_of_pure_heave_is_the_path_angle():
     chord peaks at atan(2 pi f h0 / U) = atan(pi St), and the free-stream suction parameter is the foil's own times
     |u| / U, |u| = sqrt(U^2 + h'^2)."""
     strouhal = 0.3
-    frequency = strouhal * SPEED_M_S / (2.0 * HEAVE_M)
+    frequency = heave_frequency(strouhal)
     run = oscillating_foil(TANK_FOIL, speed_m_s=SPEED_M_S, heave_amplitude_m=HEAVE_M, pitch_amplitude_rad=0.0,
                            frequency_hz=frequency, phase_rad=math.pi / 2, pivot_from_leading_edge_m=CHORD_M / 3,
                            cycles=4, averaged_cycles=1, steps_per_cycle=400, flow_parameters=TANK_FLOW)

@@ -25,7 +25,17 @@ import math
 
 import numpy as np
 import pytest
-from test_flow_experiments import CHORD_M, HEAVE_M, MEASURED, RHO, SPAN_M, SPEED_M_S, TANK_FLOW, pitch_amplitude
+from test_flow_experiments import (
+    CHORD_M,
+    HEAVE_M,
+    MEASURED,
+    RHO,
+    SPAN_M,
+    SPEED_M_S,
+    TANK_FLOW,
+    heave_frequency,
+    pitch_amplitude,
+)
 from test_wake import THEODORSEN_PIVOT_SEMICHORDS, theodorsen
 
 from swim_model import JoukowskiFoil
@@ -144,6 +154,14 @@ def startup_cycles(frequency_hz: float) -> int:
     return max(2, math.ceil(WAKE_STARTUP_CHORDS * CHORD_M * frequency_hz / SPEED_M_S))
 
 
+def series_plate(strouhal: float) -> PlateRun:
+    """The plate in the 90 deg series' motion at this Strouhal number (test_flow_experiments.tank_run's), its start-up
+    and one averaged cycle."""
+    frequency = heave_frequency(strouhal)
+    return lumped_vortex_plate(HEAVE_M, pitch_amplitude(strouhal), frequency, math.pi / 2, CHORD_M / 3,
+                               startup_cycles(frequency) + 1)
+
+
 def test_the_reference_plate_follows_theodorsen_in_pitch():
     """Pure pitch, 2 deg about c/3 at k = 1: the plate's lift harmonic within 5 % and 2 deg of Theodorsen's, its pitch
     drive's mean power within 12 %. Measured: lift +4.3 %, +0.9 deg; power +9.1 % (the errors of 80 panels, which
@@ -177,9 +195,8 @@ def test_the_wakes_pitch_power_at_the_tanks_amplitudes_is_the_inviscid_flows():
     whose lag states are linear theory's planar wake, puts 0.043 into the pitch drive there (docs/flow_model.md,
     "Power")."""
     strouhal = 0.50
-    frequency = strouhal * SPEED_M_S / (2.0 * HEAVE_M)
-    plate = lumped_vortex_plate(HEAVE_M, pitch_amplitude(strouhal), frequency, math.pi / 2, CHORD_M / 3,
-                                startup_cycles(frequency) + 1)
+    frequency = heave_frequency(strouhal)
+    plate = series_plate(strouhal)
     foil = JoukowskiFoil(CHORD_M, THIN_THICKNESS_RATIO * CHORD_M, SPAN_M)
     steps_per_cycle = WAKE_MIN_STEPS_PER_CYCLE   # oscillating_foil's default at these Strouhal numbers
     wake = oscillating_foil(
@@ -214,10 +231,8 @@ def test_the_tanks_efficiency_is_above_the_attached_inviscid_flows_by_more_than_
     points = [(st, efficiency) for st, efficiency in MEASURED["efficiency"] if round(st, 2) in (0.36, 0.50)]
     assert len(points) == 2
     for strouhal, tank_efficiency in points:
-        frequency = strouhal * SPEED_M_S / (2.0 * HEAVE_M)
-        plate = lumped_vortex_plate(HEAVE_M, pitch_amplitude(strouhal), frequency, math.pi / 2, CHORD_M / 3,
-                                    startup_cycles(frequency) + 1)
-        heave_speed = HEAVE_M * 2.0 * math.pi * frequency * np.cos(phase) / SPEED_M_S    # on the towing speed
+        plate = series_plate(strouhal)
+        heave_speed = HEAVE_M * 2.0 * math.pi * heave_frequency(strouhal) * np.cos(phase) / SPEED_M_S   # on U
         speed = np.sqrt(1.0 + heave_speed ** 2)
         thrust = plate.thrust_coefficient - drag * float(np.mean(speed))
         power = plate.power_coefficient + drag * float(np.mean(speed * heave_speed ** 2))
